@@ -1,0 +1,147 @@
+"""What a leaf node is, independent of any engine, and the registry of leaf types.
+
+A leaf type is a subclass of :class:`Leaf` registered under the paper's class name (e.g.
+``"Condition_Low_Energy_Level"``). Its :meth:`Leaf.evaluate` is written with array
+expressions against an :class:`~pyautonomousagent.state.AgentView`: called for one agent
+it sees plain numbers, called for a batch it sees arrays. Both engines call the same
+method, so they cannot drift apart.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Container, Mapping
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from pyautonomousagent.bt.spec import Node, TreeError, check_structure
+from pyautonomousagent.state import AgentView, Swarm
+from pyautonomousagent.world import World
+
+
+@dataclass(frozen=True)
+class Port:
+    """A leaf parameter.
+
+    Attributes:
+        name: the parameter's name in a tree description or file.
+        type: float, int or str; a value is converted to it (bools are refused for numbers).
+        default: the scenario parameter that supplies the value when the tree does not.
+        minimum: the smallest value allowed (numbers only), or None.
+        doc: what the parameter means, with its unit.
+    """
+
+    name: str
+    type: type
+    default: str
+    minimum: float | None = None
+    doc: str = ""
+
+    def convert(self, value: Any, where: str) -> Any:
+        """``value`` as this port's type; LeafError naming ``where`` if it is not one."""
+        if self.type is str:
+            if not isinstance(value, str):
+                raise LeafError(f"{where}: port {self.name!r} must be a string, got {value!r}")
+            return value
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise LeafError(f"{where}: port {self.name!r} must be a number, got {value!r}")
+        if self.type is int and float(value) != int(value):
+            raise LeafError(f"{where}: port {self.name!r} must be a whole number, got {value!r}")
+        converted = self.type(value)
+        if self.minimum is not None and converted < self.minimum:
+            raise LeafError(f"{where}: port {self.name!r} must be >= {self.minimum}, got {value!r}")
+        return converted
+
+
+class LeafError(ValueError):
+    """A leaf that cannot be made: unknown type, unknown port or bad value."""
+
+
+class Leaf:
+    """Base class of the leaf library.
+
+    Subclasses set :attr:`type_name`, :attr:`ports`, :attr:`keys` (the blackboard keys
+    they use) and implement :meth:`evaluate`. Port values become attributes.
+    """
+
+    type_name: ClassVar[str]
+    ports: ClassVar[tuple[Port, ...]] = ()
+    keys: ClassVar[tuple[str, ...]] = ()
+
+    def __init__(self, **values: Any) -> None:
+        for name, value in values.items():
+            setattr(self, name, value)
+
+    @classmethod
+    def create(cls, params: Mapping[str, Any], defaults: Mapping[str, Any], where: str) -> Leaf:
+        """An instance with ports from ``params``, else from the scenario's ``defaults``.
+
+        Raises:
+            LeafError: an unknown port (with the known ones), a bad value, or a default
+                the scenario lacks.
+        """
+        known = {p.name: p for p in cls.ports}
+        unknown = sorted(set(params) - set(known))
+        if unknown:
+            raise LeafError(f"{where}: unknown port(s) {unknown}; {cls.type_name} has {sorted(known)}")
+        values = {}
+        for port in cls.ports:
+            if port.name in params:
+                raw = params[port.name]
+            elif port.default in defaults:
+                raw = defaults[port.default]
+            else:
+                raise LeafError(f"{where}: port {port.name!r} has no value and no default")
+            values[port.name] = port.convert(raw, where)
+        return cls(**values)
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        """Run the leaf for ``agents``; return a status code, or an int8 array of them."""
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        params = ", ".join(f"{p.name}={getattr(self, p.name)!r}" for p in self.ports)
+        return f"{type(self).__name__}({params})"
+
+
+LEAF_TYPES: dict[str, type[Leaf]] = {}
+
+
+def register_leaf(cls: type[Leaf]) -> type[Leaf]:
+    """Class decorator: make ``cls`` available under ``cls.type_name`` in tree descriptions."""
+    LEAF_TYPES[cls.type_name] = cls
+    return cls
+
+
+def leaf_type(type_name: str) -> type[Leaf]:
+    """The registered leaf class; LeafError with the closest known names if there is none."""
+    try:
+        return LEAF_TYPES[type_name]
+    except KeyError:
+        close = difflib.get_close_matches(type_name, list(LEAF_TYPES), n=3)
+        hint = f"; did you mean {' or '.join(close)}?" if close else ""
+        raise LeafError(f"unknown leaf type {type_name!r}{hint}") from None
+
+
+def make_leaf(node: Node, defaults: Mapping[str, Any]) -> Leaf:
+    """The leaf instance for a leaf node, ports from the node or ``defaults``; TreeError if bad."""
+    try:
+        cls = leaf_type(node.type)
+        return cls.create(node.params, defaults, where=f"leaf {node.name!r} ({node.type})")
+    except LeafError as error:
+        raise TreeError(str(error) if "leaf " in str(error) else f"node {node.name!r}: {error}") from None
+
+
+def check_leaves(
+    tree: Node, swarm: Swarm, defaults: Mapping[str, Any], skip: Container[str] = ()
+) -> None:
+    """Raise TreeError for a bad structure, an unknown leaf type, bad ports, or a blackboard
+    key the swarm lacks. Leaf types in ``skip`` (hand-written behaviours) are not checked."""
+    check_structure(tree)
+    for node in tree.leaves():
+        if node.type in skip:
+            continue
+        leaf = make_leaf(node, defaults)
+        missing = [k for k in leaf.keys if k not in swarm.blackboard]
+        if missing:
+            raise TreeError(f"leaf {node.name!r} ({node.type}) needs blackboard key(s) {missing}")

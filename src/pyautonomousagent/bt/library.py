@@ -1,0 +1,256 @@
+"""The leaf-node library: the paper's Table 1, the patrol nodes and the radiation/damage nodes.
+
+Every leaf reads and writes an :class:`~pyautonomousagent.state.AgentView` with array
+expressions, so the same code runs for one agent (py_trees engine) or many at once.
+Suffix ``_S``: synchronous (SUCCESS/FAILURE); suffix ``_A``: asynchronous (may be RUNNING).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
+from pyautonomousagent.arrays import bearing, choose, maximum, minimum
+from pyautonomousagent.bt.status import RUNNING, SUCCESS, status_if, success_if
+from pyautonomousagent.datalink import GATHERING, SHARING_DATA
+from pyautonomousagent.state import AgentView
+from pyautonomousagent.world import World
+
+DESTINATION = ("x_current_destination_position", "y_current_destination_position")
+SURVEILLANCE = ("x_surveillance_position", "y_surveillance_position")
+REFUELING = ("x_refueling_position", "y_refueling_position")
+PATROL = (
+    "index_current_surveillance_position",
+    "x_surveillance_position_1",
+    "y_surveillance_position_1",
+    "x_surveillance_position_2",
+    "y_surveillance_position_2",
+)
+SPEED = Port("speed", float, "reference_speed", 0.0, "cruise speed requested, units per iteration")
+
+
+@register_leaf
+class ConditionDestinationReached(Leaf):
+    """SUCCESS if the agent is within ``distance`` of its current destination."""
+
+    type_name = "Condition_Destination_Reached"
+    ports = (Port("distance", float, "destination_tolerance", 0.0, "world units"),)
+    keys = DESTINATION
+    distance: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        dx = agents.x - bb.x_current_destination_position
+        dy = agents.y - bb.y_current_destination_position
+        return success_if(dx * dx + dy * dy <= self.distance * self.distance)
+
+
+@register_leaf
+class ConditionLowEnergyLevel(Leaf):
+    """SUCCESS if the energy level is at or below ``threshold`` percent."""
+
+    type_name = "Condition_Low_Energy_Level"
+    ports = (Port("threshold", float, "low_energy_threshold", 0.0, "percent"),)
+    threshold: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        return success_if(agents.energy <= self.threshold)
+
+
+@register_leaf
+class ConditionGatheringMoment(Leaf):
+    """SUCCESS at iteration ``iteration`` for the agent called ``sender``."""
+
+    type_name = "Condition_Gathering_Moment"
+    ports = (
+        Port("iteration", int, "gathering_iteration", 0, "the iteration of the gathering"),
+        Port("sender", str, "gathering_sender", None, "the agent that orders the gathering"),
+    )
+    iteration: int
+    sender: str
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        sender_index = world.agent_index.get(self.sender, -1)
+        return success_if((world.iteration == self.iteration) & (agents.index == sender_index))
+
+
+@register_leaf
+class ConditionRadiationDetected(Leaf):
+    """SUCCESS if the radiation sensor reads more than ``threshold`` percent."""
+
+    type_name = "Condition_Radiation_Detected"
+    ports = (Port("threshold", float, "radiation_threshold", 0.0, "percent"),)
+    threshold: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        return success_if(agents.radiation > self.threshold)
+
+
+@register_leaf
+class ConditionHighDamageLevel(Leaf):
+    """SUCCESS if the damage level is at or above ``threshold`` percent."""
+
+    type_name = "Condition_High_Damage_Level"
+    ports = (Port("threshold", float, "damage_limit", 0.0, "percent"),)
+    threshold: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        return success_if(agents.damage >= self.threshold)
+
+
+@register_leaf
+class ActionNavigateToDestinationA(Leaf):
+    """Request the heading toward the current destination at cruise speed; always RUNNING."""
+
+    type_name = "Action_Navigate_To_Destination_A"
+    ports = (SPEED,)
+    keys = DESTINATION
+    speed: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        agents.requested_heading = bearing(
+            agents.x, agents.y, bb.x_current_destination_position, bb.y_current_destination_position
+        )
+        agents.requested_speed = self.speed
+        return RUNNING
+
+
+def _set_destination(agents: AgentView, x: Any, y: Any) -> int:
+    agents.blackboard.x_current_destination_position = x
+    agents.blackboard.y_current_destination_position = y
+    return SUCCESS
+
+
+@register_leaf
+class ActionSetDestinationEqualToSurveillanceS(Leaf):
+    """Destination := the surveillance position; SUCCESS."""
+
+    type_name = "Action_Set_Destination_Equal_To_Surveillance_S"
+    keys = DESTINATION + SURVEILLANCE
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        return _set_destination(agents, bb.x_surveillance_position, bb.y_surveillance_position)
+
+
+@register_leaf
+class ActionSetDestinationEqualToRefuelingS(Leaf):
+    """Destination := the refuelling slot; SUCCESS."""
+
+    type_name = "Action_Set_Destination_Equal_To_Refueling_S"
+    keys = DESTINATION + REFUELING
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        return _set_destination(agents, bb.x_refueling_position, bb.y_refueling_position)
+
+
+def _go_to_patrol_position(agents: AgentView, index: Any) -> int:
+    """Make patrol position ``index`` (1 or 2) current and the destination."""
+    bb = agents.blackboard
+    first = index == 1
+    x = choose(first, bb.x_surveillance_position_1, bb.x_surveillance_position_2)
+    y = choose(first, bb.y_surveillance_position_1, bb.y_surveillance_position_2)
+    bb.index_current_surveillance_position = index
+    bb.x_surveillance_position = x
+    bb.y_surveillance_position = y
+    return _set_destination(agents, x, y)
+
+
+@register_leaf
+class ActionSetDestinationEqualToOtherSurveillanceS(Leaf):
+    """Switch to the other patrol surveillance position and make it the destination; SUCCESS."""
+
+    type_name = "Action_Set_Destination_Equal_To_Other_Surveillance_S"
+    keys = DESTINATION + SURVEILLANCE + PATROL
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        return _go_to_patrol_position(agents, 3 - agents.blackboard.index_current_surveillance_position)
+
+
+@register_leaf
+class ActionSetDestinationEqualToCurrentSurveillanceS(Leaf):
+    """Destination := the current patrol surveillance position; SUCCESS."""
+
+    type_name = "Action_Set_Destination_Equal_To_Current_Surveillance_S"
+    keys = DESTINATION + SURVEILLANCE + PATROL
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        return _go_to_patrol_position(agents, agents.blackboard.index_current_surveillance_position)
+
+
+def _send_to_all(agents: AgentView, world: World, kind: str, data: dict[str, Any]) -> int:
+    """Each agent of the view sends ``data`` (its own row of each array) to everyone."""
+    indices = np.atleast_1d(agents.index)
+    rows = {k: np.broadcast_to(v, indices.shape) for k, v in data.items()}
+    xs, ys = np.broadcast_to(agents.x, indices.shape), np.broadcast_to(agents.y, indices.shape)
+    for i, sender in enumerate(indices):
+        row = {k: float(v[i]) for k, v in rows.items()}
+        world.datalink.send(int(sender), kind, row, (xs[i], ys[i]))
+    return SUCCESS
+
+
+@register_leaf
+class ActionTransmitGatheringMessageS(Leaf):
+    """Send everyone a "gathering" message carrying this agent's surveillance position; SUCCESS."""
+
+    type_name = "Action_Transmit_Gathering_Message_S"
+    keys = SURVEILLANCE
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        data = {"x": bb.x_surveillance_position, "y": bb.y_surveillance_position}
+        return _send_to_all(agents, world, GATHERING, data)
+
+
+@register_leaf
+class ActionTransmitSharedDataS(Leaf):
+    """Send everyone a "sharing data" message with this agent's state; SUCCESS."""
+
+    type_name = "Action_Transmit_Shared_Data_S"
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        names = ("x", "y", "speed", "heading", "damage", "energy")
+        data = {name: getattr(agents, name) for name in names}
+        return _send_to_all(agents, world, SHARING_DATA, data)
+
+
+def _hold_still_until(agents: AgentView, done: Any, speed: float) -> Any:
+    """Request speed 0 (keeping the heading) until ``done``, then cruise speed; RUNNING/SUCCESS."""
+    agents.requested_speed = choose(done, speed, 0.0)
+    agents.requested_heading = agents.heading
+    return status_if(done, SUCCESS, RUNNING)
+
+
+@register_leaf
+class ActionRefuelA(Leaf):
+    """Refuel ``rate`` percent per iteration, standing still; RUNNING until 100 %, then SUCCESS."""
+
+    type_name = "Action_Refuel_A"
+    ports = (Port("rate", float, "refuel_rate", 0.0, "percent per iteration"), SPEED)
+    rate: float
+    speed: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        energy = minimum(agents.energy + self.rate, 100.0)
+        agents.energy = energy
+        return _hold_still_until(agents, energy >= 100.0, self.speed)
+
+
+@register_leaf
+class ActionRepairDamageA(Leaf):
+    """Repair ``rate`` percent of damage per iteration, standing still; RUNNING until 0 %."""
+
+    type_name = "Action_Repair_Damage_A"
+    ports = (Port("rate", float, "repair_rate", 0.0, "percent per iteration"), SPEED)
+    rate: float
+    speed: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        damage = maximum(agents.damage - self.rate, 0.0)
+        agents.damage = damage
+        return _hold_still_until(agents, damage <= 0.0, self.speed)
+

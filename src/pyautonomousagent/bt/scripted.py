@@ -1,0 +1,39 @@
+"""A leaf whose statuses are given in advance: for tests, and for teaching composites.
+
+``leaf("Scripted", "a", statuses=[[SUCCESS], [RUNNING], ...])`` returns
+``statuses[world.iteration - 1][agent]`` on each tick: one row per tick (iteration 1
+first), one column per agent. It changes nothing else.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+import numpy as np
+
+from pyautonomousagent.bt.leaf import Leaf, LeafError, register_leaf
+from pyautonomousagent.bt.status import NAMES
+from pyautonomousagent.state import AgentView
+from pyautonomousagent.world import World
+
+
+@register_leaf
+class Scripted(Leaf):
+    """Returns the scripted status of the current iteration for each agent."""
+
+    type_name = "Scripted"
+    statuses: np.ndarray
+
+    @classmethod
+    def create(cls, params: Mapping[str, Any], defaults: Mapping[str, Any], where: str) -> Leaf:
+        if set(params) != {"statuses"}:
+            raise LeafError(f"{where}: Scripted takes exactly one port, 'statuses'")
+        table = np.asarray(params["statuses"], dtype=np.int8)
+        if table.ndim != 2 or not np.isin(table, list(NAMES)).all():
+            raise LeafError(f"{where}: statuses must be a (ticks, agents) table of status codes")
+        return cls(statuses=table)
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        row = self.statuses[world.iteration - 1]
+        return row[agents.index] if np.ndim(agents.index) else int(row[agents.index])

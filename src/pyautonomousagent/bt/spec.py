@@ -1,0 +1,175 @@
+"""The engine-independent tree description: a small tree of node specs.
+
+A :class:`Node` names its type (a control node such as ``"Sequence"`` or a leaf type such
+as ``"Condition_Low_Energy_Level"``), an instance name, its children and its parameters.
+Engines turn a description into something they tick (one py_trees tree per agent, or a
+flat program for all agents); loaders and writers turn it into files and pictures.
+
+Build one with the helpers, which read like the paper's figures::
+
+    reactive_fallback("root",
+        sequence("low_energy", leaf("Condition_Low_Energy_Level"), ...),
+        leaf("Action_Navigate_To_Destination_A", "action_navigate_to_destination_a_2"))
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+#: Decorators that map their child's status: type -> {child status name: own status name}.
+STATUS_MAPS: dict[str, dict[str, str]] = {
+    "Inverter": {"SUCCESS": "FAILURE", "FAILURE": "SUCCESS"},
+    "FailureIsSuccess": {"FAILURE": "SUCCESS"},
+    "FailureIsRunning": {"FAILURE": "RUNNING"},
+    "SuccessIsFailure": {"SUCCESS": "FAILURE"},
+    "SuccessIsRunning": {"SUCCESS": "RUNNING"},
+    "RunningIsFailure": {"RUNNING": "FAILURE"},
+    "RunningIsSuccess": {"RUNNING": "SUCCESS"},
+    "PassThrough": {},
+}
+
+#: Control node types: type -> (least children, most children or None, {parameter: default}).
+#: A default of None marks a required parameter.
+CONTROL_NODES: dict[str, tuple[int, int | None, dict[str, Any]]] = {
+    "Sequence": (0, None, {"memory": None}),
+    "Selector": (0, None, {"memory": None}),
+    "Parallel": (0, None, {"policy": "SuccessOnAll", "synchronise": True}),
+    "Repeat": (1, 1, {"num_success": None}),
+    "Retry": (1, 1, {"num_failures": None}),
+    **{name: (1, 1, {}) for name in STATUS_MAPS},
+}
+
+PARALLEL_POLICIES = ("SuccessOnAll", "SuccessOnOne")
+
+
+class TreeError(ValueError):
+    """A tree description that cannot be built, with a message naming the node."""
+
+
+@dataclass(frozen=True)
+class Node:
+    """One node of a tree description.
+
+    Attributes:
+        type: a control type from :data:`CONTROL_NODES` or a registered leaf type name.
+        name: the instance name (e.g. ``"action_navigate_to_destination_a_1"``).
+        children: child nodes, left (highest priority) first.
+        params: parameters: ``memory`` for composites, ports for leaves.
+    """
+
+    type: str
+    name: str
+    children: tuple[Node, ...] = ()
+    params: Mapping[str, Any] = field(default_factory=dict)
+
+    @property
+    def is_control(self) -> bool:
+        """True for composites and decorators, False for leaves."""
+        return self.type in CONTROL_NODES
+
+    def walk(self) -> Iterator[Node]:
+        """This node and all below it, depth first, left to right (tick order)."""
+        yield self
+        for child in self.children:
+            yield from child.walk()
+
+    def leaves(self) -> list[Node]:
+        """The leaf nodes, in tick order."""
+        return [n for n in self.walk() if not n.is_control]
+
+
+def snake_case(type_name: str) -> str:
+    """``"Action_Refuel_A"`` -> ``"action_refuel_a"``; ``"RefuelAction"`` -> ``"refuel_action"``."""
+    return re.sub(r"(?<=[a-z0-9])(?=[A-Z])", "_", type_name).replace("__", "_").lower()
+
+
+def sequence(name: str, *children: Node, memory: bool = True) -> Node:
+    """A sequence ("→"; with ``memory=False`` the reactive sequence "R→")."""
+    return Node("Sequence", name, tuple(children), {"memory": memory})
+
+
+def reactive_sequence(name: str, *children: Node) -> Node:
+    """A reactive sequence ("R→"): restarts from its first child on every tick."""
+    return sequence(name, *children, memory=False)
+
+
+def fallback(name: str, *children: Node, memory: bool = True) -> Node:
+    """A fallback / selector ("?"; with ``memory=False`` the reactive fallback "R?")."""
+    return Node("Selector", name, tuple(children), {"memory": memory})
+
+
+def reactive_fallback(name: str, *children: Node) -> Node:
+    """A reactive fallback ("R?"): restarts from its first child on every tick."""
+    return fallback(name, *children, memory=False)
+
+
+def inverter(name: str, child: Node) -> Node:
+    """An inverter ("≠"): swaps its child's SUCCESS and FAILURE."""
+    return Node("Inverter", name, (child,))
+
+
+def parallel(name: str, *children: Node, policy: str = "SuccessOnAll", synchronise: bool = True) -> Node:
+    """A parallel ("⇉"): ticks every child every tick; ``policy`` decides its success."""
+    params: dict[str, Any] = {"policy": policy}
+    if policy == "SuccessOnAll":
+        params["synchronise"] = synchronise
+    return Node("Parallel", name, tuple(children), params)
+
+
+def decorator(type_name: str, name: str, child: Node, **params: Any) -> Node:
+    """A decorator of type ``type_name`` (e.g. ``"Repeat"``, ``num_success=3``)."""
+    return Node(type_name, name, (child,), dict(params))
+
+
+def leaf(type_name: str, name: str | None = None, **params: Any) -> Node:
+    """A leaf node of a registered type; the name defaults to the type in snake case."""
+    return Node(type_name, name or snake_case(type_name), (), dict(params))
+
+
+def check_structure(root: Node) -> None:
+    """Raise :class:`TreeError` if a control node has a wrong number of children or
+    unknown parameters, or if two nodes share a name."""
+    seen: set[str] = set()
+    for node in root.walk():
+        if node.name in seen:
+            raise TreeError(f"two nodes are named {node.name!r}; give each node its own name")
+        seen.add(node.name)
+        if not node.is_control:
+            if node.children:
+                raise TreeError(f"leaf {node.name!r} ({node.type}) cannot have children")
+            continue
+        least, most, _ = CONTROL_NODES[node.type]
+        count = len(node.children)
+        if count < least or (most is not None and count > most):
+            wanted = str(least) if least == most else f"at least {least}"
+            raise TreeError(f"{node.type} {node.name!r} needs {wanted} child(ren), has {count}")
+        control_params(node)
+
+
+def control_params(node: Node) -> dict[str, Any]:
+    """A control node's parameters with defaults filled in; TreeError if one is bad."""
+    defaults = CONTROL_NODES[node.type][2]
+    where = f"{node.type} {node.name!r}"
+    unknown = sorted(set(node.params) - set(defaults))
+    if unknown:
+        raise TreeError(f"{where} has unknown parameter(s) {unknown}; it takes {sorted(defaults)}")
+    values = {**defaults, **node.params}
+    for key, value in values.items():
+        if value is None:
+            raise TreeError(f"{where} needs parameter {key!r}")
+        if key in ("memory", "synchronise") and not isinstance(value, bool):
+            raise TreeError(f"{where}: {key} must be true or false, got {value!r}")
+        if key in ("num_success", "num_failures") and (
+            isinstance(value, bool) or not isinstance(value, int) or value < 1
+        ):
+            raise TreeError(f"{where}: {key} must be a whole number >= 1, got {value!r}")
+    if values.get("policy", "SuccessOnAll") not in PARALLEL_POLICIES:
+        raise TreeError(f"{where}: policy must be one of {PARALLEL_POLICIES}, got {values['policy']!r}")
+    if values.get("policy") == "SuccessOnOne":
+        if node.params.get("synchronise"):
+            raise TreeError(f"{where}: policy SuccessOnOne cannot synchronise")
+        values["synchronise"] = False
+    return values

@@ -1,0 +1,29 @@
+"""Node statuses as small integers, shared by both engines and the recorded traces.
+
+The codes mirror :class:`py_trees.common.Status`; arrays of them have dtype int8.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+INVALID = 0
+SUCCESS = 1
+FAILURE = 2
+RUNNING = 3
+
+NAMES = {INVALID: "INVALID", SUCCESS: "SUCCESS", FAILURE: "FAILURE", RUNNING: "RUNNING"}
+
+
+def status_if(condition: Any, if_true: int, if_false: int) -> Any:
+    """``if_true`` where ``condition`` holds, else ``if_false``: an int, or an int8 array."""
+    if isinstance(condition, np.ndarray):
+        return np.where(condition, np.int8(if_true), np.int8(if_false))
+    return if_true if condition else if_false
+
+
+def success_if(condition: Any) -> Any:
+    """SUCCESS where ``condition`` holds, FAILURE elsewhere."""
+    return status_if(condition, SUCCESS, FAILURE)

@@ -1,0 +1,1 @@
+"""Decision engines: how Phase 3 ticks the behaviour tree of every agent."""

@@ -1,0 +1,160 @@
+"""The py_trees engine: one real py_trees tree per agent, ticked agent by agent.
+
+This is the didactic path of the paper. Library leaves become :class:`LeafBehaviour`
+adapters around the engine-independent :class:`~pyautonomousagent.bt.leaf.Leaf`; a
+hand-written :class:`AgentBehaviour` subclass (override ``update()`` as in py_trees) can be
+registered under a type name with :func:`register_behaviour` and used in any tree.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Mapping
+from typing import Any
+
+import numpy as np
+import py_trees
+from py_trees.common import Status
+
+from pyautonomousagent.bt import status as codes
+from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
+from pyautonomousagent.bt.spec import Node, control_params
+from pyautonomousagent.state import AgentView, Swarm
+from pyautonomousagent.world import World
+
+TO_PYTREES = {
+    codes.INVALID: Status.INVALID,
+    codes.SUCCESS: Status.SUCCESS,
+    codes.FAILURE: Status.FAILURE,
+    codes.RUNNING: Status.RUNNING,
+}
+FROM_PYTREES = {v: k for k, v in TO_PYTREES.items()}
+
+
+class AgentBehaviour(py_trees.behaviour.Behaviour):
+    """A py_trees behaviour that belongs to one agent.
+
+    Subclass it and override ``update()`` (and ``initialise()``/``terminate()`` if
+    needed), reading and writing ``self.agent`` (e.g. ``self.agent.energy``,
+    ``self.agent.blackboard.x_current_destination_position``). Every tick adds one to the
+    agent's ``number_ticks``.
+    """
+
+    def __init__(self, name: str, agent: AgentView, world: World, **params: Any) -> None:
+        super().__init__(name)
+        self.agent = agent
+        self.world = world
+        self.params = params
+        self._ticks = agent.swarm.blackboard["number_ticks"]
+        self._row = agent.index
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """Count the tick on the blackboard, then tick as py_trees does."""
+        self._ticks[self._row] += 1
+        yield from super().tick()
+
+
+class LeafBehaviour(py_trees.behaviour.Behaviour):
+    """A library leaf (engine-independent :class:`Leaf`) run for one agent by py_trees.
+
+    It counts its ticks in ``update()``, which py_trees calls once per tick, sparing the
+    extra generator of :meth:`AgentBehaviour.tick` on this hot path.
+    """
+
+    def __init__(self, name: str, leaf: Leaf, agent: AgentView, world: World) -> None:
+        super().__init__(name)
+        self.leaf = leaf
+        self.agent = agent
+        self.world = world
+        self._ticks = agent.swarm.blackboard["number_ticks"]
+        self._row = agent.index
+
+    def update(self) -> Status:
+        """Count the tick, then evaluate the leaf for this agent."""
+        self._ticks[self._row] += 1
+        return TO_PYTREES[self.leaf.evaluate(self.agent, self.world)]
+
+
+BehaviourFactory = Callable[..., AgentBehaviour]
+#: Hand-written py_trees behaviours: type name -> class taking (name, agent, world, **params).
+BEHAVIOUR_TYPES: dict[str, BehaviourFactory] = {}
+
+
+def register_behaviour(type_name: str) -> Callable[[type[AgentBehaviour]], type[AgentBehaviour]]:
+    """Class decorator: use an :class:`AgentBehaviour` subclass as leaf type ``type_name``.
+
+    Such a leaf runs on the py_trees engine only.
+    """
+
+    def register(cls: type[AgentBehaviour]) -> type[AgentBehaviour]:
+        BEHAVIOUR_TYPES[type_name] = cls
+        return cls
+
+    return register
+
+
+def build_behaviour(
+    node: Node, agent: AgentView, world: World, defaults: Mapping[str, Any]
+) -> py_trees.behaviour.Behaviour:
+    """The py_trees tree of one agent for a (checked) tree description."""
+    children = [build_behaviour(c, agent, world, defaults) for c in node.children]
+    if node.is_control:
+        return _control_behaviour(node, children)
+    if node.type in BEHAVIOUR_TYPES:
+        return BEHAVIOUR_TYPES[node.type](node.name, agent, world, **dict(node.params))
+    return LeafBehaviour(node.name, make_leaf(node, defaults), agent, world)
+
+
+def _control_behaviour(
+    node: Node, children: list[py_trees.behaviour.Behaviour]
+) -> py_trees.behaviour.Behaviour:
+    """The py_trees composite or decorator for a control node."""
+    params = control_params(node)
+    if node.type in ("Sequence", "Selector"):
+        composite = getattr(py_trees.composites, node.type)
+        return composite(node.name, params["memory"], children)  # type: ignore[no-any-return]
+    if node.type == "Parallel":
+        policies = py_trees.common.ParallelPolicy
+        policy = (
+            policies.SuccessOnOne()
+            if params["policy"] == "SuccessOnOne"
+            else policies.SuccessOnAll(synchronise=params["synchronise"])
+        )
+        return py_trees.composites.Parallel(node.name, policy, children)
+    decorator = getattr(py_trees.decorators, node.type)
+    return decorator(node.name, children[0], **params)  # type: ignore[no-any-return]
+
+
+class PyTreesEngine:
+    """Phase 3 with one py_trees tree per agent.
+
+    Args:
+        tree: the tree description.
+        swarm: the agents (each gets its own tree and its own blackboard row).
+        world: the shared world.
+        defaults: scenario parameters that supply leaf ports not set in the tree.
+    """
+
+    name = "pytrees"
+
+    def __init__(self, tree: Node, swarm: Swarm, world: World, defaults: Mapping[str, Any]) -> None:
+        check_leaves(tree, swarm, defaults, skip=BEHAVIOUR_TYPES)
+        self.tree = tree
+        self.roots = [build_behaviour(tree, swarm.agent(i), world, defaults) for i in range(swarm.size)]
+
+    def tick(self) -> None:
+        """Tick every agent's tree once, in agent order."""
+        for root in self.roots:
+            root.tick_once()
+
+    def node_statuses(self) -> np.ndarray:
+        """Status codes after the last tick, shape (nodes in tick order, N), int8."""
+        table = [[FROM_PYTREES[b.status] for b in _preorder(root)] for root in self.roots]
+        return np.asarray(table, dtype=np.int8).T
+
+
+def _preorder(behaviour: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.Behaviour]:
+    """The behaviours of a tree in tick order (the order of :meth:`Node.walk`)."""
+    nodes = [behaviour]
+    for child in behaviour.children:
+        nodes.extend(_preorder(child))
+    return nodes

@@ -1,0 +1,1 @@
+"""Motion models and their control systems, as pure functions over swarm arrays."""

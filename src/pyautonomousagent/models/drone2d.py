@@ -1,0 +1,83 @@
+"""The paper's 2-D point-mass drone (eqs. 1-4) and its bang-bang control system (Phase 4).
+
+Heading is in degrees, measured clockwise from north (+y), as in aviation: a drone with
+heading 90 flies east (+x). All functions work on whole arrays of shape ``(N,)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class DroneParameters:
+    """Parameters of the 2-D drone model.
+
+    Attributes:
+        max_speed: upper speed limit, world units per iteration (paper: 0.1).
+        speed_step: magnitude of the speed control signal u_v per iteration (paper: 0.1).
+        turn_step: magnitude of the heading control signal u_a, degrees per iteration
+            (reference-facts decision: 1.0).
+    """
+
+    max_speed: float = 0.1
+    speed_step: float = 0.1
+    turn_step: float = 1.0
+
+
+def advance(
+    x: np.ndarray,
+    y: np.ndarray,
+    speed: np.ndarray,
+    heading: np.ndarray,
+    u_speed: np.ndarray,
+    u_heading: np.ndarray,
+    params: DroneParameters,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """One step of paper eqs. 1-4 with last iteration's state and control signals.
+
+    Args:
+        x, y: position, shape (N,).
+        speed: units per iteration, shape (N,).
+        heading: degrees clockwise from north, shape (N,).
+        u_speed, u_heading: control signals of the previous iteration, shape (N,).
+        params: model parameters (speed limits).
+
+    Returns:
+        New (x, y, speed, heading); speed clipped to [0, max_speed], heading in [0, 360).
+    """
+    rad = np.radians(heading)
+    new_x = x + speed * np.sin(rad)
+    new_y = y + speed * np.cos(rad)
+    new_speed = np.clip(speed + u_speed, 0.0, params.max_speed)
+    new_heading = np.mod(heading + u_heading, 360.0)
+    return new_x, new_y, new_speed, new_heading
+
+
+def heading_error(requested: np.ndarray, current: np.ndarray) -> np.ndarray:
+    """Signed shortest turn from ``current`` to ``requested``, degrees in (-180, 180]."""
+    error = np.mod(requested - current, 360.0)
+    return np.where(error > 180.0, error - 360.0, error)
+
+
+def control(
+    speed: np.ndarray,
+    heading: np.ndarray,
+    requested_speed: np.ndarray,
+    requested_heading: np.ndarray,
+    params: DroneParameters,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Phase 4: bang-bang control signals toward the requested speed and heading.
+
+    The heading turns the shorter way round the circle; a signal is 0 when the value
+    already equals its reference.
+
+    Returns:
+        (u_speed, u_heading), each shape (N,), in {-step, 0, +step}.
+    """
+    u_speed = params.speed_step * np.sign(requested_speed - speed)
+    u_heading = params.turn_step * np.sign(heading_error(requested_heading, heading))
+    return u_speed, u_heading
+

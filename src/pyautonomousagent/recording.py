@@ -1,0 +1,97 @@
+"""Phase 6: recording the swarm into preallocated arrays, and exporting them.
+
+A :class:`Recorder` keeps one array of shape ``(records, N)`` per recorded column, where
+``records = iterations // every + 1`` (the initial state, then every ``every``-th
+iteration). Nothing grows during a run. :func:`to_table` turns the arrays into a long
+table (one row per recorded iteration and agent) for Parquet, CSV or pandas.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+
+from pyautonomousagent.state import Swarm
+
+
+class Recorder:
+    """Preallocated columnar storage of the swarm's state and blackboard.
+
+    Args:
+        swarm: the agents (its columns and blackboard keys are recorded).
+        iterations: the run's length in iterations.
+        every: record iteration t when ``t % every == 0`` (decimation); 1 records all.
+    """
+
+    def __init__(self, swarm: Swarm, iterations: int, every: int = 1) -> None:
+        if every < 1:
+            raise ValueError(f"record_every must be >= 1, got {every}")
+        self.every = every
+        self.names = list(swarm.names)
+        records = iterations // every + 1
+        self.iterations = np.zeros(records, dtype=np.int64)
+        self.columns = {
+            **{k: np.zeros((records, swarm.size), dtype=v.dtype) for k, v in swarm.columns.items()},
+            **{k: np.zeros((records, swarm.size), dtype=v.dtype) for k, v in swarm.blackboard.items()},
+        }
+        self.count = 0
+
+    def due(self, iteration: int) -> bool:
+        """Whether ``iteration`` is recorded."""
+        return iteration % self.every == 0
+
+    def record(self, iteration: int, swarm: Swarm) -> None:
+        """Copy the swarm's current state into the next record."""
+        row = self.count
+        self.iterations[row] = iteration
+        for key, values in self.columns.items():
+            source = swarm.columns.get(key)
+            values[row] = source if source is not None else swarm.blackboard[key]
+        self.count += 1
+
+    def column(self, key: str) -> np.ndarray:
+        """The recorded values of ``key``, shape (records so far, N)."""
+        return self.columns[key][: self.count]
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes held by the preallocated arrays."""
+        return sum(v.nbytes for v in self.columns.values()) + self.iterations.nbytes
+
+
+def to_table(recorder: Recorder) -> pa.Table:
+    """The records as a long table: columns ``iteration, agent``, the state, the blackboard."""
+    records, n = recorder.count, len(recorder.names)
+    agent = pa.DictionaryArray.from_arrays(
+        pa.array(np.tile(np.arange(n, dtype=np.int32), records)), pa.array(recorder.names)
+    )
+    data: dict[str, pa.Array] = {
+        "iteration": pa.array(np.repeat(recorder.iterations[:records], n)),
+        "agent": agent,
+    }
+    for key in recorder.columns:
+        data[key] = pa.array(recorder.column(key).reshape(-1))
+    return pa.table(data)
+
+
+def write_table(table: pa.Table, path: Path, fmt: str = "parquet") -> Path:
+    """Write ``table`` as ``path`` in ``fmt`` ("parquet" or "csv"); return the path."""
+    if fmt == "parquet":
+        import pyarrow.parquet as pq
+
+        pq.write_table(table, path)
+    elif fmt == "csv":
+        import pyarrow.csv as pcsv
+
+        pcsv.write_csv(table.cast(_plain_agent(table.schema)), path)
+    else:
+        raise ValueError(f"unknown format {fmt!r}; use 'parquet' or 'csv'")
+    return path
+
+
+def _plain_agent(schema: pa.Schema) -> pa.Schema:
+    """The schema with the dictionary-encoded agent column as plain strings (for CSV)."""
+    return schema.set(schema.get_field_index("agent"), pa.field("agent", pa.string()))
+

@@ -1,0 +1,55 @@
+"""Named scenarios, each described by a validated YAML file.
+
+``load("gathering")`` reads the packaged ``gathering.yaml``; ``load("my.yaml")`` reads a
+file of one's own. :func:`register` adds a name.
+"""
+
+from __future__ import annotations
+
+import difflib
+from importlib import resources
+from pathlib import Path
+
+import yaml
+
+from pyautonomousagent.simulation.scenario import Scenario, ScenarioError
+
+_PACKAGED = resources.files(__name__)
+REGISTRY: dict[str, Path] = {
+    "gathering": Path(str(_PACKAGED / "gathering.yaml")),
+    "patrol": Path(str(_PACKAGED / "patrol.yaml")),
+}
+
+
+def register(name: str, path: str | Path) -> None:
+    """Make the scenario file ``path`` loadable as ``name``."""
+    REGISTRY[name] = Path(path)
+
+
+def names() -> list[str]:
+    """The registered scenario names."""
+    return list(REGISTRY)
+
+
+def load(name_or_path: str | Path) -> Scenario:
+    """A registered scenario by name, or a scenario YAML file by path.
+
+    Raises:
+        ScenarioError: unknown name, unreadable file, bad YAML, or bad fields.
+    """
+    key = str(name_or_path)
+    if key in REGISTRY:
+        path = REGISTRY[key]
+    elif key.endswith((".yaml", ".yml")):
+        path = Path(key)
+    else:
+        close = difflib.get_close_matches(key, names(), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise ScenarioError(f"unknown scenario {key!r}{hint}; known: {', '.join(names())}")
+    try:
+        data = yaml.safe_load(path.read_text())
+    except OSError as error:
+        raise ScenarioError(f"cannot read scenario file {path}: {error.strerror}") from None
+    except yaml.YAMLError as error:
+        raise ScenarioError(f"{path}: not valid YAML: {error}") from None
+    return Scenario.from_mapping(data, source=str(path.name))

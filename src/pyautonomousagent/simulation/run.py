@@ -1,0 +1,138 @@
+"""The simulation: the swarm, its world and engine, and the loop in the paper's phase order."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+import pyarrow as pa
+
+from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.bt.trees import tree_by_name
+from pyautonomousagent.datalink import Datalink, Received
+from pyautonomousagent.engines.batched import BatchedEngine
+from pyautonomousagent.engines.pytrees import PyTreesEngine
+from pyautonomousagent.models.drone2d import DroneParameters
+from pyautonomousagent.progress import Progress
+from pyautonomousagent.recording import Recorder, to_table
+from pyautonomousagent.simulation import phases
+from pyautonomousagent.simulation.scenario import Scenario
+from pyautonomousagent.state import Swarm
+from pyautonomousagent.world import World
+
+ENGINES = {"pytrees": PyTreesEngine, "batched": BatchedEngine}
+
+
+class Engine(Protocol):
+    """What the loop needs of a decision engine (Phase 3)."""
+
+    name: str
+
+    def tick(self) -> None: ...
+
+    def node_statuses(self) -> np.ndarray: ...
+
+
+@dataclass
+class Simulation:
+    """One run of a scenario. Make it with :meth:`create`, then :meth:`run` or :meth:`step`.
+
+    Attributes:
+        scenario: what is simulated.
+        seed: the seed of ``rng``.
+        rng: the run's only source of randomness.
+        swarm: the agents' state and blackboards.
+        world: the shared world (clock, datalink, radiation).
+        drone: the motion model's parameters.
+        engine: the decision engine of Phase 3.
+        recorder: Phase 6's preallocated records.
+        u_speed, u_heading: control signals from Phase 4, used by the next Phase 2, shape (N,).
+        inbox: messages delivered in Phase 5, acted on in the next Phase 2.
+        shared: receiver -> sender -> latest "sharing data" (with its iteration).
+        events: alerts and recorded messages, as plain dicts.
+        alerted: agents that have raised their zero-energy alert, shape (N,).
+        timings: seconds spent per stage.
+    """
+
+    scenario: Scenario
+    seed: int
+    rng: np.random.Generator
+    swarm: Swarm
+    world: World
+    drone: DroneParameters
+    engine: Engine
+    recorder: Recorder
+    u_speed: np.ndarray
+    u_heading: np.ndarray
+    inbox: list[Received] = field(default_factory=list)
+    shared: dict[int, dict[int, dict[str, float]]] = field(default_factory=dict)
+    events: list[dict[str, Any]] = field(default_factory=list)
+    alerted: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @classmethod
+    def create(cls, scenario: Scenario, seed: int = 0, engine: str = "pytrees",
+               record_every: int = 1, tree: Node | None = None) -> Simulation:
+        """Phase 1 and set-up: agents, world, engine and recorder for ``scenario``.
+
+        Args:
+            scenario: the scenario to run.
+            seed: seed of the run's random generator.
+            engine: name of the decision engine (see :data:`ENGINES`).
+            record_every: record every K-th iteration (and the initial state).
+            tree: a tree description to use instead of the scenario's own.
+        """
+        if engine not in ENGINES:
+            raise ValueError(f"unknown engine {engine!r}; choose from {', '.join(ENGINES)}")
+        start = time.perf_counter()
+        rng = np.random.default_rng(seed)
+        swarm = phases.create_agents(scenario, rng)
+        p = scenario.parameters
+        world = World(
+            width=scenario.world[0],
+            height=scenario.world[1],
+            datalink=Datalink(p.datalink_range),
+            radiation_sources=scenario.radiation_sources,
+            agent_index={name: i for i, name in enumerate(swarm.names)},
+        )
+        defaults = vars(p)
+        decision = ENGINES[engine](tree or tree_by_name(scenario.tree), swarm, world, defaults)
+        sim = cls(
+            scenario=scenario, seed=seed, rng=rng, swarm=swarm, world=world,
+            drone=DroneParameters(p.max_speed, p.speed_step, p.turn_step), engine=decision,
+            recorder=Recorder(swarm, scenario.iterations, record_every),
+            u_speed=np.zeros(swarm.size), u_heading=np.zeros(swarm.size),
+            alerted=np.zeros(swarm.size, dtype=bool),
+        )
+        phases.record(sim)  # the initial state, iteration 0
+        sim.timings["setup"] = time.perf_counter() - start
+        return sim
+
+    def step(self) -> None:
+        """One iteration: Phases 2 to 6."""
+        self.world.iteration += 1
+        phases.estimate_state(self)
+        phases.decide(self)
+        phases.control(self)
+        phases.deliver_messages(self)
+        phases.record(self)
+
+    def run(self, progress: bool | None = None) -> Simulation:
+        """Run the scenario's remaining iterations; a progress bar if ``progress``
+        (by default when standard error is a terminal). Returns ``self``."""
+        start = time.perf_counter()
+        remaining = self.scenario.iterations - self.world.iteration
+        bar = Progress(remaining, f"{self.scenario.name} ({self.engine.name})", enabled=progress)
+        for done in range(1, remaining + 1):
+            self.step()
+            if done % 50 == 0 or done == remaining:
+                bar.update(done)
+        bar.close()
+        self.timings["simulate"] = self.timings.get("simulate", 0.0) + time.perf_counter() - start
+        return self
+
+    def table(self) -> pa.Table:
+        """The recorded data: one row per recorded iteration and agent."""
+        return to_table(self.recorder)

@@ -1,0 +1,164 @@
+"""The swarm's state: arrays with the agent axis first, and per-agent views on them.
+
+Every quantity of every agent lives once, in an array of shape ``(N,)`` held by
+:class:`Swarm`. An :class:`AgentView` reads and writes rows of those arrays: with an
+integer index it is one agent (``agent.energy`` is a plain number), with an integer
+array it is a group of agents (``agents.energy`` is an array). Leaf nodes are written
+against this view, so one piece of leaf code serves a single agent and a whole batch.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+#: Agent state columns shared by every motion model: name -> dtype.
+STATE_COLUMNS: dict[str, type] = {
+    "x": np.float64,  # east position (world units)
+    "y": np.float64,  # north position (world units)
+    "speed": np.float64,  # world units per iteration
+    "heading": np.float64,  # degrees clockwise from north (+y), in [0, 360)
+    "energy": np.float64,  # percent, [0, 100]
+    "damage": np.float64,  # percent, [0, 100]
+    "radiation": np.float64,  # percent, [0, 100], last sensor reading
+    "requested_speed": np.float64,  # reference for the control system
+    "requested_heading": np.float64,  # reference for the control system, degrees
+}
+
+
+@dataclass
+class Swarm:
+    """The state of all N agents.
+
+    Attributes:
+        names: agent identifiers, e.g. ``["drone1", ...]``; length N.
+        columns: state arrays, each of shape ``(N,)`` (see :data:`STATE_COLUMNS`).
+        blackboard: blackboard arrays, each of shape ``(N,)``: key -> values per agent.
+    """
+
+    names: list[str]
+    columns: dict[str, np.ndarray] = field(default_factory=dict)
+    blackboard: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @classmethod
+    def create(cls, names: Iterable[str], blackboard_keys: Mapping[str, Any] = ()) -> Swarm:
+        """Zero-filled state for the named agents, with the given blackboard keys.
+
+        Args:
+            names: agent identifiers.
+            blackboard_keys: key -> dtype (e.g. ``{"number_ticks": np.int64}``).
+        """
+        names = list(names)
+        n = len(names)
+        columns = {k: np.zeros(n, dtype=t) for k, t in STATE_COLUMNS.items()}
+        board = {k: np.zeros(n, dtype=t) for k, t in dict(blackboard_keys).items()}
+        return cls(names=names, columns=columns, blackboard=board)
+
+    @property
+    def size(self) -> int:
+        """Number of agents N."""
+        return len(self.names)
+
+    def agent(self, index: int) -> AgentView:
+        """The view of one agent (``agent.energy`` is a number)."""
+        return AgentView(self, index)
+
+    def agents(self, indices: np.ndarray | None = None) -> AgentView:
+        """The view of a group of agents (``agents.energy`` is an array); all if None."""
+        return AgentView(self, np.arange(self.size) if indices is None else indices)
+
+    def index_of(self, name: str) -> int:
+        """The row of the agent called ``name``; ValueError if there is none."""
+        return self.names.index(name)
+
+
+def _plain(value: Any) -> Any:
+    """A NumPy scalar as a Python number (one agent); an array unchanged (a group)."""
+    return value.item() if value.ndim == 0 else value
+
+
+class _Column:
+    """Descriptor: ``view.<name>`` reads/writes ``swarm.columns[name][view.index]``."""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, view: AgentView, owner: type | None = None) -> Any:
+        return _plain(view.swarm.columns[self.name][view.index])
+
+    def __set__(self, view: AgentView, value: Any) -> None:
+        view.swarm.columns[self.name][view.index] = value
+
+
+class BlackboardView:
+    """One agent's (or a group's) blackboard: attributes are rows of the blackboard arrays.
+
+    Each agent has its own row, so nothing leaks between agents; an unknown key raises
+    AttributeError naming the key and the keys that exist.
+    """
+
+    __slots__ = ("_board", "_index")
+
+    def __init__(self, board: dict[str, np.ndarray], index: Any) -> None:
+        object.__setattr__(self, "_board", board)
+        object.__setattr__(self, "_index", index)
+
+    def _column(self, key: str) -> np.ndarray:
+        try:
+            return self._board[key]
+        except KeyError:
+            known = ", ".join(sorted(self._board))
+            raise AttributeError(f"no blackboard key {key!r} (keys: {known})") from None
+
+    def __getattr__(self, key: str) -> Any:
+        return _plain(self._column(key)[self._index])
+
+    def __setattr__(self, key: str, value: Any) -> None:
+        self._column(key)[self._index] = value
+
+    def keys(self) -> list[str]:
+        """The blackboard's keys."""
+        return list(self._board)
+
+    def as_dict(self) -> dict[str, Any]:
+        """Key -> value(s) for this view, e.g. for display."""
+        return {k: _plain(v[self._index]) for k, v in self._board.items()}
+
+
+class AgentView:
+    """Rows of a :class:`Swarm`: one agent (int index) or a group (int array index).
+
+    State columns are attributes (``x``, ``y``, ``speed``, ``heading``, ``energy``,
+    ``damage``, ``radiation``, ``requested_speed``, ``requested_heading``); the blackboard
+    is ``view.blackboard``.
+    """
+
+    __slots__ = ("swarm", "index", "blackboard")
+
+    x = _Column()
+    y = _Column()
+    speed = _Column()
+    heading = _Column()
+    energy = _Column()
+    damage = _Column()
+    radiation = _Column()
+    requested_speed = _Column()
+    requested_heading = _Column()
+
+    def __init__(self, swarm: Swarm, index: Any) -> None:
+        self.swarm = swarm
+        self.index = index
+        self.blackboard = BlackboardView(swarm.blackboard, index)
+
+    @property
+    def name(self) -> Any:
+        """The agent's identifier (a string), or an array of them for a group."""
+        if np.ndim(self.index) == 0:
+            return self.swarm.names[int(self.index)]
+        return np.array(self.swarm.names, dtype=object)[self.index]
+
+    def __repr__(self) -> str:
+        return f"AgentView({self.name!r})"

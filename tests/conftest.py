@@ -1,0 +1,119 @@
+"""Shared fixtures: small engines for tiny trees, and the full scenario runs (once per session)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import py_trees
+import pytest
+
+from pyautonomousagent import Parameters, Simulation, load
+from pyautonomousagent.bt import library  # noqa: F401  (registers the leaf types)
+from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.datalink import Datalink
+from pyautonomousagent.engines.pytrees import PyTreesEngine
+from pyautonomousagent.state import Swarm
+from pyautonomousagent.world import World
+
+#: The blackboard of the paper's Table 3 plus the patrol keys.
+BLACKBOARD_KEYS: dict[str, type] = {
+    "number_ticks": np.int64,
+    "x_surveillance_position": np.float64,
+    "y_surveillance_position": np.float64,
+    "x_refueling_position": np.float64,
+    "y_refueling_position": np.float64,
+    "x_current_destination_position": np.float64,
+    "y_current_destination_position": np.float64,
+    "index_current_surveillance_position": np.int64,
+    "x_surveillance_position_1": np.float64,
+    "y_surveillance_position_1": np.float64,
+    "x_surveillance_position_2": np.float64,
+    "y_surveillance_position_2": np.float64,
+}
+
+
+def make_swarm(n: int = 1) -> Swarm:
+    """N zero-filled agents ``drone1``..``droneN`` with the full blackboard."""
+    return Swarm.create([f"drone{i + 1}" for i in range(n)], BLACKBOARD_KEYS)
+
+
+def make_world(swarm: Swarm, datalink_range: float = 1000.0) -> World:
+    """A 100 x 100 world for ``swarm`` at iteration 0."""
+    return World(
+        width=100.0,
+        height=100.0,
+        datalink=Datalink(datalink_range),
+        agent_index={name: i for i, name in enumerate(swarm.names)},
+    )
+
+
+@dataclass
+class Harness:
+    """A tree on the py_trees engine for N agents, ticked one iteration at a time."""
+
+    tree: Node
+    swarm: Swarm
+    world: World
+    engine: PyTreesEngine
+
+    def tick(self) -> np.ndarray:
+        """Advance the clock one iteration, tick every agent once; the node statuses."""
+        self.world.iteration += 1
+        self.engine.tick()
+        return self.engine.node_statuses()
+
+    def names(self) -> list[str]:
+        """The node names in the order of :meth:`node_statuses` rows."""
+        return [node.name for node in self.tree.walk()]
+
+    def statuses(self, agent: int = 0) -> dict[str, int]:
+        """Node name -> status code of one agent, after the last tick."""
+        column = self.engine.node_statuses()[:, agent]
+        return dict(zip(self.names(), (int(c) for c in column), strict=True))
+
+
+def make_harness(tree: Node, n: int = 1, defaults: Mapping[str, Any] | None = None) -> Harness:
+    """Swarm + World + PyTreesEngine for ``tree`` and ``n`` agents."""
+    swarm = make_swarm(n)
+    world = make_world(swarm)
+    params = vars(Parameters()) if defaults is None else defaults
+    return Harness(tree, swarm, world, PyTreesEngine(tree, swarm, world, params))
+
+
+@pytest.fixture(autouse=True)
+def _clear_pytrees_blackboard() -> None:
+    """Hygiene: no test sees py_trees' global blackboard as another test left it."""
+    py_trees.blackboard.Blackboard.clear()
+
+
+@pytest.fixture(scope="session")
+def gathering_run() -> Simulation:
+    """The full gathering scenario (4 drones x 8000 iterations, seed 0), run once."""
+    return Simulation.create(load("gathering"), seed=0).run(progress=False)
+
+
+@pytest.fixture(scope="session")
+def patrol_run() -> Simulation:
+    """The patrol scenario with 10 drones x 4000 iterations (seed 0), run once."""
+    scenario = load("patrol").with_overrides(agents=10, iterations=4000)
+    return Simulation.create(scenario, seed=0).run(progress=False)
+
+
+@pytest.fixture
+def harness():
+    """Factory: ``harness(tree, n=1, defaults=None)`` -> a :class:`Harness`."""
+    return make_harness
+
+
+@pytest.fixture
+def swarm_world():
+    """Factory: ``swarm_world(n=1, datalink_range=1000)`` -> (Swarm, World)."""
+
+    def build(n: int = 1, datalink_range: float = 1000.0) -> tuple[Swarm, World]:
+        swarm = make_swarm(n)
+        return swarm, make_world(swarm, datalink_range)
+
+    return build

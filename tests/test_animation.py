@@ -1,0 +1,143 @@
+"""Phase 7: the Fig. 5 frames and the streamed GIF."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from pyautonomousagent.render.animation import (
+    DRONE_COLOUR,
+    FIGSIZE,
+    HEADING_COLOUR,
+    MAX_LABELLED,
+    FramePainter,
+    draw_frame,
+    frame_rows,
+    panel_rows,
+    refuelling_slots,
+    surveillance_marks,
+    write_gif,
+)
+from pyautonomousagent.scenarios import load
+from pyautonomousagent.simulation import Simulation
+
+
+@pytest.fixture(scope="module")
+def run() -> Simulation:
+    """200 iterations of the gathering scenario, every iteration recorded."""
+    return Simulation.create(load("gathering").with_overrides(iterations=200), seed=0).run(
+        progress=False)
+
+
+@pytest.fixture(scope="module")
+def gif(run: Simulation, tmp_path_factory: pytest.TempPathFactory):
+    path = tmp_path_factory.mktemp("gif") / "run.gif"
+    return write_gif(run.recorder, run.scenario, path, frame_every=10, progress=False)
+
+
+def rgb(hex_colour: str) -> np.ndarray:
+    return np.array([int(hex_colour[i:i + 2], 16) for i in (1, 3, 5)])
+
+
+def near(image: Image.Image, painter: FramePainter, x: float, y: float, colour: str) -> bool:
+    """Whether a pixel within 2 px of world point (x, y) has ``colour`` (within 40 per channel)."""
+    px, py = painter.axes.transData.transform((x, y))
+    column, row = int(round(px)), int(round(image.height - py))
+    patch = np.asarray(image)[row - 2:row + 3, column - 2:column + 3].reshape(-1, 3).astype(int)
+    return bool((np.abs(patch - rgb(colour)).max(axis=1) <= 40).any())
+
+
+def test_gif_is_a_looping_animation_with_one_frame_per_ten_iterations(gif, run):
+    with Image.open(gif.path) as image:
+        assert image.format == "GIF"
+        assert image.n_frames == gif.frames == len(range(0, 201, 10)) == 21
+        assert image.info["loop"] == 0
+        assert image.info["duration"] == 50
+        assert image.size == (int(FIGSIZE[0] * 80), int(FIGSIZE[1] * 80))
+    assert gif.bytes == gif.path.stat().st_size > 0
+    assert gif.path.read_bytes()[:6] == b"GIF89a" and gif.path.read_bytes()[-1:] == b";"
+
+
+def test_gif_frames_change_and_match_the_drawn_frames(gif, run):
+    with Image.open(gif.path) as image:
+        frames = []
+        for index in (0, 1, image.n_frames - 1):
+            image.seek(index)
+            frames.append(np.asarray(image.convert("RGB"), dtype=int))
+    assert (frames[0] != frames[1]).any()
+    assert (frames[0] != frames[2]).sum() > 100  # the drones moved
+    last = np.asarray(draw_frame(run.recorder, run.scenario, 200), dtype=int)
+    assert np.abs(frames[2] - last).mean() < 2.0  # cropped frames are placed right
+
+
+def test_drone_one_is_drawn_where_it_is_and_heads_where_it_heads(run):
+    painter = FramePainter(run.recorder, run.scenario)
+    x, y, heading = (run.recorder.column(k)[150, 0] for k in ("x", "y", "heading"))
+    image = painter.draw(150)
+    assert near(image, painter, x, y, DRONE_COLOUR)
+    r = painter.radius
+    h = np.radians(heading)
+    assert near(image, painter, x + r * np.sin(h), y + r * np.cos(h), HEADING_COLOUR)
+    assert not near(image, painter, x - 1.1 * r * np.sin(h), y - 1.1 * r * np.cos(h), HEADING_COLOUR)
+    assert not near(image, painter, 90.0, 10.0, DRONE_COLOUR)  # an empty corner
+
+
+def test_blitting_leaves_nothing_of_the_previous_frame(run):
+    painter = FramePainter(run.recorder, run.scenario)
+    painter.draw(0)
+    again = np.asarray(painter.draw(200))
+    fresh = np.asarray(draw_frame(run.recorder, run.scenario, 200))
+    assert np.array_equal(again, fresh)
+
+
+def test_draw_frame_rejects_rows_outside_the_records(run):
+    with pytest.raises(IndexError):
+        draw_frame(run.recorder, run.scenario, run.recorder.count)
+
+
+def test_static_marks_come_from_the_first_record(run):
+    assert refuelling_slots(run.recorder, run.scenario) == [(20, 65), (20, 55), (20, 45), (20, 35)]
+    assert surveillance_marks(run.recorder, run.scenario) == [(50, 50), (70, 80), (40, 70), (60, 25)]
+
+
+def test_patrol_marks_its_two_positions_and_many_drones_go_unlabelled():
+    scenario = load("patrol").with_overrides(agents=MAX_LABELLED + 1, iterations=5)
+    sim = Simulation.create(scenario, seed=0).run(progress=False)
+    assert surveillance_marks(sim.recorder, scenario) == [(70, 80), (70, 20)]
+    assert refuelling_slots(sim.recorder, scenario) == [(10, 50)]
+    assert FramePainter(sim.recorder, scenario).labels == []
+
+
+def test_panel_shows_the_iteration_and_first_drone_with_fixed_labels(run):
+    first, later = panel_rows(run.recorder, 0), panel_rows(run.recorder, 150)
+    assert [label for label, _ in first] == [label for label, _ in later]
+    assert later[0] == ("Iteration", "150")
+    values = dict(later)
+    assert values["  ticks"] == str(run.recorder.column("number_ticks")[150, 0])
+    assert values["  energy"] == f"{run.recorder.column('energy')[150, 0]:.1f} %"
+
+
+def fake(iterations: list[int]) -> SimpleNamespace:
+    return SimpleNamespace(iterations=np.array(iterations), count=len(iterations))
+
+
+def test_frame_rows_one_per_window_even_when_recording_was_decimated():
+    assert list(frame_rows(fake(list(range(31))), 10)) == [0, 10, 20, 30]
+    every_third = list(range(0, 61, 3))
+    assert [every_third[i] for i in frame_rows(fake(every_third), 10)] == [0, 12, 21, 30, 42, 51, 60]
+    assert list(frame_rows(fake([0, 20, 40]), 10)) == [0, 1, 2]
+    with pytest.raises(ValueError):
+        frame_rows(fake([0]), 0)
+
+
+def test_importing_the_module_does_not_import_matplotlib():
+    code = "import sys, pyautonomousagent.render.animation; print('matplotlib' in sys.modules)"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            check=True, cwd=Path(__file__).parent)
+    assert result.stdout.strip() == "False"

@@ -1,0 +1,186 @@
+"""The datalink: range, receivers, the sender, clearing; and messages through the simulation."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from pyautonomousagent import Simulation, load
+from pyautonomousagent.datalink import GATHERING, SHARING_DATA, Datalink, message_events
+from pyautonomousagent.simulation import phases
+
+
+def delivered(received):
+    return [(r.receiver, r.message.sender, r.message.type) for r in received]
+
+
+def test_range_just_inside_and_just_outside():
+    link = Datalink(range=10.0)
+    link.send(0, "t", {}, (0.0, 0.0))
+    x = np.array([0.0, 10.0, 10.000001, 6.0, 0.0])
+    y = np.array([0.0, 0.0, 0.0, 8.0, -10.0])  # 10, 10.000001, 10 (6-8-10), 10 away
+    assert delivered(link.deliver(x, y)) == [(1, 0, "t"), (3, 0, "t"), (4, 0, "t")]
+
+
+def test_range_uses_the_senders_position_when_it_sent():
+    link = Datalink(range=5.0)
+    link.send(0, "t", {}, (100.0, 100.0))
+    # the sender has since moved next to agent 1; the message still starts from (100, 100)
+    x, y = np.array([0.0, 1.0, 98.0]), np.array([0.0, 0.0, 100.0])
+    assert delivered(link.deliver(x, y)) == [(2, 0, "t")]
+
+
+def test_receivers_list():
+    link = Datalink(range=1000.0)
+    link.send(1, "t", {"a": 1.0}, (0.0, 0.0), receivers=[3, 0])
+    x = y = np.zeros(4)
+    received = link.deliver(x, y)
+    assert delivered(received) == [(3, 1, "t"), (0, 1, "t")]
+    assert received[0].message.receivers == (3, 0)
+    assert dict(received[0].message.data) == {"a": 1.0}
+
+
+def test_receivers_list_respects_range():
+    link = Datalink(range=1.0)
+    link.send(0, "t", {}, (0.0, 0.0), receivers=[1, 2])
+    x, y = np.array([0.0, 1.0, 1.5]), np.zeros(3)
+    assert delivered(link.deliver(x, y)) == [(1, 0, "t")]
+
+
+def test_never_delivered_to_the_sender():
+    link = Datalink(range=1000.0)
+    link.send(2, "t", {}, (0.0, 0.0))
+    link.send(1, "u", {}, (0.0, 0.0), receivers=[1, 0])  # even when it names itself
+    x = y = np.zeros(3)
+    assert delivered(link.deliver(x, y)) == [(0, 2, "t"), (1, 2, "t"), (0, 1, "u")]
+
+
+def test_channel_cleared_after_delivery():
+    link = Datalink(range=1000.0)
+    link.send(0, "t", {}, (0.0, 0.0))
+    assert len(link.channel) == 1
+    x = y = np.zeros(2)
+    assert len(link.deliver(x, y)) == 1
+    assert link.channel == []
+    assert link.deliver(x, y) == []
+
+
+def test_channel_cleared_even_when_nobody_is_in_range():
+    link = Datalink(range=1.0)
+    link.send(0, "t", {}, (0.0, 0.0))
+    assert link.deliver(np.array([0.0, 50.0]), np.array([0.0, 50.0])) == []
+    assert link.channel == []
+
+
+def test_delivery_order_is_sending_order():
+    link = Datalink(range=1000.0)
+    link.send(1, "first", {}, (0.0, 0.0))
+    link.send(0, "second", {}, (0.0, 0.0))
+    x = y = np.zeros(2)
+    assert delivered(link.deliver(x, y)) == [(0, 1, "first"), (1, 0, "second")]
+
+
+def test_send_copies_data_and_position():
+    link = Datalink(range=1000.0)
+    data = {"x": 1.0}
+    position = np.array([2.0, 3.0])
+    link.send(np.int64(0), "t", data, position)
+    data["x"] = 9.0
+    position[0] = 9.0
+    message = link.channel[0]
+    assert dict(message.data) == {"x": 1.0}
+    assert message.sender_position == (2.0, 3.0)
+    assert type(message.sender) is int
+
+
+def test_message_events_lists_only_the_named_types():
+    link = Datalink(range=1000.0)
+    link.send(0, GATHERING, {"x": 50.0, "y": 50.0}, (0.0, 0.0))
+    link.send(1, SHARING_DATA, {"x": 1.0}, (0.0, 0.0))
+    link.send(1, GATHERING, {"x": 1.0, "y": 2.0}, (0.0, 0.0), receivers=[0])
+    events = message_events(link.channel, (GATHERING,), 12, ["drone1", "drone2"])
+    assert events == [
+        {"iteration": 12, "event": "message", "type": GATHERING, "sender": "drone1",
+         "receivers": "all", "data": {"x": 50.0, "y": 50.0}},
+        {"iteration": 12, "event": "message", "type": GATHERING, "sender": "drone2",
+         "receivers": ["drone1"], "data": {"x": 1.0, "y": 2.0}},
+    ]  # fmt: skip
+
+
+# --------------------------------------------------------------------------- through the simulation
+
+
+@pytest.fixture
+def early_gathering() -> Simulation:
+    """Gathering with drone1's order at iteration 3 (4 drones)."""
+    scenario = load("gathering").with_overrides(gathering_iteration=3, iterations=10)
+    return Simulation.create(scenario, seed=0)
+
+
+def surveillance(sim: Simulation) -> list[tuple[float, float]]:
+    bb = sim.swarm.blackboard
+    return list(zip(bb["x_surveillance_position"].tolist(), bb["y_surveillance_position"].tolist(),
+                    strict=True))  # fmt: skip
+
+
+def test_gathering_message_acted_on_in_next_iterations_phase_2(early_gathering):
+    sim = early_gathering
+    original = [(50.0, 50.0), (70.0, 80.0), (40.0, 70.0), (60.0, 25.0)]
+    sim.step()
+    sim.step()
+    assert surveillance(sim) == original
+    sim.step()  # iteration 3: drone1 sends; delivered in Phase 5, not yet acted on
+    assert sim.world.iteration == 3
+    assert sim.events == [
+        {"iteration": 3, "event": "message", "type": GATHERING, "sender": "drone1",
+         "receivers": "all", "data": {"x": 50.0, "y": 50.0}},
+    ]  # fmt: skip
+    assert surveillance(sim) == original
+    assert sorted(r.receiver for r in sim.inbox if r.message.type == GATHERING) == [1, 2, 3]
+    # iteration 4, phase by phase: Phase 2 applies the message before the tree is ticked
+    sim.world.iteration += 1
+    phases.estimate_state(sim)
+    assert surveillance(sim) == [(50.0, 50.0)] * 4
+    assert sim.inbox == []
+    phases.decide(sim)
+    phases.control(sim)
+    phases.deliver_messages(sim)
+    phases.record(sim)
+    assert [e["iteration"] for e in sim.events] == [3]  # only one gathering order
+    record = sim.recorder
+    np.testing.assert_array_equal(record.column("x_surveillance_position")[3], [50, 70, 40, 60])
+    np.testing.assert_array_equal(record.column("x_surveillance_position")[4], [50, 50, 50, 50])
+    np.testing.assert_array_equal(record.column("y_surveillance_position")[4], [50, 50, 50, 50])
+
+
+def test_gathering_message_outside_range_is_lost():
+    scenario = load("gathering").with_overrides(
+        gathering_iteration=2, iterations=4, datalink_range=15.0
+    )
+    sim = Simulation.create(scenario, seed=0).run(progress=False)
+    # drone1 at (20, 65): drone2 (10 away) gets it, drone3 (20 away) and drone4 (30) do not
+    assert surveillance(sim) == [(50.0, 50.0), (50.0, 50.0), (40.0, 70.0), (60.0, 25.0)]
+
+
+def test_shared_data_keeps_the_latest_per_sender():
+    sim = Simulation.create(load("gathering").with_overrides(iterations=20), seed=0)
+    sim.step()
+    assert sim.shared == {}  # iteration 1's messages are acted on in iteration 2
+    for _ in range(5):
+        sim.step()
+    t = sim.world.iteration
+    assert sorted(sim.shared) == [0, 1, 2, 3]
+    for receiver, senders in sim.shared.items():
+        assert sorted(senders) == sorted({0, 1, 2, 3} - {receiver})  # never from itself
+        for sender, data in senders.items():
+            assert data["iteration"] == t - 1
+            for key in ("x", "y", "speed", "heading", "damage", "energy"):
+                # sent in Phase 3 of iteration t - 1; nothing after it changes these fields
+                # while the drones fly with full energy
+                assert data[key] == sim.recorder.column(key)[t - 1, sender], (key, sender)
+    previous = sim.shared[1][0]["x"]
+    sim.step()
+    assert sim.shared[1][0]["iteration"] == t
+    assert sim.shared[1][0]["x"] == sim.recorder.column("x")[t, 0]
+    assert sim.shared[1][0]["x"] != previous  # replaced, not appended
+    assert len(sim.shared[1]) == 3
