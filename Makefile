@@ -24,6 +24,8 @@ demo: $(VENV)/.installed
 	$(BIN)/pyaa run gathering --out runs/gathering
 
 test: $(VENV)/.installed-test
+	$(BIN)/ruff check src tests
+	$(BIN)/mypy src
 	$(BIN)/python -m pytest
 
 lint: $(VENV)/.installed-test

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -10,16 +12,54 @@ from pyautonomousagent.datalink import GATHERING, SHARING_DATA, Datalink, messag
 from pyautonomousagent.simulation import phases
 
 
-def delivered(received):
-    return [(r.receiver, r.message.sender, r.message.type) for r in received]
+def delivered(deliveries, n: int) -> list[tuple[int, int, str]]:
+    """(receiver, sender, type) of every delivery, in the order the datalink gives them."""
+    out = []
+    for delivery in deliveries:
+        receivers, rows = delivery.pairs(n)
+        senders = delivery.messages.senders
+        for receiver, row in zip(receivers.tolist(), rows.tolist(), strict=True):
+            out.append((receiver, int(senders[row]), delivery.messages.type))
+    return out
+
+
+def on_channel(link: Datalink) -> list[tuple]:
+    """(sender, type, data, sender position, receivers) of each message waiting to go."""
+    out = []
+    for messages in link.channel:
+        for row in range(len(messages)):
+            targets = messages.receivers(row)
+            out.append((
+                int(messages.senders[row]),
+                messages.type,
+                {k: float(v[row]) for k, v in messages.data.items()},
+                (float(messages.x[row]), float(messages.y[row])),
+                None if targets is None else [int(t) for t in targets],
+            ))  # fmt: skip
+    return out
 
 
 def test_range_just_inside_and_just_outside():
     link = Datalink(range=10.0)
     link.send(0, "t", {}, (0.0, 0.0))
-    x = np.array([0.0, 10.0, 10.000001, 6.0, 0.0])
-    y = np.array([0.0, 0.0, 0.0, 8.0, -10.0])  # 10, 10.000001, 10 (6-8-10), 10 away
-    assert delivered(link.deliver(x, y)) == [(1, 0, "t"), (3, 0, "t"), (4, 0, "t")]
+    x = np.array([0.0, 10.0, 10.000001, 6.0, 0.0, -7.0])
+    y = np.array([0.0, 0.0, 0.0, 8.0, -10.0, -7.2])  # 10, 10.000001, 10 (6-8-10), 10, 10.04
+    assert delivered(link.deliver(x, y), 6) == [(1, 0, "t"), (3, 0, "t"), (4, 0, "t")]
+
+
+def test_range_just_outside_with_two_agents():
+    link = Datalink(range=10.0)
+    link.send(0, "t", {}, (0.0, 0.0))
+    assert delivered(link.deliver(np.array([0.0, 10.000001]), np.zeros(2)), 2) == []
+    link.send(0, "t", {}, (0.0, 0.0))
+    assert delivered(link.deliver(np.array([0.0, 10.0]), np.zeros(2)), 2) == [(1, 0, "t")]
+
+
+def test_everyone_in_range_reaches_everyone_but_the_sender():
+    link = Datalink(range=1000.0)
+    link.send(1, "t", {"a": 1.0}, (5.0, 5.0))
+    x, y = np.array([0.0, 5.0, 9.0, 3.0]), np.array([1.0, 5.0, 2.0, 8.0])
+    assert delivered(link.deliver(x, y), 4) == [(0, 1, "t"), (2, 1, "t"), (3, 1, "t")]
 
 
 def test_range_uses_the_senders_position_when_it_sent():
@@ -27,24 +67,26 @@ def test_range_uses_the_senders_position_when_it_sent():
     link.send(0, "t", {}, (100.0, 100.0))
     # the sender has since moved next to agent 1; the message still starts from (100, 100)
     x, y = np.array([0.0, 1.0, 98.0]), np.array([0.0, 0.0, 100.0])
-    assert delivered(link.deliver(x, y)) == [(2, 0, "t")]
+    assert delivered(link.deliver(x, y), 3) == [(2, 0, "t")]
 
 
 def test_receivers_list():
     link = Datalink(range=1000.0)
     link.send(1, "t", {"a": 1.0}, (0.0, 0.0), receivers=[3, 0])
+    assert on_channel(link) == [(1, "t", {"a": 1.0}, (0.0, 0.0), [3, 0])]
     x = y = np.zeros(4)
-    received = link.deliver(x, y)
-    assert delivered(received) == [(3, 1, "t"), (0, 1, "t")]
-    assert received[0].message.receivers == (3, 0)
-    assert dict(received[0].message.data) == {"a": 1.0}
+    deliveries = link.deliver(x, y)
+    assert sorted(delivered(deliveries, 4)) == [(0, 1, "t"), (3, 1, "t")]
+    (delivery,) = deliveries
+    assert delivery.messages.receivers(0).tolist() == [3, 0]
+    assert delivery.messages.data["a"].tolist() == [1.0]
 
 
 def test_receivers_list_respects_range():
     link = Datalink(range=1.0)
     link.send(0, "t", {}, (0.0, 0.0), receivers=[1, 2])
     x, y = np.array([0.0, 1.0, 1.5]), np.zeros(3)
-    assert delivered(link.deliver(x, y)) == [(1, 0, "t")]
+    assert delivered(link.deliver(x, y), 3) == [(1, 0, "t")]
 
 
 def test_never_delivered_to_the_sender():
@@ -52,45 +94,68 @@ def test_never_delivered_to_the_sender():
     link.send(2, "t", {}, (0.0, 0.0))
     link.send(1, "u", {}, (0.0, 0.0), receivers=[1, 0])  # even when it names itself
     x = y = np.zeros(3)
-    assert delivered(link.deliver(x, y)) == [(0, 2, "t"), (1, 2, "t"), (0, 1, "u")]
+    assert delivered(link.deliver(x, y), 3) == [(0, 2, "t"), (1, 2, "t"), (0, 1, "u")]
+
+
+def test_never_delivered_to_the_sender_out_of_range_path():
+    link = Datalink(range=2.0)
+    link.send(0, "t", {}, (0.0, 0.0))
+    x, y = np.array([0.0, 1.0, 50.0]), np.zeros(3)
+    assert delivered(link.deliver(x, y), 3) == [(1, 0, "t")]
 
 
 def test_channel_cleared_after_delivery():
     link = Datalink(range=1000.0)
     link.send(0, "t", {}, (0.0, 0.0))
-    assert len(link.channel) == 1
+    assert len(on_channel(link)) == 1
     x = y = np.zeros(2)
-    assert len(link.deliver(x, y)) == 1
+    assert len(delivered(link.deliver(x, y), 2)) == 1
     assert link.channel == []
-    assert link.deliver(x, y) == []
+    assert delivered(link.deliver(x, y), 2) == []
 
 
 def test_channel_cleared_even_when_nobody_is_in_range():
     link = Datalink(range=1.0)
     link.send(0, "t", {}, (0.0, 0.0))
-    assert link.deliver(np.array([0.0, 50.0]), np.array([0.0, 50.0])) == []
+    assert delivered(link.deliver(np.array([0.0, 50.0]), np.array([0.0, 50.0])), 2) == []
     assert link.channel == []
 
 
-def test_delivery_order_is_sending_order():
+def test_delivery_order_is_canonical():
+    # by type (first sent first), then by sender, then in each sender's sending order
     link = Datalink(range=1000.0)
-    link.send(1, "first", {}, (0.0, 0.0))
-    link.send(0, "second", {}, (0.0, 0.0))
-    x = y = np.zeros(2)
-    assert delivered(link.deliver(x, y)) == [(0, 1, "first"), (1, 0, "second")]
+    link.send(2, "first", {"k": 1.0}, (0.0, 0.0))
+    link.send(0, "second", {"k": 2.0}, (0.0, 0.0))
+    link.send(1, "first", {"k": 3.0}, (0.0, 0.0))
+    link.send(1, "first", {"k": 4.0}, (0.0, 0.0))
+    x = y = np.zeros(3)
+    deliveries = link.deliver(x, y)
+    assert [d.messages.type for d in deliveries] == ["first", "second"]
+    assert deliveries[0].messages.senders.tolist() == [1, 1, 2]
+    assert deliveries[0].messages.data["k"].tolist() == [3.0, 4.0, 1.0]
+    assert delivered(deliveries, 3) == [
+        (0, 1, "first"), (2, 1, "first"), (0, 1, "first"), (2, 1, "first"),
+        (0, 2, "first"), (1, 2, "first"), (1, 0, "second"), (2, 0, "second"),
+    ]  # fmt: skip
+
+
+def test_send_many_senders_at_once():
+    link = Datalink(range=1000.0)
+    link.send(np.array([0, 2]), "t", {"v": np.array([1.0, 3.0])}, (np.array([0.0, 2.0]), 5.0))
+    assert on_channel(link) == [
+        (0, "t", {"v": 1.0}, (0.0, 5.0), None),
+        (2, "t", {"v": 3.0}, (2.0, 5.0), None),
+    ]
 
 
 def test_send_copies_data_and_position():
     link = Datalink(range=1000.0)
-    data = {"x": 1.0}
+    data = {"x": np.array(1.0)}
     position = np.array([2.0, 3.0])
     link.send(np.int64(0), "t", data, position)
-    data["x"] = 9.0
+    data["x"][...] = 9.0
     position[0] = 9.0
-    message = link.channel[0]
-    assert dict(message.data) == {"x": 1.0}
-    assert message.sender_position == (2.0, 3.0)
-    assert type(message.sender) is int
+    assert on_channel(link) == [(0, "t", {"x": 1.0}, (2.0, 3.0), None)]
 
 
 def test_message_events_lists_only_the_named_types():
@@ -98,7 +163,8 @@ def test_message_events_lists_only_the_named_types():
     link.send(0, GATHERING, {"x": 50.0, "y": 50.0}, (0.0, 0.0))
     link.send(1, SHARING_DATA, {"x": 1.0}, (0.0, 0.0))
     link.send(1, GATHERING, {"x": 1.0, "y": 2.0}, (0.0, 0.0), receivers=[0])
-    events = message_events(link.channel, (GATHERING,), 12, ["drone1", "drone2"])
+    deliveries = link.deliver(np.zeros(2), np.zeros(2))
+    events = message_events(deliveries, (GATHERING,), 12, ["drone1", "drone2"])
     assert events == [
         {"iteration": 12, "event": "message", "type": GATHERING, "sender": "drone1",
          "receivers": "all", "data": {"x": 50.0, "y": 50.0}},
@@ -136,7 +202,8 @@ def test_gathering_message_acted_on_in_next_iterations_phase_2(early_gathering):
          "receivers": "all", "data": {"x": 50.0, "y": 50.0}},
     ]  # fmt: skip
     assert surveillance(sim) == original
-    assert sorted(r.receiver for r in sim.inbox if r.message.type == GATHERING) == [1, 2, 3]
+    gathering = [d for d in sim.inbox if d.messages.type == GATHERING]
+    assert sorted(r for d in gathering for r in d.pairs(4)[0].tolist()) == [1, 2, 3]
     # iteration 4, phase by phase: Phase 2 applies the message before the tree is ticked
     sim.world.iteration += 1
     phases.estimate_state(sim)
@@ -160,17 +227,24 @@ def test_gathering_message_outside_range_is_lost():
     sim = Simulation.create(scenario, seed=0).run(progress=False)
     # drone1 at (20, 65): drone2 (10 away) gets it, drone3 (20 away) and drone4 (30) do not
     assert surveillance(sim) == [(50.0, 50.0), (50.0, 50.0), (40.0, 70.0), (60.0, 25.0)]
+    # the order itself is recorded once, when it is sent
+    assert [(e["iteration"], e["sender"]) for e in sim.events] == [(2, "drone1")]
+
+
+def heard(sim: Simulation, receiver: int) -> dict[int, dict[str, float]]:
+    return dict(sim.shared[receiver])
 
 
 def test_shared_data_keeps_the_latest_per_sender():
     sim = Simulation.create(load("gathering").with_overrides(iterations=20), seed=0)
     sim.step()
-    assert sim.shared == {}  # iteration 1's messages are acted on in iteration 2
+    # iteration 1's messages are acted on in iteration 2
+    assert all(heard(sim, r) == {} for r in range(4))
     for _ in range(5):
         sim.step()
     t = sim.world.iteration
-    assert sorted(sim.shared) == [0, 1, 2, 3]
-    for receiver, senders in sim.shared.items():
+    for receiver in range(4):
+        senders = heard(sim, receiver)
         assert sorted(senders) == sorted({0, 1, 2, 3} - {receiver})  # never from itself
         for sender, data in senders.items():
             assert data["iteration"] == t - 1
@@ -178,9 +252,29 @@ def test_shared_data_keeps_the_latest_per_sender():
                 # sent in Phase 3 of iteration t - 1; nothing after it changes these fields
                 # while the drones fly with full energy
                 assert data[key] == sim.recorder.column(key)[t - 1, sender], (key, sender)
-    previous = sim.shared[1][0]["x"]
+    previous = heard(sim, 1)[0]["x"]
     sim.step()
-    assert sim.shared[1][0]["iteration"] == t
-    assert sim.shared[1][0]["x"] == sim.recorder.column("x")[t, 0]
-    assert sim.shared[1][0]["x"] != previous  # replaced, not appended
-    assert len(sim.shared[1]) == 3
+    assert heard(sim, 1)[0]["iteration"] == t
+    assert heard(sim, 1)[0]["x"] == sim.recorder.column("x")[t, 0]
+    assert heard(sim, 1)[0]["x"] != previous  # replaced, not appended
+    assert len(heard(sim, 1)) == 3
+
+
+def test_shared_data_only_from_senders_in_range():
+    # slots 10 apart on a line: with range 15 each drone hears only its neighbours
+    scenario = load("gathering").with_overrides(iterations=5, datalink_range=15.0)
+    sim = Simulation.create(scenario, seed=0).run(progress=False)
+    assert {r: sorted(heard(sim, r)) for r in range(4)} == {0: [1], 1: [0, 2], 2: [1, 3], 3: [2]}
+    assert heard(sim, 2)[3]["iteration"] == 4
+    assert heard(sim, 2)[3]["y"] == sim.recorder.column("y")[4, 3]
+
+
+def test_shared_data_has_no_entries_for_agents_that_do_not_exist():
+    sim = Simulation.create(load("gathering").with_overrides(iterations=3), seed=0).run(
+        progress=False
+    )
+    for receiver in (4, 99):
+        with pytest.raises((IndexError, KeyError)):
+            sim.shared[receiver]
+    # iterating over it must end (at most one entry per agent), not run on forever
+    assert len(list(itertools.islice(iter(sim.shared), 10))) <= 4

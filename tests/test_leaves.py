@@ -50,6 +50,22 @@ def statuses(result, n: int) -> list[int]:
     return [int(s) for s in np.broadcast_to(result, (n,))]
 
 
+def on_channel(world) -> list[tuple]:
+    """(sender, type, data, sender position, receivers) of each message waiting to go."""
+    out = []
+    for messages in world.datalink.channel:
+        for row in range(len(messages)):
+            targets = messages.receivers(row)
+            out.append((
+                int(messages.senders[row]),
+                messages.type,
+                {k: float(v[row]) for k, v in messages.data.items()},
+                (float(messages.x[row]), float(messages.y[row])),
+                None if targets is None else [int(t) for t in targets],
+            ))  # fmt: skip
+    return out
+
+
 def snapshot(swarm):
     return (
         {k: v.copy() for k, v in swarm.columns.items()},
@@ -205,7 +221,9 @@ class TestConditionGatheringMoment:
 class TestConditionRadiationDetected:
     T = "Condition_Radiation_Detected"
 
-    @pytest.mark.parametrize(("level", "expected"), [(0.0, FAILURE), (0.001, SUCCESS), (100.0, SUCCESS)])
+    @pytest.mark.parametrize(
+        ("level", "expected"), [(0.0, FAILURE), (0.001, SUCCESS), (100.0, SUCCESS)]
+    )
     def test_one_agent(self, swarm_world, level, expected):
         swarm, world = swarm_world(1)
         swarm.columns["radiation"][0] = level
@@ -230,7 +248,8 @@ class TestConditionHighDamageLevel:
     T = "Condition_High_Damage_Level"
 
     @pytest.mark.parametrize(
-        ("damage", "expected"), [(70.0, SUCCESS), (69.999, FAILURE), (100.0, SUCCESS), (0.0, FAILURE)]
+        ("damage", "expected"),
+        [(70.0, SUCCESS), (69.999, FAILURE), (100.0, SUCCESS), (0.0, FAILURE)],
     )
     def test_one_agent(self, swarm_world, damage, expected):
         swarm, world = swarm_world(1)
@@ -293,7 +312,9 @@ class TestActionNavigateToDestinationA:
         before = snapshot(swarm)
         result = make(self.T).evaluate(swarm.agents(BATCH), world)
         assert statuses(result, 2) == [RUNNING, RUNNING]
-        np.testing.assert_allclose(swarm.columns["requested_heading"], [90.0, 7.0, 180.0], atol=1e-12)
+        np.testing.assert_allclose(
+            swarm.columns["requested_heading"], [90.0, 7.0, 180.0], atol=1e-12
+        )
         np.testing.assert_array_equal(swarm.columns["requested_speed"], [0.1, 0.02, 0.1])
         assert_unchanged(swarm, before, except_columns=("requested_heading", "requested_speed"))
 
@@ -331,7 +352,11 @@ class TestSetDestination:
     @pytest.mark.parametrize(
         ("type_name", "xs", "ys"),
         [
-            ("Action_Set_Destination_Equal_To_Surveillance_S", [50.0, -1.0, 40.0], [51.0, -2.0, 70.0]),
+            (
+                "Action_Set_Destination_Equal_To_Surveillance_S",
+                [50.0, -1.0, 40.0],
+                [51.0, -2.0, 70.0],
+            ),
             ("Action_Set_Destination_Equal_To_Refueling_S", [20.0, -1.0, 20.0], [65.0, -2.0, 45.0]),
         ],
     )
@@ -396,7 +421,10 @@ class TestPatrolDestinations:
         node.evaluate(swarm.agent(0), world)
         bb = swarm.agent(0).blackboard
         assert bb.index_current_surveillance_position == 1
-        assert (bb.x_current_destination_position, bb.y_current_destination_position) == (70.0, 80.0)
+        assert (bb.x_current_destination_position, bb.y_current_destination_position) == (
+            70.0,
+            80.0,
+        )
 
     def test_batch_other(self, swarm_world):
         swarm, world = swarm_world(3)
@@ -451,12 +479,7 @@ class TestTransmit:
         self.setup_state(swarm)
         before = snapshot(swarm)
         assert make(self.GATHER).evaluate(swarm.agent(1), world) == SUCCESS
-        (message,) = world.datalink.channel
-        assert message.sender == 1
-        assert message.receivers is None
-        assert message.type == GATHERING
-        assert dict(message.data) == {"x": 70.0, "y": 80.0}
-        assert message.sender_position == (2.0, 5.0)
+        assert on_channel(world) == [(1, GATHERING, {"x": 70.0, "y": 80.0}, (2.0, 5.0), None)]
         assert_unchanged(swarm, before)
 
     def test_gathering_batch(self, swarm_world):
@@ -465,13 +488,10 @@ class TestTransmit:
         before = snapshot(swarm)
         result = make(self.GATHER).evaluate(swarm.agents(BATCH), world)
         assert statuses(result, 2) == [SUCCESS, SUCCESS]
-        channel = world.datalink.channel
-        assert [m.sender for m in channel] == [0, 2]
-        assert [m.type for m in channel] == [GATHERING, GATHERING]
-        assert [dict(m.data) for m in channel] == [{"x": 50.0, "y": 50.0}, {"x": 40.0, "y": 70.0}]
-        assert [m.sender_position for m in channel] == [(1.0, 4.0), (3.0, 6.0)]
-        assert all(m.receivers is None for m in channel)
-        assert all(type(v) is float for m in channel for v in m.data.values())
+        assert on_channel(world) == [
+            (0, GATHERING, {"x": 50.0, "y": 50.0}, (1.0, 4.0), None),
+            (2, GATHERING, {"x": 40.0, "y": 70.0}, (3.0, 6.0), None),
+        ]
         assert_unchanged(swarm, before)
 
     def test_shared_data_one_agent(self, swarm_world):
@@ -479,17 +499,8 @@ class TestTransmit:
         self.setup_state(swarm)
         before = snapshot(swarm)
         assert make(self.SHARE).evaluate(swarm.agent(2), world) == SUCCESS
-        (message,) = world.datalink.channel
-        assert (message.sender, message.receivers, message.type) == (2, None, SHARING_DATA)
-        assert dict(message.data) == {
-            "x": 3.0,
-            "y": 6.0,
-            "speed": 0.05,
-            "heading": 30.0,
-            "damage": 2.0,
-            "energy": 80.0,
-        }
-        assert message.sender_position == (3.0, 6.0)
+        data = {"x": 3.0, "y": 6.0, "speed": 0.05, "heading": 30.0, "damage": 2.0, "energy": 80.0}
+        assert on_channel(world) == [(2, SHARING_DATA, data, (3.0, 6.0), None)]
         assert_unchanged(swarm, before)
 
     def test_shared_data_batch(self, swarm_world):
@@ -498,14 +509,12 @@ class TestTransmit:
         before = snapshot(swarm)
         result = make(self.SHARE).evaluate(swarm.agents(BATCH), world)
         assert statuses(result, 2) == [SUCCESS, SUCCESS]
-        channel = world.datalink.channel
-        assert [(m.sender, m.type) for m in channel] == [(0, SHARING_DATA), (2, SHARING_DATA)]
-        assert dict(channel[0].data) == {
-            "x": 1.0, "y": 4.0, "speed": 0.1, "heading": 10.0, "damage": 0.0, "energy": 100.0,
-        }  # fmt: skip
-        assert dict(channel[1].data) == {
-            "x": 3.0, "y": 6.0, "speed": 0.05, "heading": 30.0, "damage": 2.0, "energy": 80.0,
-        }  # fmt: skip
+        first = {"x": 1.0, "y": 4.0, "speed": 0.1, "heading": 10.0, "damage": 0.0, "energy": 100.0}
+        third = {"x": 3.0, "y": 6.0, "speed": 0.05, "heading": 30.0, "damage": 2.0, "energy": 80.0}
+        assert on_channel(world) == [
+            (0, SHARING_DATA, first, (1.0, 4.0), None),
+            (2, SHARING_DATA, third, (3.0, 6.0), None),
+        ]
         assert_unchanged(swarm, before)
 
     def test_messages_are_snapshots(self, swarm_world):
@@ -513,8 +522,17 @@ class TestTransmit:
         self.setup_state(swarm)
         make(self.SHARE).evaluate(swarm.agent(0), world)
         swarm.columns["x"][0] = 99.0
-        assert world.datalink.channel[0].data["x"] == 1.0
-        assert world.datalink.channel[0].sender_position == (1.0, 4.0)
+        ((_, _, data, position, _),) = on_channel(world)
+        assert (data["x"], position) == (1.0, (1.0, 4.0))
+
+    def test_delivered_to_the_other_agents(self, swarm_world):
+        swarm, world = swarm_world(3)
+        self.setup_state(swarm)
+        make(self.GATHER).evaluate(swarm.agent(0), world)
+        (delivery,) = world.datalink.deliver(swarm.columns["x"], swarm.columns["y"])
+        receivers, rows = delivery.pairs(3)
+        assert receivers.tolist() == [1, 2]
+        assert delivery.messages.senders[rows].tolist() == [0, 0]
 
 
 # --------------------------------------------------------------------------- refuel / repair
@@ -532,6 +550,7 @@ class TestActionRefuelA:
         [
             (50.0, 52.0, RUNNING, 0.0),
             (97.0, 99.0, RUNNING, 0.0),
+            (97.95, 99.95, RUNNING, 0.0),  # not yet full
             (98.0, 100.0, SUCCESS, 0.1),  # reaches exactly 100
             (99.5, 100.0, SUCCESS, 0.1),  # clipped to 100
             (100.0, 100.0, SUCCESS, 0.1),
@@ -589,6 +608,7 @@ class TestActionRepairDamageA:
         ("damage", "after", "expected", "requested_speed"),
         [
             (5.0, 4.0, RUNNING, 0.0),
+            (1.5, 0.5, RUNNING, 0.0),  # not yet repaired
             (1.0, 0.0, SUCCESS, 0.1),  # repaired to exactly 0
             (0.5, 0.0, SUCCESS, 0.1),  # clipped at 0
             (0.0, 0.0, SUCCESS, 0.1),
@@ -637,7 +657,9 @@ class TestActionRepairDamageA:
 
 
 def test_port_defaults_come_from_the_given_parameters():
-    params = vars(dataclasses.replace(Parameters(), low_energy_threshold=25.0, reference_speed=0.07))
+    params = vars(
+        dataclasses.replace(Parameters(), low_energy_threshold=25.0, reference_speed=0.07)
+    )
     low = leaf_type("Condition_Low_Energy_Level").create({}, params, "t")
     nav = leaf_type("Action_Navigate_To_Destination_A").create({}, params, "t")
     assert (low.threshold, nav.speed) == (25.0, 0.07)
@@ -729,3 +751,22 @@ def test_engine_reports_missing_blackboard_keys():
 def test_every_library_leaf_is_tested():
     # a new leaf type needs its own tests here (Scripted is the test helper itself)
     assert set(LEAF_TYPES) - {"Scripted"} == COVERED
+
+
+@pytest.mark.parametrize("type_name", sorted(COVERED))
+def test_numpy_integer_index_is_one_agent(swarm_world, type_name):
+    # AgentView: "with an integer index it is one agent"; a NumPy integer is an integer index
+    params = {"sender": "drone2"} if type_name == "Condition_Gathering_Moment" else {}
+    outcomes = []
+    for index in (1, np.int64(1)):
+        swarm, world = swarm_world(2)
+        world.iteration = 5000
+        swarm.columns["energy"][:] = 40.0
+        swarm.blackboard["index_current_surveillance_position"][:] = 1
+        status = make(type_name, **params).evaluate(swarm.agent(index), world)
+        assert np.ndim(status) == 0, f"index {index!r}: status {status!r} is not one status"
+        assert status in (SUCCESS, FAILURE, RUNNING)
+        columns, board = snapshot(swarm)
+        state = {k: v.tolist() for k, v in {**columns, **board}.items()}
+        outcomes.append((int(status), state, on_channel(world)))
+    assert outcomes[0] == outcomes[1]

@@ -85,7 +85,13 @@ def test_speed_clipped_to_0_and_max_speed(speed, u, expected):
 
 @pytest.mark.parametrize(
     ("heading", "u", "expected"),
-    [(359.5, 1.0, 0.5), (359.0, 1.0, 0.0), (0.0, -1.0, 359.0), (0.5, -1.0, 359.5), (180.0, 1.0, 181.0)],
+    [
+        (359.5, 1.0, 0.5),
+        (359.0, 1.0, 0.0),
+        (0.0, -1.0, 359.0),
+        (0.5, -1.0, 359.5),
+        (180.0, 1.0, 181.0),
+    ],
 )
 def test_heading_wraps_into_0_360(heading, u, expected):
     _, _, _, a = step(0.0, 0.0, 0.0, heading, ua=u)
@@ -154,7 +160,13 @@ def test_turn_step_is_a_parameter():
 
 @pytest.mark.parametrize(
     ("requested", "current", "error"),
-    [(10.0, 350.0, 20.0), (350.0, 10.0, -20.0), (180.0, 0.0, 180.0), (0.0, 180.0, 180.0), (5.0, 5.0, 0.0)],
+    [
+        (10.0, 350.0, 20.0),
+        (350.0, 10.0, -20.0),
+        (180.0, 0.0, 180.0),
+        (0.0, 180.0, 180.0),
+        (5.0, 5.0, 0.0),
+    ],
 )
 def test_heading_error_in_minus_180_to_180(requested, current, error):
     assert float(heading_error(np.array([requested]), np.array([current]))[0]) == error
@@ -168,3 +180,17 @@ def test_control_then_advance_turns_toward_request_across_seam():
         heading = step(0.0, 0.0, 0.0, heading, ua=ua)[3]
     assert heading == 10.0
     assert ctrl(0.0, heading, 0.0, 10.0) == (0.0, 0.0)
+
+
+def test_heading_error_is_the_shortest_signed_turn_on_a_grid():
+    # every pair of headings on a 2.5-degree grid, including the 0/360 seam and 180 apart
+    grid = np.arange(0.0, 360.0, 2.5)
+    requested, current = (a.ravel() for a in np.meshgrid(grid, grid))
+    error = heading_error(requested, current)
+    assert (error > -180.0).all() and (error <= 180.0).all()
+    landed = np.mod(current + error, 360.0)
+    np.testing.assert_allclose(landed, requested, atol=1e-9)
+    still = np.zeros_like(current)
+    _, turn = control(still, current, still, requested, P)
+    np.testing.assert_array_equal(turn, np.sign(error))
+    assert (turn[requested == current] == 0).all()

@@ -103,7 +103,8 @@ def test_unknown_parameter_with_did_you_mean():
     data = base()
     data["parameters"]["energy_usage"] = 1
     with pytest.raises(
-        ScenarioError, match=r"unknown key 'parameters.energy_usage' \(did you mean 'energy_use'\?\)"
+        ScenarioError,
+        match=r"unknown key 'parameters.energy_usage' \(did you mean 'energy_use'\?\)",
     ):
         Scenario.from_mapping(data, source="my.yaml")
 
@@ -116,7 +117,9 @@ def test_unknown_key_without_a_close_match():
     assert "did you mean" not in str(info.value)
 
 
-@pytest.mark.parametrize("key", ["name", "tree", "agents", "iterations", "world", "refueling_positions"])
+@pytest.mark.parametrize(
+    "key", ["name", "tree", "agents", "iterations", "world", "refueling_positions"]
+)
 def test_missing_key(key):
     assert f"missing key '{key}'" in bad(**{key: KeyError})
 
@@ -137,7 +140,11 @@ def test_missing_surveillance_positions_without_patrol():
         ("refueling_positions", [], "refueling_positions must be a list of at least 1"),
         ("surveillance_positions", "here", "surveillance_positions must be a list"),
         ("patrol_positions", [[1, 2]], "patrol_positions must be a list of exactly 2"),
-        ("patrol_positions", [[1, 2], [3, 4], [5, 6]], "patrol_positions must be a list of exactly 2"),
+        (
+            "patrol_positions",
+            [[1, 2], [3, 4], [5, 6]],
+            "patrol_positions must be a list of exactly 2",
+        ),
     ],
 )
 def test_bad_point(field, value, path):
@@ -195,7 +202,9 @@ def test_missing_file(tmp_path):
 
 
 def test_unknown_scenario_name():
-    with pytest.raises(ScenarioError, match=r"unknown scenario 'gatherin' \(did you mean 'gathering'\?\)"):
+    with pytest.raises(
+        ScenarioError, match=r"unknown scenario 'gatherin' \(did you mean 'gathering'\?\)"
+    ):
         load("gatherin")
     with pytest.raises(ScenarioError, match="known: gathering, patrol"):
         load("nothing-like-it")

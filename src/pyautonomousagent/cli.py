@@ -43,17 +43,31 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--engine", choices=list(ENGINES), default="pytrees", help="decision engine")
     run.add_argument("--out", type=Path, help="output folder (default: runs/SCENARIO)")
     run.add_argument("--format", choices=["parquet", "csv"], default="parquet", help="data format")
-    run.add_argument("--record-every", type=int, default=1, metavar="K",
-                     help="record every K-th iteration (default: 1, all)")
+    run.add_argument(
+        "--record-every",
+        type=int,
+        default=1,
+        metavar="K",
+        help="record every K-th iteration (default: 1, all)",
+    )
     run.add_argument("--no-gif", action="store_true", help="skip the animation (Phase 7)")
     run.add_argument("--frame-every", type=int, help="iterations between animation frames")
-    run.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                     help="override a scenario parameter, e.g. --set low_energy_threshold=30")
+    run.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scenario parameter, e.g. --set low_energy_threshold=30",
+    )
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     tree = sub.add_parser("tree", help="print a scenario's behaviour tree")
     tree.add_argument("scenario", help="a registered scenario name or a scenario .yaml file")
-    tree.add_argument("--style", choices=["paper", "py_trees"], default="paper",
-                      help="the paper's symbols, or py_trees' own drawing")
+    tree.add_argument(
+        "--style",
+        choices=["paper", "py_trees"],
+        default="paper",
+        help="the paper's symbols, or py_trees' own drawing",
+    )
     return parser
 
 
@@ -76,8 +90,9 @@ def _scenario(args: argparse.Namespace) -> Scenario:
     unknown = [k for k in overrides if k not in to_mapping(scenario)["parameters"]]
     if unknown:
         raise ScenarioError(f"--set: unknown parameter {unknown[0]!r}")
-    return scenario.with_overrides(agents=args.agents, iterations=args.iterations,
-                                   frame_every=args.frame_every, **overrides)
+    return scenario.with_overrides(
+        agents=args.agents, iterations=args.iterations, frame_every=args.frame_every, **overrides
+    )
 
 
 def _versions() -> dict[str, str]:
@@ -99,8 +114,9 @@ def run(args: argparse.Namespace) -> int:
     out = args.out or Path("runs") / scenario.name
     out.mkdir(parents=True, exist_ok=True)
     progress = None if not args.quiet else False
-    sim = Simulation.create(scenario, seed=args.seed, engine=args.engine,
-                            record_every=args.record_every).run(progress=progress)
+    sim = Simulation.create(
+        scenario, seed=args.seed, engine=args.engine, record_every=args.record_every
+    ).run(progress=progress)
     start = time.perf_counter()
     data = write_table(sim.table(), out / f"states.{args.format}", args.format)
     sim.timings["write_data"] = time.perf_counter() - start
@@ -108,8 +124,13 @@ def run(args: argparse.Namespace) -> int:
     if not args.no_gif:
         from pyautonomousagent.render.animation import write_gif
 
-        stats = write_gif(sim.recorder, scenario, out / "animation.gif",
-                          frame_every=scenario.frame_every, progress=progress)
+        stats = write_gif(
+            sim.recorder,
+            scenario,
+            out / "animation.gif",
+            frame_every=scenario.frame_every,
+            progress=progress,
+        )
         sim.timings["animation"] = stats.seconds
         written.append(stats.path)
     written.append(_write_summary(sim, args, out / "run.json"))
@@ -136,8 +157,10 @@ def _print_summary(sim: Simulation, written: list[Path]) -> None:
     alerts = sum(1 for e in sim.events if e["event"] == "alert")
     messages = sum(1 for e in sim.events if e["event"] == "message")
     n, its = sim.swarm.size, sim.scenario.iterations
-    print(f"{sim.scenario.name}: {n} agents x {its} iterations on {sim.engine.name} in "
-          f"{sim.timings['simulate']:.2f} s; {messages} recorded message(s), {alerts} alert(s)")
+    print(
+        f"{sim.scenario.name}: {n} agents x {its} iterations on {sim.engine.name} in "
+        f"{sim.timings['simulate']:.2f} s; {messages} recorded message(s), {alerts} alert(s)"
+    )
     for path in written:
         print(f"  wrote {path}")
 
@@ -146,8 +169,10 @@ def scenarios_command() -> int:
     """``pyaa scenarios``: one line per registered scenario."""
     for name in names():
         scenario = load(name)
-        print(f"{name:12s} {scenario.agents:>5d} agents {scenario.iterations:>6d} iterations  "
-              f"{scenario.description}")
+        print(
+            f"{name:12s} {scenario.agents:>5d} agents {scenario.iterations:>6d} iterations  "
+            f"{scenario.description}"
+        )
     return 0
 
 
@@ -170,7 +195,10 @@ def tree_command(args: argparse.Namespace) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``pyaa`` console script."""
-    args = _parser().parse_args(argv)
+    try:
+        args = _parser().parse_args(argv)
+    except SystemExit as stop:  # usage errors and --help: argparse has printed its message
+        return int(stop.code or 0)
     try:
         if args.command == "run":
             return run(args)

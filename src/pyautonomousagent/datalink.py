@@ -5,11 +5,21 @@ and the sender's position when it was sent. Messages sent during an iteration wa
 channel; :meth:`Datalink.deliver` hands each to every receiver within range of the
 sender's position (never to the sender) and clears the channel. Receivers act on them in
 Phase 2 of the next iteration (:func:`pyautonomousagent.simulation.phases.process_messages`).
+
+One call of :meth:`Datalink.send` may carry the messages of many senders at once (the
+batched engine); the py_trees engine sends one at a time. Delivery puts the messages of a
+type in a canonical order (by sender, then in the order each sender sent them), so both
+engines deliver the same messages in the same order.
+
+Cost: when every agent lies within range of every other (the usual case of a long-range
+link), a broadcast is recorded once, not once per receiver (O(N) time and memory). Otherwise
+receivers are found on a uniform grid of cells one range wide, in time proportional to the
+pairs in range, not N^2.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -19,31 +29,78 @@ SHARING_DATA = "sharing data"
 GATHERING = "gathering"
 
 
-@dataclass(frozen=True)
-class Message:
-    """One message on the channel.
+@dataclass
+class Messages:
+    """Messages of one type, one row each.
 
     Attributes:
-        sender: index of the sending agent.
-        receivers: indices of the intended receivers, or None for all agents.
         type: message type, e.g. ``"sharing data"`` or ``"gathering"``.
-        data: the payload (name -> number).
-        sender_position: (x, y) of the sender when it sent the message.
+        senders: sending agents, shape (M,).
+        order: per-sender sending order (a global counter), shape (M,).
+        x, y: sender positions when sent, shape (M,).
+        data: payload arrays, name -> shape (M,).
+        lists: per message, the row of ``receiver_lists`` naming its receivers, or -1 for
+            everyone; shape (M,).
+        receiver_lists: the receiver lists (int arrays) of targeted messages.
     """
 
-    sender: int
-    receivers: tuple[int, ...] | None
     type: str
-    data: Mapping[str, float]
-    sender_position: tuple[float, float]
+    senders: np.ndarray
+    order: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    data: dict[str, np.ndarray]
+    lists: np.ndarray
+    receiver_lists: list[np.ndarray]
+
+    def __len__(self) -> int:
+        return int(self.senders.size)
+
+    def receivers(self, row: int) -> np.ndarray | None:
+        """The intended receivers of message ``row``, or None for everyone."""
+        which = int(self.lists[row])
+        return None if which < 0 else self.receiver_lists[which]
+
+    def take(self, rows: np.ndarray) -> Messages:
+        """The messages at ``rows``, in that order."""
+        return Messages(
+            self.type,
+            self.senders[rows],
+            self.order[rows],
+            self.x[rows],
+            self.y[rows],
+            {k: v[rows] for k, v in self.data.items()},
+            self.lists[rows],
+            self.receiver_lists,
+        )
 
 
-@dataclass(frozen=True)
-class Received:
-    """A message as one receiver got it."""
+@dataclass
+class Delivery:
+    """The messages of one type, as delivered.
 
-    receiver: int
-    message: Message
+    Attributes:
+        messages: the messages, in canonical order (by sender, then sending order).
+        receivers, rows: delivered pairs (receiver index, message row), in message order;
+            empty when ``to_all`` holds.
+        to_all: every message was a broadcast and every agent was in range of every
+            sender: each message reached every agent but its sender (pairs not listed).
+    """
+
+    messages: Messages
+    receivers: np.ndarray
+    rows: np.ndarray
+    to_all: bool = False
+
+    def pairs(self, n_agents: int) -> tuple[np.ndarray, np.ndarray]:
+        """(receivers, rows) of every delivery, listing them also when ``to_all`` holds."""
+        if not self.to_all:
+            return self.receivers, self.rows
+        m = len(self.messages)
+        receivers = np.tile(np.arange(n_agents), m)
+        rows = np.repeat(np.arange(m), n_agents)
+        keep = receivers != self.messages.senders[rows]
+        return receivers[keep], rows[keep]
 
 
 @dataclass
@@ -52,62 +109,281 @@ class Datalink:
 
     Attributes:
         range: largest sender-receiver distance that a message crosses (world units).
-        channel: messages sent this iteration, not yet delivered.
+        channel: messages sent this iteration, not yet delivered (one entry per send call).
     """
 
     range: float
-    channel: list[Message] = field(default_factory=list)
+    channel: list[Messages] = field(default_factory=list)
+    _sent: int = 0
 
     def send(
         self,
-        sender: int,
+        sender: Any,
         type: str,
-        data: Mapping[str, float],
-        sender_position: tuple[float, float],
+        data: Mapping[str, Any],
+        sender_position: tuple[Any, Any],
         receivers: Sequence[int] | None = None,
     ) -> None:
-        """Put a message on the channel; it is delivered at the end of the iteration."""
-        targets = None if receivers is None else tuple(int(r) for r in receivers)
-        position = (float(sender_position[0]), float(sender_position[1]))
-        self.channel.append(Message(int(sender), targets, type, dict(data), position))
+        """Put messages on the channel; they are delivered at the end of the iteration.
 
-    def deliver(self, x: np.ndarray, y: np.ndarray) -> list[Received]:
-        """Phase 5: hand every message to its receivers within range, then clear the channel.
+        Args:
+            sender: one agent index, or an array of them (one message each).
+            type: the message type.
+            data: payload: name -> a number, or an array with one entry per sender.
+            sender_position: (x, y) of the sender(s), numbers or arrays.
+            receivers: intended receivers (agent indices), or None for everyone.
+        """
+        senders = np.atleast_1d(np.asarray(sender, dtype=np.int64))
+        m = senders.size
+        order = np.arange(self._sent, self._sent + m)
+        self._sent += m
+        x = np.broadcast_to(np.asarray(sender_position[0], dtype=np.float64), (m,)).copy()
+        y = np.broadcast_to(np.asarray(sender_position[1], dtype=np.float64), (m,)).copy()
+        payload = {
+            k: np.broadcast_to(np.asarray(v, dtype=np.float64), (m,)).copy()
+            for k, v in data.items()
+        }
+        lists = [] if receivers is None else [np.asarray(receivers, dtype=np.int64)]
+        which = np.full(m, -1 if receivers is None else 0, dtype=np.int64)
+        self.channel.append(Messages(type, senders, order, x, y, payload, which, lists))
+
+    def deliver(self, x: np.ndarray, y: np.ndarray) -> list[Delivery]:
+        """Phase 5: hand every message to its receivers within range; clear the channel.
 
         Args:
             x, y: the receivers' current positions, shape (N,).
 
         Returns:
-            One entry per (receiver, message), in sending order.
+            One :class:`Delivery` per message type, in order of first sending.
         """
-        delivered: list[Received] = []
-        everyone = np.arange(len(x))
-        for message in self.channel:
-            targets = everyone if message.receivers is None else np.asarray(message.receivers, int)
-            sx, sy = message.sender_position
-            in_range = np.hypot(x[targets] - sx, y[targets] - sy) <= self.range
-            for receiver in targets[in_range & (targets != message.sender)]:
-                delivered.append(Received(int(receiver), message))
+        deliveries = [self._deliver_type(merged, x, y) for merged in _merge_by_type(self.channel)]
         self.channel.clear()
-        return delivered
+        return deliveries
+
+    def _deliver_type(self, messages: Messages, x: np.ndarray, y: np.ndarray) -> Delivery:
+        broadcast = messages.lists < 0
+        if broadcast.all() and self._all_in_range(messages, x, y):
+            empty = np.zeros(0, dtype=np.int64)
+            return Delivery(messages, empty, empty, to_all=True)
+        parts = [grid_pairs(messages.x, messages.y, np.flatnonzero(broadcast), x, y, self.range)]
+        for row in np.flatnonzero(~broadcast):
+            targets = messages.receiver_lists[messages.lists[row]]
+            near = (
+                np.hypot(x[targets] - messages.x[row], y[targets] - messages.y[row]) <= self.range
+            )
+            parts.append((targets[near], np.full(int(near.sum()), row, dtype=np.int64)))
+        receivers = np.concatenate([p[0] for p in parts])
+        rows = np.concatenate([p[1] for p in parts])
+        keep = receivers != messages.senders[rows]
+        order = np.lexsort((receivers[keep], rows[keep]))
+        return Delivery(messages, receivers[keep][order], rows[keep][order])
+
+    def _all_in_range(self, messages: Messages, x: np.ndarray, y: np.ndarray) -> bool:
+        """True if every sender position is within range of every agent (bounding-box test)."""
+        xs = np.concatenate([x, messages.x])
+        ys = np.concatenate([y, messages.y])
+        return bool(np.hypot(xs.max() - xs.min(), ys.max() - ys.min()) <= self.range)
+
+
+def _merge_by_type(channel: list[Messages]) -> list[Messages]:
+    """The channel's messages grouped by type, each group in canonical order."""
+    types = list(dict.fromkeys(m.type for m in channel))
+    merged = []
+    for kind in types:
+        parts = [m for m in channel if m.type == kind]
+        keys = sorted(set().union(*(m.data for m in parts)))
+        offsets = np.cumsum([0] + [len(m.receiver_lists) for m in parts])
+        messages = Messages(
+            kind,
+            np.concatenate([m.senders for m in parts]),
+            np.concatenate([m.order for m in parts]),
+            np.concatenate([m.x for m in parts]),
+            np.concatenate([m.y for m in parts]),
+            {
+                k: np.concatenate([m.data.get(k, np.full(len(m), np.nan)) for m in parts])
+                for k in keys
+            },
+            np.concatenate(
+                [
+                    np.where(m.lists < 0, -1, m.lists + o)
+                    for m, o in zip(parts, offsets[:-1], strict=True)
+                ]
+            ),
+            [r for m in parts for r in m.receiver_lists],
+        )
+        merged.append(messages.take(np.lexsort((messages.order, messages.senders))))
+    return merged
+
+
+def grid_pairs(
+    sx: np.ndarray, sy: np.ndarray, rows: np.ndarray, x: np.ndarray, y: np.ndarray, reach: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """All (receiver, message row) pairs within ``reach``, found on a grid of cells ``reach`` wide.
+
+    Args:
+        sx, sy: message (sender) positions, shape (M,).
+        rows: the message rows to place, shape (R,).
+        x, y: receiver positions, shape (N,).
+        reach: the range (world units).
+
+    Returns:
+        (receivers, rows) of the pairs, unordered; time and memory grow with the pairs
+        found in neighbouring cells, not with N * M.
+    """
+    if rows.size == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty
+    x0, y0 = min(x.min(), sx[rows].min()), min(y.min(), sy[rows].min())
+    cell_x = np.floor((x - x0) / reach).astype(np.int64)
+    cell_y = np.floor((y - y0) / reach).astype(np.int64)
+    width = int(max(cell_x.max(), np.floor((sx[rows] - x0) / reach).max())) + 3
+    cell = (cell_y + 1) * width + cell_x + 1
+    by_cell = np.argsort(cell, kind="stable")
+    sorted_cells = cell[by_cell]
+    mx = np.floor((sx[rows] - x0) / reach).astype(np.int64)
+    my = np.floor((sy[rows] - y0) / reach).astype(np.int64)
+    found_receivers, found_rows = [], []
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            target = (my + dy + 1) * width + mx + dx + 1
+            lo = np.searchsorted(sorted_cells, target, "left")
+            hi = np.searchsorted(sorted_cells, target, "right")
+            counts = hi - lo
+            owner = np.repeat(np.arange(rows.size), counts)
+            offset = np.arange(owner.size) - np.repeat(np.cumsum(counts) - counts, counts)
+            receivers = by_cell[lo[owner] + offset]
+            message = rows[owner]
+            near = np.hypot(x[receivers] - sx[message], y[receivers] - sy[message]) <= reach
+            found_receivers.append(receivers[near])
+            found_rows.append(message[near])
+    return np.concatenate(found_receivers), np.concatenate(found_rows)
+
+
+@dataclass
+class SharedData:
+    """What each agent last heard from each other agent by "sharing data" messages.
+
+    A broadcast that reached everyone is stored once per sender (O(N) memory); deliveries
+    that reached only some agents are stored per (receiver, sender) pair that occurred.
+
+    Attributes:
+        fields: the payload names kept, e.g. ``("x", "y", "speed", ...)``.
+    """
+
+    n_agents: int
+    fields: tuple[str, ...] = ("x", "y", "speed", "heading", "damage", "energy")
+    _everyone_iteration: np.ndarray = field(init=False)
+    _everyone_data: np.ndarray = field(init=False)
+    _pair_keys: np.ndarray = field(init=False)
+    _pair_iteration: np.ndarray = field(init=False)
+    _pair_data: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        n, f = self.n_agents, len(self.fields)
+        self._everyone_iteration = np.full(n, -1, dtype=np.int64)
+        self._everyone_data = np.zeros((n, f))
+        self._pair_keys = np.zeros(0, dtype=np.int64)
+        self._pair_iteration = np.zeros(0, dtype=np.int64)
+        self._pair_data = np.zeros((0, f))
+
+    def store(self, delivery: Delivery, iteration: int) -> None:
+        """Remember the latest message per sender (and per receiver) of ``delivery``."""
+        messages = delivery.messages
+        values = np.stack([messages.data[k] for k in self.fields], axis=1)
+        if delivery.to_all:
+            last = _last_per_key(messages.senders)
+            self._everyone_iteration[messages.senders[last]] = iteration
+            self._everyone_data[messages.senders[last]] = values[last]
+            return
+        keys = delivery.receivers * self.n_agents + messages.senders[delivery.rows]
+        last = _last_per_key(keys)
+        self._merge_pairs(keys[last], iteration, values[delivery.rows[last]])
+
+    def _merge_pairs(self, keys: np.ndarray, iteration: int, values: np.ndarray) -> None:
+        order = np.argsort(keys)
+        keys, values = keys[order], values[order]
+        at = np.searchsorted(self._pair_keys, keys)
+        known = at < self._pair_keys.size
+        known[known] = self._pair_keys[at[known]] == keys[known]
+        self._pair_iteration[at[known]] = iteration
+        self._pair_data[at[known]] = values[known]
+        new = ~known
+        self._pair_keys = np.insert(self._pair_keys, at[new], keys[new])
+        self._pair_iteration = np.insert(self._pair_iteration, at[new], iteration)
+        self._pair_data = np.insert(self._pair_data, at[new], values[new], axis=0)
+
+    def __len__(self) -> int:
+        return self.n_agents
+
+    def __iter__(self) -> Iterator[dict[int, dict[str, float]]]:
+        return (self[r] for r in range(self.n_agents))
+
+    def __getitem__(self, receiver: int) -> dict[int, dict[str, float]]:
+        """Sender -> latest data (with its ``iteration``) as heard by ``receiver``."""
+        if not 0 <= receiver < self.n_agents:
+            raise IndexError(f"no agent {receiver}; there are {self.n_agents}")
+        heard: dict[int, dict[str, float]] = {}
+        for sender in np.flatnonzero(self._everyone_iteration >= 0).tolist():
+            if sender != receiver:
+                heard[sender] = self._row(
+                    self._everyone_data[sender], self._everyone_iteration[sender]
+                )
+        lo, hi = np.searchsorted(
+            self._pair_keys, [receiver * self.n_agents, (receiver + 1) * self.n_agents]
+        )
+        for k in range(lo, hi):
+            sender = int(self._pair_keys[k] % self.n_agents)
+            if sender not in heard or heard[sender]["iteration"] < self._pair_iteration[k]:
+                heard[sender] = self._row(self._pair_data[k], self._pair_iteration[k])
+        return heard
+
+    def _row(self, values: np.ndarray, iteration: Any) -> dict[str, float]:
+        return {**dict(zip(self.fields, values.tolist(), strict=True)), "iteration": int(iteration)}
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes held."""
+        return sum(
+            a.nbytes
+            for a in (
+                self._everyone_iteration,
+                self._everyone_data,
+                self._pair_keys,
+                self._pair_iteration,
+                self._pair_data,
+            )
+        )
+
+
+def _last_per_key(keys: np.ndarray) -> np.ndarray:
+    """Positions of the last occurrence of each distinct key."""
+    reversed_first = np.unique(keys[::-1], return_index=True)[1]
+    return keys.size - 1 - reversed_first
 
 
 def message_events(
-    messages: list[Message], types: tuple[str, ...], iteration: int, names: Sequence[str]
+    deliveries: list[Delivery], types: tuple[str, ...], iteration: int, names: Sequence[str]
 ) -> list[dict[str, Any]]:
     """Recordable events for the messages of the given types (e.g. gathering orders).
 
-    Agents are given by name (``names[i]`` is agent i).
+    Agents are given by name (``names[i]`` is agent i); one event per message, in
+    canonical order.
     """
-    return [
-        {
-            "iteration": iteration,
-            "event": "message",
-            "type": m.type,
-            "sender": names[m.sender],
-            "receivers": "all" if m.receivers is None else [names[r] for r in m.receivers],
-            "data": dict(m.data),
-        }
-        for m in messages
-        if m.type in types
-    ]
+    events = []
+    for delivery in deliveries:
+        messages = delivery.messages
+        if messages.type not in types:
+            continue
+        for row in range(len(messages)):
+            targets = messages.receivers(row)
+            events.append(
+                {
+                    "iteration": iteration,
+                    "event": "message",
+                    "type": messages.type,
+                    "sender": names[int(messages.senders[row])],
+                    "receivers": "all" if targets is None else [names[int(r)] for r in targets],
+                    "data": {k: float(v[row]) for k, v in messages.data.items()},
+                }
+            )
+    return events

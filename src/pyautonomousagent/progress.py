@@ -17,8 +17,9 @@ class Progress:
         stream: where to draw (standard error by default).
     """
 
-    def __init__(self, total: int, label: str = "", enabled: bool | None = None,
-                 stream: TextIO | None = None) -> None:
+    def __init__(
+        self, total: int, label: str = "", enabled: bool | None = None, stream: TextIO | None = None
+    ) -> None:
         self.total = max(int(total), 1)
         self.label = label
         self.stream = stream or sys.stderr
@@ -40,7 +41,9 @@ class Progress:
         bar = "#" * int(30 * fraction) + "." * (30 - int(30 * fraction))
         elapsed = now - self._start
         eta = elapsed / fraction - elapsed if fraction > 0 else 0.0
-        self.stream.write(f"\r{self.label} [{bar}] {self.done}/{self.total} {elapsed:.0f}s<{eta:.0f}s")
+        self.stream.write(
+            f"\r{self.label} [{bar}] {self.done}/{self.total} {elapsed:.0f}s<{eta:.0f}s"
+        )
         self.stream.flush()
 
     def close(self) -> None:

@@ -8,6 +8,7 @@ table (one row per recorded iteration and agent) for Parquet, CSV or pandas.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -23,9 +24,16 @@ class Recorder:
         swarm: the agents (its columns and blackboard keys are recorded).
         iterations: the run's length in iterations.
         every: record iteration t when ``t % every == 0`` (decimation); 1 records all.
+        extra: more columns to record (e.g. a motion model's state), name -> shape (N,).
     """
 
-    def __init__(self, swarm: Swarm, iterations: int, every: int = 1) -> None:
+    def __init__(
+        self,
+        swarm: Swarm,
+        iterations: int,
+        every: int = 1,
+        extra: Mapping[str, np.ndarray] | None = None,
+    ) -> None:
         if every < 1:
             raise ValueError(f"record_every must be >= 1, got {every}")
         self.every = every
@@ -34,7 +42,11 @@ class Recorder:
         self.iterations = np.zeros(records, dtype=np.int64)
         self.columns = {
             **{k: np.zeros((records, swarm.size), dtype=v.dtype) for k, v in swarm.columns.items()},
-            **{k: np.zeros((records, swarm.size), dtype=v.dtype) for k, v in swarm.blackboard.items()},
+            **{
+                k: np.zeros((records, swarm.size), dtype=v.dtype)
+                for k, v in swarm.blackboard.items()
+            },
+            **{k: np.zeros((records, swarm.size), dtype=v.dtype) for k, v in (extra or {}).items()},
         }
         self.count = 0
 
@@ -42,13 +54,15 @@ class Recorder:
         """Whether ``iteration`` is recorded."""
         return iteration % self.every == 0
 
-    def record(self, iteration: int, swarm: Swarm) -> None:
-        """Copy the swarm's current state into the next record."""
+    def record(
+        self, iteration: int, swarm: Swarm, extra: Mapping[str, np.ndarray] | None = None
+    ) -> None:
+        """Copy the swarm's current state (and the ``extra`` columns) into the next record."""
         row = self.count
         self.iterations[row] = iteration
+        sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
         for key, values in self.columns.items():
-            source = swarm.columns.get(key)
-            values[row] = source if source is not None else swarm.blackboard[key]
+            values[row] = sources[key]
         self.count += 1
 
     def column(self, key: str) -> np.ndarray:
@@ -94,4 +108,3 @@ def write_table(table: pa.Table, path: Path, fmt: str = "parquet") -> Path:
 def _plain_agent(schema: pa.Schema) -> pa.Schema:
     """The schema with the dictionary-encoded agent column as plain strings (for CSV)."""
     return schema.set(schema.get_field_index("agent"), pa.field("agent", pa.string()))
-

@@ -23,7 +23,9 @@ class RadiationSource:
     active: bool = False
 
 
-def radiation_level(x: np.ndarray, y: np.ndarray, sources: tuple[RadiationSource, ...]) -> np.ndarray:
+def radiation_level(
+    x: np.ndarray, y: np.ndarray, sources: tuple[RadiationSource, ...]
+) -> np.ndarray:
     """Radiation read at (x, y): the levels of all active sources added, clipped to 100 %.
 
     Args:
@@ -47,5 +49,5 @@ def drain_energy(energy: np.ndarray, use_per_iteration: float) -> np.ndarray:
 
 
 def accumulate_damage(damage: np.ndarray, radiation: np.ndarray, factor: float) -> np.ndarray:
-    """Damage after one iteration of exposure: ``factor`` percent per iteration at 100 % radiation."""
+    """Damage after one iteration of exposure: ``factor`` % per iteration at 100 % radiation."""
     return np.minimum(damage + factor * radiation / 100.0, 100.0)

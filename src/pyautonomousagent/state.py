@@ -44,7 +44,9 @@ class Swarm:
     blackboard: dict[str, np.ndarray] = field(default_factory=dict)
 
     @classmethod
-    def create(cls, names: Iterable[str], blackboard_keys: Mapping[str, Any] = ()) -> Swarm:
+    def create(
+        cls, names: Iterable[str], blackboard_keys: Mapping[str, Any] | None = None
+    ) -> Swarm:
         """Zero-filled state for the named agents, with the given blackboard keys.
 
         Args:
@@ -53,8 +55,8 @@ class Swarm:
         """
         names = list(names)
         n = len(names)
-        columns = {k: np.zeros(n, dtype=t) for k, t in STATE_COLUMNS.items()}
-        board = {k: np.zeros(n, dtype=t) for k, t in dict(blackboard_keys).items()}
+        columns: dict[str, np.ndarray] = {k: np.zeros(n, dtype=t) for k, t in STATE_COLUMNS.items()}
+        board = {k: np.zeros(n, dtype=t) for k, t in (blackboard_keys or {}).items()}
         return cls(names=names, columns=columns, blackboard=board)
 
     @property
@@ -129,7 +131,7 @@ class BlackboardView:
 
 
 class AgentView:
-    """Rows of a :class:`Swarm`: one agent (int index) or a group (int array index).
+    """Rows of a :class:`Swarm`: one agent (int index) or a group (int array or slice index).
 
     State columns are attributes (``x``, ``y``, ``speed``, ``heading``, ``energy``,
     ``damage``, ``radiation``, ``requested_speed``, ``requested_heading``); the blackboard
@@ -154,9 +156,19 @@ class AgentView:
         self.blackboard = BlackboardView(swarm.blackboard, index)
 
     @property
+    def is_one(self) -> bool:
+        """True for a single agent (an integer index), False for a group."""
+        return isinstance(self.index, int | np.integer)
+
+    @property
+    def indices(self) -> np.ndarray:
+        """The agents' rows as an int array (one entry for a single agent)."""
+        return np.arange(self.swarm.size)[self.index].reshape(-1)
+
+    @property
     def name(self) -> Any:
         """The agent's identifier (a string), or an array of them for a group."""
-        if np.ndim(self.index) == 0:
+        if self.is_one:
             return self.swarm.names[int(self.index)]
         return np.array(self.swarm.names, dtype=object)[self.index]
 

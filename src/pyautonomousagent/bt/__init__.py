@@ -1,7 +1,6 @@
 """Behaviour trees: the engine-independent tree description and the leaf-node library."""
 
 from pyautonomousagent.bt import library, scripted  # noqa: F401  (register the leaf types)
-
 from pyautonomousagent.bt.spec import (
     Node,
     fallback,

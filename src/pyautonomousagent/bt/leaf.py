@@ -83,7 +83,9 @@ class Leaf:
         known = {p.name: p for p in cls.ports}
         unknown = sorted(set(params) - set(known))
         if unknown:
-            raise LeafError(f"{where}: unknown port(s) {unknown}; {cls.type_name} has {sorted(known)}")
+            raise LeafError(
+                f"{where}: unknown port(s) {unknown}; {cls.type_name} has {sorted(known)}"
+            )
         values = {}
         for port in cls.ports:
             if port.name in params:
@@ -127,9 +129,12 @@ def make_leaf(node: Node, defaults: Mapping[str, Any]) -> Leaf:
     """The leaf instance for a leaf node, ports from the node or ``defaults``; TreeError if bad."""
     try:
         cls = leaf_type(node.type)
+    except LeafError as error:
+        raise TreeError(f"node {node.name!r}: {error}") from None
+    try:
         return cls.create(node.params, defaults, where=f"leaf {node.name!r} ({node.type})")
     except LeafError as error:
-        raise TreeError(str(error) if "leaf " in str(error) else f"node {node.name!r}: {error}") from None
+        raise TreeError(str(error)) from None
 
 
 def check_leaves(

@@ -9,11 +9,9 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
-from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
 from pyautonomousagent.arrays import bearing, choose, maximum, minimum
-from pyautonomousagent.bt.status import RUNNING, SUCCESS, status_if, success_if
+from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
+from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS, status_if, success_if
 from pyautonomousagent.datalink import GATHERING, SHARING_DATA
 from pyautonomousagent.state import AgentView
 from pyautonomousagent.world import World
@@ -72,8 +70,12 @@ class ConditionGatheringMoment(Leaf):
     sender: str
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
-        sender_index = world.agent_index.get(self.sender, -1)
-        return success_if((world.iteration == self.iteration) & (agents.index == sender_index))
+        if world.iteration != self.iteration:
+            return FAILURE
+        sender = world.agent_index.get(self.sender, -1)
+        if agents.is_one:
+            return success_if(int(agents.index) == sender)
+        return success_if(agents.indices == sender)
 
 
 @register_leaf
@@ -168,7 +170,9 @@ class ActionSetDestinationEqualToOtherSurveillanceS(Leaf):
     keys = DESTINATION + SURVEILLANCE + PATROL
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
-        return _go_to_patrol_position(agents, 3 - agents.blackboard.index_current_surveillance_position)
+        return _go_to_patrol_position(
+            agents, 3 - agents.blackboard.index_current_surveillance_position
+        )
 
 
 @register_leaf
@@ -183,13 +187,8 @@ class ActionSetDestinationEqualToCurrentSurveillanceS(Leaf):
 
 
 def _send_to_all(agents: AgentView, world: World, kind: str, data: dict[str, Any]) -> int:
-    """Each agent of the view sends ``data`` (its own row of each array) to everyone."""
-    indices = np.atleast_1d(agents.index)
-    rows = {k: np.broadcast_to(v, indices.shape) for k, v in data.items()}
-    xs, ys = np.broadcast_to(agents.x, indices.shape), np.broadcast_to(agents.y, indices.shape)
-    for i, sender in enumerate(indices):
-        row = {k: float(v[i]) for k, v in rows.items()}
-        world.datalink.send(int(sender), kind, row, (xs[i], ys[i]))
+    """Each agent of the view sends ``data`` (its own entry of each value) to everyone."""
+    world.datalink.send(agents.indices, kind, data, (agents.x, agents.y))
     return SUCCESS
 
 
@@ -253,4 +252,3 @@ class ActionRepairDamageA(Leaf):
         damage = maximum(agents.damage - self.rate, 0.0)
         agents.damage = damage
         return _hold_still_until(agents, damage <= 0.0, self.speed)
-

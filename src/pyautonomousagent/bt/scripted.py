@@ -35,5 +35,5 @@ class Scripted(Leaf):
         return cls(statuses=table)
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
-        row = self.statuses[world.iteration - 1]
-        return row[agents.index] if np.ndim(agents.index) else int(row[agents.index])
+        value = self.statuses[world.iteration - 1][agents.index]
+        return value if np.ndim(value) else int(value)

@@ -111,7 +111,9 @@ def inverter(name: str, child: Node) -> Node:
     return Node("Inverter", name, (child,))
 
 
-def parallel(name: str, *children: Node, policy: str = "SuccessOnAll", synchronise: bool = True) -> Node:
+def parallel(
+    name: str, *children: Node, policy: str = "SuccessOnAll", synchronise: bool = True
+) -> Node:
     """A parallel ("⇉"): ticks every child every tick; ``policy`` decides its success."""
     params: dict[str, Any] = {"policy": policy}
     if policy == "SuccessOnAll":
@@ -167,7 +169,9 @@ def control_params(node: Node) -> dict[str, Any]:
         ):
             raise TreeError(f"{where}: {key} must be a whole number >= 1, got {value!r}")
     if values.get("policy", "SuccessOnAll") not in PARALLEL_POLICIES:
-        raise TreeError(f"{where}: policy must be one of {PARALLEL_POLICIES}, got {values['policy']!r}")
+        raise TreeError(
+            f"{where}: policy must be one of {PARALLEL_POLICIES}, got {values['policy']!r}"
+        )
     if values.get("policy") == "SuccessOnOne":
         if node.params.get("synchronise"):
             raise TreeError(f"{where}: policy SuccessOnOne cannot synchronise")

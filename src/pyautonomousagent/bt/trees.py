@@ -34,7 +34,9 @@ def go_refuel(refueled: Node, reached: str = "condition_destination_reached") ->
             "fallback_refueling",
             reactive_sequence(
                 "reactive_sequence_go_to_refueling",
-                inverter("inverter_destination_reached", leaf("Condition_Destination_Reached", reached)),
+                inverter(
+                    "inverter_destination_reached", leaf("Condition_Destination_Reached", reached)
+                ),
                 leaf("Action_Navigate_To_Destination_A", "action_navigate_to_destination_a_1"),
             ),
             sequence("sequence_refuel", leaf("Action_Refuel_A"), refueled),

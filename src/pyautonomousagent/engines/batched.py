@@ -9,7 +9,7 @@ subtree is the contiguous range ``[i, end[i])``. Per-node state is held per agen
   ``current_child``), -1 for none;
 - ``counter``: shape (nodes, N), the successes of ``Repeat`` / failures of ``Retry``.
 
-A node is ticked for the agents whose tick reaches it (a sorted index array), and every
+A node is ticked for the agents whose tick reaches it (a boolean mask), and every
 rule of py_trees 2.x is reproduced: which children are ticked, which statuses are kept,
 and which RUNNING subtrees are halted (set INVALID) and when. Leaves run their
 engine-independent ``evaluate`` once for all those agents.
@@ -72,8 +72,9 @@ def compile_tree(root: Node) -> Program:
 
     visit(root, -1)
     params = tuple(control_params(n) if n.is_control else {} for n in nodes)
-    return Program(tuple(nodes), np.asarray(parent), tuple(tuple(c) for c in children),
-                   np.asarray(end), params)
+    return Program(
+        tuple(nodes), np.asarray(parent), tuple(tuple(c) for c in children), np.asarray(end), params
+    )
 
 
 def _status_table(type_name: str) -> np.ndarray:
@@ -115,25 +116,30 @@ class BatchedEngine:
         self.current = np.full((n, swarm.size), -1, dtype=np.int16)
         self.counter = np.zeros((n, swarm.size), dtype=np.int32)
         self.leaves: dict[int, Leaf] = {
-            i: make_leaf(node, defaults) for i, node in enumerate(program.nodes) if not node.is_control
+            i: make_leaf(node, defaults)
+            for i, node in enumerate(program.nodes)
+            if not node.is_control
         }
         self._ticks = swarm.blackboard["number_ticks"]
-        self._everyone = np.arange(swarm.size)
-        self._tables = {i: _status_table(node.type) for i, node in enumerate(program.nodes)
-                        if node.type in STATUS_MAPS}
+        self._everyone = np.ones(swarm.size, dtype=bool)
+        self._tables = {
+            i: _status_table(node.type)
+            for i, node in enumerate(program.nodes)
+            if node.type in STATUS_MAPS
+        }
         self._tickers = [self._ticker(i) for i in range(n)]
 
     def _ticker(self, i: int) -> Callable[[np.ndarray], None]:
         node_type = self.program.nodes[i].type
         if node_type == "Sequence":
-            return lambda idx: self._sequence(i, idx)
+            return lambda mask: self._sequence(i, mask)
         if node_type == "Selector":
-            return lambda idx: self._selector(i, idx)
+            return lambda mask: self._selector(i, mask)
         if node_type == "Parallel":
-            return lambda idx: self._parallel(i, idx)
+            return lambda mask: self._parallel(i, mask)
         if node_type in STATUS_MAPS or node_type in ("Repeat", "Retry"):
-            return lambda idx: self._decorator(i, idx)
-        return lambda idx: self._leaf(i, idx)
+            return lambda mask: self._decorator(i, mask)
+        return lambda mask: self._leaf(i, mask)
 
     def tick(self) -> None:
         """Tick the tree once for every agent."""
@@ -143,127 +149,125 @@ class BatchedEngine:
         """Status codes after the last tick, shape (nodes in tick order, N), int8."""
         return self.status.copy()
 
-    # -- halting -------------------------------------------------------------------------
+    # Every node method takes ``mask``, shape (N,), bool: the agents whose tick reaches the
+    # node (never empty). Methods never modify ``mask``.
 
-    def _halt(self, child: int, agents: np.ndarray) -> None:
-        """py_trees' ``stop(INVALID)`` of ``child``'s subtree for ``agents``."""
-        if agents.size:
-            stop = self.program.end[child]
-            self.status[child:stop, agents] = INVALID
-            self.current[child:stop, agents] = -1
+    def _halt(self, first: int, stop: int, mask: np.ndarray) -> None:
+        """py_trees' ``stop(INVALID)`` of the nodes ``first``..``stop - 1`` for ``mask``."""
+        np.copyto(self.status[first:stop], INVALID, where=mask)
+        np.copyto(self.current[first:stop], -1, where=mask)
 
-    def _halt_children(self, i: int, first: int, agents: np.ndarray) -> None:
-        """Halt the children of node ``i`` from position ``first`` on."""
+    def _halt_children(self, i: int, first: int, mask: np.ndarray) -> None:
+        """Halt the children of node ``i`` from position ``first`` on, for ``mask``."""
         kids = self.program.children[i]
-        if agents.size and first < len(kids):
-            stop = self.program.end[i]
-            self.status[kids[first]:stop, agents] = INVALID
-            self.current[kids[first]:stop, agents] = -1
+        if first < len(kids) and mask.any():
+            self._halt(kids[first], self.program.end[i], mask)
 
-    # -- nodes ---------------------------------------------------------------------------
+    def _leaf(self, i: int, mask: np.ndarray) -> None:
+        rows: Any = slice(None) if mask.all() else np.flatnonzero(mask)
+        result = self.leaves[i].evaluate(self.swarm.agents(rows), self.world)
+        self.status[i, rows] = result
+        self._ticks[rows] += 1
 
-    def _leaf(self, i: int, idx: np.ndarray) -> None:
-        result = self.leaves[i].evaluate(self.swarm.agents(idx), self.world)
-        self.status[i, idx] = result
-        self._ticks[idx] += 1
-
-    def _sequence(self, i: int, idx: np.ndarray) -> None:
+    def _sequence(self, i: int, mask: np.ndarray) -> None:
         kids, memory = self.program.children[i], self.program.params[i]["memory"]
         status, current = self.status[i], self.current[i]
-        fresh = status[idx] != RUNNING
-        self._halt_children(i, 0, idx[fresh])
+        fresh = mask & (status != RUNNING)
+        self._halt_children(i, 0, fresh)
         if not kids:
-            status[idx], current[idx] = SUCCESS, -1
+            np.copyto(status, SUCCESS, where=mask)
+            np.copyto(current, -1, where=mask)
             return
-        start = np.where(fresh, 0, current[idx]) if memory else np.zeros(idx.size, np.int16)
-        going = start == 0
+        start = np.where(fresh, 0, current) if memory else None
+        going = mask & (start == 0) if start is not None else mask.copy()
         for k, child in enumerate(kids):
             if going.any():
-                at = np.flatnonzero(going)
-                agents = idx[at]
-                current[agents] = k
-                self._tickers[child](agents)
-                result = self.status[child, agents]
-                stopped = result != SUCCESS
-                if stopped.any():
-                    halted = agents[stopped]
-                    if not memory:
-                        self._halt_children(i, k + 1, halted)
-                    status[halted] = result[stopped]
-                going = np.zeros(idx.size, bool)
-                going[at[~stopped]] = True
-            if memory and k + 1 < len(kids):
-                going |= start == k + 1
-        status[idx[going]] = SUCCESS
+                np.copyto(current, k, where=going)
+                self._tickers[child](going)
+                result = self.status[child]
+                succeeded = result == SUCCESS
+                stopped = going & ~succeeded
+                if not memory:
+                    self._halt_children(i, k + 1, stopped)
+                np.copyto(status, result, where=stopped)
+                going &= succeeded
+            if start is not None and k + 1 < len(kids):
+                going |= mask & (start == k + 1)
+        np.copyto(status, SUCCESS, where=going)
 
-    def _selector(self, i: int, idx: np.ndarray) -> None:
+    def _selector(self, i: int, mask: np.ndarray) -> None:
         kids, memory = self.program.children[i], self.program.params[i]["memory"]
         status, current = self.status[i], self.current[i]
-        current[idx[status[idx] != RUNNING]] = 0
+        np.copyto(current, 0, where=mask & (status != RUNNING))
         if not kids:
-            status[idx], current[idx] = FAILURE, -1
+            np.copyto(status, FAILURE, where=mask)
+            np.copyto(current, -1, where=mask)
             return
-        previous = current[idx]
-        start = previous if memory else np.zeros(idx.size, np.int16)
-        for k in range(int(start.max())):
-            self._halt(kids[k], idx[start > k])
-        going = start == 0
+        previous = current.copy()
+        if memory:
+            for k in range(len(kids) - 1):
+                preceding = mask & (previous > k)
+                if preceding.any():
+                    self._halt(kids[k], self.program.end[kids[k]], preceding)
+            going = mask & (previous == 0)
+        else:
+            going = mask.copy()
         for k, child in enumerate(kids):
             if going.any():
-                at = np.flatnonzero(going)
-                agents = idx[at]
-                self._tickers[child](agents)
-                result = self.status[child, agents]
-                chosen = result != FAILURE
-                if chosen.any():
-                    winners = agents[chosen]
-                    current[winners] = k
-                    self._halt_children(i, k + 1, winners[previous[at[chosen]] != k])
-                    status[winners] = result[chosen]
-                going = np.zeros(idx.size, bool)
-                going[at[~chosen]] = True
+                self._tickers[child](going)
+                result = self.status[child]
+                failed = result == FAILURE
+                chosen = going & ~failed
+                np.copyto(current, k, where=chosen)
+                self._halt_children(i, k + 1, chosen & (previous != k))
+                np.copyto(status, result, where=chosen)
+                going &= failed
             if memory and k + 1 < len(kids):
-                going |= start == k + 1
-        failed = idx[going]
-        status[failed], current[failed] = FAILURE, len(kids) - 1
+                going |= mask & (previous == k + 1)
+        np.copyto(status, FAILURE, where=going)
+        np.copyto(current, len(kids) - 1, where=going)
 
-    def _parallel(self, i: int, idx: np.ndarray) -> None:
+    def _parallel(self, i: int, mask: np.ndarray) -> None:
         kids, params = self.program.children[i], self.program.params[i]
         status = self.status[i]
-        self._halt_children(i, 0, idx[status[idx] != RUNNING])
+        self._halt_children(i, 0, mask & (status != RUNNING))
         if not kids:
-            status[idx] = SUCCESS
+            np.copyto(status, SUCCESS, where=mask)
             return
         for child in kids:
-            agents = idx[self.status[child, idx] != SUCCESS] if params["synchronise"] else idx
-            if agents.size:
-                self._tickers[child](agents)
-        results = self.status[np.ix_(kids, idx)]
+            going = mask & (self.status[child] != SUCCESS) if params["synchronise"] else mask
+            if going.any():
+                self._tickers[child](going)
+        results = self.status[list(kids)]
         success = results == SUCCESS
         won = success.all(axis=0) if params["policy"] == "SuccessOnAll" else success.any(axis=0)
         new = np.where((results == FAILURE).any(axis=0), FAILURE, np.where(won, SUCCESS, RUNNING))
-        finished = new != RUNNING
+        finished = mask & (new != RUNNING)
         for k, child in enumerate(kids):
-            self._halt(child, idx[finished & (results[k] == RUNNING)])
-        status[idx] = new
+            dangling = finished & (results[k] == RUNNING)
+            if dangling.any():
+                self._halt(child, self.program.end[child], dangling)
+        np.copyto(status, new, where=mask)
 
-    def _decorator(self, i: int, idx: np.ndarray) -> None:
+    def _decorator(self, i: int, mask: np.ndarray) -> None:
         node, child = self.program.nodes[i], self.program.children[i][0]
         counter = self.counter[i]
-        counter[idx[self.status[i, idx] != RUNNING]] = 0
-        self._tickers[child](idx)
-        result = self.status[child, idx]
+        np.copyto(counter, 0, where=mask & (self.status[i] != RUNNING))
+        self._tickers[child](mask)
+        result = self.status[child]
         if node.type == "Repeat":
-            success = result == SUCCESS
-            counter[idx[success]] += 1
-            done = counter[idx] == self.program.params[i]["num_success"]
-            new = np.where(result == FAILURE, FAILURE, np.where(success & done, SUCCESS, RUNNING))
+            success = mask & (result == SUCCESS)
+            np.add(counter, 1, out=counter, where=success)
+            done = success & (counter == self.program.params[i]["num_success"])
+            new = np.where(result == FAILURE, FAILURE, np.where(done, SUCCESS, RUNNING))
         elif node.type == "Retry":
-            failure = result == FAILURE
-            counter[idx[failure]] += 1
-            again = counter[idx] < self.program.params[i]["num_failures"]
+            failure = mask & (result == FAILURE)
+            np.add(counter, 1, out=counter, where=failure)
+            again = counter < self.program.params[i]["num_failures"]
             new = np.where(failure, np.where(again, RUNNING, FAILURE), result)
         else:
             new = self._tables[i][result]
-        self._halt(child, idx[(new != RUNNING) & (result == RUNNING)])
-        self.status[i, idx] = new
+        dangling = mask & (new != RUNNING) & (result == RUNNING)
+        if dangling.any():
+            self._halt(child, self.program.end[child], dangling)
+        np.copyto(self.status[i], new, where=mask)

@@ -111,7 +111,7 @@ def _control_behaviour(
     params = control_params(node)
     if node.type in ("Sequence", "Selector"):
         composite = getattr(py_trees.composites, node.type)
-        return composite(node.name, params["memory"], children)  # type: ignore[no-any-return]
+        return composite(node.name, params["memory"], children)
     if node.type == "Parallel":
         policies = py_trees.common.ParallelPolicy
         policy = (
@@ -121,7 +121,7 @@ def _control_behaviour(
         )
         return py_trees.composites.Parallel(node.name, policy, children)
     decorator = getattr(py_trees.decorators, node.type)
-    return decorator(node.name, children[0], **params)  # type: ignore[no-any-return]
+    return decorator(node.name, children[0], **params)
 
 
 class PyTreesEngine:
@@ -139,7 +139,9 @@ class PyTreesEngine:
     def __init__(self, tree: Node, swarm: Swarm, world: World, defaults: Mapping[str, Any]) -> None:
         check_leaves(tree, swarm, defaults, skip=BEHAVIOUR_TYPES)
         self.tree = tree
-        self.roots = [build_behaviour(tree, swarm.agent(i), world, defaults) for i in range(swarm.size)]
+        self.roots = [
+            build_behaviour(tree, swarm.agent(i), world, defaults) for i in range(swarm.size)
+        ]
 
     def tick(self) -> None:
         """Tick every agent's tree once, in agent order."""

@@ -81,3 +81,45 @@ def control(
     u_heading = params.turn_step * np.sign(heading_error(requested_heading, heading))
     return u_speed, u_heading
 
+
+class Drone2D:
+    """The 2-D drone as the swarm's motion model: Phase 2 motion and Phase 4 control.
+
+    Holds the control signals of the last Phase 4, used by the next Phase 2.
+
+    Args:
+        params: model parameters.
+        n_agents: number of agents N.
+    """
+
+    name = "drone2d"
+
+    def __init__(self, params: DroneParameters, n_agents: int) -> None:
+        self.params = params
+        self.u_speed = np.zeros(n_agents)
+        self.u_heading = np.zeros(n_agents)
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """Model state recorded beside the swarm's columns (none for this model)."""
+        return {}
+
+    def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None:
+        """Move the agents where ``moving`` (shape (N,), bool); the others stop where they are.
+
+        Args:
+            s: the swarm's state columns, updated in place.
+            moving: agents that move this iteration (those with energy).
+        """
+        x, y, v, a = advance(
+            s["x"], s["y"], s["speed"], s["heading"], self.u_speed, self.u_heading, self.params
+        )
+        s["x"][:] = np.where(moving, x, s["x"])
+        s["y"][:] = np.where(moving, y, s["y"])
+        s["speed"][:] = np.where(moving, v, 0.0)
+        s["heading"][:] = np.where(moving, a, s["heading"])
+
+    def control(self, s: dict[str, np.ndarray]) -> None:
+        """Phase 4: control signals toward the requested speed and heading."""
+        self.u_speed, self.u_heading = control(
+            s["speed"], s["heading"], s["requested_speed"], s["requested_heading"], self.params
+        )

@@ -39,13 +39,17 @@ PANEL_XY = (0.66, 0.92)
 DRONE_RADIUS = 0.015
 """A drone's radius as a fraction of the world's larger side (1.5 units in a 100 x 100 world)."""
 SLOT_RADIUS = 2.5 * DRONE_RADIUS
+"""A refuelling slot's radius, same convention as ``DRONE_RADIUS``."""
 MAX_LABELLED = 50
 """Above this many agents the drones are drawn without their index labels."""
 PALETTE_COLOURS = 256
 """Colours in the GIF's single global colour table (taken from the first frame)."""
 DRONE_COLOUR = "#08306b"
+"""Dark blue of the drones and their index labels."""
 HEADING_COLOUR = "#e31a1c"
+"""Red of the heading dot."""
 SLOT_COLOUR = "#9ecae1"
+"""Light blue of the refuelling slots."""
 
 
 @dataclass(frozen=True)
@@ -134,13 +138,16 @@ def panel_rows(recorder: Recorder, row: int) -> list[tuple[str, str]]:
 
     name = recorder.names[0] if recorder.names else "agent 1"
     lines = [
-        ("Iteration", f"{int(recorder.iterations[row])}"), ("", ""), (f"{name} state", ""),
+        ("Iteration", f"{int(recorder.iterations[row])}"),
+        ("", ""),
+        (f"{name} state", ""),
         ("  position", _format("({:6.2f}, {:6.2f})", value("x"), value("y"))),
         ("  speed", _format("{:.3f}", value("speed"))),
         ("  heading", _format("{:.1f} deg", value("heading"))),
         ("  energy", _format("{:.1f} %", value("energy"))),
         ("  damage", _format("{:.1f} %", value("damage"))),
-        ("", ""), (f"{name} blackboard", ""),
+        ("", ""),
+        (f"{name} blackboard", ""),
         ("  ticks", _format("{}", value("number_ticks", int))),
         ("  surveillance", point("surveillance_position")),
         ("  destination", point("current_destination_position")),
@@ -195,17 +202,36 @@ class FramePainter:
 
         def circles(diameter: float, colour: str) -> EllipseCollection:
             collection = EllipseCollection(
-                np.full(agents, diameter), np.full(agents, diameter), np.zeros(agents),
-                units="xy", offsets=np.zeros((agents, 2)), offset_transform=self.axes.transData,
-                facecolors=colour, edgecolors="none", animated=True, zorder=3)
-            return self.axes.add_collection(collection, autolim=False)
+                np.full(agents, diameter),
+                np.full(agents, diameter),
+                np.zeros(agents),
+                units="xy",
+                offsets=np.zeros((agents, 2)),
+                offset_transform=self.axes.transData,
+                facecolors=colour,
+                edgecolors="none",
+                animated=True,
+                zorder=3,
+            )
+            self.axes.add_collection(collection, autolim=False)
+            return collection
 
         self.bodies = circles(2 * self.radius, DRONE_COLOUR)
         self.dots = circles(0.8 * self.radius, HEADING_COLOUR)
         labelled = agents <= MAX_LABELLED
         self.labels = [
-            self.axes.text(0, 0, str(i + 1), fontsize=8, color=DRONE_COLOUR, ha="left",
-                           va="bottom", animated=True, clip_on=True, zorder=4)
+            self.axes.text(
+                0,
+                0,
+                str(i + 1),
+                fontsize=8,
+                color=DRONE_COLOUR,
+                ha="left",
+                va="bottom",
+                animated=True,
+                clip_on=True,
+                zorder=4,
+            )
             for i in range(agents if labelled else 0)
         ]
 
@@ -215,7 +241,7 @@ class FramePainter:
         Only the values are redrawn: text is the costliest thing Agg draws per frame.
         """
         labels = "\n".join(label for label, _ in panel_rows(self.recorder, 0))
-        style = {"family": "monospace", "fontsize": 10, "va": "top", "ha": "left"}
+        style: dict[str, Any] = {"family": "monospace", "fontsize": 10, "va": "top", "ha": "left"}
         self.panel_labels = self.figure.text(*PANEL_XY, labels, **style)
         self.panel = self.figure.text(*PANEL_XY, "", animated=True, **style)
 
@@ -235,10 +261,13 @@ class FramePainter:
             label.set_position((xi + 0.8 * r, yi + 0.8 * r))
         self.panel.set_text("\n".join(text for _, text in panel_rows(self.recorder, row)))
 
-    def draw(self, row: int) -> Image.Image:
-        """The frame of record ``row`` (0 <= row < recorder.count) as an RGB image."""
-        from PIL import Image
+    def render(self, row: int) -> np.ndarray:
+        """The frame of record ``row`` (0 <= row < recorder.count) as RGBA pixels.
 
+        Returns:
+            uint8 array of shape (height, width, 4), a view of the canvas that the next
+            call overwrites (copy it to keep it).
+        """
         if not 0 <= row < self.recorder.count:
             raise IndexError(f"row {row} is outside the {self.recorder.count} records")
         self._update(row)
@@ -246,8 +275,13 @@ class FramePainter:
         for artist in (self.bodies, self.dots, *self.labels):
             self.axes.draw_artist(artist)
         self.figure.draw_artist(self.panel)
-        rgba = Image.frombuffer("RGBA", self.size, self.canvas.buffer_rgba(), "raw", "RGBA", 0, 1)
-        return rgba.convert("RGB")
+        return np.asarray(self.canvas.buffer_rgba())
+
+    def draw(self, row: int) -> Image.Image:
+        """The frame of record ``row`` as an RGB image (a copy)."""
+        from PIL import Image
+
+        return Image.fromarray(np.ascontiguousarray(self.render(row)[..., :3]))
 
 
 def _draw_background(axes: Any, recorder: Recorder, scenario: Scenario, radius: float) -> None:
@@ -279,44 +313,117 @@ def draw_frame(recorder: Recorder, scenario: Scenario, row: int = 0, dpi: int = 
     return FramePainter(recorder, scenario, dpi).draw(row)
 
 
+class Palette:
+    """A fixed colour table of at most 256 colours, and an exact nearest-colour map onto it.
+
+    Colours are 24-bit codes ``R | G << 8 | B << 16``. The table is built from a sample
+    frame: Pillow's median cut groups its colours into 256 clusters, and each cluster is
+    represented by its most frequent colour (not the mean), so flat colours such as white
+    and the drone blue are kept exactly. Any colour maps to its nearest entry (Euclidean in
+    RGB), computed once per colour and memoised in a 2**24-entry table (32 MB, allocated
+    lazily by the system). Pillow's own palette mapping is not used: it merges colours up to
+    4 levels apart, which turns white into grey.
+
+    Args:
+        pixels: the sample frame, RGB or RGBA, shape (height, width, 3|4), uint8.
+    """
+
+    def __init__(self, pixels: np.ndarray) -> None:
+        from PIL import Image
+
+        rgb = Image.fromarray(np.ascontiguousarray(pixels[..., :3]))
+        clusters = np.asarray(rgb.quantize(PALETTE_COLOURS, dither=Image.Dither.NONE))
+        keys, counts = np.unique(
+            clusters.astype(np.int64) << 24 | colour_codes(pixels), return_counts=True
+        )
+        keys = keys[np.lexsort((-counts, keys >> 24))]  # by cluster, most frequent first
+        first = np.r_[True, keys[1:] >> 24 != keys[:-1] >> 24]
+        self.codes = keys[first] & 0xFFFFFF
+        self.rgb = _unpack(self.codes)
+        self._index = np.zeros(1 << 24, dtype=np.uint16)  # entry + 1; 0: not met yet
+
+    def indices(self, codes: np.ndarray) -> np.ndarray:
+        """The table entry of each colour code, uint8 of the same shape."""
+        found = self._index[codes]
+        missing = found == 0
+        if missing.any():
+            new = np.unique(codes[missing])
+            distance = ((_unpack(new)[:, None, :] - self.rgb[None, :, :]) ** 2).sum(axis=2)
+            self._index[new] = distance.argmin(axis=1) + 1
+            found = self._index[codes]
+        return (found - 1).astype(np.uint8)
+
+    def tobytes(self) -> bytes:
+        """The table as ``RGBRGB...`` bytes."""
+        return self.rgb.astype(np.uint8).tobytes()
+
+
+def colour_codes(pixels: np.ndarray) -> np.ndarray:
+    """24-bit codes ``R | G << 8 | B << 16`` of RGB or RGBA pixels (H, W, 3|4) uint8 -> (H, W)."""
+    if pixels.shape[-1] == 4 and pixels.flags.c_contiguous:
+        return pixels.view("<u4")[..., 0] & 0xFFFFFF
+    rgb = pixels[..., :3].astype(np.uint32)
+    return rgb[..., 0] | rgb[..., 1] << 8 | rgb[..., 2] << 16
+
+
+def _unpack(codes: np.ndarray) -> np.ndarray:
+    """Colour codes (K,) -> RGB (K, 3) int64."""
+    codes = codes.astype(np.int64)
+    return np.stack([codes & 0xFF, codes >> 8 & 0xFF, codes >> 16 & 0xFF], axis=1)
+
+
 class GifStream:
     """Writes an animated, looping GIF one frame at a time, keeping no frames in memory.
 
-    The first frame's colours (quantized without dithering) become the global colour table;
-    later frames are mapped to it. Each frame after the first is stored as the smallest
-    rectangle that differs from the previous frame (drawn over it, disposal "do not
-    dispose"). Encoding uses Pillow's C GIF encoder.
+    The first frame's colours become the global colour table (:class:`Palette`); every
+    frame is mapped to it. Each frame after the first is stored as the smallest rectangle
+    that differs from the previous frame, drawn over it (disposal "do not dispose").
+    Encoding uses Pillow's GIF helpers and C encoder.
 
     Args:
         file: a binary file open for writing.
-        delay_ms: display time of each frame in milliseconds (GIF stores hundredths).
+        delay_ms: display time of each frame in milliseconds; GIF stores whole hundredths,
+            so a multiple of 10 is exact (others are truncated).
     """
 
     def __init__(self, file: BinaryIO, delay_ms: float) -> None:
         self.file = file
         self.delay_ms = delay_ms
-        self.palette: Image.Image | None = None
+        self.palette: Palette | None = None
         self.previous: np.ndarray | None = None
         self.frames = 0
 
-    def add(self, rgb: Image.Image) -> None:
-        """Append one RGB frame (every frame must have the first frame's size)."""
-        from PIL import GifImagePlugin, Image
+    def add(self, pixels: np.ndarray) -> None:
+        """Append one frame: RGB or RGBA pixels, shape (height, width, 3|4), uint8.
+
+        Every frame must have the first frame's size.
+        """
+        from PIL import GifImagePlugin
 
         if self.palette is None:
-            self.palette = rgb.quantize(PALETTE_COLOURS, dither=Image.Dither.NONE)
-            header, _ = GifImagePlugin.getheader(self.palette, info={"loop": 0})
+            self.palette = Palette(pixels)
+        codes = colour_codes(pixels)
+        indices = self.palette.indices(codes)
+        if self.previous is None:
+            header, _ = GifImagePlugin.getheader(self._image(indices), info={"loop": 0})
             self.file.write(b"".join(header))
-            frame = self.palette
-        else:
-            frame = rgb.quantize(palette=self.palette, dither=Image.Dither.NONE)
-        indices = np.asarray(frame)
-        box = _changed_box(self.previous, indices)
+        left, top, right, bottom = _changed_box(self.previous, indices)
         self.previous = indices
-        chunks = GifImagePlugin.getdata(frame.crop(box), offset=box[:2],
-                                        duration=self.delay_ms, disposal=1)
+        frame = self._image(indices[top:bottom, left:right])
+        chunks = GifImagePlugin.getdata(
+            frame, offset=(left, top), duration=self.delay_ms, disposal=1
+        )
         self.file.write(b"".join(chunks))
         self.frames += 1
+
+    def _image(self, indices: np.ndarray) -> Image.Image:
+        """A "P" image of palette ``indices`` (H, W) uint8 with the stream's colour table."""
+        from PIL import Image
+
+        assert self.palette is not None
+        image = Image.fromarray(np.ascontiguousarray(indices))
+        image.putpalette(self.palette.tobytes())
+        return image
 
     def close(self) -> None:
         """Write the GIF trailer (the file itself is left open)."""
@@ -339,8 +446,15 @@ def _changed_box(previous: np.ndarray | None, current: np.ndarray) -> tuple[int,
     return int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1
 
 
-def write_gif(recorder: Recorder, scenario: Scenario, path: Path, frame_every: int = 10,
-              dpi: int = 80, fps: int = 20, progress: bool | None = None) -> AnimationStats:
+def write_gif(
+    recorder: Recorder,
+    scenario: Scenario,
+    path: str | Path,
+    frame_every: int = 10,
+    dpi: int = 80,
+    fps: int = 20,
+    progress: bool | None = None,
+) -> AnimationStats:
     """Draw the run as an animated GIF at ``path``, streaming frame by frame.
 
     Args:
@@ -349,21 +463,25 @@ def write_gif(recorder: Recorder, scenario: Scenario, path: Path, frame_every: i
         path: the GIF file to write (overwritten).
         frame_every: iterations between frames (one frame per window of this many).
         dpi: pixels per inch; frames are ``FIGSIZE * dpi`` pixels (800 x 480 at 80).
-        fps: frames per second when played (GIF delays are whole hundredths of a second).
+        fps: frames per second when played. GIF delays are whole hundredths of a second,
+            so the delay is ``100 / fps`` rounded, and at least 2 (at most 50 fps; browsers
+            play shorter delays slowly).
         progress: show a progress bar; by default only on a terminal.
 
     Returns:
         frames written, wall seconds, the path and the file size in bytes.
     """
+    if fps <= 0:
+        raise ValueError(f"fps must be > 0, got {fps}")
     start = time.perf_counter()
     path = Path(path)
     rows = frame_rows(recorder, frame_every)
     painter = FramePainter(recorder, scenario, dpi)
     bar = Progress(len(rows), "gif", enabled=progress)
     with path.open("wb") as file:
-        stream = GifStream(file, delay_ms=1000.0 / fps)
+        stream = GifStream(file, delay_ms=10 * max(2, round(100 / fps)))
         for done, row in enumerate(rows, start=1):
-            stream.add(painter.draw(int(row)))
+            stream.add(painter.render(int(row)))
             bar.update(done)
         stream.close()
     bar.close()

@@ -15,7 +15,6 @@ import numpy as np
 
 from pyautonomousagent.bt.library import DESTINATION, PATROL, REFUELING, SURVEILLANCE
 from pyautonomousagent.datalink import GATHERING, SHARING_DATA, message_events
-from pyautonomousagent.models import drone2d
 from pyautonomousagent.sensors import accumulate_damage, drain_energy, radiation_level
 from pyautonomousagent.simulation.scenario import Scenario
 from pyautonomousagent.state import Swarm
@@ -88,12 +87,7 @@ def estimate_state(sim: Simulation) -> None:
     reading = radiation_level(s["x"], s["y"], sim.world.radiation_sources)
     s["radiation"][:] = np.where(powered, reading, s["radiation"])
     s["damage"][:] = accumulate_damage(s["damage"], s["radiation"], p.radiation_damage_factor)
-    x, y, v, a = drone2d.advance(s["x"], s["y"], s["speed"], s["heading"], sim.u_speed, sim.u_heading,
-                                 sim.drone)
-    s["x"][:] = np.where(powered, x, s["x"])
-    s["y"][:] = np.where(powered, y, s["y"])
-    s["speed"][:] = np.where(powered, v, 0.0)
-    s["heading"][:] = np.where(powered, a, s["heading"])
+    sim.model.advance(s, powered)
     _raise_alerts(sim, ~powered)
     process_messages(sim)
 
@@ -102,27 +96,40 @@ def _raise_alerts(sim: Simulation, unpowered: np.ndarray) -> None:
     for i in np.flatnonzero(unpowered & ~sim.alerted):
         sim.alerted[i] = True
         name = sim.swarm.names[i]
-        sim.events.append({"iteration": sim.world.iteration, "event": "alert", "agent": name,
-                           "message": "zero energy: sensors off, not moving"})
+        sim.events.append(
+            {
+                "iteration": sim.world.iteration,
+                "event": "alert",
+                "agent": name,
+                "message": "zero energy: sensors off, not moving",
+            }
+        )
         log.warning("iteration %d: %s has zero energy", sim.world.iteration, name)
 
 
 def process_messages(sim: Simulation) -> None:
     """Act on the messages delivered last iteration.
 
-    "gathering": the receiver's surveillance position becomes the message's position.
+    "gathering": the receiver's surveillance position becomes the message's position (the
+    last one, in canonical order, if several arrived).
     "sharing data": the receiver keeps the latest data per sender in ``sim.shared``.
     """
     bb = sim.swarm.blackboard
-    for received in sim.inbox:
-        message, receiver = received.message, received.receiver
-        if message.type == GATHERING:
-            bb["x_surveillance_position"][receiver] = message.data["x"]
-            bb["y_surveillance_position"][receiver] = message.data["y"]
-        elif message.type == SHARING_DATA:
-            data = dict(message.data, iteration=sim.world.iteration - 1)
-            sim.shared.setdefault(receiver, {})[message.sender] = data
+    for delivery in sim.inbox:
+        if delivery.messages.type == GATHERING:
+            receivers, rows = delivery.pairs(sim.swarm.size)
+            last = _last_per_receiver(receivers)
+            data = delivery.messages.data
+            bb["x_surveillance_position"][receivers[last]] = data["x"][rows[last]]
+            bb["y_surveillance_position"][receivers[last]] = data["y"][rows[last]]
+        elif delivery.messages.type == SHARING_DATA:
+            sim.shared.store(delivery, sim.world.iteration - 1)
     sim.inbox = []
+
+
+def _last_per_receiver(receivers: np.ndarray) -> np.ndarray:
+    """Positions of each receiver's last delivery."""
+    return receivers.size - 1 - np.unique(receivers[::-1], return_index=True)[1]
 
 
 def decide(sim: Simulation) -> None:
@@ -131,23 +138,19 @@ def decide(sim: Simulation) -> None:
 
 
 def control(sim: Simulation) -> None:
-    """Phase 4: bang-bang control signals toward the requested speed and heading."""
-    s = sim.swarm.columns
-    sim.u_speed, sim.u_heading = drone2d.control(
-        s["speed"], s["heading"], s["requested_speed"], s["requested_heading"], sim.drone
-    )
+    """Phase 4: the motion model's control signals toward the requested speed and heading."""
+    sim.model.control(sim.swarm.columns)
 
 
 def deliver_messages(sim: Simulation) -> None:
     """Phase 5: deliver this iteration's messages within range; the channel is cleared."""
-    link = sim.world.datalink
-    sim.events.extend(message_events(
-        link.channel, RECORDED_MESSAGE_TYPES, sim.world.iteration, sim.swarm.names
-    ))
-    sim.inbox = link.deliver(sim.swarm.columns["x"], sim.swarm.columns["y"])
+    sim.inbox = sim.world.datalink.deliver(sim.swarm.columns["x"], sim.swarm.columns["y"])
+    sim.events.extend(
+        message_events(sim.inbox, RECORDED_MESSAGE_TYPES, sim.world.iteration, sim.swarm.names)
+    )
 
 
 def record(sim: Simulation) -> None:
     """Phase 6: store the state and blackboard of every agent (on recorded iterations)."""
     if sim.recorder.due(sim.world.iteration):
-        sim.recorder.record(sim.world.iteration, sim.swarm)
+        sim.recorder.record(sim.world.iteration, sim.swarm, sim.model.columns())

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -11,10 +12,10 @@ import pyarrow as pa
 
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.trees import tree_by_name
-from pyautonomousagent.datalink import Datalink, Received
+from pyautonomousagent.datalink import Datalink, Delivery, SharedData
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.pytrees import PyTreesEngine
-from pyautonomousagent.models.drone2d import DroneParameters
+from pyautonomousagent.models.drone2d import Drone2D, DroneParameters
 from pyautonomousagent.progress import Progress
 from pyautonomousagent.recording import Recorder, to_table
 from pyautonomousagent.simulation import phases
@@ -22,7 +23,17 @@ from pyautonomousagent.simulation.scenario import Scenario
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
-ENGINES = {"pytrees": PyTreesEngine, "batched": BatchedEngine}
+
+class Model(Protocol):
+    """What the loop needs of a motion model."""
+
+    name: str
+
+    def columns(self) -> dict[str, np.ndarray]: ...
+
+    def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None: ...
+
+    def control(self, s: dict[str, np.ndarray]) -> None: ...
 
 
 class Engine(Protocol):
@@ -30,9 +41,16 @@ class Engine(Protocol):
 
     name: str
 
+    def __init__(
+        self, tree: Node, swarm: Swarm, world: World, defaults: Mapping[str, Any]
+    ) -> None: ...
+
     def tick(self) -> None: ...
 
     def node_statuses(self) -> np.ndarray: ...
+
+
+ENGINES: dict[str, type[Engine]] = {"pytrees": PyTreesEngine, "batched": BatchedEngine}
 
 
 @dataclass
@@ -45,12 +63,11 @@ class Simulation:
         rng: the run's only source of randomness.
         swarm: the agents' state and blackboards.
         world: the shared world (clock, datalink, radiation).
-        drone: the motion model's parameters.
+        model: the motion model (Phase 2 motion, Phase 4 control).
         engine: the decision engine of Phase 3.
         recorder: Phase 6's preallocated records.
-        u_speed, u_heading: control signals from Phase 4, used by the next Phase 2, shape (N,).
         inbox: messages delivered in Phase 5, acted on in the next Phase 2.
-        shared: receiver -> sender -> latest "sharing data" (with its iteration).
+        shared: what each agent last heard by "sharing data": ``shared[receiver][sender]``.
         events: alerts and recorded messages, as plain dicts.
         alerted: agents that have raised their zero-energy alert, shape (N,).
         timings: seconds spent per stage.
@@ -61,20 +78,24 @@ class Simulation:
     rng: np.random.Generator
     swarm: Swarm
     world: World
-    drone: DroneParameters
+    model: Model
     engine: Engine
     recorder: Recorder
-    u_speed: np.ndarray
-    u_heading: np.ndarray
-    inbox: list[Received] = field(default_factory=list)
-    shared: dict[int, dict[int, dict[str, float]]] = field(default_factory=dict)
+    shared: SharedData
+    inbox: list[Delivery] = field(default_factory=list)
     events: list[dict[str, Any]] = field(default_factory=list)
     alerted: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     timings: dict[str, float] = field(default_factory=dict)
 
     @classmethod
-    def create(cls, scenario: Scenario, seed: int = 0, engine: str = "pytrees",
-               record_every: int = 1, tree: Node | None = None) -> Simulation:
+    def create(
+        cls,
+        scenario: Scenario,
+        seed: int = 0,
+        engine: str = "pytrees",
+        record_every: int = 1,
+        tree: Node | None = None,
+    ) -> Simulation:
         """Phase 1 and set-up: agents, world, engine and recorder for ``scenario``.
 
         Args:
@@ -98,12 +119,18 @@ class Simulation:
             agent_index={name: i for i, name in enumerate(swarm.names)},
         )
         defaults = vars(p)
+        model = Drone2D(DroneParameters(p.max_speed, p.speed_step, p.turn_step), swarm.size)
         decision = ENGINES[engine](tree or tree_by_name(scenario.tree), swarm, world, defaults)
         sim = cls(
-            scenario=scenario, seed=seed, rng=rng, swarm=swarm, world=world,
-            drone=DroneParameters(p.max_speed, p.speed_step, p.turn_step), engine=decision,
-            recorder=Recorder(swarm, scenario.iterations, record_every),
-            u_speed=np.zeros(swarm.size), u_heading=np.zeros(swarm.size),
+            scenario=scenario,
+            seed=seed,
+            rng=rng,
+            swarm=swarm,
+            world=world,
+            model=model,
+            engine=decision,
+            recorder=Recorder(swarm, scenario.iterations, record_every, model.columns()),
+            shared=SharedData(swarm.size),
             alerted=np.zeros(swarm.size, dtype=bool),
         )
         phases.record(sim)  # the initial state, iteration 0

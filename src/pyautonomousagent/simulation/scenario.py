@@ -139,11 +139,19 @@ class _Reader:
                 raise ScenarioError(f"{self.source}: unknown key {where!r}{hint}")
         for key in required:
             if key not in data:
-                raise ScenarioError(f"{self.source}: missing key {f'{path}.{key}' if path else key!r}")
+                raise ScenarioError(
+                    f"{self.source}: missing key {f'{path}.{key}' if path else key!r}"
+                )
         return dict(data)
 
-    def number(self, value: Any, path: str, kind: type = float, minimum: float | None = None,
-               above: float | None = None) -> Any:
+    def number(
+        self,
+        value: Any,
+        path: str,
+        kind: type = float,
+        minimum: float | None = None,
+        above: float | None = None,
+    ) -> Any:
         whole = kind is int
         must = "a whole number" if whole else "a number"
         if isinstance(value, bool) or not isinstance(value, int | float):
@@ -166,8 +174,14 @@ class _Reader:
             raise self.fail(path, "a pair [x, y]", value)
         return (self.number(value[0], f"{path}[0]"), self.number(value[1], f"{path}[1]"))
 
-    def points(self, value: Any, path: str, least: int = 1, most: int | None = None) -> tuple[Point, ...]:
-        if not isinstance(value, list | tuple) or len(value) < least or (most and len(value) > most):
+    def points(
+        self, value: Any, path: str, least: int = 1, most: int | None = None
+    ) -> tuple[Point, ...]:
+        if (
+            not isinstance(value, list | tuple)
+            or len(value) < least
+            or (most and len(value) > most)
+        ):
             count = f"exactly {least}" if least == most else f"at least {least}"
             raise self.fail(path, f"a list of {count} [x, y] pairs", value)
         return tuple(self.point(p, f"{path}[{i}]") for i, p in enumerate(value))
@@ -196,7 +210,9 @@ class _Reader:
             if not isinstance(active, bool):
                 raise self.fail(f"{path}.active", "true or false", active)
             x, y = self.number(item["x"], f"{path}.x"), self.number(item["y"], f"{path}.y")
-            sources.append(RadiationSource(x, y, self.number(item["range"], f"{path}.range", above=0), active))
+            sources.append(
+                RadiationSource(x, y, self.number(item["range"], f"{path}.range", above=0), active)
+            )
         return tuple(sources)
 
     def scenario(self, data: Any) -> Scenario:
@@ -217,10 +233,14 @@ class _Reader:
             iterations=self.number(d["iterations"], "iterations", int, minimum=1),
             world=world,
             refueling_positions=self.points(d["refueling_positions"], "refueling_positions"),
-            surveillance_positions=self.points(d.get("surveillance_positions"), "surveillance_positions")
-            if d.get("surveillance_positions") or not d.get("patrol_positions") else (),
+            surveillance_positions=self.points(
+                d.get("surveillance_positions"), "surveillance_positions"
+            )
+            if d.get("surveillance_positions") or not d.get("patrol_positions")
+            else (),
             patrol_positions=self.points(d["patrol_positions"], "patrol_positions", 2, 2)
-            if d.get("patrol_positions") else (),
+            if d.get("patrol_positions")
+            else (),
             initial_heading=heading,
             frame_every=self.number(d.get("frame_every", 10), "frame_every", int, minimum=1),
             radiation_sources=self.radiation(d.get("radiation_sources", [])),
