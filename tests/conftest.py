@@ -14,6 +14,7 @@ from pyautonomousagent import Parameters, Simulation, load
 from pyautonomousagent.bt import library  # noqa: F401  (registers the leaf types)
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.datalink import Datalink
+from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.pytrees import PyTreesEngine
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
@@ -57,7 +58,7 @@ class Harness:
     tree: Node
     swarm: Swarm
     world: World
-    engine: PyTreesEngine
+    engine: PyTreesEngine | BatchedEngine
 
     def tick(self) -> np.ndarray:
         """Advance the clock one iteration, tick every agent once; the node statuses."""
@@ -75,12 +76,15 @@ class Harness:
         return dict(zip(self.names(), (int(c) for c in column), strict=True))
 
 
-def make_harness(tree: Node, n: int = 1, defaults: Mapping[str, Any] | None = None) -> Harness:
-    """Swarm + World + PyTreesEngine for ``tree`` and ``n`` agents."""
+def make_harness(
+    tree: Node, n: int = 1, defaults: Mapping[str, Any] | None = None, engine: str = "pytrees"
+) -> Harness:
+    """Swarm + World + an engine ("pytrees" or "batched") for ``tree`` and ``n`` agents."""
     swarm = make_swarm(n)
     world = make_world(swarm)
     params = vars(Parameters()) if defaults is None else defaults
-    return Harness(tree, swarm, world, PyTreesEngine(tree, swarm, world, params))
+    kind = PyTreesEngine if engine == "pytrees" else BatchedEngine
+    return Harness(tree, swarm, world, kind(tree, swarm, world, params))
 
 
 @pytest.fixture(autouse=True)

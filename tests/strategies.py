@@ -1,0 +1,80 @@
+"""Hypothesis strategies: random behaviour trees of every supported control type, with
+Scripted leaves whose status per tick per agent is drawn at random."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from itertools import count
+
+from hypothesis import strategies as st
+
+from pyautonomousagent.bt.spec import STATUS_MAPS, Node
+from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
+
+STATUSES = st.sampled_from([SUCCESS, FAILURE, RUNNING])
+
+
+def scripted_leaf(ticks: int, agents: int) -> st.SearchStrategy[Node]:
+    """A Scripted leaf with a random (ticks, agents) status table."""
+    table = st.lists(
+        st.lists(STATUSES, min_size=agents, max_size=agents), min_size=ticks, max_size=ticks
+    )
+    return table.map(lambda rows: Node("Scripted", "leaf", (), {"statuses": rows}))
+
+
+def control_node(children: st.SearchStrategy[list[Node]]) -> st.SearchStrategy[Node]:
+    """A composite or decorator over drawn children."""
+    composites = st.builds(
+        lambda kind, memory, kids: Node(kind, "c", tuple(kids), {"memory": memory}),
+        st.sampled_from(["Sequence", "Selector"]),
+        st.booleans(),
+        children,
+    )
+    parallels = st.builds(
+        lambda policy, sync, kids: Node(
+            "Parallel",
+            "p",
+            tuple(kids),
+            {"policy": policy, **({"synchronise": sync} if policy == "SuccessOnAll" else {})},
+        ),
+        st.sampled_from(["SuccessOnAll", "SuccessOnOne"]),
+        st.booleans(),
+        children,
+    )
+    one_child = children.filter(bool).map(lambda kids: kids[:1])
+    mapped = st.builds(
+        lambda kind, kids: Node(kind, "d", tuple(kids)),
+        st.sampled_from(sorted(STATUS_MAPS)),
+        one_child,
+    )
+    counted = st.builds(
+        lambda kind, n, kids: Node(
+            kind, "r", tuple(kids), {"num_success" if kind == "Repeat" else "num_failures": n}
+        ),
+        st.sampled_from(["Repeat", "Retry"]),
+        st.integers(1, 3),
+        one_child,
+    )
+    return st.one_of(composites, parallels, mapped, counted)
+
+
+def _renamed(root: Node) -> Node:
+    """The tree with unique node names n0, n1, ... in tick order."""
+    names = count()
+
+    def visit(node: Node) -> Node:
+        name = f"n{next(names)}"
+        return replace(node, name=name, children=tuple(visit(c) for c in node.children))
+
+    return visit(root)
+
+
+def trees(ticks: int, agents: int, max_leaves: int = 12) -> st.SearchStrategy[Node]:
+    """Random trees (a control node at the root) with uniquely named nodes."""
+    leaves = scripted_leaf(ticks, agents)
+    tree = st.recursive(
+        leaves,
+        lambda inner: control_node(st.lists(inner, min_size=1, max_size=4)),
+        max_leaves=max_leaves,
+    )
+    return tree.filter(lambda node: node.is_control).map(_renamed)
