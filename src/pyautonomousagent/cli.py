@@ -60,6 +60,7 @@ def _parser() -> argparse.ArgumentParser:
         help="override a scenario parameter, e.g. --set low_energy_threshold=30",
     )
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    _add_bench(sub)
     tree = sub.add_parser("tree", help="print a scenario's behaviour tree")
     tree.add_argument("scenario", help="a registered scenario name or a scenario .yaml file")
     tree.add_argument(
@@ -69,6 +70,121 @@ def _parser() -> argparse.ArgumentParser:
         help="the paper's symbols, or py_trees' own drawing",
     )
     return parser
+
+
+def _int_list(text: str) -> list[int]:
+    try:
+        values = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected whole numbers separated by commas, got {text!r}"
+        )
+    if not values or min(values) < 1:
+        raise argparse.ArgumentTypeError(f"expected whole numbers >= 1, got {text!r}")
+    return values
+
+
+def _add_bench(sub: Any) -> None:
+    bench = sub.add_parser("bench", help="time scenario runs on each engine (paper Table 4)")
+    bench.add_argument("scenario", help="a registered scenario name")
+    bench.add_argument(
+        "--agents",
+        type=_int_list,
+        default=[1, 10, 100, 1000],
+        help="agent counts, e.g. 1,10,100,1000",
+    )
+    bench.add_argument("--iterations", type=int, default=4000, help="iterations per run")
+    bench.add_argument("--engines", default="pytrees,batched", help="engines, comma-separated")
+    bench.add_argument(
+        "--record-every",
+        type=_int_list,
+        default=[1],
+        metavar="K[,K...]",
+        help="recording decimation(s) to measure, e.g. 1,100",
+    )
+    bench.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    bench.add_argument("--timeout", type=float, help="give up on a case after this many seconds")
+    bench.add_argument(
+        "--stress",
+        action="store_true",
+        help="find the largest swarm within --memory-budget (per engine)",
+    )
+    bench.add_argument("--memory-budget", default="5.12GB", help="peak memory allowed, e.g. 5.12GB")
+    bench.add_argument(
+        "--stress-iterations",
+        type=int,
+        default=100,
+        help="iterations of each stress probe (memory is preallocated)",
+    )
+
+
+def bench_command(args: argparse.Namespace) -> int:
+    """``pyaa bench``: measure each case in its own process, print the table (or JSON)."""
+    from pyautonomousagent import bench
+
+    engines = [e.strip() for e in args.engines.split(",") if e.strip()]
+    unknown = [e for e in engines if e not in ENGINES]
+    if unknown:
+        raise ScenarioError(
+            f"--engines: unknown engine {unknown[0]!r}; choose from {list(ENGINES)}"
+        )
+    load(args.scenario)  # a clear error for an unknown scenario, before any run
+    if args.iterations < 1:
+        raise ScenarioError(f"--iterations must be a whole number >= 1, got {args.iterations}")
+    if args.stress:
+        return _stress(args, engines, bench)
+    results = []
+    for every in args.record_every:
+        for agents in args.agents:
+            for engine in engines:
+                case = bench.Case(args.scenario, engine, agents, args.iterations, every)
+                print(
+                    f"measuring {engine} with {agents} agents, record every {every} ...",
+                    file=sys.stderr,
+                    flush=True,
+                )
+                results.append(bench.measure(case, args.timeout))
+    if args.json:
+        ratios = bench.speedups(results)
+        rows = [
+            {
+                **vars(r.case),
+                "seconds": r.seconds,
+                "peak_mb": r.peak_mb,
+                "seconds_per_agent_iteration": r.per_agent_iteration,
+                "speedup_vs_pytrees": ratios.get(r.case),
+                "error": r.error,
+            }
+            for r in results
+        ]
+        print(json.dumps(rows, indent=2))
+    else:
+        print(bench.table(results))
+    return 0
+
+
+def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
+    budget = bench.parse_size_mb(args.memory_budget)
+    found = {}
+    for engine in engines:
+
+        def show(result: Any) -> None:
+            mb = "failed" if result.peak_mb is None else f"{result.peak_mb:.0f} MB"
+            print(f"  {engine}: {result.case.agents} agents -> {mb}", file=sys.stderr, flush=True)
+
+        every = args.stress_iterations
+        found[engine], _ = bench.stress(
+            args.scenario, engine, budget, args.stress_iterations, every, report=show
+        )
+        print(
+            f"{args.scenario} on {engine}: at most {found[engine]} agents within "
+            f"{budget:.0f} MB ({args.stress_iterations} iterations a probe, recording first "
+            f"and last)",
+            flush=True,
+        )
+    if args.json:
+        print(json.dumps(found))
+    return 0
 
 
 def _parse_overrides(pairs: list[str]) -> dict[str, Any]:
@@ -204,6 +320,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return run(args)
         if args.command == "scenarios":
             return scenarios_command()
+        if args.command == "bench":
+            return bench_command(args)
         return tree_command(args)
     except USER_ERRORS as error:
         print(f"pyaa: error: {error}", file=sys.stderr)

@@ -68,8 +68,10 @@ class Swarm:
         """The view of one agent (``agent.energy`` is a number)."""
         return AgentView(self, index)
 
-    def agents(self, indices: np.ndarray | None = None) -> AgentView:
-        """The view of a group of agents (``agents.energy`` is an array); all if None."""
+    def agents(self, indices: np.ndarray | slice | None = None) -> AgentView:
+        """The view of a group of agents (``agents.energy`` is an array); all if None.
+
+        ``indices`` is an int array, a slice or a boolean mask of shape (N,)."""
         return AgentView(self, np.arange(self.size) if indices is None else indices)
 
     def index_of(self, name: str) -> int:
@@ -82,6 +84,19 @@ def _plain(value: Any) -> Any:
     return value.item() if value.ndim == 0 else value
 
 
+def _read(column: np.ndarray, index: Any, masked: bool) -> Any:
+    """The view's values of ``column``: all N of them when the view is a mask."""
+    return column if masked else _plain(column[index])
+
+
+def _write(column: np.ndarray, index: Any, masked: bool, value: Any) -> None:
+    """Write the view's values of ``column`` (only where the mask holds, for a mask)."""
+    if masked:
+        np.copyto(column, value, where=index)
+    else:
+        column[index] = value
+
+
 class _Column:
     """Descriptor: ``view.<name>`` reads/writes ``swarm.columns[name][view.index]``."""
 
@@ -89,10 +104,10 @@ class _Column:
         self.name = name
 
     def __get__(self, view: AgentView, owner: type | None = None) -> Any:
-        return _plain(view.swarm.columns[self.name][view.index])
+        return _read(view.swarm.columns[self.name], view.index, view.masked)
 
     def __set__(self, view: AgentView, value: Any) -> None:
-        view.swarm.columns[self.name][view.index] = value
+        _write(view.swarm.columns[self.name], view.index, view.masked, value)
 
 
 class BlackboardView:
@@ -102,11 +117,12 @@ class BlackboardView:
     AttributeError naming the key and the keys that exist.
     """
 
-    __slots__ = ("_board", "_index")
+    __slots__ = ("_board", "_index", "_masked")
 
-    def __init__(self, board: dict[str, np.ndarray], index: Any) -> None:
+    def __init__(self, board: dict[str, np.ndarray], index: Any, masked: bool = False) -> None:
         object.__setattr__(self, "_board", board)
         object.__setattr__(self, "_index", index)
+        object.__setattr__(self, "_masked", masked)
 
     def _column(self, key: str) -> np.ndarray:
         try:
@@ -116,10 +132,10 @@ class BlackboardView:
             raise AttributeError(f"no blackboard key {key!r} (keys: {known})") from None
 
     def __getattr__(self, key: str) -> Any:
-        return _plain(self._column(key)[self._index])
+        return _read(self._column(key), self._index, self._masked)
 
     def __setattr__(self, key: str, value: Any) -> None:
-        self._column(key)[self._index] = value
+        _write(self._column(key), self._index, self._masked, value)
 
     def keys(self) -> list[str]:
         """The blackboard's keys."""
@@ -127,18 +143,23 @@ class BlackboardView:
 
     def as_dict(self) -> dict[str, Any]:
         """Key -> value(s) for this view, e.g. for display."""
-        return {k: _plain(v[self._index]) for k, v in self._board.items()}
+        return {k: _read(v, self._index, self._masked) for k, v in self._board.items()}
 
 
 class AgentView:
-    """Rows of a :class:`Swarm`: one agent (int index) or a group (int array or slice index).
+    """Rows of a :class:`Swarm`: one agent, or a group.
+
+    The index is an int (one agent: attributes are plain numbers), an int array or a slice
+    (a group: attributes are arrays of the group's values), or a boolean mask of shape
+    (N,) (a group: attributes are whole (N,) arrays, and writes change only the rows where
+    the mask holds; the batched engine uses this when most agents are in the group).
 
     State columns are attributes (``x``, ``y``, ``speed``, ``heading``, ``energy``,
     ``damage``, ``radiation``, ``requested_speed``, ``requested_heading``); the blackboard
-    is ``view.blackboard``.
+    is ``view.blackboard``. Values in "view shape" are what attributes return.
     """
 
-    __slots__ = ("swarm", "index", "blackboard")
+    __slots__ = ("swarm", "index", "blackboard", "masked")
 
     x = _Column()
     y = _Column()
@@ -153,7 +174,8 @@ class AgentView:
     def __init__(self, swarm: Swarm, index: Any) -> None:
         self.swarm = swarm
         self.index = index
-        self.blackboard = BlackboardView(swarm.blackboard, index)
+        self.masked = isinstance(index, np.ndarray) and index.dtype == np.bool_
+        self.blackboard = BlackboardView(swarm.blackboard, index, self.masked)
 
     @property
     def is_one(self) -> bool:
@@ -162,8 +184,27 @@ class AgentView:
 
     @property
     def indices(self) -> np.ndarray:
-        """The agents' rows as an int array (one entry for a single agent)."""
+        """The agents' rows as a compact int array (one entry for a single agent)."""
+        if self.masked:
+            return np.flatnonzero(self.index)
         return np.arange(self.swarm.size)[self.index].reshape(-1)
+
+    @property
+    def rows(self) -> Any:
+        """The agents' row numbers in view shape (an int for one agent)."""
+        if self.is_one:
+            return int(self.index)
+        return self.pick(np.arange(self.swarm.size))
+
+    def pick(self, values: np.ndarray) -> Any:
+        """The view's entries of an array of shape (N,), in view shape."""
+        return _read(values, self.index, self.masked)
+
+    def compact(self, values: Any) -> np.ndarray:
+        """Values in view shape (or a scalar) as one entry per agent of :attr:`indices`."""
+        if self.masked and np.ndim(values):
+            return np.asarray(values)[self.index]
+        return np.broadcast_to(values, self.indices.shape)
 
     @property
     def name(self) -> Any:

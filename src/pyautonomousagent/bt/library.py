@@ -72,10 +72,7 @@ class ConditionGatheringMoment(Leaf):
     def evaluate(self, agents: AgentView, world: World) -> Any:
         if world.iteration != self.iteration:
             return FAILURE
-        sender = world.agent_index.get(self.sender, -1)
-        if agents.is_one:
-            return success_if(int(agents.index) == sender)
-        return success_if(agents.indices == sender)
+        return success_if(agents.rows == world.agent_index.get(self.sender, -1))
 
 
 @register_leaf
@@ -188,7 +185,9 @@ class ActionSetDestinationEqualToCurrentSurveillanceS(Leaf):
 
 def _send_to_all(agents: AgentView, world: World, kind: str, data: dict[str, Any]) -> int:
     """Each agent of the view sends ``data`` (its own entry of each value) to everyone."""
-    world.datalink.send(agents.indices, kind, data, (agents.x, agents.y))
+    payload = {k: agents.compact(v) for k, v in data.items()}
+    position = (agents.compact(agents.x), agents.compact(agents.y))
+    world.datalink.send(agents.indices, kind, payload, position)
     return SUCCESS
 
 

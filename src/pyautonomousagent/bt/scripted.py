@@ -35,5 +35,4 @@ class Scripted(Leaf):
         return cls(statuses=table)
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
-        value = self.statuses[world.iteration - 1][agents.index]
-        return value if np.ndim(value) else int(value)
+        return agents.pick(self.statuses[world.iteration - 1])

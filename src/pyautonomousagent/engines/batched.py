@@ -152,22 +152,38 @@ class BatchedEngine:
     # Every node method takes ``mask``, shape (N,), bool: the agents whose tick reaches the
     # node (never empty). Methods never modify ``mask``.
 
-    def _halt(self, first: int, stop: int, mask: np.ndarray) -> None:
-        """py_trees' ``stop(INVALID)`` of the nodes ``first``..``stop - 1`` for ``mask``."""
-        np.copyto(self.status[first:stop], INVALID, where=mask)
-        np.copyto(self.current[first:stop], -1, where=mask)
+    def _halt(self, child: int, mask: np.ndarray) -> None:
+        """py_trees' ``child.stop(INVALID)`` for the agents of ``mask`` whose ``child`` is not
+        INVALID: its whole subtree becomes INVALID. (A node that is INVALID has an INVALID
+        subtree, so the child's own status decides. A composite's remembered child is not
+        reset: it is only read while the composite is RUNNING.)"""
+        need = mask & (self.status[child] != INVALID)
+        if need.any():
+            np.copyto(self.status[child : self.program.end[child]], INVALID, where=need)
 
     def _halt_children(self, i: int, first: int, mask: np.ndarray) -> None:
         """Halt the children of node ``i`` from position ``first`` on, for ``mask``."""
         kids = self.program.children[i]
         if first < len(kids) and mask.any():
-            self._halt(kids[first], self.program.end[i], mask)
+            for child in kids[first:]:
+                self._halt(child, mask)
 
     def _leaf(self, i: int, mask: np.ndarray) -> None:
-        rows: Any = slice(None) if mask.all() else np.flatnonzero(mask)
-        result = self.leaves[i].evaluate(self.swarm.agents(rows), self.world)
-        self.status[i, rows] = result
-        self._ticks[rows] += 1
+        """Evaluate the leaf for the agents of ``mask``: as a compact group when few, as a
+        masked view of all N when many (no gathering of values)."""
+        reached = np.count_nonzero(mask)
+        if reached == mask.size:
+            result = self.leaves[i].evaluate(self.swarm.agents(slice(None)), self.world)
+            self.status[i] = result
+            self._ticks += 1
+        elif 4 * reached >= mask.size:
+            result = self.leaves[i].evaluate(self.swarm.agents(mask), self.world)
+            np.copyto(self.status[i], result, where=mask)
+            np.add(self._ticks, 1, out=self._ticks, where=mask)
+        else:
+            rows = np.flatnonzero(mask)
+            self.status[i, rows] = self.leaves[i].evaluate(self.swarm.agents(rows), self.world)
+            self._ticks[rows] += 1
 
     def _sequence(self, i: int, mask: np.ndarray) -> None:
         kids, memory = self.program.children[i], self.program.params[i]["memory"]
@@ -206,9 +222,7 @@ class BatchedEngine:
         previous = current.copy()
         if memory:
             for k in range(len(kids) - 1):
-                preceding = mask & (previous > k)
-                if preceding.any():
-                    self._halt(kids[k], self.program.end[kids[k]], preceding)
+                self._halt(kids[k], mask & (previous > k))
             going = mask & (previous == 0)
         else:
             going = mask.copy()
@@ -244,9 +258,7 @@ class BatchedEngine:
         new = np.where((results == FAILURE).any(axis=0), FAILURE, np.where(won, SUCCESS, RUNNING))
         finished = mask & (new != RUNNING)
         for k, child in enumerate(kids):
-            dangling = finished & (results[k] == RUNNING)
-            if dangling.any():
-                self._halt(child, self.program.end[child], dangling)
+            self._halt(child, finished & (results[k] == RUNNING))
         np.copyto(status, new, where=mask)
 
     def _decorator(self, i: int, mask: np.ndarray) -> None:
@@ -267,7 +279,5 @@ class BatchedEngine:
             new = np.where(failure, np.where(again, RUNNING, FAILURE), result)
         else:
             new = self._tables[i][result]
-        dangling = mask & (new != RUNNING) & (result == RUNNING)
-        if dangling.any():
-            self._halt(child, self.program.end[child], dangling)
+        self._halt(child, mask & (new != RUNNING) & (result == RUNNING))
         np.copyto(self.status[i], new, where=mask)

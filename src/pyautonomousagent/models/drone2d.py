@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pyautonomousagent.arrays import wrap_degrees
+
 
 @dataclass(frozen=True)
 class DroneParameters:
@@ -48,17 +50,18 @@ def advance(
     Returns:
         New (x, y, speed, heading); speed clipped to [0, max_speed], heading in [0, 360).
     """
-    rad = np.radians(heading)
+    rad = heading * (np.pi / 180.0)
     new_x = x + speed * np.sin(rad)
     new_y = y + speed * np.cos(rad)
     new_speed = np.clip(speed + u_speed, 0.0, params.max_speed)
-    new_heading = np.mod(heading + u_heading, 360.0)
+    new_heading = wrap_degrees(heading + u_heading)
     return new_x, new_y, new_speed, new_heading
 
 
 def heading_error(requested: np.ndarray, current: np.ndarray) -> np.ndarray:
-    """Signed shortest turn from ``current`` to ``requested``, degrees in (-180, 180]."""
-    error = np.mod(requested - current, 360.0)
+    """Signed shortest turn from ``current`` to ``requested`` (both in [0, 360)), degrees in
+    (-180, 180]."""
+    error = wrap_degrees(requested - current)
     return np.where(error > 180.0, error - 360.0, error)
 
 

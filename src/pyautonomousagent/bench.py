@@ -1,0 +1,174 @@
+"""``pyaa bench``: time and memory of scenario runs, engine against engine, as the paper's Table 4.
+
+Each case (scenario, engine, agents, iterations, recording) runs in a fresh Python process,
+so its peak memory (maximum resident set size) is its own. Only the simulation loop is
+timed (Phases 2-6, as in the paper), not set-up or Phase 7. The table's speed-up is the
+py_trees engine's time over the batched engine's, for the same agents, in the same run.
+"""
+
+from __future__ import annotations
+
+import json
+import resource
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass
+
+#: The paper's Table 4 (2-D patrol, 4000 iterations, its 2 GHz machine): agents -> seconds.
+PAPER_TABLE_4 = {
+    1: 0.19,
+    10: 2.02,
+    20: 3.48,
+    50: 8.79,
+    100: 17.32,
+    200: 35.41,
+    500: 89.12,
+    1000: 177.41,
+}
+
+
+@dataclass(frozen=True)
+class Case:
+    """One measured run."""
+
+    scenario: str
+    engine: str
+    agents: int
+    iterations: int
+    record_every: int
+
+
+@dataclass(frozen=True)
+class Result:
+    """What a case measured: loop seconds and peak resident memory (MB), or why it failed."""
+
+    case: Case
+    seconds: float | None
+    peak_mb: float | None
+    error: str = ""
+
+    @property
+    def per_agent_iteration(self) -> float | None:
+        """Seconds per agent-iteration."""
+        if self.seconds is None:
+            return None
+        return self.seconds / (self.case.agents * self.case.iterations)
+
+
+def run_case_here(case: Case) -> dict[str, float]:
+    """Run ``case`` in this process; its loop seconds and this process's peak memory (MB)."""
+    from pyautonomousagent.scenarios import load
+    from pyautonomousagent.simulation import Simulation
+
+    scenario = load(case.scenario).with_overrides(agents=case.agents, iterations=case.iterations)
+    sim = Simulation.create(scenario, seed=0, engine=case.engine, record_every=case.record_every)
+    start = time.perf_counter()
+    sim.run(progress=False)
+    seconds = time.perf_counter() - start
+    peak_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return {"seconds": seconds, "peak_mb": peak_kb / 1024}
+
+
+def measure(case: Case, timeout: float | None = None) -> Result:
+    """Run ``case`` in a fresh process (so its peak memory is its own)."""
+    command = [sys.executable, "-m", "pyautonomousagent.bench", json.dumps(asdict(case))]
+    try:
+        done = subprocess.run(command, capture_output=True, text=True, timeout=timeout, check=False)
+    except subprocess.TimeoutExpired:
+        return Result(case, None, None, f"timed out after {timeout:.0f} s")
+    if done.returncode != 0:
+        lines = (done.stderr or "").strip().splitlines()
+        reason = lines[-1] if lines else f"exit code {done.returncode}"
+        return Result(case, None, None, reason)
+    figures = json.loads(done.stdout.strip().splitlines()[-1])
+    return Result(case, figures["seconds"], figures["peak_mb"])
+
+
+def speedups(results: Sequence[Result], reference: str = "pytrees") -> dict[Case, float]:
+    """Case -> reference engine's seconds / this case's seconds (same agents and recording)."""
+    base = {
+        (r.case.scenario, r.case.agents, r.case.iterations, r.case.record_every): r.seconds
+        for r in results
+        if r.case.engine == reference and r.seconds
+    }
+    ratios = {}
+    for r in results:
+        key = (r.case.scenario, r.case.agents, r.case.iterations, r.case.record_every)
+        if r.case.engine != reference and r.seconds and key in base:
+            ratios[r.case] = base[key] / r.seconds
+    return ratios
+
+
+def table(results: Sequence[Result], reference: str = "pytrees") -> str:
+    """The results as a text table like the paper's Table 4."""
+    ratios = speedups(results, reference)
+    head = (
+        f"{'agents':>8} {'engine':>8} {'record':>7} {'seconds':>9} {'s/agent-it':>11} "
+        f"{'peak MB':>8} {'speed-up':>9} {'paper s':>8}"
+    )
+    lines = [head, "-" * len(head)]
+    for r in results:
+        c = r.case
+        paper = (
+            PAPER_TABLE_4.get(c.agents) if c.scenario == "patrol" and c.iterations == 4000 else None
+        )
+        if r.seconds is None:
+            lines.append(f"{c.agents:>8} {c.engine:>8} {c.record_every:>7}  failed: {r.error}")
+            continue
+        ratio = f"{ratios[c]:.0f}x" if c in ratios else ""
+        lines.append(
+            f"{c.agents:>8} {c.engine:>8} {c.record_every:>7} {r.seconds:>9.3f} "
+            f"{r.per_agent_iteration:>11.2e} {r.peak_mb:>8.0f} {ratio:>9} "
+            f"{'' if paper is None else f'{paper:.2f}':>8}"
+        )
+    return "\n".join(lines)
+
+
+def stress(
+    scenario: str,
+    engine: str,
+    budget_mb: float,
+    iterations: int,
+    record_every: int,
+    start: int = 1000,
+    report: Callable[[Result], None] = lambda r: None,
+) -> tuple[int, list[Result]]:
+    """The largest swarm whose run stays within ``budget_mb`` of peak memory.
+
+    Doubles the agents from ``start`` until a run exceeds the budget (or fails), then
+    bisects to within 2 %. Returns the largest fitting count and every probe.
+    """
+    probes: list[Result] = []
+
+    def fits(agents: int) -> bool:
+        result = measure(Case(scenario, engine, agents, iterations, record_every))
+        probes.append(result)
+        report(result)
+        return result.peak_mb is not None and result.peak_mb <= budget_mb
+
+    low, high = 0, start
+    while fits(high):
+        low, high = high, high * 2
+    while high - low > max(1, low // 50):
+        middle = (low + high) // 2
+        if fits(middle):
+            low = middle
+        else:
+            high = middle
+    return low, probes
+
+
+def parse_size_mb(text: str) -> float:
+    """``"5.12GB"`` -> 5242.88 (MB, 1024-based); also MB, KB, or a bare number of MB."""
+    units = {"gb": 1024.0, "mb": 1.0, "kb": 1 / 1024}
+    lowered = text.strip().lower()
+    for suffix, factor in units.items():
+        if lowered.endswith(suffix):
+            return float(lowered[: -len(suffix)]) * factor
+    return float(lowered)
+
+
+if __name__ == "__main__":
+    print(json.dumps(run_case_here(Case(**json.loads(sys.argv[1])))))
