@@ -76,9 +76,8 @@ def _int_list(text: str) -> list[int]:
     try:
         values = [int(v) for v in text.split(",") if v.strip()]
     except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"expected whole numbers separated by commas, got {text!r}"
-        )
+        message = f"expected whole numbers separated by commas, got {text!r}"
+        raise argparse.ArgumentTypeError(message) from None
     if not values or min(values) < 1:
         raise argparse.ArgumentTypeError(f"expected whole numbers >= 1, got {text!r}")
     return values
@@ -166,12 +165,13 @@ def bench_command(args: argparse.Namespace) -> int:
 def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
     budget = bench.parse_size_mb(args.memory_budget)
     found = {}
+
+    def show(result: Any) -> None:
+        mb = "failed" if result.peak_mb is None else f"{result.peak_mb:.0f} MB"
+        line = f"  {result.case.engine}: {result.case.agents} agents -> {mb}"
+        print(line, file=sys.stderr, flush=True)
+
     for engine in engines:
-
-        def show(result: Any) -> None:
-            mb = "failed" if result.peak_mb is None else f"{result.peak_mb:.0f} MB"
-            print(f"  {engine}: {result.case.agents} agents -> {mb}", file=sys.stderr, flush=True)
-
         every = args.stress_iterations
         found[engine], _ = bench.stress(
             args.scenario, engine, budget, args.stress_iterations, every, report=show
