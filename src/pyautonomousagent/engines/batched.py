@@ -5,9 +5,9 @@ order (pre-order), each with its parent, its children and the end of its subtree
 subtree is the contiguous range ``[i, end[i])``. Per-node state is held per agent:
 
 - ``status``: shape (nodes, N), int8 codes of :mod:`pyautonomousagent.bt.status`;
-- ``current``: shape (nodes, N), the child index a composite remembers (py_trees'
-  ``current_child``), -1 for none;
-- ``counter``: shape (nodes, N), the successes of ``Repeat`` / failures of ``Retry``.
+- ``current``: per Sequence/Selector node, shape (N,), the child index it remembers
+  (py_trees' ``current_child``), -1 for none;
+- ``counter``: per Repeat/Retry node, shape (N,), its successes / failures so far.
 
 A node is ticked for the agents whose tick reaches it (a boolean mask), and every
 rule of py_trees 2.x is reproduced: which children are ticked, which statuses are kept,
@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from pyautonomousagent.allocator import reuse_freed_memory
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
 from pyautonomousagent.bt.spec import STATUS_MAPS, Node, TreeError, control_params
 from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
@@ -109,12 +110,22 @@ class BatchedEngine:
                     "no batched form; run this tree with the pytrees engine"
                 )
         check_leaves(tree, swarm, defaults)
+        reuse_freed_memory()
         self.program = program = compile_tree(tree)
         self.swarm, self.world = swarm, world
         n = len(program.nodes)
         self.status = np.zeros((n, swarm.size), dtype=np.int8)
-        self.current = np.full((n, swarm.size), -1, dtype=np.int16)
-        self.counter = np.zeros((n, swarm.size), dtype=np.int32)
+        kinds = [node.type for node in program.nodes]
+        self.current = {
+            i: np.full(swarm.size, -1, dtype=np.int16)
+            for i, kind in enumerate(kinds)
+            if kind in ("Sequence", "Selector")
+        }
+        self.counter = {
+            i: np.zeros(swarm.size, dtype=np.int32)
+            for i, kind in enumerate(kinds)
+            if kind in ("Repeat", "Retry")
+        }
         self.leaves: dict[int, Leaf] = {
             i: make_leaf(node, defaults)
             for i, node in enumerate(program.nodes)
@@ -137,8 +148,10 @@ class BatchedEngine:
             return lambda mask: self._selector(i, mask)
         if node_type == "Parallel":
             return lambda mask: self._parallel(i, mask)
-        if node_type in STATUS_MAPS or node_type in ("Repeat", "Retry"):
+        if node_type in STATUS_MAPS:
             return lambda mask: self._decorator(i, mask)
+        if node_type in ("Repeat", "Retry"):
+            return lambda mask: self._counted(i, mask)
         return lambda mask: self._leaf(i, mask)
 
     def tick(self) -> None:
@@ -194,11 +207,17 @@ class BatchedEngine:
             np.copyto(status, SUCCESS, where=mask)
             np.copyto(current, -1, where=mask)
             return
-        start = np.where(fresh, 0, current) if memory else None
-        going = mask & (start == 0) if start is not None else mask.copy()
+        resuming = mask & ~fresh if memory else None
+        if resuming is not None and resuming.any():
+            start: np.ndarray | None = np.where(fresh, 0, current)
+            last_start = int(start[resuming].max())
+            going = mask & (start == 0)
+        else:  # every agent starts at the first child
+            start, last_start, going = None, 0, mask.copy()
         for k, child in enumerate(kids):
             if going.any():
-                np.copyto(current, k, where=going)
+                if memory:
+                    np.copyto(current, k, where=going)
                 self._tickers[child](going)
                 result = self.status[child]
                 succeeded = result == SUCCESS
@@ -207,7 +226,7 @@ class BatchedEngine:
                     self._halt_children(i, k + 1, stopped)
                 np.copyto(status, result, where=stopped)
                 going &= succeeded
-            if start is not None and k + 1 < len(kids):
+            if start is not None and k < last_start:
                 going |= mask & (start == k + 1)
         np.copyto(status, SUCCESS, where=going)
 
@@ -262,6 +281,13 @@ class BatchedEngine:
         np.copyto(status, new, where=mask)
 
     def _decorator(self, i: int, mask: np.ndarray) -> None:
+        child = self.program.children[i][0]
+        self._tickers[child](mask)
+        result = self.status[child]
+        self._settle(i, child, mask, result, self._tables[i][result])
+
+    def _counted(self, i: int, mask: np.ndarray) -> None:
+        """Repeat (counts successes) and Retry (counts failures), as py_trees' decorators."""
         node, child = self.program.nodes[i], self.program.children[i][0]
         counter = self.counter[i]
         np.copyto(counter, 0, where=mask & (self.status[i] != RUNNING))
@@ -272,12 +298,16 @@ class BatchedEngine:
             np.add(counter, 1, out=counter, where=success)
             done = success & (counter == self.program.params[i]["num_success"])
             new = np.where(result == FAILURE, FAILURE, np.where(done, SUCCESS, RUNNING))
-        elif node.type == "Retry":
+        else:
             failure = mask & (result == FAILURE)
             np.add(counter, 1, out=counter, where=failure)
             again = counter < self.program.params[i]["num_failures"]
             new = np.where(failure, np.where(again, RUNNING, FAILURE), result)
-        else:
-            new = self._tables[i][result]
+        self._settle(i, child, mask, result, new)
+
+    def _settle(
+        self, i: int, child: int, mask: np.ndarray, result: np.ndarray, new: np.ndarray
+    ) -> None:
+        """A decorator's new status; a child left RUNNING under a finished decorator halts."""
         self._halt(child, mask & (new != RUNNING) & (result == RUNNING))
         np.copyto(self.status[i], new, where=mask)

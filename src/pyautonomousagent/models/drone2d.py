@@ -113,13 +113,14 @@ class Drone2D:
             s: the swarm's state columns, updated in place.
             moving: agents that move this iteration (those with energy).
         """
-        x, y, v, a = advance(
+        new = advance(
             s["x"], s["y"], s["speed"], s["heading"], self.u_speed, self.u_heading, self.params
         )
-        s["x"][:] = np.where(moving, x, s["x"])
-        s["y"][:] = np.where(moving, y, s["y"])
-        s["speed"][:] = np.where(moving, v, 0.0)
-        s["heading"][:] = np.where(moving, a, s["heading"])
+        everyone = bool(moving.all())
+        for key, value in zip(("x", "y", "speed", "heading"), new, strict=True):
+            np.copyto(s[key], value, where=True if everyone else moving)
+        if not everyone:
+            s["speed"][~moving] = 0.0
 
     def control(self, s: dict[str, np.ndarray]) -> None:
         """Phase 4: control signals toward the requested speed and heading."""

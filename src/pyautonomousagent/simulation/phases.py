@@ -84,11 +84,14 @@ def estimate_state(sim: Simulation) -> None:
     s, p = sim.swarm.columns, sim.scenario.parameters
     s["energy"][:] = drain_energy(s["energy"], p.energy_use)
     powered = s["energy"] > 0.0
-    reading = radiation_level(s["x"], s["y"], sim.world.radiation_sources)
-    s["radiation"][:] = np.where(powered, reading, s["radiation"])
-    s["damage"][:] = accumulate_damage(s["damage"], s["radiation"], p.radiation_damage_factor)
+    if any(source.active for source in sim.world.radiation_sources):
+        reading = radiation_level(s["x"], s["y"], sim.world.radiation_sources)
+        np.copyto(s["radiation"], reading, where=powered)
+        s["damage"][:] = accumulate_damage(s["damage"], s["radiation"], p.radiation_damage_factor)
+    # else: no source is active, so every reading is 0 and damage does not grow
     sim.model.advance(s, powered)
-    _raise_alerts(sim, ~powered)
+    if not powered.all():
+        _raise_alerts(sim, ~powered)
     process_messages(sim)
 
 
