@@ -71,19 +71,45 @@ def run_case_here(case: Case) -> dict[str, float]:
     return {"seconds": seconds, "peak_mb": peak_kb / 1024}
 
 
-def measure(case: Case, timeout: float | None = None) -> Result:
-    """Run ``case`` in a fresh process (so its peak memory is its own)."""
+def measure(case: Case, timeout: float | None = None, budget_mb: float | None = None) -> Result:
+    """Run ``case`` in a fresh process (so its peak memory is its own).
+
+    With ``budget_mb``, the process is stopped as soon as its peak memory passes the budget
+    (read from /proc where there is one), and the result says so.
+    """
     command = [sys.executable, "-m", "pyautonomousagent.bench", json.dumps(asdict(case))]
-    try:
-        done = subprocess.run(command, capture_output=True, text=True, timeout=timeout, check=False)
-    except subprocess.TimeoutExpired:
-        return Result(case, None, None, f"timed out after {timeout:.0f} s")
-    if done.returncode != 0:
-        lines = (done.stderr or "").strip().splitlines()
-        reason = lines[-1] if lines else f"exit code {done.returncode}"
-        return Result(case, None, None, reason)
-    figures = json.loads(done.stdout.strip().splitlines()[-1])
+    started = time.perf_counter()
+    with subprocess.Popen(
+        command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    ) as child:
+        while child.poll() is None:
+            if budget_mb is not None and (_peak_mb(child.pid) or 0.0) > budget_mb:
+                child.kill()
+                child.wait()
+                return Result(case, None, _peak_mb(child.pid), f"over {budget_mb:.0f} MB")
+            if timeout is not None and time.perf_counter() - started > timeout:
+                child.kill()
+                child.wait()
+                return Result(case, None, None, f"timed out after {timeout:.0f} s")
+            time.sleep(0.05)
+        out, err = child.communicate()
+    if child.returncode != 0:
+        lines = err.strip().splitlines()
+        return Result(case, None, None, lines[-1] if lines else f"exit code {child.returncode}")
+    figures = json.loads(out.strip().splitlines()[-1])
     return Result(case, figures["seconds"], figures["peak_mb"])
+
+
+def _peak_mb(pid: int) -> float | None:
+    """Peak resident memory of a running process in MB, from /proc (None if unknown)."""
+    try:
+        with open(f"/proc/{pid}/status") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        return None
+    return None
 
 
 def speedups(results: Sequence[Result], reference: str = "pytrees") -> dict[Case, float]:
@@ -143,7 +169,9 @@ def stress(
     probes: list[Result] = []
 
     def fits(agents: int) -> bool:
-        result = measure(Case(scenario, engine, agents, iterations, record_every))
+        result = measure(
+            Case(scenario, engine, agents, iterations, record_every), budget_mb=budget_mb
+        )
         probes.append(result)
         report(result)
         return result.peak_mb is not None and result.peak_mb <= budget_mb

@@ -97,7 +97,7 @@ def _add_bench(sub: Any) -> None:
     bench.add_argument(
         "--record-every",
         type=_int_list,
-        default=[1],
+        default=None,
         metavar="K[,K...]",
         help="recording decimation(s) to measure, e.g. 1,100",
     )
@@ -112,7 +112,7 @@ def _add_bench(sub: Any) -> None:
     bench.add_argument(
         "--stress-iterations",
         type=int,
-        default=100,
+        default=20,
         help="iterations of each stress probe (memory is preallocated)",
     )
 
@@ -133,7 +133,7 @@ def bench_command(args: argparse.Namespace) -> int:
     if args.stress:
         return _stress(args, engines, bench)
     results = []
-    for every in args.record_every:
+    for every in args.record_every or [1]:
         for agents in args.agents:
             for engine in engines:
                 case = bench.Case(args.scenario, engine, agents, args.iterations, every)
@@ -167,19 +167,20 @@ def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
     found = {}
 
     def show(result: Any) -> None:
-        mb = "failed" if result.peak_mb is None else f"{result.peak_mb:.0f} MB"
+        mb = result.error if result.error else f"{result.peak_mb:.0f} MB"
         line = f"  {result.case.engine}: {result.case.agents} agents -> {mb}"
         print(line, file=sys.stderr, flush=True)
 
+    # Without --record-every a probe records the initial state only.
+    every = max(args.record_every) if args.record_every else args.stress_iterations + 1
+    recording = f"recording every {every}" if args.record_every else "recording the initial state"
     for engine in engines:
-        every = args.stress_iterations
         found[engine], _ = bench.stress(
             args.scenario, engine, budget, args.stress_iterations, every, report=show
         )
         print(
             f"{args.scenario} on {engine}: at most {found[engine]} agents within "
-            f"{budget:.0f} MB ({args.stress_iterations} iterations a probe, recording first "
-            f"and last)",
+            f"{budget:.0f} MB peak ({args.stress_iterations} iterations a probe, {recording})",
             flush=True,
         )
     if args.json:

@@ -207,13 +207,7 @@ class BatchedEngine:
             np.copyto(status, SUCCESS, where=mask)
             np.copyto(current, -1, where=mask)
             return
-        resuming = mask & ~fresh if memory else None
-        if resuming is not None and resuming.any():
-            start: np.ndarray | None = np.where(fresh, 0, current)
-            last_start = int(start[resuming].max())
-            going = mask & (start == 0)
-        else:  # every agent starts at the first child
-            start, last_start, going = None, 0, mask.copy()
+        start, last_start, going = self._sequence_start(memory, mask, fresh, current)
         for k, child in enumerate(kids):
             if going.any():
                 if memory:
@@ -229,6 +223,18 @@ class BatchedEngine:
             if start is not None and k < last_start:
                 going |= mask & (start == k + 1)
         np.copyto(status, SUCCESS, where=going)
+
+    @staticmethod
+    def _sequence_start(
+        memory: bool, mask: np.ndarray, fresh: np.ndarray, current: np.ndarray
+    ) -> tuple[np.ndarray | None, int, np.ndarray]:
+        """Where each agent's sequence starts: (child index per agent or None when all start
+        at the first child, the largest start, the agents starting at the first child)."""
+        resuming = mask & ~fresh
+        if memory and resuming.any():
+            start = np.where(fresh, 0, current)
+            return start, int(start[resuming].max()), mask & (start == 0)
+        return None, 0, mask.copy()
 
     def _selector(self, i: int, mask: np.ndarray) -> None:
         kids, memory = self.program.children[i], self.program.params[i]["memory"]

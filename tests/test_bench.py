@@ -1,0 +1,102 @@
+"""``pyaa bench``: cases measured in their own process, the table, JSON and the stress search."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from pyautonomousagent import bench
+from pyautonomousagent.cli import main
+
+
+def fake(
+    engine: str, agents: int, seconds: float | None, peak: float | None = 100.0
+) -> bench.Result:
+    return bench.Result(
+        bench.Case("patrol", engine, agents, 4000, 1), seconds, peak, "" if seconds else "over 5 MB"
+    )
+
+
+def test_speedups_pair_engines_with_the_same_agents() -> None:
+    results = [fake("pytrees", 10, 2.0), fake("batched", 10, 0.5), fake("batched", 100, 1.0)]
+    ratios = bench.speedups(results)
+    assert ratios == {results[1].case: 4.0}
+
+
+def test_table_has_the_papers_figures_and_failures() -> None:
+    text = bench.table(
+        [fake("pytrees", 100, 20.0), fake("batched", 100, 0.2), fake("batched", 1000, None, None)]
+    )
+    lines = text.splitlines()
+    assert "speed-up" in lines[0] and "paper s" in lines[0]
+    assert "100x" in lines[3] and "17.32" in lines[3]
+    assert "failed: over 5 MB" in lines[4]
+
+
+@pytest.mark.parametrize(
+    ("text", "mb"), [("5.12GB", 5.12 * 1024), ("300MB", 300.0), ("2048kb", 2.0), ("64", 64.0)]
+)
+def test_sizes(text: str, mb: float) -> None:
+    assert bench.parse_size_mb(text) == pytest.approx(mb)
+
+
+def test_stress_doubles_then_bisects(monkeypatch: pytest.MonkeyPatch) -> None:
+    def measure(
+        case: bench.Case, timeout: float | None = None, budget_mb: float | None = None
+    ) -> bench.Result:
+        return bench.Result(case, 1.0, 50.0 + case.agents / 100)  # 1 MB per 100 agents
+
+    monkeypatch.setattr(bench, "measure", measure)
+    found, probes = bench.stress("patrol", "batched", 250.0, 5, 6, start=1000)
+    assert 19_600 <= found <= 20_000
+    assert [p.case.agents for p in probes][:6] == [1000, 2000, 4000, 8000, 16000, 32000]
+
+
+def test_a_real_case_runs_in_its_own_process() -> None:
+    result = bench.measure(bench.Case("patrol", "batched", 3, 30, 1))
+    assert result.error == ""
+    assert result.seconds is not None and result.seconds > 0
+    assert result.peak_mb is not None and result.peak_mb > 10
+
+
+def test_cli_prints_the_table_and_json(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["bench", "patrol", "--agents", "2", "--iterations", "20"]) == 0
+    table = capsys.readouterr().out.splitlines()
+    assert table[0].split()[:3] == ["agents", "engine", "record"]
+    assert [line.split()[1] for line in table[2:]] == ["pytrees", "batched"]
+    assert table[3].split()[6].endswith("x")  # the batched row has its speed-up
+    assert (
+        main(
+            [
+                "bench",
+                "patrol",
+                "--agents",
+                "2",
+                "--iterations",
+                "10",
+                "--engines",
+                "batched",
+                "--record-every",
+                "1,5",
+                "--json",
+            ]
+        )
+        == 0
+    )
+    rows = json.loads(capsys.readouterr().out)
+    assert [(r["engine"], r["record_every"]) for r in rows] == [("batched", 1), ("batched", 5)]
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["bench", "nope"],
+        ["bench", "patrol", "--engines", "x"],
+        ["bench", "patrol", "--agents", "0"],
+        ["bench", "patrol", "--agents", "a,b"],
+    ],
+)
+def test_cli_refuses_bad_input(args: list[str], capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(args) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
