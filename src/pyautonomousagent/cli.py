@@ -40,7 +40,12 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--agents", type=int, help="number of agents (default: the scenario's)")
     run.add_argument("--iterations", type=int, help="iterations to simulate")
     run.add_argument("--seed", type=int, default=0, help="seed of the run's random generator")
-    run.add_argument("--engine", choices=list(ENGINES), default="pytrees", help="decision engine")
+    run.add_argument(
+        "--engine",
+        choices=["auto", *ENGINES],
+        default="auto",
+        help="decision engine (default auto: batched unless the tree has hand-written leaves)",
+    )
     run.add_argument("--out", type=Path, help="output folder (default: runs/SCENARIO)")
     run.add_argument("--format", choices=["parquet", "csv"], default="parquet", help="data format")
     run.add_argument(
@@ -305,7 +310,8 @@ def tree_command(args: argparse.Namespace) -> int:
         return 0
     import py_trees
 
-    sim = Simulation.create(scenario.with_overrides(agents=1, iterations=1), tree=tree)
+    one = scenario.with_overrides(agents=1, iterations=1)
+    sim = Simulation.create(one, tree=tree, engine="pytrees")
     print(py_trees.display.unicode_tree(sim.engine.roots[0]))  # type: ignore[attr-defined]
     return 0
 

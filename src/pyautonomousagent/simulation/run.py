@@ -14,7 +14,7 @@ from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.datalink import Datalink, Delivery, SharedData
 from pyautonomousagent.engines.batched import BatchedEngine
-from pyautonomousagent.engines.pytrees import PyTreesEngine
+from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, PyTreesEngine
 from pyautonomousagent.models.drone2d import Drone2D, DroneParameters
 from pyautonomousagent.progress import Progress
 from pyautonomousagent.recording import Recorder, to_table
@@ -51,6 +51,12 @@ class Engine(Protocol):
 
 
 ENGINES: dict[str, type[Engine]] = {"pytrees": PyTreesEngine, "batched": BatchedEngine}
+
+
+def choose_engine(tree: Node) -> str:
+    """ "batched", unless a leaf of ``tree`` is a hand-written py_trees behaviour ("pytrees")."""
+    hand_written = any(node.type in BEHAVIOUR_TYPES for node in tree.leaves())
+    return "pytrees" if hand_written else "batched"
 
 
 @dataclass
@@ -92,7 +98,7 @@ class Simulation:
         cls,
         scenario: Scenario,
         seed: int = 0,
-        engine: str = "pytrees",
+        engine: str = "auto",
         record_every: int = 1,
         tree: Node | None = None,
     ) -> Simulation:
@@ -101,12 +107,16 @@ class Simulation:
         Args:
             scenario: the scenario to run.
             seed: seed of the run's random generator.
-            engine: name of the decision engine (see :data:`ENGINES`).
+            engine: name of the decision engine (see :data:`ENGINES`), or "auto": the
+                batched engine unless the tree has hand-written py_trees behaviours.
             record_every: record every K-th iteration (and the initial state).
             tree: a tree description to use instead of the scenario's own.
         """
+        tree = tree or tree_by_name(scenario.tree)
+        engine = choose_engine(tree) if engine == "auto" else engine
         if engine not in ENGINES:
-            raise ValueError(f"unknown engine {engine!r}; choose from {', '.join(ENGINES)}")
+            choices = ", ".join(["auto", *ENGINES])
+            raise ValueError(f"unknown engine {engine!r}; choose from {choices}")
         start = time.perf_counter()
         rng = np.random.default_rng(seed)
         swarm = phases.create_agents(scenario, rng)
@@ -120,7 +130,7 @@ class Simulation:
         )
         defaults = vars(p)
         model = Drone2D(DroneParameters(p.max_speed, p.speed_step, p.turn_step), swarm.size)
-        decision = ENGINES[engine](tree or tree_by_name(scenario.tree), swarm, world, defaults)
+        decision = ENGINES[engine](tree, swarm, world, defaults)
         sim = cls(
             scenario=scenario,
             seed=seed,
