@@ -78,6 +78,12 @@ def compile_tree(root: Node) -> Program:
     )
 
 
+def _some(mask: np.ndarray) -> bool:
+    """Whether any entry of ``mask`` holds (``count_nonzero`` costs a quarter of ``any()``
+    on a thousand entries)."""
+    return bool(np.count_nonzero(mask))
+
+
 def _status_table(type_name: str) -> np.ndarray:
     """Lookup table child status -> own status of a status-mapping decorator."""
     table = np.arange(len(NAMES), dtype=np.int8)
@@ -171,13 +177,13 @@ class BatchedEngine:
         subtree, so the child's own status decides. A composite's remembered child is not
         reset: it is only read while the composite is RUNNING.)"""
         need = mask & (self.status[child] != INVALID)
-        if need.any():
+        if _some(need):
             np.copyto(self.status[child : self.program.end[child]], INVALID, where=need)
 
     def _halt_children(self, i: int, first: int, mask: np.ndarray) -> None:
         """Halt the children of node ``i`` from position ``first`` on, for ``mask``."""
         kids = self.program.children[i]
-        if first < len(kids) and mask.any():
+        if first < len(kids) and _some(mask):
             for child in kids[first:]:
                 self._halt(child, mask)
 
@@ -209,7 +215,7 @@ class BatchedEngine:
             return
         start, last_start, going = self._sequence_start(memory, mask, fresh, current)
         for k, child in enumerate(kids):
-            if going.any():
+            if _some(going):
                 if memory:
                     np.copyto(current, k, where=going)
                 self._tickers[child](going)
@@ -231,7 +237,7 @@ class BatchedEngine:
         """Where each agent's sequence starts: (child index per agent or None when all start
         at the first child, the largest start, the agents starting at the first child)."""
         resuming = mask & ~fresh
-        if memory and resuming.any():
+        if memory and _some(resuming):
             start = np.where(fresh, 0, current)
             return start, int(start[resuming].max()), mask & (start == 0)
         return None, 0, mask.copy()
@@ -252,7 +258,7 @@ class BatchedEngine:
         else:
             going = mask.copy()
         for k, child in enumerate(kids):
-            if going.any():
+            if _some(going):
                 self._tickers[child](going)
                 result = self.status[child]
                 failed = result == FAILURE
@@ -275,7 +281,7 @@ class BatchedEngine:
             return
         for child in kids:
             going = mask & (self.status[child] != SUCCESS) if params["synchronise"] else mask
-            if going.any():
+            if _some(going):
                 self._tickers[child](going)
         results = self.status[list(kids)]
         success = results == SUCCESS
