@@ -24,7 +24,14 @@ from typing import Any
 import numpy as np
 
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
-from pyautonomousagent.bt.spec import STATUS_MAPS, Node, TreeError, control_params
+from pyautonomousagent.bt.spec import (
+    BTCPP_TYPES,
+    STATUS_MAPS,
+    Node,
+    TreeError,
+    control_params,
+    parallel_threshold,
+)
 from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES
 from pyautonomousagent.state import Swarm
@@ -131,6 +138,8 @@ class BatchedEngine:
 
     def _ticker(self, i: int) -> Callable[[np.ndarray], None]:
         node_type = self.program.nodes[i].type
+        if node_type in BTCPP_TYPES:
+            return self._btcpp_ticker(i)
         if node_type == "Sequence":
             return lambda mask: self._sequence(i, mask)
         if node_type == "Selector":
@@ -271,3 +280,84 @@ class BatchedEngine:
         if dangling.any():
             self._halt(child, self.program.end[child], dangling)
         np.copyto(self.status[i], new, where=mask)
+
+    # BehaviorTree.CPP's control nodes (see engines/btcpp.py for the same rules on py_trees).
+    # ``counter`` holds SequenceWithMemory's remembered child and the loop counts of
+    # BTRepeat / RetryUntilSuccessful; ``_done`` marks the finished children of a BTParallel.
+
+    def _btcpp_ticker(self, i: int) -> Callable[[np.ndarray], None]:
+        node_type = self.program.nodes[i].type
+        if node_type == "SequenceWithMemory":
+            return lambda mask: self._sequence_with_memory(i, mask)
+        if node_type == "BTParallel":
+            if not hasattr(self, "_done"):
+                self._done = np.zeros(self.status.shape, dtype=bool)
+            return lambda mask: self._btcpp_parallel(i, mask)
+        return lambda mask: self._btcpp_loop(i, mask)
+
+    def _sequence_with_memory(self, i: int, mask: np.ndarray) -> None:
+        index, status = self.counter[i], self.status[i]
+        start = index.copy()
+        alive = mask.copy()
+        for k, child in enumerate(self.program.children[i]):
+            ticked = alive & (start <= k)
+            if ticked.any():
+                self._tickers[child](ticked)
+                result = self.status[child]
+                stopped = ticked & (result != SUCCESS)
+                np.copyto(index, k, where=stopped)
+                np.copyto(status, result, where=stopped)
+                alive &= ~stopped
+        np.copyto(index, 0, where=alive)
+        np.copyto(status, SUCCESS, where=alive)
+
+    def _btcpp_loop(self, i: int, mask: np.ndarray) -> None:
+        """BTRepeat (again on SUCCESS) and RetryUntilSuccessful (again on FAILURE)."""
+        node, child = self.program.nodes[i], self.program.children[i][0]
+        repeat = node.type == "BTRepeat"
+        again = SUCCESS if repeat else FAILURE
+        limit = self.program.params[i]["num_cycles" if repeat else "num_attempts"]
+        counter, status = self.counter[i], self.status[i]
+        np.copyto(counter, 0, where=mask & (status != RUNNING))
+        going = mask.copy()
+        while going.any():
+            self._tickers[child](going)
+            result = self.status[child]
+            looped = going & (result == again)
+            np.add(counter, 1, out=counter, where=looped)
+            more = looped & (counter < limit)
+            ended = going & ~more
+            np.copyto(status, result, where=ended)
+            np.copyto(counter, 0, where=ended & (result != RUNNING))
+            going = more
+
+    def _btcpp_parallel(self, i: int, mask: np.ndarray) -> None:
+        kids = list(self.program.children[i])
+        params, status, done = self.program.params[i], self.status[i], self._done
+        need_success = parallel_threshold(params["success_count"], len(kids))
+        need_failure = parallel_threshold(params["failure_count"], len(kids))
+        fresh = mask & (status != RUNNING)
+        self._halt_children(i, 0, fresh)
+        done[kids] &= ~fresh
+        alive = mask.copy()
+        for child in kids:
+            ticked = alive & ~done[child]
+            if ticked.any():
+                self._tickers[child](ticked)
+                done[child] |= ticked & (self.status[child] != RUNNING)
+            results = np.where(done[kids], self.status[kids], RUNNING)
+            successes = (results == SUCCESS).sum(axis=0)
+            failures = (results == FAILURE).sum(axis=0)
+            won = alive & (successes >= need_success)
+            hopeless = (len(kids) - failures < need_success) | (failures >= need_failure)
+            lost = alive & ~won & hopeless
+            ended = won | lost
+            if ended.any():
+                for kid in kids:
+                    dangling = ended & (self.status[kid] == RUNNING)
+                    if dangling.any():
+                        self._halt(kid, self.program.end[kid], dangling)
+                done[kids] &= ~ended
+                np.copyto(status, np.where(won, SUCCESS, FAILURE), where=ended)
+                alive &= ~ended
+        np.copyto(status, RUNNING, where=alive)

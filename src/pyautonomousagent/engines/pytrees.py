@@ -17,7 +17,8 @@ from py_trees.common import Status
 
 from pyautonomousagent.bt import status as codes
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
-from pyautonomousagent.bt.spec import Node, control_params
+from pyautonomousagent.bt.spec import CONTROL_NODES, Node, control_params
+from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -109,6 +110,9 @@ def _control_behaviour(
 ) -> py_trees.behaviour.Behaviour:
     """The py_trees composite or decorator for a control node."""
     params = control_params(node)
+    if node.type in BTCPP_BEHAVIOURS:
+        single = CONTROL_NODES[node.type][1] == 1
+        return BTCPP_BEHAVIOURS[node.type](node.name, children[0] if single else children, **params)
     if node.type in ("Sequence", "Selector"):
         composite = getattr(py_trees.composites, node.type)
         return composite(node.name, params["memory"], children)
