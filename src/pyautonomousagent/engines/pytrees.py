@@ -16,7 +16,7 @@ import py_trees
 from py_trees.common import Status
 
 from pyautonomousagent.bt import status as codes
-from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
+from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
 from pyautonomousagent.bt.spec import CONTROL_NODES, Node, control_params
 from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS
 from pyautonomousagent.state import AgentView, Swarm
@@ -88,6 +88,7 @@ def register_behaviour(type_name: str) -> Callable[[type[AgentBehaviour]], type[
 
     def register(cls: type[AgentBehaviour]) -> type[AgentBehaviour]:
         BEHAVIOUR_TYPES[type_name] = cls
+        declare_leaf_type(type_name)
         return cls
 
     return register

@@ -10,6 +10,7 @@ from typing import Any, Protocol
 import numpy as np
 import pyarrow as pa
 
+from pyautonomousagent.bt.files import is_tree_file, load_tree
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.datalink import Datalink, Delivery, SharedData
@@ -51,6 +52,13 @@ class Engine(Protocol):
 
 
 ENGINES: dict[str, type[Engine]] = {"pytrees": PyTreesEngine, "batched": BatchedEngine}
+
+
+def scenario_tree(scenario: Scenario) -> Node:
+    """The scenario's tree: loaded from its tree file, or a built-in tree by name."""
+    if is_tree_file(scenario.tree):
+        return load_tree(scenario.tree)
+    return tree_by_name(scenario.tree)
 
 
 @dataclass
@@ -120,7 +128,7 @@ class Simulation:
         )
         defaults = vars(p)
         model = Drone2D(DroneParameters(p.max_speed, p.speed_step, p.turn_step), swarm.size)
-        decision = ENGINES[engine](tree or tree_by_name(scenario.tree), swarm, world, defaults)
+        decision = ENGINES[engine](tree or scenario_tree(scenario), swarm, world, defaults)
         sim = cls(
             scenario=scenario,
             seed=seed,
