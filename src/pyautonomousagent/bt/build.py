@@ -82,6 +82,7 @@ def reference(value: Any) -> str | None:
 class _Builder:
     def __init__(self, document: Document) -> None:
         self.doc = document
+        self.instances: dict[str, int] = {}  # SubTree name prefix -> line of its <SubTree>
 
     def fail(self, line: int, message: str, fix: str) -> TreeFileError:
         return TreeFileError(self.doc.file, line, message, fix)
@@ -95,7 +96,7 @@ class _Builder:
     def _copy(self, node: RawNode, scope: _Scope, stack: tuple[str, ...], prefix: str) -> RawNode:
         if node.tag == SUBTREE:
             return self._subtree(node, scope, stack, prefix)
-        ports = {k: self._resolve(v, k, scope, node.line) for k, v in node.ports.items()}
+        ports = {k: self._resolve(v, k, scope, node.line_of(k)) for k, v in node.ports.items()}
         children = [self._copy(child, scope, stack, prefix) for child in node.children]
         name = prefix + node.name if node.name else None
         return replace(node, name=name, ports=ports, children=children, prefix=prefix)
@@ -126,13 +127,28 @@ class _Builder:
                 "a tree cannot include itself, directly or through other trees; "
                 "remove this SubTree",
             )
-        values = {k: self._resolve(v, k, scope, node.line) for k, v in node.ports.items()}
+        values = {k: self._resolve(v, k, scope, node.line_of(k)) for k, v in node.ports.items()}
         for port, default in self.doc.subtree_ports.get(tree_id, {}).items():
             if port not in values and not node.autoremap:
                 values[port] = self._resolve(default, port, scope, node.line)
         inner = _Scope(values, scope, node.autoremap, tree_id, node.line)
-        name = node.name or snake_case(tree_id)
-        return self.inline(tree_id, inner, (*stack, tree_id), f"{prefix}{name}/")
+        return self.inline(tree_id, inner, (*stack, tree_id), self._instance(node, prefix))
+
+    def _instance(self, node: RawNode, prefix: str) -> str:
+        """The name prefix of a SubTree's nodes: ``prefix`` + its name (made up if none) + /."""
+        base = prefix + (node.name or snake_case(node.subtree or ""))
+        name, n = base, 2
+        while name in self.instances:
+            if node.name:
+                raise self.fail(
+                    node.line,
+                    f"two SubTrees are named {node.name!r} (lines {self.instances[name]} "
+                    f"and {node.line})",
+                    "give each SubTree its own name, or leave name out",
+                )
+            name, n = f"{base}_{n}", n + 1
+        self.instances[name] = node.line
+        return name + "/"
 
     def _resolve(self, value: Any, port: str, scope: _Scope, line: int) -> Any:
         """``value``, or the value its ``{key}`` reference stands for in ``scope``."""
@@ -191,7 +207,7 @@ class _Builder:
         if node.category and node.category != tag.kind:
             raise self.fail(
                 node.line,
-                f"{tag.tag} is a {tag.kind}, not a {node.category}",
+                f"{tag.tag} is a {tag.kind}, not {_a(node.category)}",
                 f'write <{tag.kind} ID="{tag.tag}"> or <{tag.tag}>',
             )
         if tag.kind == DECORATOR and len(children) != 1:
@@ -199,7 +215,7 @@ class _Builder:
                 node.line,
                 f"decorator {tag.tag} needs exactly 1 child, has {len(children)}",
                 "put exactly one node inside it"
-                + ("; wrap several in a <Sequence>" if children else ""),
+                + ("; wrap several in a Sequence" if children else ""),
             )
         if not children:
             raise self.fail(
@@ -212,7 +228,8 @@ class _Builder:
         try:
             control_params(spec)
         except TreeError as error:
-            raise self.fail(node.line, str(error), _param_fix(tag, len(children))) from None
+            message = str(error).replace(tag.spec, tag.tag, 1)  # the word the file uses
+            raise self.fail(node.line, message, _param_fix(tag, len(children))) from None
         return spec
 
     def _params(self, node: RawNode, tag: Tag) -> dict[str, Any]:
@@ -222,7 +239,7 @@ class _Builder:
                 takes = ", ".join(tag.params) or "no parameters"
                 hint = closest(key, list(tag.params))
                 raise self.fail(
-                    node.line,
+                    node.line_of(key),
                     f"{tag.tag} has no parameter {key!r}",
                     hint or f"remove it ({tag.tag} takes {takes})",
                 )
@@ -247,7 +264,7 @@ class _Builder:
             return int(text)
         must = "true or false" if kind is bool else "a whole number"
         raise self.fail(
-            node.line,
+            node.line_of(key),
             f"{node.tag}: {key} must be {must}, got {text!r}",
             f'write e.g. {key}="{"true" if kind is bool else 3}"',
         )
@@ -263,7 +280,7 @@ class _Builder:
         if node.category is not None and node.category != category:
             raise self.fail(
                 node.line,
-                f"{node.tag} is an {category}, not a {node.category}",
+                f"{node.tag} is {_a(category)}, not {_a(node.category)}",
                 f'write <{category} ID="{node.tag}"/>',
             )
         if node.tag in ENGINE_LEAF_TYPES and node.tag not in LEAF_TYPES:
@@ -280,17 +297,21 @@ class _Builder:
                 ports = ", ".join(names) or "none"
                 hint = closest(key, names)
                 raise self.fail(
-                    node.line,
+                    node.line_of(key),
                     f"{node.tag} has no port {key!r}",
                     hint or f"remove it ({node.tag}'s ports: {ports})",
                 )
             try:
                 params[key] = cls.parse_port(key, value, where)
             except LeafError as error:
-                raise self.fail(
-                    node.line, str(error), f"write {key} as {cls.port_hint(key)}"
-                ) from None
+                fix = f"write {key} as {cls.port_hint(key)}"
+                raise self.fail(node.line_of(key), str(error), fix) from None
         return params
+
+
+def _a(word: str) -> str:
+    """``"an Action"``, ``"a Condition"``."""
+    return f"{'an' if word[0] in 'AEIOU' else 'a'} {word}"
 
 
 def _param_fix(tag: Tag, children: int) -> str:

@@ -51,6 +51,7 @@ class RawNode:
         subtree: for ``SubTree``: the referenced tree's ID.
         autoremap: for ``SubTree``: the ``_autoremap`` flag.
         prefix: set when a SubTree is inlined: the start of the names of its nodes.
+        port_lines: port -> its own line, where the file has one (YAML keys).
     """
 
     tag: str
@@ -62,6 +63,11 @@ class RawNode:
     subtree: str | None = None
     autoremap: bool = False
     prefix: str = ""
+    port_lines: dict[str, int] = field(default_factory=dict)
+
+    def line_of(self, port: str) -> int:
+        """The line of ``port`` (the node's line if the port has none of its own)."""
+        return self.port_lines.get(port, self.line)
 
     def walk(self) -> list[RawNode]:
         """This node and all below it, depth first."""

@@ -202,8 +202,5 @@ def parallel_threshold(value: Any, children: int, where: str = "count") -> int:
         raise TreeError(f"{where} must be a whole number other than 0, got {value!r}")
     resolved = value if value > 0 else children + value + 1
     if not 1 <= resolved <= children:
-        raise TreeError(
-            f"{where}={value} asks for {resolved} of {children} child(ren); "
-            f"use 1..{children} or -1..-{children}"
-        )
+        raise TreeError(f"{where}={value} asks for {resolved} of {children} child(ren)")
     return resolved

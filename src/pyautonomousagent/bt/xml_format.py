@@ -221,12 +221,14 @@ def _node(element: _Element, file: str) -> RawNode:
         else:
             node.tag, node.category = node_id, element.tag
     elif "ID" in attrs:
+        tag = BY_TAG.get(element.tag)
+        category = tag.kind if tag else leaf_category(element.tag)
         raise TreeFileError(
             file,
             element.line,
             f"<{element.tag}> has an ID attribute",
-            f"remove it (the compact form <{element.tag}> names the node "
-            f'already), or write <Action ID="{element.tag}">',
+            f"remove it (the compact form <{element.tag}> names the node already), "
+            f'or write <{category} ID="{element.tag}">',
         )
     for key, value in attrs.items():
         if key in SCRIPT_ATTRIBUTES:

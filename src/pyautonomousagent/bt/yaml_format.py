@@ -188,6 +188,7 @@ class _Reader:
             )
         elif key != "type" and not key.startswith("_"):
             raw.ports[key] = self.port(key, line, value)
+            raw.port_lines[key] = line
 
     def port(self, key: str, line: int, node: yaml.Node) -> Any:
         if isinstance(node, yaml.MappingNode):
