@@ -127,7 +127,10 @@ class _Builder:
                 "a tree cannot include itself, directly or through other trees; "
                 "remove this SubTree",
             )
-        values = {k: self._resolve(v, k, scope, node.line_of(k)) for k, v in node.ports.items()}
+        values = {
+            k: self._resolve("{" + k + "}" if v == "{=}" else v, k, scope, node.line_of(k))
+            for k, v in node.ports.items()
+        }
         for port, default in self.doc.subtree_ports.get(tree_id, {}).items():
             if port not in values and not node.autoremap:
                 values[port] = self._resolve(default, port, scope, node.line)

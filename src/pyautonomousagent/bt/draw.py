@@ -86,7 +86,10 @@ def layout(root: Node) -> tuple[Box, float, float]:
 
 def _measure(node: Node) -> Box:
     lines = node_lines(node)
-    width = max(len(line) for line in lines) * CHAR + 2 * PAD
+    widths = [len(line) * CHAR for line in lines]
+    if node.is_control:  # the symbol line is drawn larger
+        widths[0] *= (FONT + 2) / FONT
+    width = max(widths) + 2 * PAD
     box = Box(node, lines, width, len(lines) * LINE + 2 * PAD)
     box.children = [_measure(child) for child in node.children]
     below = sum(c.span for c in box.children) + GAP * max(len(box.children) - 1, 0)
@@ -122,6 +125,8 @@ def draw_tree(root: Node, path: str | Path, title: str = "") -> Path:
     from matplotlib.patches import FancyBboxPatch
 
     box, width, height = layout(root)
+    note = legend(root)
+    width = max(width, len(note) * CHAR + 2 * GAP)
     top = 0.35 if title else 0.0
     fig = Figure(figsize=(width, height + top + 0.3))
     ax = fig.add_axes((0, 0, 1, 1))
@@ -130,7 +135,7 @@ def draw_tree(root: Node, path: str | Path, title: str = "") -> Path:
     ax.axis("off")
     if title:
         ax.text(GAP, 0.2, title, fontsize=FONT + 3, weight="bold", va="center")
-    ax.text(GAP, height + top + 0.12, legend(root), fontsize=FONT, va="center", color="#333")
+    ax.text(GAP, height + top + 0.12, note, fontsize=FONT, va="center", color="#333")
     for b in _all(box):
         for child in b.children:
             ax.plot([b.x, child.x], [top + b.y + b.height, top + child.y], color="#555", lw=0.8)

@@ -240,7 +240,7 @@ def _node(element: _Element, file: str) -> RawNode:
                 "leaves under a Sequence or Fallback instead",
             )
         if not key.startswith("_"):
-            node.ports[key] = "{" + key + "}" if node.subtree and value == "{=}" else value
+            node.ports[key] = value
     node.children = [_node(child, file) for child in element.children]
     return node
 
