@@ -264,3 +264,10 @@ def test_cli_run_with_a_tree_file(tmp_path, capsys):
     assert summary["scenario"]["tree"] == str(REFUEL_EARLY)
     code, _, err = cli(["run", "patrol", "--tree", "tree.txt", "--quiet"], capsys)
     assert code == 2 and "a tree file must end in .xml, .yaml or .yml" in err
+
+
+def test_a_copied_scenario_finds_the_packaged_tree_file(tmp_path):
+    (tmp_path / "copy.yaml").write_text((PACKAGED / "gathering.yaml").read_text())
+    assert load(str(tmp_path / "copy.yaml")).tree == str(PACKAGED / "gathering.xml")
+    (tmp_path / "gathering.xml").write_text((PACKAGED / "patrol.xml").read_text())
+    assert load(str(tmp_path / "copy.yaml")).tree == str(tmp_path / "gathering.xml")
