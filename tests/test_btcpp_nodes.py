@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import pytest
 
-from pyautonomousagent.bt import fallback, leaf, reactive_fallback, sequence
+from pyautonomousagent.bt import fallback, leaf, reactive_fallback, reactive_sequence, sequence
 from pyautonomousagent.bt.spec import Node, TreeError, check_structure, sequence_with_memory
 
 from .test_composites import letters, scripted
@@ -134,3 +134,12 @@ def test_fallback_and_reactive_fallback_are_py_trees_selectors(harness, engine):
 def test_bad_btcpp_nodes_are_refused(node, message):
     with pytest.raises(TreeError, match=message):
         check_structure(node)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("reactive", [reactive_fallback, reactive_sequence])
+def test_reactive_nodes_halt_a_running_child_when_an_earlier_one_runs(harness, engine, reactive):
+    first = "FR" if reactive is reactive_fallback else "SR"
+    h = harness(reactive("r", scripted("a", first), scripted("b", "RR")), engine=engine)
+    # BT.CPP: a child returning RUNNING halts its siblings, so b (running) is halted
+    run(h, [f"R {first[0]}R", "R RI"], [2, 1])
