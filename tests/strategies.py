@@ -55,7 +55,37 @@ def control_node(children: st.SearchStrategy[list[Node]]) -> st.SearchStrategy[N
         st.integers(1, 3),
         one_child,
     )
-    return st.one_of(composites, parallels, mapped, counted)
+    return st.one_of(composites, parallels, mapped, counted, btcpp_node(children))
+
+
+def btcpp_node(children: st.SearchStrategy[list[Node]]) -> st.SearchStrategy[Node]:
+    """A node with BehaviorTree.CPP semantics: SequenceWithMemory, BTParallel with random
+    thresholds, BTRepeat or RetryUntilSuccessful."""
+    with_memory = children.map(lambda kids: Node("SequenceWithMemory", "m", tuple(kids)))
+    parallel = children.flatmap(
+        lambda kids: st.builds(
+            lambda s, f: Node(
+                "BTParallel", "q", tuple(kids), {"success_count": s, "failure_count": f}
+            ),
+            _threshold(len(kids)),
+            _threshold(len(kids)),
+        )
+    )
+    one_child = children.filter(bool).map(lambda kids: kids[:1])
+    loops = st.builds(
+        lambda kind, n, kids: Node(
+            kind, "l", tuple(kids), {"num_cycles" if kind == "BTRepeat" else "num_attempts": n}
+        ),
+        st.sampled_from(["BTRepeat", "RetryUntilSuccessful"]),
+        st.integers(1, 3),
+        one_child,
+    )
+    return st.one_of(with_memory, parallel, loops)
+
+
+def _threshold(children: int) -> st.SearchStrategy[int]:
+    """A valid BTParallel count for ``children`` children: 1..n or -n..-1."""
+    return st.one_of(st.integers(1, children), st.integers(-children, -1))
 
 
 def _renamed(root: Node) -> Node:

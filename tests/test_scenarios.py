@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from pyautonomousagent import Parameters, Scenario, ScenarioError, load
@@ -32,11 +34,12 @@ def bad(**changes) -> str:
 
 def test_packaged_scenarios_load():
     gathering, patrol = load("gathering"), load("patrol")
-    assert (gathering.agents, gathering.iterations, gathering.tree) == (4, 8000, "gathering")
+    assert (gathering.agents, gathering.iterations) == (4, 8000)
+    assert Path(gathering.tree).name == "gathering.xml" and Path(gathering.tree).is_file()
     assert gathering.refueling_positions == ((20, 65), (20, 55), (20, 45), (20, 35))
     assert gathering.surveillance_positions == ((50, 50), (70, 80), (40, 70), (60, 25))
     assert gathering.parameters == Parameters()
-    assert (patrol.agents, patrol.iterations, patrol.tree) == (10, 4000, "patrol")
+    assert (patrol.agents, patrol.iterations, Path(patrol.tree).name) == (10, 4000, "patrol.xml")
     assert patrol.patrol_positions == ((70, 80), (70, 20))
     assert patrol.initial_heading == "random"
     assert names()[:2] == ["gathering", "patrol"]

@@ -12,16 +12,22 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any, NoReturn
 
+from pyautonomousagent.bt.build import build
+from pyautonomousagent.bt.document import Document, document_from_node
+from pyautonomousagent.bt.files import file_format, is_tree_file, read_document, to_text_format
 from pyautonomousagent.bt.leaf import LeafError
-from pyautonomousagent.bt.spec import TreeError
+from pyautonomousagent.bt.spec import Node, TreeError
+from pyautonomousagent.bt.text import to_text
+from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.recording import write_table
 from pyautonomousagent.scenarios import load, names
 from pyautonomousagent.simulation import Scenario, ScenarioError, Simulation
 from pyautonomousagent.simulation.run import ENGINES
 from pyautonomousagent.simulation.scenario import to_mapping
 
-#: Errors that mean bad input: shown as one line, no traceback.
+#: Errors that mean bad input: shown as one line, no traceback (TreeFileError is a TreeError).
 USER_ERRORS = (ScenarioError, TreeError, LeafError)
+TREE_FORMATS = ("text", "png", "svg", "dot", "xml", "yaml")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -65,14 +71,28 @@ def _parser() -> argparse.ArgumentParser:
         help="override a scenario parameter, e.g. --set low_energy_threshold=30",
     )
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    run.add_argument(
+        "--tree", type=Path, metavar="FILE", help="run this tree file (.xml, .yaml) instead"
+    )
     _add_bench(sub)
-    tree = sub.add_parser("tree", help="print a scenario's behaviour tree")
-    tree.add_argument("scenario", help="a registered scenario name or a scenario .yaml file")
+    tree = sub.add_parser("tree", help="print, draw or convert a behaviour tree")
+    tree.add_argument(
+        "source",
+        metavar="FILE_OR_SCENARIO",
+        help="a tree file (.xml, .yaml, .yml), a registered scenario or a scenario .yaml file",
+    )
+    tree.add_argument(
+        "--format",
+        choices=list(TREE_FORMATS),
+        default="text",
+        help="text (default), a png/svg picture, Graphviz dot, or a tree file (xml, yaml)",
+    )
+    tree.add_argument("--out", type=Path, help="write to this file (pictures: default NAME.png)")
     tree.add_argument(
         "--style",
         choices=["paper", "py_trees"],
         default="paper",
-        help="the paper's symbols, or py_trees' own drawing",
+        help="text format: the paper's symbols, or py_trees' own drawing",
     )
     return parser
 
@@ -233,6 +253,9 @@ def run(args: argparse.Namespace) -> int:
     if args.record_every < 1:
         raise ScenarioError(f"--record-every must be a whole number >= 1, got {args.record_every}")
     scenario = _scenario(args)
+    if args.tree is not None:
+        file_format(args.tree)  # refuse other endings before anything runs
+        scenario = scenario.with_overrides(tree=str(args.tree.resolve()))
     out = args.out or Path("runs") / scenario.name
     out.mkdir(parents=True, exist_ok=True)
     progress = None if not args.quiet else False
@@ -298,21 +321,70 @@ def scenarios_command() -> int:
     return 0
 
 
-def tree_command(args: argparse.Namespace) -> int:
-    """``pyaa tree``: the scenario's tree as text."""
-    from pyautonomousagent.bt.text import to_text
-    from pyautonomousagent.bt.trees import tree_by_name
+def _tree_source(source: str) -> tuple[Document, str]:
+    """The tree document ``source`` names (a tree file, or a scenario's tree) and a name."""
+    if source not in names() and is_tree_file(source) and not _is_scenario_file(source):
+        return read_document(source), Path(source).stem
+    scenario = load(source)
+    if is_tree_file(scenario.tree):
+        return read_document(scenario.tree), scenario.name
+    return document_from_node(tree_by_name(scenario.tree), scenario.tree), scenario.name
 
-    scenario = load(args.scenario)
-    tree = tree_by_name(scenario.tree)
-    if args.style == "paper":
-        print(to_text(tree))
-        return 0
+
+def _is_scenario_file(path: str) -> bool:
+    """Whether a .yaml file is a scenario (it has ``agents``) rather than a tree file."""
+    import yaml
+
+    if not path.endswith((".yaml", ".yml")):
+        return False
+    try:
+        data = yaml.safe_load(Path(path).read_text())
+    except (OSError, yaml.YAMLError):
+        return False  # the tree reader reports it, with the line
+    return isinstance(data, dict) and "agents" in data
+
+
+def _py_trees_text(tree: Node) -> str:
+    """py_trees' own drawing of the tree, built for one agent with the default parameters."""
     import py_trees
 
-    one = scenario.with_overrides(agents=1, iterations=1)
-    sim = Simulation.create(one, tree=tree, engine="pytrees")
-    print(py_trees.display.unicode_tree(sim.engine.roots[0]))  # type: ignore[attr-defined]
+    from pyautonomousagent.datalink import Datalink
+    from pyautonomousagent.engines.pytrees import build_behaviour
+    from pyautonomousagent.simulation.scenario import Parameters
+    from pyautonomousagent.state import Swarm
+    from pyautonomousagent.world import World
+
+    swarm = Swarm.create(["drone1"], {"number_ticks": int})
+    world = World(100.0, 100.0, Datalink(1000.0), agent_index={"drone1": 0})
+    root = build_behaviour(tree, swarm.agent(0), world, vars(Parameters()))
+    return str(py_trees.display.unicode_tree(root))
+
+
+def tree_command(args: argparse.Namespace) -> int:
+    """``pyaa tree``: print, draw or convert a tree file or a scenario's tree."""
+    document, name = _tree_source(args.source)
+    fmt = args.format
+    if fmt in ("png", "svg"):
+        from pyautonomousagent.bt.draw import draw_tree
+
+        path = draw_tree(build(document), args.out or Path(f"{name}.{fmt}"), title=name)
+        print(f"wrote {path}")
+        return 0
+    if fmt in ("xml", "yaml"):
+        text = to_text_format(document, fmt)
+    elif fmt == "dot":
+        from pyautonomousagent.bt.draw import to_dot
+
+        text = to_dot(build(document), name)
+    elif args.style == "py_trees":
+        text = _py_trees_text(build(document)) + "\n"
+    else:
+        text = to_text(build(document)) + "\n"
+    if args.out is None:
+        print(text, end="")
+        return 0
+    args.out.write_text(text, encoding="utf-8")
+    print(f"wrote {args.out}")
     return 0
 
 

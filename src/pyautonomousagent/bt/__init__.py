@@ -1,6 +1,8 @@
-"""Behaviour trees: the engine-independent tree description and the leaf-node library."""
+"""Behaviour trees: the engine-independent tree description, the leaf-node library, and
+tree files (BehaviorTree.CPP XML, YAML: :func:`load_tree`, :func:`save_tree`)."""
 
 from pyautonomousagent.bt import library, scripted  # noqa: F401  (register the leaf types)
+from pyautonomousagent.bt.files import load_tree, save_tree
 from pyautonomousagent.bt.spec import (
     Node,
     fallback,
@@ -21,7 +23,9 @@ __all__ = [
     "fallback",
     "inverter",
     "leaf",
+    "load_tree",
     "reactive_fallback",
     "reactive_sequence",
+    "save_tree",
     "sequence",
 ]

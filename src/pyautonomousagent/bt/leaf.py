@@ -37,6 +37,28 @@ class Port:
     minimum: float | None = None
     doc: str = ""
 
+    def parse(self, value: Any, where: str) -> Any:
+        """Like :meth:`convert`, but a number port also takes text (an XML attribute)."""
+        if isinstance(value, str) and self.type is not str:
+            text = value.strip()
+            try:
+                value = int(text) if self.type is int else float(text)
+            except ValueError:
+                kind = "a whole number" if self.type is int else "a number"
+                raise LeafError(
+                    f"{where}: port {self.name!r} must be {kind}, got {text!r}"
+                ) from None
+            if value != value or value in (float("inf"), float("-inf")):
+                raise LeafError(
+                    f"{where}: port {self.name!r} must be a finite number, got {text!r}"
+                )
+        return self.convert(value, where)
+
+    def hint(self) -> str:
+        """What a good value looks like, for error messages: ``a number >= 0``."""
+        kind = {str: "text", int: "a whole number", float: "a number"}[self.type]
+        return kind + (f" >= {self.minimum:g}" if self.minimum is not None else "")
+
     def convert(self, value: Any, where: str) -> Any:
         """``value`` as this port's type; LeafError naming ``where`` if it is not one."""
         if self.type is str:
@@ -97,6 +119,26 @@ class Leaf:
             values[port.name] = port.convert(raw, where)
         return cls(**values)
 
+    @classmethod
+    def port_names(cls) -> list[str]:
+        """The names of the ports a tree may set."""
+        return [p.name for p in cls.ports]
+
+    @classmethod
+    def parse_port(cls, name: str, value: Any, where: str) -> Any:
+        """A port value from a tree file (XML text or a YAML value) as the port's type.
+
+        Raises:
+            LeafError: the value does not fit the port.
+        """
+        port = {p.name: p for p in cls.ports}[name]
+        return port.parse(value, where)
+
+    @classmethod
+    def port_hint(cls, name: str) -> str:
+        """What a good value of port ``name`` looks like (for error messages)."""
+        return {p.name: p for p in cls.ports}[name].hint()
+
     def evaluate(self, agents: AgentView, world: World) -> Any:
         """Run the leaf for ``agents``; return a status code, or an int8 array of them."""
         raise NotImplementedError
@@ -107,6 +149,15 @@ class Leaf:
 
 
 LEAF_TYPES: dict[str, type[Leaf]] = {}
+
+#: Leaf type names known to an engine only (hand-written py_trees behaviours): tree files
+#: may use them, with their ports passed through as written.
+ENGINE_LEAF_TYPES: set[str] = set()
+
+
+def declare_leaf_type(type_name: str) -> None:
+    """Let tree files use ``type_name``, a leaf an engine provides (see ``register_behaviour``)."""
+    ENGINE_LEAF_TYPES.add(type_name)
 
 
 def register_leaf(cls: type[Leaf]) -> type[Leaf]:

@@ -7,6 +7,7 @@ first), one column per agent. It changes nothing else.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping
 from typing import Any
 
@@ -33,6 +34,25 @@ class Scripted(Leaf):
         if table.ndim != 2 or not np.isin(table, list(NAMES)).all():
             raise LeafError(f"{where}: statuses must be a (ticks, agents) table of status codes")
         return cls(statuses=table)
+
+    @classmethod
+    def port_names(cls) -> list[str]:
+        return ["statuses"]
+
+    @classmethod
+    def parse_port(cls, name: str, value: Any, where: str) -> Any:
+        """``statuses`` as a list of rows; text (from XML) is read as JSON."""
+        if isinstance(value, str):
+            try:
+                value = json.loads(value)
+            except json.JSONDecodeError:
+                raise LeafError(f"{where}: statuses must be JSON, e.g. [[1, 2], [3, 1]]") from None
+        cls.create({"statuses": value}, {}, where)
+        return value
+
+    @classmethod
+    def port_hint(cls, name: str) -> str:
+        return "a (ticks, agents) table of status codes, e.g. [[1, 2], [3, 1]]"
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return agents.pick(self.statuses[world.iteration - 1])

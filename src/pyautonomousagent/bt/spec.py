@@ -40,7 +40,15 @@ CONTROL_NODES: dict[str, tuple[int, int | None, dict[str, Any]]] = {
     "Repeat": (1, 1, {"num_success": None}),
     "Retry": (1, 1, {"num_failures": None}),
     **{name: (1, 1, {}) for name in STATUS_MAPS},
+    # BehaviorTree.CPP semantics where py_trees has no equal (see docs/tree-files.md):
+    "SequenceWithMemory": (1, None, {}),
+    "BTParallel": (1, None, {"success_count": -1, "failure_count": 1}),
+    "BTRepeat": (1, 1, {"num_cycles": None}),
+    "RetryUntilSuccessful": (1, 1, {"num_attempts": None}),
 }
+
+#: The control node types with BehaviorTree.CPP semantics (both engines implement them).
+BTCPP_TYPES = ("SequenceWithMemory", "BTParallel", "BTRepeat", "RetryUntilSuccessful")
 
 PARALLEL_POLICIES = ("SuccessOnAll", "SuccessOnOne")
 
@@ -121,6 +129,12 @@ def parallel(
     return Node("Parallel", name, tuple(children), params)
 
 
+def sequence_with_memory(name: str, *children: Node) -> Node:
+    """BehaviorTree.CPP's SequenceWithMemory ("→*"): after a failure it resumes at the
+    failed child instead of restarting."""
+    return Node("SequenceWithMemory", name, tuple(children))
+
+
 def decorator(type_name: str, name: str, child: Node, **params: Any) -> Node:
     """A decorator of type ``type_name`` (e.g. ``"Repeat"``, ``num_success=3``)."""
     return Node(type_name, name, (child,), dict(params))
@@ -164,10 +178,12 @@ def control_params(node: Node) -> dict[str, Any]:
             raise TreeError(f"{where} needs parameter {key!r}")
         if key in ("memory", "synchronise") and not isinstance(value, bool):
             raise TreeError(f"{where}: {key} must be true or false, got {value!r}")
-        if key in ("num_success", "num_failures") and (
+        if key in ("num_success", "num_failures", "num_cycles", "num_attempts") and (
             isinstance(value, bool) or not isinstance(value, int) or value < 1
         ):
             raise TreeError(f"{where}: {key} must be a whole number >= 1, got {value!r}")
+        if key in ("success_count", "failure_count"):
+            parallel_threshold(value, len(node.children), f"{where}: {key}")
     if values.get("policy", "SuccessOnAll") not in PARALLEL_POLICIES:
         raise TreeError(
             f"{where}: policy must be one of {PARALLEL_POLICIES}, got {values['policy']!r}"
@@ -177,3 +193,14 @@ def control_params(node: Node) -> dict[str, Any]:
             raise TreeError(f"{where}: policy SuccessOnOne cannot synchronise")
         values["synchronise"] = False
     return values
+
+
+def parallel_threshold(value: Any, children: int, where: str = "count") -> int:
+    """A BTParallel count resolved as BehaviorTree.CPP does: ``k >= 1`` is k children,
+    ``-1`` is all of them, ``-2`` all but one, ...; TreeError unless 1 <= result <= children."""
+    if isinstance(value, bool) or not isinstance(value, int) or value == 0:
+        raise TreeError(f"{where} must be a whole number other than 0, got {value!r}")
+    resolved = value if value > 0 else children + value + 1
+    if not 1 <= resolved <= children:
+        raise TreeError(f"{where}={value} asks for {resolved} of {children} child(ren)")
+    return resolved

@@ -1,29 +1,34 @@
-"""A tree description as text: the paper's symbols (→, R→, ?, R?, ≠) or py_trees' own drawing."""
+"""A tree description as text: the paper's symbols (→, R→, ?, R?, ≠) or py_trees' own drawing.
+
+Control nodes show their symbol (from :data:`pyautonomousagent.bt.vocabulary.TAGS`; the
+file tag where a node has none) and name, then any parameters; leaves show their name,
+type and the ports set in the tree.
+"""
 
 from __future__ import annotations
 
 from pyautonomousagent.bt.spec import Node
-
-SYMBOLS = {
-    ("Sequence", True): "→",
-    ("Sequence", False): "R→",
-    ("Selector", True): "?",
-    ("Selector", False): "R?",
-    ("Inverter", None): "≠",
-}
+from pyautonomousagent.bt.vocabulary import file_params, tag_of
 
 
 def symbol(node: Node) -> str:
-    """The paper's symbol for a control node; "" for a leaf."""
-    memory = node.params.get("memory") if node.type in ("Sequence", "Selector") else None
-    return SYMBOLS.get((node.type, memory), "")
+    """The paper's symbol for a control node (its file tag if it has none); "" for a leaf."""
+    if not node.is_control:
+        return ""
+    tag = tag_of(node)
+    return tag.symbol or tag.tag
+
+
+def _ports(params: dict) -> str:
+    return ", ".join(f"{k}={v!r}" for k, v in params.items())
 
 
 def label(node: Node) -> str:
     """One line for a node: symbol and name for control nodes; name, type and ports for leaves."""
     if node.is_control:
-        return f"{symbol(node)} {node.name}"
-    ports = ", ".join(f"{k}={v!r}" for k, v in node.params.items())
+        params = file_params(node)
+        return f"{symbol(node)} {node.name}" + (f" [{_ports(params)}]" if params else "")
+    ports = _ports(dict(node.params))
     return f"{node.name} [{node.type}{': ' + ports if ports else ''}]"
 
 

@@ -7,7 +7,9 @@ subtree is the contiguous range ``[i, end[i])``. Per-node state is held per agen
 - ``status``: shape (nodes, N), int8 codes of :mod:`pyautonomousagent.bt.status`;
 - ``current``: per Sequence/Selector node, shape (N,), the child index it remembers
   (py_trees' ``current_child``), -1 for none;
-- ``counter``: per Repeat/Retry node, shape (N,), its successes / failures so far.
+- ``counter``: per Repeat/Retry node, shape (N,), its successes / failures so far (and the
+  remembered child or loop count of BehaviorTree.CPP's SequenceWithMemory, Repeat and
+  RetryUntilSuccessful).
 
 A node is ticked for the agents whose tick reaches it (a boolean mask), and every
 rule of py_trees 2.x is reproduced: which children are ticked, which statuses are kept,
@@ -25,7 +27,14 @@ import numpy as np
 
 from pyautonomousagent.allocator import reuse_freed_memory
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
-from pyautonomousagent.bt.spec import STATUS_MAPS, Node, TreeError, control_params
+from pyautonomousagent.bt.spec import (
+    BTCPP_TYPES,
+    STATUS_MAPS,
+    Node,
+    TreeError,
+    control_params,
+    parallel_threshold,
+)
 from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES
 from pyautonomousagent.state import Swarm
@@ -127,11 +136,14 @@ class BatchedEngine:
             for i, kind in enumerate(kinds)
             if kind in ("Sequence", "Selector")
         }
+        counted = ("Repeat", "Retry", "SequenceWithMemory", "BTRepeat", "RetryUntilSuccessful")
         self.counter = {
             i: np.zeros(swarm.size, dtype=np.int32)
             for i, kind in enumerate(kinds)
-            if kind in ("Repeat", "Retry")
+            if kind in counted
         }
+        parallels = "BTParallel" in kinds
+        self._done = np.zeros(self.status.shape if parallels else (0, 0), dtype=bool)
         self.leaves: dict[int, Leaf] = {
             i: make_leaf(node, defaults)
             for i, node in enumerate(program.nodes)
@@ -148,6 +160,8 @@ class BatchedEngine:
 
     def _ticker(self, i: int) -> Callable[[np.ndarray], None]:
         node_type = self.program.nodes[i].type
+        if node_type in BTCPP_TYPES:
+            return self._btcpp_ticker(i)
         if node_type == "Sequence":
             return lambda mask: self._sequence(i, mask)
         if node_type == "Selector":
@@ -323,3 +337,80 @@ class BatchedEngine:
         """A decorator's new status; a child left RUNNING under a finished decorator halts."""
         self._halt(child, mask & (new != RUNNING) & (result == RUNNING))
         np.copyto(self.status[i], new, where=mask)
+
+    # BehaviorTree.CPP's control nodes (see engines/btcpp.py for the same rules on py_trees).
+    # ``counter`` holds SequenceWithMemory's remembered child and the loop counts of
+    # BTRepeat / RetryUntilSuccessful; ``_done`` marks the finished children of a BTParallel.
+
+    def _btcpp_ticker(self, i: int) -> Callable[[np.ndarray], None]:
+        node_type = self.program.nodes[i].type
+        if node_type == "SequenceWithMemory":
+            return lambda mask: self._sequence_with_memory(i, mask)
+        if node_type == "BTParallel":
+            return lambda mask: self._btcpp_parallel(i, mask)
+        return lambda mask: self._btcpp_loop(i, mask)
+
+    def _sequence_with_memory(self, i: int, mask: np.ndarray) -> None:
+        index, status = self.counter[i], self.status[i]
+        start = index.copy()
+        alive = mask.copy()
+        for k, child in enumerate(self.program.children[i]):
+            ticked = alive & (start <= k)
+            if _some(ticked):
+                self._tickers[child](ticked)
+                result = self.status[child]
+                stopped = ticked & (result != SUCCESS)
+                np.copyto(index, k, where=stopped)
+                np.copyto(status, result, where=stopped)
+                alive &= ~stopped
+        np.copyto(index, 0, where=alive)
+        np.copyto(status, SUCCESS, where=alive)
+
+    def _btcpp_loop(self, i: int, mask: np.ndarray) -> None:
+        """BTRepeat (again on SUCCESS) and RetryUntilSuccessful (again on FAILURE)."""
+        node, child = self.program.nodes[i], self.program.children[i][0]
+        repeat = node.type == "BTRepeat"
+        again = SUCCESS if repeat else FAILURE
+        limit = self.program.params[i]["num_cycles" if repeat else "num_attempts"]
+        counter, status = self.counter[i], self.status[i]
+        np.copyto(counter, 0, where=mask & (status != RUNNING))
+        going = mask.copy()
+        while _some(going):
+            self._tickers[child](going)
+            result = self.status[child]
+            looped = going & (result == again)
+            np.add(counter, 1, out=counter, where=looped)
+            more = looped & (counter < limit)
+            ended = going & ~more
+            np.copyto(status, result, where=ended)
+            np.copyto(counter, 0, where=ended & (result != RUNNING))
+            going = more
+
+    def _btcpp_parallel(self, i: int, mask: np.ndarray) -> None:
+        kids = list(self.program.children[i])
+        params, status, done = self.program.params[i], self.status[i], self._done
+        need_success = parallel_threshold(params["success_count"], len(kids))
+        need_failure = parallel_threshold(params["failure_count"], len(kids))
+        fresh = mask & (status != RUNNING)
+        self._halt_children(i, 0, fresh)
+        done[kids] &= ~fresh
+        alive = mask.copy()
+        for child in kids:
+            ticked = alive & ~done[child]
+            if _some(ticked):
+                self._tickers[child](ticked)
+                done[child] |= ticked & (self.status[child] != RUNNING)
+            results = np.where(done[kids], self.status[kids], RUNNING)
+            successes = (results == SUCCESS).sum(axis=0)
+            failures = (results == FAILURE).sum(axis=0)
+            won = alive & (successes >= need_success)
+            hopeless = (len(kids) - failures < need_success) | (failures >= need_failure)
+            lost = alive & ~won & hopeless
+            ended = won | lost
+            if _some(ended):
+                for kid in kids:
+                    self._halt(kid, ended & (self.status[kid] == RUNNING))
+                done[kids] &= ~ended
+                np.copyto(status, np.where(won, SUCCESS, FAILURE), where=ended)
+                alive &= ~ended
+        np.copyto(status, RUNNING, where=alive)

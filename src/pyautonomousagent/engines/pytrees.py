@@ -16,8 +16,9 @@ import py_trees
 from py_trees.common import Status
 
 from pyautonomousagent.bt import status as codes
-from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
-from pyautonomousagent.bt.spec import Node, control_params
+from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
+from pyautonomousagent.bt.spec import CONTROL_NODES, Node, control_params
+from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -87,6 +88,7 @@ def register_behaviour(type_name: str) -> Callable[[type[AgentBehaviour]], type[
 
     def register(cls: type[AgentBehaviour]) -> type[AgentBehaviour]:
         BEHAVIOUR_TYPES[type_name] = cls
+        declare_leaf_type(type_name)
         return cls
 
     return register
@@ -109,6 +111,9 @@ def _control_behaviour(
 ) -> py_trees.behaviour.Behaviour:
     """The py_trees composite or decorator for a control node."""
     params = control_params(node)
+    if node.type in BTCPP_BEHAVIOURS:
+        single = CONTROL_NODES[node.type][1] == 1
+        return BTCPP_BEHAVIOURS[node.type](node.name, children[0] if single else children, **params)
     if node.type in ("Sequence", "Selector"):
         composite = getattr(py_trees.composites, node.type)
         return composite(node.name, params["memory"], children)

@@ -1,7 +1,9 @@
 """Named scenarios, each described by a validated YAML file.
 
 ``load("gathering")`` reads the packaged ``gathering.yaml``; ``load("my.yaml")`` reads a
-file of one's own. :func:`register` adds a name.
+file of one's own. :func:`register` adds a name. A scenario's ``tree`` names a tree file
+(``gathering.xml``), found next to the scenario file (else among the packaged tree files),
+or a built-in tree name.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from pathlib import Path
 
 import yaml
 
+from pyautonomousagent.bt.files import is_tree_file
 from pyautonomousagent.simulation.scenario import Scenario, ScenarioError
 
 _PACKAGED = resources.files(__name__)
@@ -52,4 +55,16 @@ def load(name_or_path: str | Path) -> Scenario:
         raise ScenarioError(f"cannot read scenario file {path}: {error.strerror}") from None
     except yaml.YAMLError as error:
         raise ScenarioError(f"{path}: not valid YAML: {error}") from None
+    if isinstance(data, dict) and isinstance(data.get("tree"), str) and is_tree_file(data["tree"]):
+        data["tree"] = str(tree_path(data["tree"], path.parent))
     return Scenario.from_mapping(data, source=str(path.name))
+
+
+def tree_path(tree: str, folder: Path) -> Path:
+    """A scenario's tree file: relative to the scenario's ``folder``, else a packaged tree
+    file of that name (so a copy of ``gathering.yaml`` still finds ``gathering.xml``)."""
+    path = folder / tree
+    packaged = Path(str(_PACKAGED / tree))
+    if not path.exists() and not Path(tree).is_absolute() and packaged.is_file():
+        return packaged
+    return path

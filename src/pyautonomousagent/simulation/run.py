@@ -10,6 +10,7 @@ from typing import Any, Protocol
 import numpy as np
 import pyarrow as pa
 
+from pyautonomousagent.bt.files import is_tree_file, load_tree
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.datalink import Datalink, Delivery, SharedData
@@ -57,6 +58,13 @@ def choose_engine(tree: Node) -> str:
     """ "batched", unless a leaf of ``tree`` is a hand-written py_trees behaviour ("pytrees")."""
     hand_written = any(node.type in BEHAVIOUR_TYPES for node in tree.leaves())
     return "pytrees" if hand_written else "batched"
+
+
+def scenario_tree(scenario: Scenario) -> Node:
+    """The scenario's tree: loaded from its tree file, or a built-in tree by name."""
+    if is_tree_file(scenario.tree):
+        return load_tree(scenario.tree)
+    return tree_by_name(scenario.tree)
 
 
 @dataclass
@@ -112,7 +120,7 @@ class Simulation:
             record_every: record every K-th iteration (and the initial state).
             tree: a tree description to use instead of the scenario's own.
         """
-        tree = tree or tree_by_name(scenario.tree)
+        tree = tree or scenario_tree(scenario)
         engine = choose_engine(tree) if engine == "auto" else engine
         if engine not in ENGINES:
             choices = ", ".join(["auto", *ENGINES])

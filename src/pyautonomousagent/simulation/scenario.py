@@ -52,7 +52,9 @@ class Scenario:
     Attributes:
         name: registry name, e.g. ``"gathering"``.
         description: one line for ``pyaa scenarios``.
-        tree: name of the behaviour tree (see :mod:`pyautonomousagent.scenarios.trees`).
+        tree: the behaviour tree: a tree file (.xml, .yaml; relative paths are resolved
+            against the scenario file by :func:`pyautonomousagent.scenarios.load`) or a
+            built-in tree name (see :mod:`pyautonomousagent.bt.trees`).
         agents: number of agents N (named ``drone1``..``droneN``).
         iterations: iterations to simulate.
         world: (width, height) in world units.

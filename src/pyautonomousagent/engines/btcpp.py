@@ -1,0 +1,174 @@
+"""BehaviorTree.CPP's control nodes that py_trees lacks, as small py_trees classes.
+
+Each class reproduces the documented BehaviorTree.CPP 4 behaviour (which children are
+ticked, what is returned, what is remembered) in py_trees' terms: a halted node is
+``INVALID`` (BT.CPP's ``IDLE``) and a finished node keeps its last status for display.
+The batched engine implements the same rules on arrays; docs/tree-files.md has the table.
+
+- :class:`SequenceWithMemory`: a sequence that, after a failure, resumes at the failed
+  child; it keeps its place even when halted, and starts over only after success.
+- :class:`RetryUntilSuccessful` / :class:`Repeat`: tick the child again *within the same
+  tick* after a failure (resp. success), up to ``num_attempts`` (resp. ``num_cycles``) times.
+- :class:`Parallel`: ticks the children that have not finished yet, left to right, and
+  returns as soon as ``success_count`` children succeeded or success became impossible
+  (``failure_count`` failures); running children are then halted.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Sequence
+
+import py_trees
+from py_trees.behaviour import Behaviour
+from py_trees.common import Status
+
+from pyautonomousagent.bt.spec import parallel_threshold
+
+
+class SequenceWithMemory(py_trees.composites.Composite):
+    """BT.CPP ``SequenceWithMemory``: resumes at the running or failed child.
+
+    Args:
+        name: the node's name.
+        children: the children, ticked left to right.
+    """
+
+    def __init__(self, name: str, children: Sequence[Behaviour]) -> None:
+        super().__init__(name, list(children))
+        self.index = 0  # the child to tick first; kept on halt, as in BT.CPP 4
+
+    def tick(self) -> Iterator[Behaviour]:
+        """Tick from the remembered child on; stop at the first child that does not succeed."""
+        if self.status != Status.RUNNING:
+            self.initialise()
+        for k in range(self.index, len(self.children)):
+            child = self.children[k]
+            self.current_child = child
+            yield from child.tick()
+            if child.status == Status.SUCCESS:
+                continue
+            self.index = k
+            if child.status == Status.RUNNING:
+                self.status = Status.RUNNING
+            else:
+                self.stop(child.status)
+            yield self
+            return
+        self.index = 0
+        self.stop(Status.SUCCESS)
+        yield self
+
+
+class _Loop(py_trees.decorators.Decorator):
+    """A decorator that ticks its child again within one tick while ``again`` says so."""
+
+    def __init__(self, name: str, child: Behaviour, limit: int, again: Status) -> None:
+        super().__init__(name=name, child=child)
+        self.limit = limit
+        self.again = again
+        self.count = 0
+
+    def tick(self) -> Iterator[Behaviour]:
+        """Tick the child until it returns something else than ``again`` or the limit is hit."""
+        if self.status != Status.RUNNING:
+            self.count = 0
+            self.initialise()
+        while True:
+            yield from self.decorated.tick()
+            result = self.decorated.status
+            if result == self.again:
+                self.count += 1
+                if self.count < self.limit:
+                    continue
+            break
+        if result != Status.RUNNING:
+            self.count = 0
+            self.stop(result)
+        self.status = result
+        yield self
+
+    def update(self) -> Status:  # pragma: no cover - tick() does the work
+        return self.decorated.status
+
+
+class RetryUntilSuccessful(_Loop):
+    """BT.CPP ``RetryUntilSuccessful``: after a failure, tick the child again at once, up to
+    ``num_attempts`` tries in all; FAILURE when they all failed."""
+
+    def __init__(self, name: str, child: Behaviour, num_attempts: int) -> None:
+        super().__init__(name, child, num_attempts, Status.FAILURE)
+
+
+class Repeat(_Loop):
+    """BT.CPP ``Repeat``: after a success, tick the child again at once, until it has
+    succeeded ``num_cycles`` times (SUCCESS); FAILURE at its first failure."""
+
+    def __init__(self, name: str, child: Behaviour, num_cycles: int) -> None:
+        super().__init__(name, child, num_cycles, Status.SUCCESS)
+
+
+class Parallel(py_trees.composites.Composite):
+    """BT.CPP ``Parallel`` with ``success_count`` / ``failure_count`` thresholds.
+
+    Args:
+        name: the node's name.
+        children: the children, ticked left to right.
+        success_count: successes needed (-1: all children, -2: all but one, ...).
+        failure_count: failures that make it fail (same convention).
+    """
+
+    def __init__(
+        self, name: str, children: Sequence[Behaviour], success_count: int, failure_count: int
+    ) -> None:
+        super().__init__(name, list(children))
+        self.need_success = parallel_threshold(success_count, len(self.children))
+        self.need_failure = parallel_threshold(failure_count, len(self.children))
+        self.done: set[int] = set()  # children that finished during this run
+
+    def tick(self) -> Iterator[Behaviour]:
+        """Tick the unfinished children; decide after each one, as BT.CPP does."""
+        if self.status != Status.RUNNING:
+            for child in self.children:
+                if child.status != Status.INVALID:
+                    child.stop(Status.INVALID)
+            self.done = set()
+            self.initialise()
+        for k, child in enumerate(self.children):
+            if k not in self.done:
+                yield from child.tick()
+                if child.status != Status.RUNNING:
+                    self.done.add(k)
+            verdict = self._verdict()
+            if verdict is not None:
+                self._finish(verdict)
+                yield self
+                return
+        self.status = Status.RUNNING
+        yield self
+
+    def _verdict(self) -> Status | None:
+        """SUCCESS or FAILURE if the counts decide it now, else None."""
+        successes = sum(1 for k in self.done if self.children[k].status == Status.SUCCESS)
+        failures = len(self.done) - successes
+        if successes >= self.need_success:
+            return Status.SUCCESS
+        if len(self.children) - failures < self.need_success or failures >= self.need_failure:
+            return Status.FAILURE
+        return None
+
+    def _finish(self, verdict: Status) -> None:
+        """Halt the children still running, forget the run, and end with ``verdict``."""
+        for child in self.children:
+            if child.status == Status.RUNNING:
+                child.stop(Status.INVALID)
+        self.done = set()
+        self.stop(verdict)
+
+
+#: Spec node type -> py_trees class (called with name, children and the node's parameters).
+BTCPP_BEHAVIOURS = {
+    "SequenceWithMemory": SequenceWithMemory,
+    "BTParallel": Parallel,
+    "BTRepeat": Repeat,
+    "RetryUntilSuccessful": RetryUntilSuccessful,
+}

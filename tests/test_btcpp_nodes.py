@@ -1,0 +1,145 @@
+"""BehaviorTree.CPP's node semantics, on both engines, with scripted leaves.
+
+Same notation as test_composites.py: a script is one letter per tick (S, F, R); expected
+statuses are one letter per node in tick order (I for INVALID, BT.CPP's IDLE), and the
+number of leaf ticks per tick is checked too, since BT.CPP's loops tick a child several
+times within one tick.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from pyautonomousagent.bt import fallback, leaf, reactive_fallback, reactive_sequence, sequence
+from pyautonomousagent.bt.spec import Node, TreeError, check_structure, sequence_with_memory
+
+from .test_composites import letters, scripted
+
+ENGINES = ["pytrees", "batched"]
+
+
+def run(h, expected: list[str], leaf_ticks: list[int]) -> None:
+    """Tick once per row; assert every node's status and the leaf ticks of that tick."""
+    counts = h.swarm.blackboard["number_ticks"]
+    for t, (row, ticks) in enumerate(zip(expected, leaf_ticks, strict=True), start=1):
+        before = int(counts[0])
+        got = letters(h.tick()[:, 0])
+        assert got == row.replace(" ", ""), f"tick {t}: nodes {h.names()}: got {got}, want {row}"
+        assert int(counts[0]) - before == ticks, f"leaf ticks at tick {t}"
+
+
+def decorated(kind: str, child: Node, **params: int) -> Node:
+    return Node(kind, "d", (child,), params)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_sequence_with_memory_resumes_at_the_failed_child(harness, engine):
+    kids = (scripted("a", "SFF"), scripted("b", "FSS"), scripted("c", "SSS"))
+    h = harness(sequence_with_memory("m", *kids), engine=engine)
+    run(h, ["F SFI", "S SSS", "F FSS"], [2, 2, 1])  # tick 2 skips a; tick 3 starts over
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_bt_sequence_restarts_after_a_failure(harness, engine):
+    kids = (scripted("a", "SFF"), scripted("b", "FSS"), scripted("c", "SSS"))
+    h = harness(sequence("s", *kids), engine=engine)  # BT.CPP <Sequence>
+    run(h, ["F SFI", "F FII", "F FII"], [2, 1, 1])
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_sequence_with_memory_keeps_its_place_when_halted(harness, engine):
+    guarded = sequence_with_memory("m", scripted("a", "SFF"), scripted("b", "RRS"))
+    h = harness(reactive_fallback("rf", scripted("x", "FSF"), guarded), engine=engine)
+    # tick 2: x succeeds and the reactive fallback halts m; tick 3: m resumes at b, not a
+    run(h, ["R F R SR", "S S I II", "S F S IS"], [3, 1, 2])
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize(
+    ("script", "expected", "ticks"),
+    [
+        ("S", ["S S"], [1]),
+        ("F", ["F F"], [3]),  # three attempts within one tick
+        ("RF", ["R R", "F F"], [1, 3]),
+        ("RS", ["R R", "S S"], [1, 1]),
+    ],
+)
+def test_retry_until_successful_loops_within_a_tick(harness, engine, script, expected, ticks):
+    h = harness(
+        decorated("RetryUntilSuccessful", scripted("a", script), num_attempts=3), engine=engine
+    )
+    run(h, expected, ticks)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize(
+    ("script", "expected", "ticks"),
+    [("S", ["S S"], [3]), ("F", ["F F"], [1]), ("RS", ["R R", "S S"], [1, 3])],
+)
+def test_repeat_loops_within_a_tick(harness, engine, script, expected, ticks):
+    h = harness(decorated("BTRepeat", scripted("a", script), num_cycles=3), engine=engine)
+    run(h, expected, ticks)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_repeat_counts_cycles_across_ticks(harness, engine):
+    child = sequence_with_memory("m", scripted("p", "SS"), scripted("q", "RS"))
+    h = harness(decorated("BTRepeat", child, num_cycles=3), engine=engine)
+    # tick 2: q finishes cycle 1, then two whole cycles p, q run within the same tick
+    run(h, ["R R SR", "S S SS"], [2, 5])
+
+
+def parallel(*kids: Node, success: int, failure: int) -> Node:
+    return Node("BTParallel", "p", kids, {"success_count": success, "failure_count": failure})
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize(
+    ("scripts", "success", "failure", "expected", "ticks"),
+    [
+        (("S", "S", "S"), 1, 1, ["S S II"], [1]),  # decided after the first child
+        (("RS", "SS", "RS"), -1, 1, ["R RSR", "S SSS"], [3, 2]),  # b is not ticked again
+        (("F", "R", "F"), 2, 2, ["F F I F"], [3]),  # b was running: halted
+        (("F", "S", "S"), -1, 3, ["F F II"], [1]),  # success became impossible
+        (("R", "F", "R"), -2, 2, ["R RFR"], [3]),
+    ],
+)
+def test_parallel_thresholds(harness, engine, scripts, success, failure, expected, ticks):
+    kids = [scripted(name, script) for name, script in zip("abc", scripts, strict=True)]
+    h = harness(parallel(*kids, success=success, failure=failure), engine=engine)
+    run(h, expected, ticks)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_fallback_and_reactive_fallback_are_py_trees_selectors(harness, engine):
+    tree = fallback(
+        "f",
+        scripted("a", "FSS"),
+        reactive_fallback("r", scripted("b", "RF"), leaf("Scripted", "c", statuses=[[3], [1]])),
+    )
+    h = harness(tree, engine=engine)
+    run(h, ["R F R R I", "S I S F S"], [2, 2])
+
+
+@pytest.mark.parametrize(
+    ("node", "message"),
+    [
+        (Node("BTParallel", "p", (scripted("a", "S"),), {"success_count": 2}), "asks for 2 of 1"),
+        (Node("BTParallel", "p", (scripted("a", "S"),), {"failure_count": 0}), "other than 0"),
+        (Node("BTRepeat", "r", (scripted("a", "S"),), {"num_cycles": -1}), ">= 1"),
+        (Node("RetryUntilSuccessful", "r", (scripted("a", "S"),)), "needs parameter"),
+        (Node("SequenceWithMemory", "m", ()), "at least 1"),
+    ],
+)
+def test_bad_btcpp_nodes_are_refused(node, message):
+    with pytest.raises(TreeError, match=message):
+        check_structure(node)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("reactive", [reactive_fallback, reactive_sequence])
+def test_reactive_nodes_halt_a_running_child_when_an_earlier_one_runs(harness, engine, reactive):
+    first = "FR" if reactive is reactive_fallback else "SR"
+    h = harness(reactive("r", scripted("a", first), scripted("b", "RR")), engine=engine)
+    # BT.CPP: a child returning RUNNING halts its siblings, so b (running) is halted
+    run(h, [f"R {first[0]}R", "R RI"], [2, 1])
