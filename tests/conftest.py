@@ -121,3 +121,19 @@ def swarm_world():
         return swarm, make_world(swarm, datalink_range)
 
     return build
+
+
+def on_channel(link: Datalink) -> list[tuple]:
+    """(sender, type, data, sender position, receivers) of each message waiting to go."""
+    out = []
+    for messages in link.channel:
+        for row in range(len(messages)):
+            targets = messages.receivers(row)
+            out.append((
+                int(messages.senders[row]),
+                messages.type,
+                {k: float(v[row]) for k, v in messages.data.items()},
+                (float(messages.x[row]), float(messages.y[row])),
+                None if targets is None else [int(t) for t in targets],
+            ))  # fmt: skip
+    return out

@@ -11,6 +11,8 @@ from pyautonomousagent import Simulation, load
 from pyautonomousagent.datalink import GATHERING, SHARING_DATA, Datalink, message_events
 from pyautonomousagent.simulation import phases
 
+from .conftest import on_channel
+
 
 def delivered(deliveries, n: int) -> list[tuple[int, int, str]]:
     """(receiver, sender, type) of every delivery, in the order the datalink gives them."""
@@ -20,22 +22,6 @@ def delivered(deliveries, n: int) -> list[tuple[int, int, str]]:
         senders = delivery.messages.senders
         for receiver, row in zip(receivers.tolist(), rows.tolist(), strict=True):
             out.append((receiver, int(senders[row]), delivery.messages.type))
-    return out
-
-
-def on_channel(link: Datalink) -> list[tuple]:
-    """(sender, type, data, sender position, receivers) of each message waiting to go."""
-    out = []
-    for messages in link.channel:
-        for row in range(len(messages)):
-            targets = messages.receivers(row)
-            out.append((
-                int(messages.senders[row]),
-                messages.type,
-                {k: float(v[row]) for k, v in messages.data.items()},
-                (float(messages.x[row]), float(messages.y[row])),
-                None if targets is None else [int(t) for t in targets],
-            ))  # fmt: skip
     return out
 
 

@@ -18,6 +18,8 @@ from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.datalink import GATHERING, SHARING_DATA
 from pyautonomousagent.engines.pytrees import PyTreesEngine
 
+from .conftest import on_channel
+
 DEFAULTS = vars(Parameters())
 BATCH = np.array([0, 2])  # agents 0 and 2 of three; agent 1 must stay untouched
 
@@ -48,22 +50,6 @@ def make(type_name: str, **params) -> Leaf:
 def statuses(result, n: int) -> list[int]:
     """A leaf's result for a batch of ``n`` agents as a list of codes."""
     return [int(s) for s in np.broadcast_to(result, (n,))]
-
-
-def on_channel(world) -> list[tuple]:
-    """(sender, type, data, sender position, receivers) of each message waiting to go."""
-    out = []
-    for messages in world.datalink.channel:
-        for row in range(len(messages)):
-            targets = messages.receivers(row)
-            out.append((
-                int(messages.senders[row]),
-                messages.type,
-                {k: float(v[row]) for k, v in messages.data.items()},
-                (float(messages.x[row]), float(messages.y[row])),
-                None if targets is None else [int(t) for t in targets],
-            ))  # fmt: skip
-    return out
 
 
 def snapshot(swarm):
@@ -479,7 +465,9 @@ class TestTransmit:
         self.setup_state(swarm)
         before = snapshot(swarm)
         assert make(self.GATHER).evaluate(swarm.agent(1), world) == SUCCESS
-        assert on_channel(world) == [(1, GATHERING, {"x": 70.0, "y": 80.0}, (2.0, 5.0), None)]
+        assert on_channel(world.datalink) == [
+            (1, GATHERING, {"x": 70.0, "y": 80.0}, (2.0, 5.0), None)
+        ]
         assert_unchanged(swarm, before)
 
     def test_gathering_batch(self, swarm_world):
@@ -488,7 +476,7 @@ class TestTransmit:
         before = snapshot(swarm)
         result = make(self.GATHER).evaluate(swarm.agents(BATCH), world)
         assert statuses(result, 2) == [SUCCESS, SUCCESS]
-        assert on_channel(world) == [
+        assert on_channel(world.datalink) == [
             (0, GATHERING, {"x": 50.0, "y": 50.0}, (1.0, 4.0), None),
             (2, GATHERING, {"x": 40.0, "y": 70.0}, (3.0, 6.0), None),
         ]
@@ -500,7 +488,7 @@ class TestTransmit:
         before = snapshot(swarm)
         assert make(self.SHARE).evaluate(swarm.agent(2), world) == SUCCESS
         data = {"x": 3.0, "y": 6.0, "speed": 0.05, "heading": 30.0, "damage": 2.0, "energy": 80.0}
-        assert on_channel(world) == [(2, SHARING_DATA, data, (3.0, 6.0), None)]
+        assert on_channel(world.datalink) == [(2, SHARING_DATA, data, (3.0, 6.0), None)]
         assert_unchanged(swarm, before)
 
     def test_shared_data_batch(self, swarm_world):
@@ -511,7 +499,7 @@ class TestTransmit:
         assert statuses(result, 2) == [SUCCESS, SUCCESS]
         first = {"x": 1.0, "y": 4.0, "speed": 0.1, "heading": 10.0, "damage": 0.0, "energy": 100.0}
         third = {"x": 3.0, "y": 6.0, "speed": 0.05, "heading": 30.0, "damage": 2.0, "energy": 80.0}
-        assert on_channel(world) == [
+        assert on_channel(world.datalink) == [
             (0, SHARING_DATA, first, (1.0, 4.0), None),
             (2, SHARING_DATA, third, (3.0, 6.0), None),
         ]
@@ -522,7 +510,7 @@ class TestTransmit:
         self.setup_state(swarm)
         make(self.SHARE).evaluate(swarm.agent(0), world)
         swarm.columns["x"][0] = 99.0
-        ((_, _, data, position, _),) = on_channel(world)
+        ((_, _, data, position, _),) = on_channel(world.datalink)
         assert (data["x"], position) == (1.0, (1.0, 4.0))
 
     def test_delivered_to_the_other_agents(self, swarm_world):
@@ -768,5 +756,5 @@ def test_numpy_integer_index_is_one_agent(swarm_world, type_name):
         assert status in (SUCCESS, FAILURE, RUNNING)
         columns, board = snapshot(swarm)
         state = {k: v.tolist() for k, v in {**columns, **board}.items()}
-        outcomes.append((int(status), state, on_channel(world)))
+        outcomes.append((int(status), state, on_channel(world.datalink)))
     assert outcomes[0] == outcomes[1]
