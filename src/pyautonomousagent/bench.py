@@ -1,8 +1,9 @@
 """``pyaa bench``: time and memory of scenario runs, engine against engine, as the paper's Table 4.
 
 Each case (scenario, engine, agents, iterations, recording) runs in a fresh Python process,
-so its peak memory (maximum resident set size) is its own. Only the simulation loop is
-timed (Phases 2-6, as in the paper), not set-up or Phase 7. The table's speed-up is the
+so its peak memory (maximum resident set size) is its own. The simulation is timed: set-up
+(Phase 1, building the engine, preallocating the records) and the loop (Phases 2-6), not
+Phase 7, as in the paper. The table's speed-up is the
 py_trees engine's time over the batched engine's, for the same agents, in the same run.
 """
 
@@ -42,7 +43,7 @@ class Case:
 
 @dataclass(frozen=True)
 class Result:
-    """What a case measured: loop seconds and peak resident memory (MB), or why it failed."""
+    """What a case measured: seconds and peak resident memory (MB), or why it failed."""
 
     case: Case
     seconds: float | None
@@ -58,13 +59,13 @@ class Result:
 
 
 def run_case_here(case: Case) -> dict[str, float]:
-    """Run ``case`` in this process; its loop seconds and this process's peak memory (MB)."""
+    """Run ``case`` in this process; its seconds (set-up and loop) and peak memory (MB)."""
     from pyautonomousagent.scenarios import load
     from pyautonomousagent.simulation import Simulation
 
     scenario = load(case.scenario).with_overrides(agents=case.agents, iterations=case.iterations)
-    sim = Simulation.create(scenario, seed=0, engine=case.engine, record_every=case.record_every)
     start = time.perf_counter()
+    sim = Simulation.create(scenario, seed=0, engine=case.engine, record_every=case.record_every)
     sim.run(progress=False)
     seconds = time.perf_counter() - start
     peak_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss

@@ -8,6 +8,7 @@ table (one row per recorded iteration and agent) for Parquet, CSV or pandas.
 
 from __future__ import annotations
 
+import mmap
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -40,14 +41,8 @@ class Recorder:
         self.names = list(swarm.names)
         records = iterations // every + 1
         self.iterations = np.zeros(records, dtype=np.int64)
-        self.columns = {
-            **{k: np.zeros((records, swarm.size), dtype=v.dtype) for k, v in swarm.columns.items()},
-            **{
-                k: np.zeros((records, swarm.size), dtype=v.dtype)
-                for k, v in swarm.blackboard.items()
-            },
-            **{k: np.zeros((records, swarm.size), dtype=v.dtype) for k, v in (extra or {}).items()},
-        }
+        sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
+        self.columns = {k: preallocated((records, swarm.size), v.dtype) for k, v in sources.items()}
         self.count = 0
 
     def due(self, iteration: int) -> bool:
@@ -73,6 +68,23 @@ class Recorder:
     def nbytes(self) -> int:
         """Bytes held by the preallocated arrays."""
         return sum(v.nbytes for v in self.columns.values()) + self.iterations.nbytes
+
+
+def preallocated(shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
+    """A zero-filled array whose memory is committed at once (Linux: ``MAP_POPULATE``).
+
+    ``numpy.zeros`` maps pages lazily, and each first write then faults one 4 KiB page; on a
+    virtual machine that made full-rate recording three times slower than committing the
+    whole block in one system call. Small arrays, and systems without ``MAP_POPULATE``, get
+    ``numpy.zeros``.
+    """
+    dtype = np.dtype(dtype)
+    nbytes = int(np.prod(shape)) * dtype.itemsize
+    populate = getattr(mmap, "MAP_POPULATE", None)
+    if populate is None or nbytes < 1 << 20:
+        return np.zeros(shape, dtype)
+    flags = mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS | populate
+    return np.frombuffer(mmap.mmap(-1, nbytes, flags=flags), dtype=dtype).reshape(shape)
 
 
 def to_table(recorder: Recorder) -> pa.Table:
