@@ -53,7 +53,7 @@ def advance(
     rad = heading * (np.pi / 180.0)
     new_x = x + speed * np.sin(rad)
     new_y = y + speed * np.cos(rad)
-    new_speed = np.clip(speed + u_speed, 0.0, params.max_speed)
+    new_speed = np.minimum(np.maximum(speed + u_speed, 0.0), params.max_speed)
     new_heading = wrap_degrees(heading + u_heading)
     return new_x, new_y, new_speed, new_heading
 
