@@ -15,10 +15,10 @@ from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.datalink import Datalink, Delivery, SharedData
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.pytrees import PyTreesEngine
-from pyautonomousagent.models.drone2d import Drone2D, DroneParameters
 from pyautonomousagent.progress import Progress
 from pyautonomousagent.recording import Recorder, to_table
 from pyautonomousagent.simulation import phases
+from pyautonomousagent.simulation.motion import build_model
 from pyautonomousagent.simulation.scenario import Scenario
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
@@ -95,6 +95,7 @@ class Simulation:
         engine: str = "pytrees",
         record_every: int = 1,
         tree: Node | None = None,
+        implementation: str | None = None,
     ) -> Simulation:
         """Phase 1 and set-up: agents, world, engine and recorder for ``scenario``.
 
@@ -104,6 +105,8 @@ class Simulation:
             engine: name of the decision engine (see :data:`ENGINES`).
             record_every: record every K-th iteration (and the initial state).
             tree: a tree description to use instead of the scenario's own.
+            implementation: the X8's implementation, "pyfly" or "vectorised", instead of
+                the engine's default (see :mod:`pyautonomousagent.simulation.motion`).
         """
         if engine not in ENGINES:
             raise ValueError(f"unknown engine {engine!r}; choose from {', '.join(ENGINES)}")
@@ -119,7 +122,7 @@ class Simulation:
             agent_index={name: i for i, name in enumerate(swarm.names)},
         )
         defaults = vars(p)
-        model = Drone2D(DroneParameters(p.max_speed, p.speed_step, p.turn_step), swarm.size)
+        model = build_model(scenario, swarm, engine, seed, implementation)
         decision = ENGINES[engine](tree or tree_by_name(scenario.tree), swarm, world, defaults)
         sim = cls(
             scenario=scenario,
