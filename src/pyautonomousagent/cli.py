@@ -12,6 +12,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any, NoReturn
 
+from pyautonomousagent.benchmarks_x8 import add_arguments as add_bench_arguments
+from pyautonomousagent.benchmarks_x8 import run_bench
 from pyautonomousagent.bt.leaf import LeafError
 from pyautonomousagent.bt.spec import TreeError
 from pyautonomousagent.recording import write_table
@@ -60,6 +62,7 @@ def _parser() -> argparse.ArgumentParser:
         help="override a scenario parameter, e.g. --set low_energy_threshold=30",
     )
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    add_bench_arguments(sub.add_parser("bench", help="time and peak memory per engine and size"))
     tree = sub.add_parser("tree", help="print a scenario's behaviour tree")
     tree.add_argument("scenario", help="a registered scenario name or a scenario .yaml file")
     tree.add_argument(
@@ -204,6 +207,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return run(args)
         if args.command == "scenarios":
             return scenarios_command()
+        if args.command == "bench":
+            return run_bench(args)
         return tree_command(args)
     except USER_ERRORS as error:
         print(f"pyaa: error: {error}", file=sys.stderr)
