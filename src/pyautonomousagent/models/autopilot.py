@@ -52,7 +52,7 @@ class PID:
         slope = np.where(np.isnan(self.previous), 0.0, (error - self.previous) / self.dt)
         self.previous = np.array(error, dtype=float)
         out = self.kp * error + self.ki * self.integral + self.kd * slope
-        return np.clip(out, -self.limit, self.limit)
+        return np.minimum(np.maximum(out, -self.limit), self.limit)
 
 
 @dataclass(frozen=True)
@@ -207,7 +207,7 @@ class AttitudeController:
         aileron = -g.kp_roll * errors[1] - g.ki_roll * i_roll - g.kd_roll * p
         elevator = -g.kp_pitch * errors[2] - g.ki_pitch * i_pitch - g.kd_pitch * q
         return (
-            np.clip(elevator, g.elevator_min, g.elevator_max),
-            np.clip(aileron, g.aileron_min, g.aileron_max),
-            np.clip(throttle, 0.0, 1.0),
+            np.minimum(np.maximum(elevator, g.elevator_min), g.elevator_max),
+            np.minimum(np.maximum(aileron, g.aileron_min), g.aileron_max),
+            np.minimum(np.maximum(throttle, 0.0), 1.0),
         )

@@ -9,9 +9,9 @@ against it by the test suite.
 
 Two things differ from calling PyFly naively, both documented in docs/x8.md:
 
-- PyFly keeps the history of every variable of every step; the adapter drops all but the
-  latest value every :data:`HISTORY_KEPT` steps, so long runs (200,000 iterations) keep
-  bounded memory.
+- PyFly keeps the history of every variable of every step (and of the attitude at every
+  evaluation of its right-hand side); the adapter drops all but the latest value every
+  :data:`HISTORY_KEPT` steps, so long runs (200,000 iterations) keep bounded memory.
 - PyFly 0.1.2 passes its gust model's arguments in the wrong order (the 300-step simulation
   length lands in the sample time ``dt``); with turbulence on, the adapter replaces the gust
   model with PyFly's own ``DrydenGustModel`` built with the right time step, wingspan,
@@ -28,8 +28,9 @@ from pyautonomousagent.models.x8 import TURBULENCE_INTENSITIES, Flight, X8Model,
 from pyautonomousagent.models.x8_dynamics import body_to_ned
 from pyautonomousagent.models.x8_params import CONFIG_FILE, PARAMETER_FILE, pyfly_file
 
-#: Steps between two trimmings of PyFly's per-variable histories.
-HISTORY_KEPT = 1000
+#: Steps between two trimmings of PyFly's per-variable histories (PyFly appends every variable
+#: at every step, and the attitude at every evaluation of its right-hand side, ~20 per step).
+HISTORY_KEPT = 100
 
 
 class FlightEnvelopeError(RuntimeError):
