@@ -59,6 +59,7 @@ def test_scenario_follows_the_paper():
     assert s.x8 is not None and (s.x8.altitude, s.x8.dt, s.x8.turbulence) == (20, 0.01, False)
     assert (s.x8.course_kp, s.x8.course_ki, s.x8.course_kd, s.x8.max_roll) == (1, 1e-5, 0.01, 45)
     assert (s.x8.altitude_ki, s.x8.altitude_kd, s.x8.max_pitch) == (1e-4, 0.01, 30)
+    assert s.x8.altitude_kp == 0.1  # not the notebook's 1.0: docs/x8.md
 
 
 def test_engines_fly_their_implementations(reference, patrol):

@@ -60,14 +60,15 @@ class GuidanceGains:
     """Gains and limits of the guidance PIDs (reference-facts, "Scenario x8-patrol").
 
     Course: error in radians (wrapped), output roll reference in radians. Altitude: error in
-    metres, output pitch reference in radians. Limits in degrees.
+    metres, output pitch reference in radians; kp is 0.1, not the notebook's 1.0, with which
+    the loop limit-cycles (docs/x8.md). Limits in degrees.
     """
 
     course_kp: float = 1.0
     course_ki: float = 1e-5
     course_kd: float = 0.01
     max_roll: float = 45.0
-    altitude_kp: float = 1.0
+    altitude_kp: float = 0.1
     altitude_ki: float = 1e-4
     altitude_kd: float = 0.01
     max_pitch: float = 30.0

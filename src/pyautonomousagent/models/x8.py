@@ -17,7 +17,6 @@ modelled; the patrol refuels at 40 % and never gets there).
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,6 +48,7 @@ class X8Settings:
         turbulence_intensity: "light", "moderate" or "severe".
         course_kp, course_ki, course_kd, max_roll: course PID (rad -> rad; limit in degrees).
         altitude_kp, altitude_ki, altitude_kd, max_pitch: altitude PID (m -> rad; degrees).
+            ``altitude_kp`` is 0.1 rad/m, not the notebook's 1.0 (docs/x8.md).
     """
 
     altitude: float = 20.0
@@ -62,7 +62,7 @@ class X8Settings:
     course_ki: float = 1e-5
     course_kd: float = 0.01
     max_roll: float = 45.0
-    altitude_kp: float = 1.0
+    altitude_kp: float = 0.1  # the notebook's 1.0 limit-cycles (docs/x8.md)
     altitude_ki: float = 1e-4
     altitude_kd: float = 0.01
     max_pitch: float = 30.0
@@ -128,20 +128,20 @@ def initial_state(
 
 
 def observe(state: np.ndarray) -> Flight:
-    """The :class:`Flight` view of a state array of shape (STATES, N)."""
-    roll, pitch, _ = dyn.euler_from_quaternion(state[dyn.QUATERNION])
-    velocity = dyn.body_to_ned(state[dyn.QUATERNION], state[dyn.U], state[dyn.V], state[dyn.W])
-    airspeed, _, _ = dyn.air_data(state)
+    """The :class:`Flight` view of a state array of shape (STATES, N) (rows are views)."""
+    e, velocity = state[dyn.QUATERNION], state[dyn.VELOCITY]
+    roll, pitch = dyn.roll_pitch(e)
+    ground = (dyn.rotation(e)[:2] * velocity[None]).sum(axis=1)  # north, east velocity
     return Flight(
-        north=state[dyn.PN].copy(),
-        east=state[dyn.PE].copy(),
+        north=state[dyn.PN],
+        east=state[dyn.PE],
         altitude=-state[dyn.PD],
-        airspeed=airspeed,
-        course=np.arctan2(velocity[1], velocity[0]),
+        airspeed=np.sqrt((velocity * velocity).sum(axis=0)),
+        course=np.arctan2(ground[1], ground[0]),
         roll=roll,
         pitch=pitch,
-        p=state[dyn.P].copy(),
-        q=state[dyn.Q].copy(),
+        p=state[dyn.P],
+        q=state[dyn.Q],
     )
 
 
@@ -236,7 +236,3 @@ class X8Vectorised(X8Model):
         )
         self.commands[dyn.CMD_THROTTLE] = throttle
 
-
-def turn_radius(airspeed: float, roll_deg: float, g: float = 9.81) -> float:
-    """Radius (m) of a level coordinated turn at ``airspeed`` (m/s) and bank ``roll_deg``."""
-    return airspeed**2 / (g * math.tan(math.radians(roll_deg)))

@@ -86,13 +86,19 @@ def quaternion_from_euler(roll: np.ndarray, pitch: np.ndarray, yaw: np.ndarray) 
     )
 
 
+def roll_pitch(e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Roll and pitch (rad) of unit quaternions ``e`` of shape (4, N); each (N,)."""
+    e0, e1, e2, e3 = e
+    roll = np.arctan2(2 * (e0 * e1 + e2 * e3), e0 * e0 + e3 * e3 - e1 * e1 - e2 * e2)
+    pitch = np.arcsin(np.minimum(np.maximum(2 * (e0 * e2 - e1 * e3), -1.0), 1.0))
+    return roll, pitch
+
+
 def euler_from_quaternion(e: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Roll, pitch and yaw (rad) of unit quaternions ``e`` of shape (4, N); each (N,)."""
     e0, e1, e2, e3 = e
-    roll = np.arctan2(2 * (e0 * e1 + e2 * e3), e0**2 + e3**2 - e1**2 - e2**2)
-    pitch = np.arcsin(np.clip(2 * (e0 * e2 - e1 * e3), -1.0, 1.0))
     yaw = np.arctan2(2 * (e0 * e3 + e1 * e2), e0**2 + e1**2 - e2**2 - e3**2)
-    return roll, pitch, yaw
+    return (*roll_pitch(e), yaw)
 
 
 def rotation(e: np.ndarray) -> np.ndarray:
