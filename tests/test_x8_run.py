@@ -78,6 +78,15 @@ def test_turbulence_is_off_by_default_switchable_and_seeded():
     assert np.abs(gusty[:, :, 0] - gusty[:, :, 1]).max() > 1e-6  # each UAV its own gusts
 
 
+def test_without_the_x8_extra_the_error_says_what_to_install(monkeypatch, capsys, tmp_path):
+    from pyautonomousagent.simulation import motion
+
+    monkeypatch.setattr(motion, "pyfly_installed", lambda: False)
+    argv = ["run", "x8-patrol", "--iterations", "1", "--quiet", "--out", str(tmp_path)]
+    assert main(argv) == 2
+    assert 'needs the [x8] extra: pip install "pyautonomousagent[x8]"' in capsys.readouterr().err
+
+
 def test_vectorised_x8_refuses_turbulence():
     data = to_mapping(load("x8-patrol"))
     data["x8"]["turbulence"] = True

@@ -9,6 +9,7 @@
 
 from __future__ import annotations
 
+from importlib.util import find_spec
 from typing import TYPE_CHECKING
 
 from pyautonomousagent.models.drone2d import Drone2D, DroneParameters
@@ -35,6 +36,11 @@ def x8_implementation(engine: str, implementation: str | None = None) -> str:
     return implementation
 
 
+def pyfly_installed() -> bool:
+    """Whether ``pyfly-fixed-wing`` (the ``[x8]`` extra) can be imported."""
+    return find_spec("pyfly") is not None
+
+
 def build_model(
     scenario: Scenario, swarm: Swarm, engine: str, seed: int, implementation: str | None = None
 ) -> Model:
@@ -46,11 +52,20 @@ def build_model(
         engine: the decision engine's name.
         seed: the run's seed (seeds the PyFly simulators).
         implementation: for the X8, "pyfly" or "vectorised" instead of the engine's default.
+
+    Raises:
+        ScenarioError: the X8 without the ``[x8]`` extra, or with turbulence on the vectorised
+            model.
     """
     p = scenario.parameters
     if scenario.model == "drone2d":
         return Drone2D(DroneParameters(p.max_speed, p.speed_step, p.turn_step), swarm.size)
     settings = scenario.x8 or X8Settings()
+    if not pyfly_installed():
+        raise ScenarioError(
+            f"scenario {scenario.name!r} flies the Skywalker X8, which needs the [x8] extra: "
+            'pip install "pyautonomousagent[x8]"'
+        )
     if x8_implementation(engine, implementation) == "vectorised":
         from pyautonomousagent.models.x8 import X8Vectorised
 
