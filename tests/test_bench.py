@@ -20,13 +20,14 @@ def fake(
 
 def test_speedups_pair_engines_with_the_same_agents() -> None:
     results = [fake("pytrees", 10, 2.0), fake("batched", 10, 0.5), fake("batched", 100, 1.0)]
-    ratios = bench.speedups(results)
+    ratios = bench.speedups(results, "pytrees")
     assert ratios == {results[1].case: 4.0}
 
 
 def test_table_has_the_papers_figures_and_failures() -> None:
     text = bench.table(
-        [fake("pytrees", 100, 20.0), fake("batched", 100, 0.2), fake("batched", 1000, None, None)]
+        [fake("pytrees", 100, 20.0), fake("batched", 100, 0.2), fake("batched", 1000, None, None)],
+        "pytrees",
     )
     lines = text.splitlines()
     assert "speed-up" in lines[0] and "paper s" in lines[0]

@@ -1,10 +1,10 @@
-"""``pyaa bench``: time and memory of scenario runs, engine against engine, as the paper's Table 4.
+"""``pyaa bench``: time and memory of scenario runs, engine against engine (paper Tables 4, 5).
 
 Each case (scenario, engine, agents, iterations, recording) runs in a fresh Python process,
 so its peak memory (maximum resident set size) is its own. The simulation is timed: set-up
 (Phase 1, building the engine, preallocating the records) and the loop (Phases 2-6), not
-Phase 7, as in the paper. The table's speed-up is the
-py_trees engine's time over the batched engine's, for the same agents, in the same run.
+Phase 7, as in the paper. The table's speed-up is the first engine's time per
+agent-iteration over each other engine's, for the same agents, measured in the same run.
 """
 
 from __future__ import annotations
@@ -17,28 +17,46 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 
-#: The paper's Table 4 (2-D patrol, 4000 iterations, its 2 GHz machine): agents -> seconds.
-PAPER_TABLE_4 = {
-    1: 0.19,
-    10: 2.02,
-    20: 3.48,
-    50: 8.79,
-    100: 17.32,
-    200: 35.41,
-    500: 89.12,
-    1000: 177.41,
+#: The paper's tables (4000 iterations, its 2 GHz machine): scenario -> {agents: seconds}.
+PAPER_TABLES = {
+    "patrol": {
+        1: 0.19,
+        10: 2.02,
+        20: 3.48,
+        50: 8.79,
+        100: 17.32,
+        200: 35.41,
+        500: 89.12,
+        1000: 177.41,
+    },  # Table 4
+    "x8-patrol": {1: 20.89, 10: 210.97, 100: 1955.72},  # Table 5
+}
+
+#: Bench engine name -> (decision engine, X8 implementation or None for the engine's own).
+#: "pyfly" is the paper's X8 set-up: the py_trees engine flying one PyFly per UAV.
+BENCH_ENGINES: dict[str, tuple[str, str | None]] = {
+    "pytrees": ("pytrees", None),
+    "batched": ("batched", None),
+    "pyfly": ("pytrees", "pyfly"),
 }
 
 
 @dataclass(frozen=True)
 class Case:
-    """One measured run."""
+    """One measured run.
+
+    ``full_iterations``, when set, sizes the recording for a run that long (the stress
+    probes run a few iterations of a full run); ``scaled`` marks a case whose time is
+    scaled to ``full_iterations`` in the table (a slow engine run for fewer iterations).
+    """
 
     scenario: str
     engine: str
     agents: int
     iterations: int
     record_every: int
+    full_iterations: int | None = None
+    scaled: bool = False
 
 
 @dataclass(frozen=True)
@@ -57,16 +75,32 @@ class Result:
             return None
         return self.seconds / (self.case.agents * self.case.iterations)
 
+    @property
+    def full_seconds(self) -> float | None:
+        """Seconds for the full run: measured, or scaled from a shorter one (``case.scaled``)."""
+        if self.seconds is None or not self.case.scaled or not self.case.full_iterations:
+            return self.seconds
+        return self.seconds * self.case.full_iterations / self.case.iterations
+
 
 def run_case_here(case: Case) -> dict[str, float]:
     """Run ``case`` in this process; its seconds (set-up and loop) and peak memory (MB)."""
     from pyautonomousagent.scenarios import load
     from pyautonomousagent.simulation import Simulation
 
-    scenario = load(case.scenario).with_overrides(agents=case.agents, iterations=case.iterations)
+    full = max(case.full_iterations or case.iterations, case.iterations)
+    scenario = load(case.scenario).with_overrides(agents=case.agents, iterations=full)
+    engine, implementation = BENCH_ENGINES[case.engine]
     start = time.perf_counter()
-    sim = Simulation.create(scenario, seed=0, engine=case.engine, record_every=case.record_every)
-    sim.run(progress=False)
+    sim = Simulation.create(
+        scenario,
+        seed=0,
+        engine=engine,
+        record_every=case.record_every,
+        implementation=implementation,
+    )
+    for _ in range(case.iterations):
+        sim.step()
     seconds = time.perf_counter() - start
     peak_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return {"seconds": seconds, "peak_mb": peak_kb / 1024}
@@ -113,40 +147,44 @@ def _peak_mb(pid: int) -> float | None:
     return None
 
 
-def speedups(results: Sequence[Result], reference: str = "pytrees") -> dict[Case, float]:
-    """Case -> reference engine's seconds / this case's seconds (same agents and recording)."""
-    base = {
-        (r.case.scenario, r.case.agents, r.case.iterations, r.case.record_every): r.seconds
-        for r in results
-        if r.case.engine == reference and r.seconds
-    }
+def speedups(results: Sequence[Result], reference: str) -> dict[Case, float]:
+    """Case -> seconds per agent-iteration of the ``reference`` engine / this case's, for the
+    same scenario, agents and recording, measured in the same run."""
+    base: dict[tuple[str, int, int], float] = {}
+    for r in results:
+        if r.case.engine == reference and r.per_agent_iteration:
+            base[(r.case.scenario, r.case.agents, r.case.record_every)] = r.per_agent_iteration
     ratios = {}
     for r in results:
-        key = (r.case.scenario, r.case.agents, r.case.iterations, r.case.record_every)
-        if r.case.engine != reference and r.seconds and key in base:
-            ratios[r.case] = base[key] / r.seconds
+        key = (r.case.scenario, r.case.agents, r.case.record_every)
+        if r.case.engine != reference and r.per_agent_iteration and key in base:
+            ratios[r.case] = base[key] / r.per_agent_iteration
     return ratios
 
 
-def table(results: Sequence[Result], reference: str = "pytrees") -> str:
-    """The results as a text table like the paper's Table 4."""
+def table(results: Sequence[Result], reference: str) -> str:
+    """The results as a text table like the paper's Tables 4 and 5.
+
+    Speed-ups are per agent-iteration against ``reference``; a time marked ``~`` was
+    scaled from a shorter run of the same case.
+    """
     ratios = speedups(results, reference)
     head = (
-        f"{'agents':>8} {'engine':>8} {'record':>7} {'seconds':>9} {'s/agent-it':>11} "
+        f"{'agents':>8} {'engine':>8} {'record':>7} {'seconds':>10} {'s/agent-it':>11} "
         f"{'peak MB':>8} {'speed-up':>9} {'paper s':>8}"
     )
     lines = [head, "-" * len(head)]
     for r in results:
         c = r.case
-        paper = (
-            PAPER_TABLE_4.get(c.agents) if c.scenario == "patrol" and c.iterations == 4000 else None
-        )
-        if r.seconds is None:
+        full = c.full_iterations or c.iterations
+        paper = PAPER_TABLES.get(c.scenario, {}).get(c.agents) if full == 4000 else None
+        if r.full_seconds is None or r.per_agent_iteration is None or r.peak_mb is None:
             lines.append(f"{c.agents:>8} {c.engine:>8} {c.record_every:>7}  failed: {r.error}")
             continue
         ratio = f"{ratios[c]:.0f}x" if c in ratios else ""
+        seconds = f"{'~' if c.scaled else ''}{r.full_seconds:.3f}"
         lines.append(
-            f"{c.agents:>8} {c.engine:>8} {c.record_every:>7} {r.seconds:>9.3f} "
+            f"{c.agents:>8} {c.engine:>8} {c.record_every:>7} {seconds:>10} "
             f"{r.per_agent_iteration:>11.2e} {r.peak_mb:>8.0f} {ratio:>9} "
             f"{'' if paper is None else f'{paper:.2f}':>8}"
         )
@@ -161,9 +199,12 @@ def stress(
     record_every: int,
     start: int = 1000,
     report: Callable[[Result], None] = lambda r: None,
+    full_iterations: int | None = None,
 ) -> tuple[int, list[Result]]:
     """The largest swarm whose run stays within ``budget_mb`` of peak memory.
 
+    Each probe runs ``iterations`` iterations of a run whose recording is sized for
+    ``full_iterations`` (memory is preallocated, so the peak comes in the first iterations).
     Doubles the agents from ``start`` until a run exceeds the budget (or fails), then
     bisects to within 2 %. Returns the largest fitting count and every probe.
     """

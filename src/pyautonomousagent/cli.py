@@ -109,7 +109,7 @@ def _int_list(text: str) -> list[int]:
 
 
 def _add_bench(sub: Any) -> None:
-    bench = sub.add_parser("bench", help="time scenario runs on each engine (paper Table 4)")
+    bench = sub.add_parser("bench", help="time and peak memory per engine (paper Tables 4, 5)")
     bench.add_argument("scenario", help="a registered scenario name")
     bench.add_argument(
         "--agents",
@@ -118,13 +118,22 @@ def _add_bench(sub: Any) -> None:
         help="agent counts, e.g. 1,10,100,1000",
     )
     bench.add_argument("--iterations", type=int, default=4000, help="iterations per run")
-    bench.add_argument("--engines", default="pytrees,batched", help="engines, comma-separated")
+    bench.add_argument(
+        "--engines",
+        help="engines, comma-separated; the first is the reference "
+        "of the speed-ups (default: pytrees,batched; pyfly,batched for the X8)",
+    )
     bench.add_argument(
         "--record-every",
         type=_int_list,
-        default=None,
         metavar="K[,K...]",
-        help="recording decimation(s) to measure, e.g. 1,100",
+        help="recording decimation(s) to measure, e.g. 1,100 (default 1)",
+    )
+    bench.add_argument(
+        "--reference-iterations",
+        type=int,
+        metavar="K",
+        help="run the reference engine K iterations only and scale its time (marked ~)",
     )
     bench.add_argument("--json", action="store_true", help="print JSON instead of a table")
     bench.add_argument("--timeout", type=float, help="give up on a case after this many seconds")
@@ -135,61 +144,82 @@ def _add_bench(sub: Any) -> None:
     )
     bench.add_argument("--memory-budget", default="5.12GB", help="peak memory allowed, e.g. 5.12GB")
     bench.add_argument(
+        "--stress-start",
+        type=int,
+        default=1000,
+        metavar="N",
+        help="agents of the first stress probe",
+    )
+    bench.add_argument(
         "--stress-iterations",
         type=int,
         default=20,
+        metavar="K",
         help="iterations of each stress probe (memory is preallocated)",
     )
+
+
+def _bench_engines(args: argparse.Namespace, scenario: Scenario) -> list[str]:
+    from pyautonomousagent.bench import BENCH_ENGINES
+
+    default = "pyfly,batched" if scenario.model == "x8" else "pytrees,batched"
+    engines = [e.strip() for e in (args.engines or default).split(",") if e.strip()]
+    unknown = [e for e in engines if e not in BENCH_ENGINES]
+    if unknown or not engines:
+        raise ScenarioError(
+            f"--engines: unknown engine {(unknown or [''])[0]!r}; "
+            f"choose from {', '.join(BENCH_ENGINES)}"
+        )
+    return engines
 
 
 def bench_command(args: argparse.Namespace) -> int:
     """``pyaa bench``: measure each case in its own process, print the table (or JSON)."""
     from pyautonomousagent import bench
 
-    engines = [e.strip() for e in args.engines.split(",") if e.strip()]
-    unknown = [e for e in engines if e not in ENGINES]
-    if unknown:
-        raise ScenarioError(
-            f"--engines: unknown engine {unknown[0]!r}; choose from {list(ENGINES)}"
-        )
-    load(args.scenario)  # a clear error for an unknown scenario, before any run
+    engines = _bench_engines(args, load(args.scenario))
     if args.iterations < 1:
         raise ScenarioError(f"--iterations must be a whole number >= 1, got {args.iterations}")
     if args.stress:
         return _stress(args, engines, bench)
+    short = args.reference_iterations
     results = []
     for every in args.record_every or [1]:
         for agents in args.agents:
             for engine in engines:
-                case = bench.Case(args.scenario, engine, agents, args.iterations, every)
+                scaled = bool(short) and engine == engines[0] and short < args.iterations
+                its = short if scaled else args.iterations
+                case = bench.Case(
+                    args.scenario, engine, agents, its, every, args.iterations, scaled
+                )
                 print(
-                    f"measuring {engine} with {agents} agents, record every {every} ...",
+                    f"measuring {engine} with {agents} agents x {its} iterations, record every "
+                    f"{every} ...",
                     file=sys.stderr,
                     flush=True,
                 )
                 results.append(bench.measure(case, args.timeout))
     if args.json:
-        ratios = bench.speedups(results)
+        ratios = bench.speedups(results, engines[0])
         rows = [
             {
                 **vars(r.case),
-                "seconds": r.seconds,
+                "seconds": r.full_seconds,
                 "peak_mb": r.peak_mb,
                 "seconds_per_agent_iteration": r.per_agent_iteration,
-                "speedup_vs_pytrees": ratios.get(r.case),
+                f"speedup_vs_{engines[0]}": ratios.get(r.case),
                 "error": r.error,
             }
             for r in results
         ]
         print(json.dumps(rows, indent=2))
     else:
-        print(bench.table(results))
+        print(bench.table(results, engines[0]))
     return 0
 
 
 def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
     budget = bench.parse_size_mb(args.memory_budget)
-    found = {}
 
     def show(result: Any) -> None:
         mb = result.error if result.error else f"{result.peak_mb:.0f} MB"
@@ -197,15 +227,27 @@ def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
         print(line, file=sys.stderr, flush=True)
 
     # Without --record-every a probe records the initial state only.
-    every = max(args.record_every) if args.record_every else args.stress_iterations + 1
+    every = max(args.record_every) if args.record_every else args.iterations + 1
     recording = f"recording every {every}" if args.record_every else "recording the initial state"
+    found = {}
     for engine in engines:
+        if engine == "pyfly":
+            print("pyfly: skipped (hours per probe; the paper's figure is 290 UAVs)", flush=True)
+            continue
         found[engine], _ = bench.stress(
-            args.scenario, engine, budget, args.stress_iterations, every, report=show
+            args.scenario,
+            engine,
+            budget,
+            args.stress_iterations,
+            every,
+            start=args.stress_start,
+            report=show,
+            full_iterations=args.iterations,
         )
         print(
             f"{args.scenario} on {engine}: at most {found[engine]} agents within "
-            f"{budget:.0f} MB peak ({args.stress_iterations} iterations a probe, {recording})",
+            f"{budget:.0f} MB peak ({args.stress_iterations} iterations a probe of a "
+            f"{args.iterations}-iteration run, {recording})",
             flush=True,
         )
     if args.json:

@@ -124,9 +124,10 @@ def panel_rows(recorder: Recorder, row: int) -> list[tuple[str, str]]:
     """The text panel of record ``row`` as (label, value) lines: iteration, first drone's
     state and blackboard.
 
-    Positions in world units, speed in units per iteration, heading in degrees clockwise
-    from north, energy and damage in percent. Keys that were not recorded are left out, so
-    the labels are the same for every row of a run.
+    Positions in world units, speed in units per iteration (the X8: airspeed in m/s), heading
+    in degrees clockwise from north, energy and damage in percent; the X8 adds its altitude (m)
+    and roll (degrees). Keys that were not recorded are left out, so the labels are the same
+    for every row of a run.
     """
     columns = recorder.columns
 
@@ -144,6 +145,8 @@ def panel_rows(recorder: Recorder, row: int) -> list[tuple[str, str]]:
         ("  position", _format("({:6.2f}, {:6.2f})", value("x"), value("y"))),
         ("  speed", _format("{:.3f}", value("speed"))),
         ("  heading", _format("{:.1f} deg", value("heading"))),
+        ("  altitude", _format("{:.1f} m", value("altitude"))),
+        ("  roll", _format("{:.1f} deg", value("roll"))),
         ("  energy", _format("{:.1f} %", value("energy"))),
         ("  damage", _format("{:.1f} %", value("damage"))),
         ("", ""),

@@ -21,6 +21,7 @@ _PACKAGED = resources.files(__name__)
 REGISTRY: dict[str, Path] = {
     "gathering": Path(str(_PACKAGED / "gathering.yaml")),
     "patrol": Path(str(_PACKAGED / "patrol.yaml")),
+    "x8-patrol": Path(str(_PACKAGED / "x8-patrol.yaml")),
 }
 
 

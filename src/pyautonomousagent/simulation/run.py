@@ -16,10 +16,10 @@ from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.datalink import Datalink, Delivery, SharedData
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, PyTreesEngine
-from pyautonomousagent.models.drone2d import Drone2D, DroneParameters
 from pyautonomousagent.progress import Progress
 from pyautonomousagent.recording import Recorder, to_table
 from pyautonomousagent.simulation import phases
+from pyautonomousagent.simulation.motion import build_model
 from pyautonomousagent.simulation.scenario import Scenario
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
@@ -109,6 +109,7 @@ class Simulation:
         engine: str = "auto",
         record_every: int = 1,
         tree: Node | None = None,
+        implementation: str | None = None,
     ) -> Simulation:
         """Phase 1 and set-up: agents, world, engine and recorder for ``scenario``.
 
@@ -119,6 +120,8 @@ class Simulation:
                 batched engine unless the tree has hand-written py_trees behaviours.
             record_every: record every K-th iteration (and the initial state).
             tree: a tree description to use instead of the scenario's own.
+            implementation: the X8's implementation, "pyfly" or "vectorised", instead of
+                the engine's default (see :mod:`pyautonomousagent.simulation.motion`).
         """
         tree = tree or scenario_tree(scenario)
         engine = choose_engine(tree) if engine == "auto" else engine
@@ -137,7 +140,7 @@ class Simulation:
             agent_index={name: i for i, name in enumerate(swarm.names)},
         )
         defaults = vars(p)
-        model = Drone2D(DroneParameters(p.max_speed, p.speed_step, p.turn_step), swarm.size)
+        model = build_model(scenario, swarm, engine, seed, implementation)
         decision = ENGINES[engine](tree, swarm, world, defaults)
         sim = cls(
             scenario=scenario,

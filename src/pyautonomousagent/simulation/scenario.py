@@ -12,9 +12,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from pyautonomousagent.models.x8 import TURBULENCE_INTENSITIES, X8Settings
 from pyautonomousagent.sensors import RadiationSource
 
 Point = tuple[float, float]
+
+#: Motion models a scenario can name: the paper's 2-D drone and the Skywalker X8 (6-DOF).
+MODELS = ("drone2d", "x8")
 
 
 class ScenarioError(ValueError):
@@ -67,6 +71,8 @@ class Scenario:
         frame_every: iterations between animation frames.
         radiation_sources: sources of the radiation sensor.
         parameters: model and behaviour parameters.
+        model: the motion model, one of :data:`MODELS`.
+        x8: the X8's settings when ``model`` is "x8", else None.
     """
 
     name: str
@@ -82,6 +88,8 @@ class Scenario:
     frame_every: int = 10
     radiation_sources: tuple[RadiationSource, ...] = ()
     parameters: Parameters = field(default_factory=Parameters)
+    model: str = "drone2d"
+    x8: X8Settings | None = None
 
     @classmethod
     def from_mapping(cls, data: Any, source: str = "scenario") -> Scenario:
@@ -201,6 +209,30 @@ class _Reader:
                 values[key] = self.number(value, path, type(default), minimum=0)
         return Parameters(**values)
 
+    def x8_settings(self, data: Any, model: str) -> X8Settings | None:
+        """The ``x8`` mapping as :class:`X8Settings` (defaults for a missing key), or None."""
+        if model != "x8":
+            if data is not None:
+                raise self.fail("model", '"x8" when x8 settings are given', model)
+            return None
+        fields = {f.name: f for f in dataclasses.fields(X8Settings)}
+        given = self.keys(data if data is not None else {}, "x8", list(fields), [])
+        values: dict[str, Any] = {}
+        for key, value in given.items():
+            default, path = getattr(X8Settings(), key), f"x8.{key}"
+            if isinstance(default, bool):
+                if not isinstance(value, bool):
+                    raise self.fail(path, "true or false", value)
+                values[key] = value
+            elif isinstance(default, str):
+                if value not in TURBULENCE_INTENSITIES:
+                    raise self.fail(path, f"one of {', '.join(TURBULENCE_INTENSITIES)}", value)
+                values[key] = value
+            else:
+                above = 0 if key in ("dt", "initial_airspeed") else None
+                values[key] = self.number(value, path, float, minimum=0, above=above)
+        return X8Settings(**values)
+
     def radiation(self, data: Any) -> tuple[RadiationSource, ...]:
         if not isinstance(data, list):
             raise self.fail("radiation_sources", "a list", data)
@@ -247,4 +279,11 @@ class _Reader:
             frame_every=self.number(d.get("frame_every", 10), "frame_every", int, minimum=1),
             radiation_sources=self.radiation(d.get("radiation_sources", [])),
             parameters=self.parameters(d.get("parameters", {})),
+            model=self.model(d.get("model", "drone2d")),
+            x8=self.x8_settings(d.get("x8"), d.get("model", "drone2d")),
         )
+
+    def model(self, value: Any) -> str:
+        if value not in MODELS:
+            raise self.fail("model", f"one of {', '.join(MODELS)}", value)
+        return str(value)

@@ -1,0 +1,237 @@
+"""The Skywalker X8 as the swarm's motion model: settings, what the loop sees, and the
+vectorised implementation for the batched engine.
+
+Frames: the world's x is east and y is north (metres), as in the 2-D model; the aircraft's
+state is in NED (north, east, down) with the origin at the world's (0, 0), so
+``x = east``, ``y = north`` and ``altitude = -down``. The swarm's ``heading`` column is the
+course over ground, degrees clockwise from north in [0, 360), and ``speed`` is the airspeed
+in m/s (in still air, the speed the autopilot holds). The model records ``altitude`` (m),
+``airspeed`` (m/s), ``roll`` and ``pitch`` (degrees) beside the swarm's columns.
+
+Each iteration the loop calls :meth:`X8Model.advance` (Phase 2: integrate one time step with
+the commands of the last Phase 4) and :meth:`X8Model.control` (Phase 4: the autopilot turns
+the tree's requested heading and speed into surface and throttle commands). An agent with no
+energy is treated as grounded: its state is held and its speed column reads 0 (landing is not
+modelled; the patrol refuels at 40 % and never gets there).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pyautonomousagent.models import x8_dynamics as dyn
+from pyautonomousagent.models.autopilot import (
+    AttitudeController,
+    Guidance,
+    GuidanceGains,
+    attitude_gains,
+)
+from pyautonomousagent.models.x8_params import X8Parameters, load_parameters
+
+#: Turbulence intensities of the Dryden model (MIL-F-8785C) that PyFly offers.
+TURBULENCE_INTENSITIES = ("light", "moderate", "severe")
+
+
+@dataclass(frozen=True)
+class X8Settings:
+    """The X8's scenario settings (the ``x8:`` mapping of a scenario file).
+
+    Attributes:
+        altitude: altitude the autopilot holds (m).
+        initial_altitude: altitude at the start (m).
+        initial_airspeed: airspeed at the start, wings level along the initial heading (m/s).
+        min_airspeed: floor of the airspeed reference (m/s); the refuelling leaf requests 0.
+        dt: time step (s) = one iteration.
+        turbulence: Dryden turbulence on (PyFly reference model only).
+        turbulence_intensity: "light", "moderate" or "severe".
+        course_kp, course_ki, course_kd, max_roll: course PID (rad -> rad; limit in degrees).
+        altitude_kp, altitude_ki, altitude_kd, max_pitch: altitude PID (m -> rad; degrees).
+            ``altitude_kp`` is 0.1 rad/m, not the notebook's 1.0 (docs/x8.md).
+    """
+
+    altitude: float = 20.0
+    initial_altitude: float = 20.0
+    initial_airspeed: float = 22.0
+    min_airspeed: float = 18.0
+    dt: float = 0.01
+    turbulence: bool = False
+    turbulence_intensity: str = "light"
+    course_kp: float = 1.0
+    course_ki: float = 1e-5
+    course_kd: float = 0.01
+    max_roll: float = 45.0
+    altitude_kp: float = 0.1  # the notebook's 1.0 limit-cycles (docs/x8.md)
+    altitude_ki: float = 1e-4
+    altitude_kd: float = 0.01
+    max_pitch: float = 30.0
+
+    def gains(self) -> GuidanceGains:
+        """The guidance PIDs' gains and limits."""
+        return GuidanceGains(
+            self.course_kp,
+            self.course_ki,
+            self.course_kd,
+            self.max_roll,
+            self.altitude_kp,
+            self.altitude_ki,
+            self.altitude_kd,
+            self.max_pitch,
+        )
+
+
+@dataclass
+class Flight:
+    """What the loop and the autopilot read of N aircraft; every array has shape (N,).
+
+    Attributes:
+        north, east, altitude: position (m).
+        airspeed: m/s.
+        course: course over ground, rad clockwise from north, in (-pi, pi].
+        roll, pitch: Euler angles (rad).
+        p, q: roll and pitch rates (rad/s).
+    """
+
+    north: np.ndarray
+    east: np.ndarray
+    altitude: np.ndarray
+    airspeed: np.ndarray
+    course: np.ndarray
+    roll: np.ndarray
+    pitch: np.ndarray
+    p: np.ndarray
+    q: np.ndarray
+
+
+def initial_state(
+    settings: X8Settings, x: np.ndarray, y: np.ndarray, heading: np.ndarray
+) -> np.ndarray:
+    """The start: at (x, y) and ``initial_altitude``, wings level, flying along ``heading``.
+
+    Args:
+        settings: the X8 settings.
+        x, y: east and north positions (m), shape (N,).
+        heading: degrees clockwise from north, shape (N,).
+
+    Returns:
+        The state array of :mod:`x8_dynamics`, shape (STATES, N); rates, sideslip, angle of
+        attack, surfaces and throttle are zero.
+    """
+    n = len(x)
+    state = np.zeros((dyn.STATES, n))
+    zeros = np.zeros(n)
+    state[dyn.QUATERNION] = dyn.quaternion_from_euler(zeros, zeros, np.radians(heading))
+    state[dyn.PN], state[dyn.PE], state[dyn.PD] = y, x, -settings.initial_altitude
+    state[dyn.U] = settings.initial_airspeed
+    return state
+
+
+def observe(state: np.ndarray) -> Flight:
+    """The :class:`Flight` view of a state array of shape (STATES, N) (rows are views)."""
+    e, velocity = state[dyn.QUATERNION], state[dyn.VELOCITY]
+    roll, pitch = dyn.roll_pitch(e)
+    ground = (dyn.rotation(e)[:2] * velocity[None]).sum(axis=1)  # north, east velocity
+    return Flight(
+        north=state[dyn.PN],
+        east=state[dyn.PE],
+        altitude=-state[dyn.PD],
+        airspeed=np.sqrt((velocity * velocity).sum(axis=0)),
+        course=np.arctan2(ground[1], ground[0]),
+        roll=roll,
+        pitch=pitch,
+        p=state[dyn.P],
+        q=state[dyn.Q],
+    )
+
+
+class X8Model:
+    """What both X8 implementations share: the guidance and the swarm's columns.
+
+    Subclasses set ``self.flight`` and implement :meth:`advance` and :meth:`_attitude`.
+
+    Args:
+        settings: the X8 settings.
+        n: number of agents N.
+    """
+
+    name = "x8"
+
+    def __init__(self, settings: X8Settings, n: int) -> None:
+        self.settings = settings
+        self.guidance = Guidance(
+            settings.gains(), settings.altitude, settings.min_airspeed, settings.dt, n
+        )
+        self.flight: Flight
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """Recorded beside the swarm: altitude (m), airspeed (m/s), roll and pitch (deg)."""
+        f = self.flight
+        return {
+            "altitude": f.altitude,
+            "airspeed": f.airspeed,
+            "roll": np.degrees(f.roll),
+            "pitch": np.degrees(f.pitch),
+        }
+
+    def write(self, s: dict[str, np.ndarray], moving: np.ndarray | None = None) -> None:
+        """Fill the swarm's x, y, speed and heading columns from ``self.flight``."""
+        f = self.flight
+        s["x"][:] = f.east
+        s["y"][:] = f.north
+        s["speed"][:] = f.airspeed if moving is None else np.where(moving, f.airspeed, 0.0)
+        s["heading"][:] = np.mod(np.degrees(f.course), 360.0)
+
+    def control(self, s: dict[str, np.ndarray]) -> None:
+        """Phase 4: the autopilot's commands for the requested heading and speed."""
+        f = self.flight
+        refs = self.guidance.references(
+            f.course, f.altitude, s["requested_heading"], s["requested_speed"]
+        )
+        self._attitude(refs)
+
+    def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None:
+        """Phase 2: fly one time step (the agents where ``moving``) and update ``s``."""
+        raise NotImplementedError
+
+    def _attitude(self, refs: tuple[np.ndarray, np.ndarray, np.ndarray]) -> None:
+        raise NotImplementedError
+
+
+class X8Vectorised(X8Model):
+    """All N X8s integrated at once (fixed step, :func:`x8_dynamics.step`), autopilot on arrays.
+
+    Args:
+        settings: the X8 settings.
+        s: the swarm's columns; x, y and heading give the start, and all four are updated.
+        params: the aircraft's parameters (by default read from the installed package).
+    """
+
+    def __init__(
+        self, settings: X8Settings, s: dict[str, np.ndarray], params: X8Parameters | None = None
+    ) -> None:
+        n = len(s["x"])
+        super().__init__(settings, n)
+        self.constants = dyn.Constants.of(params or load_parameters(), settings.dt)
+        self.state = initial_state(settings, s["x"], s["y"], s["heading"])
+        self.commands = np.zeros((dyn.COMMANDS, n))
+        self.attitude = AttitudeController(attitude_gains(settings.dt), settings.dt, n)
+        self.flight = observe(self.state)
+        self.write(s)
+
+    def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None:
+        """Phase 2: one time step of ``settings.dt`` for the agents where ``moving``."""
+        new = dyn.step(self.state, self.commands, self.constants)
+        self.state = new if moving.all() else np.where(moving, new, self.state)
+        self.flight = observe(self.state)
+        self.write(s, moving)
+
+    def _attitude(self, refs: tuple[np.ndarray, np.ndarray, np.ndarray]) -> None:
+        f = self.flight
+        elevator, aileron, throttle = self.attitude.commands(
+            refs, f.roll, f.pitch, f.airspeed, f.p, f.q
+        )
+        self.commands[: dyn.CMD_ELEVON_L + 1] = dyn.elevon_commands(
+            elevator, aileron, self.constants
+        )
+        self.commands[dyn.CMD_THROTTLE] = throttle
