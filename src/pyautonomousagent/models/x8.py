@@ -235,4 +235,3 @@ class X8Vectorised(X8Model):
             elevator, aileron, self.constants
         )
         self.commands[dyn.CMD_THROTTLE] = throttle
-
