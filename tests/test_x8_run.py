@@ -130,7 +130,8 @@ def test_a_benchmark_case_runs_in_its_own_process():
     case = bench.Case("x8-patrol", "batched", 3, 10, 1, full_iterations=100)
     result = bench.measure(case)
     assert result.error == "" and result.seconds > 0 and result.peak_mb > 10
-    assert result.per_agent_iteration == result.seconds / 30
+    assert result.per_agent_iteration == (result.seconds - result.setup) / 30
+    assert 0 < result.setup < result.seconds
 
 
 def fake(case: bench.Case, timeout=None, budget_mb=None) -> bench.Result:

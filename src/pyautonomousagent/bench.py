@@ -61,30 +61,35 @@ class Case:
 
 @dataclass(frozen=True)
 class Result:
-    """What a case measured: seconds and peak resident memory (MB), or why it failed."""
+    """What a case measured: seconds (set-up and loop) and peak resident memory (MB), or why
+    it failed. ``setup`` is the part of ``seconds`` spent before the loop."""
 
     case: Case
     seconds: float | None
     peak_mb: float | None
     error: str = ""
+    setup: float = 0.0
 
     @property
     def per_agent_iteration(self) -> float | None:
-        """Seconds per agent-iteration."""
+        """Loop seconds per agent-iteration (set-up excluded)."""
         if self.seconds is None:
             return None
-        return self.seconds / (self.case.agents * self.case.iterations)
+        return (self.seconds - self.setup) / (self.case.agents * self.case.iterations)
 
     @property
     def full_seconds(self) -> float | None:
-        """Seconds for the full run: measured, or scaled from a shorter one (``case.scaled``)."""
+        """Seconds for the full run: measured, or set-up plus the loop scaled from a shorter
+        run (``case.scaled``)."""
         if self.seconds is None or not self.case.scaled or not self.case.full_iterations:
             return self.seconds
-        return self.seconds * self.case.full_iterations / self.case.iterations
+        loop = (self.seconds - self.setup) * self.case.full_iterations / self.case.iterations
+        return self.setup + loop
 
 
 def run_case_here(case: Case) -> dict[str, float]:
-    """Run ``case`` in this process; its seconds (set-up and loop) and peak memory (MB)."""
+    """Run ``case`` in this process; its seconds (set-up and loop), set-up seconds, and peak
+    memory (MB)."""
     from pyautonomousagent.scenarios import load
     from pyautonomousagent.simulation import Simulation
 
@@ -99,11 +104,12 @@ def run_case_here(case: Case) -> dict[str, float]:
         record_every=case.record_every,
         implementation=implementation,
     )
+    setup = time.perf_counter() - start
     for _ in range(case.iterations):
         sim.step()
     seconds = time.perf_counter() - start
     peak_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return {"seconds": seconds, "peak_mb": peak_kb / 1024}
+    return {"seconds": seconds, "setup": setup, "peak_mb": peak_kb / 1024}
 
 
 def measure(case: Case, timeout: float | None = None, budget_mb: float | None = None) -> Result:
@@ -132,7 +138,7 @@ def measure(case: Case, timeout: float | None = None, budget_mb: float | None = 
         lines = err.strip().splitlines()
         return Result(case, None, None, lines[-1] if lines else f"exit code {child.returncode}")
     figures = json.loads(out.strip().splitlines()[-1])
-    return Result(case, figures["seconds"], figures["peak_mb"])
+    return Result(case, figures["seconds"], figures["peak_mb"], setup=figures["setup"])
 
 
 def _peak_mb(pid: int) -> float | None:
