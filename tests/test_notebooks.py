@@ -44,3 +44,13 @@ def test_readme_examples_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) ->
     for block in blocks:
         exec(compile(block, "README.md", "exec"), namespace)  # noqa: S102
     assert namespace["table"].num_rows == 4 * 8001  # type: ignore[attr-defined]
+
+
+def test_the_pytrees_floor_script_ticks_its_tree() -> None:
+    import runpy
+
+    module = runpy.run_path(str(ROOT / "scripts" / "pytrees_floor.py"))
+    tree = module["patrol_shaped_tree"]()
+    tree.tick_once()
+    assert tree.status.name == "RUNNING"
+    assert [c.status.name for c in tree.children] == ["FAILURE", "FAILURE", "RUNNING"]
