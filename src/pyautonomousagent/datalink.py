@@ -340,20 +340,6 @@ class SharedData:
     def _row(self, values: np.ndarray, iteration: Any) -> dict[str, float]:
         return {**dict(zip(self.fields, values.tolist(), strict=True)), "iteration": int(iteration)}
 
-    @property
-    def nbytes(self) -> int:
-        """Bytes held."""
-        return sum(
-            a.nbytes
-            for a in (
-                self._everyone_iteration,
-                self._everyone_data,
-                self._pair_keys,
-                self._pair_iteration,
-                self._pair_data,
-            )
-        )
-
 
 def _last_per_key(keys: np.ndarray) -> np.ndarray:
     """Positions of the last occurrence of each distinct key."""

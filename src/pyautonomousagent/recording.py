@@ -64,11 +64,6 @@ class Recorder:
         """The recorded values of ``key``, shape (records so far, N)."""
         return self.columns[key][: self.count]
 
-    @property
-    def nbytes(self) -> int:
-        """Bytes held by the preallocated arrays."""
-        return sum(v.nbytes for v in self.columns.values()) + self.iterations.nbytes
-
 
 def preallocated(shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
     """A zero-filled array whose memory is committed at once (Linux: ``MAP_POPULATE``).
