@@ -96,6 +96,8 @@ def test_cli_prints_the_table_and_json(capsys: pytest.CaptureFixture[str]) -> No
         ["bench", "patrol", "--engines", "x"],
         ["bench", "patrol", "--agents", "0"],
         ["bench", "patrol", "--agents", "a,b"],
+        ["bench", "patrol", "--stress-iterations", "0"],
+        ["bench", "patrol", "--reference-iterations", "-1"],
     ],
 )
 def test_cli_refuses_bad_input(args: list[str], capsys: pytest.CaptureFixture[str]) -> None:

@@ -178,8 +178,11 @@ def bench_command(args: argparse.Namespace) -> int:
     from pyautonomousagent import bench
 
     engines = _bench_engines(args, load(args.scenario))
-    if args.iterations < 1:
-        raise ScenarioError(f"--iterations must be a whole number >= 1, got {args.iterations}")
+    for option in ("iterations", "reference_iterations", "stress_iterations", "stress_start"):
+        value = getattr(args, option)
+        if value is not None and value < 1:
+            flag = "--" + option.replace("_", "-")
+            raise ScenarioError(f"{flag} must be a whole number >= 1, got {value}")
     if args.stress:
         return _stress(args, engines, bench)
     short = args.reference_iterations

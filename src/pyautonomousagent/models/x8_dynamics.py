@@ -127,13 +127,6 @@ def body_to_ned(e: np.ndarray, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> n
     return (rotation(e) * np.array([x, y, z])[None]).sum(axis=1)
 
 
-def air_data(y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Airspeed (m/s), angle of attack and sideslip (rad) in still air, each (N,)."""
-    u, v, w = y[U], y[V], y[W]
-    airspeed = np.sqrt(u * u + v * v + w * w)
-    return airspeed, np.arctan2(w, u), np.arcsin(v / np.maximum(airspeed, 1e-12))
-
-
 #: Names of the features the aerodynamic coefficients are linear in (rows of the feature
 #: array built in :func:`_forces_moments`), with s = sigma(alpha), lin = C_L_0 + C_L_alpha alpha,
 #: flat = s sign(alpha) sin^2(alpha) and V the airspeed:

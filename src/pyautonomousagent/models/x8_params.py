@@ -162,11 +162,6 @@ class Actuators:
     throttle_tau: float
 
     @property
-    def elevator_limits(self) -> tuple[float, float]:
-        """Elevator range reachable with both elevons in range (rad)."""
-        return self.elevon_min, self.elevon_max
-
-    @property
     def aileron_limits(self) -> tuple[float, float]:
         """Aileron range reachable with one elevon at each limit (rad), symmetric."""
         half = (self.elevon_max - self.elevon_min) / 2.0
