@@ -46,4 +46,6 @@ class Mark:
 
     def __post_init__(self) -> None:
         if self.shape not in MARK_SHAPES:
-            raise ValueError(f"mark shape must be one of {', '.join(MARK_SHAPES)}, got {self.shape!r}")
+            raise ValueError(
+                f"mark shape must be one of {', '.join(MARK_SHAPES)}, got {self.shape!r}"
+            )
