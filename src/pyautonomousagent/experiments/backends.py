@@ -47,9 +47,7 @@ class Backend(Protocol):
     def memory_per_worker(self) -> int | None:
         """Bytes a worker may use, or None if unknown."""
 
-    def map_unordered(
-        self, fn: Callable[[T], Any], tasks: Sequence[T]
-    ) -> Iterator[tuple[T, Any]]:
+    def map_unordered(self, fn: Callable[[T], Any], tasks: Sequence[T]) -> Iterator[tuple[T, Any]]:
         """``(task, fn(task) or the exception)`` for every task, as they finish."""
 
     def close(self) -> None:
@@ -75,9 +73,7 @@ class SerialBackend:
     def memory_per_worker(self) -> int | None:
         return physical_memory()
 
-    def map_unordered(
-        self, fn: Callable[[T], Any], tasks: Sequence[T]
-    ) -> Iterator[tuple[T, Any]]:
+    def map_unordered(self, fn: Callable[[T], Any], tasks: Sequence[T]) -> Iterator[tuple[T, Any]]:
         for task in tasks:
             yield task, fn(task)
 
@@ -117,9 +113,7 @@ class PoolBackend:
         )
         return self._pool
 
-    def map_unordered(
-        self, fn: Callable[[T], Any], tasks: Sequence[T]
-    ) -> Iterator[tuple[T, Any]]:
+    def map_unordered(self, fn: Callable[[T], Any], tasks: Sequence[T]) -> Iterator[tuple[T, Any]]:
         pending: deque[tuple[T, int]] = deque((task, 0) for task in tasks)
         running: dict[Future[Any], tuple[T, int]] = {}
         pool = self._pool or self._start()
@@ -212,9 +206,7 @@ class DaskBackend:
         ]
         return min(limits) if limits else None
 
-    def map_unordered(
-        self, fn: Callable[[T], Any], tasks: Sequence[T]
-    ) -> Iterator[tuple[T, Any]]:
+    def map_unordered(self, fn: Callable[[T], Any], tasks: Sequence[T]) -> Iterator[tuple[T, Any]]:
         from distributed import as_completed
 
         window = self._window or 4 * self.workers()

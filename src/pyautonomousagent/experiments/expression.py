@@ -66,9 +66,7 @@ _COMPARE: dict[type, Callable[[Any, Any], Any]] = {
     ast.NotEq: np.not_equal,
 }
 _ALLOWED = (
-    "column names, numbers, + - * / // % **, comparisons and "
-    + "/".join(FUNCTIONS)
-    + "(...)"
+    "column names, numbers, + - * / // % **, comparisons and " + "/".join(FUNCTIONS) + "(...)"
 )
 
 

@@ -50,8 +50,9 @@ class RunData:
         """The recorded data of ``sim`` (views of its recorder, not copies)."""
         recorder = sim.recorder
         columns = {key: recorder.column(key) for key in recorder.columns}
-        return cls(sim.scenario, sim.seed, recorder.iterations[: recorder.count], columns,
-                   list(sim.events))  # fmt: skip
+        return cls(
+            sim.scenario, sim.seed, recorder.iterations[: recorder.count], columns, list(sim.events)
+        )
 
     @property
     def agents(self) -> int:
@@ -168,9 +169,7 @@ def fraction_refuelling(run: RunData) -> float:
 def gathering_time(run: RunData) -> float:
     """Iterations from the first gathering order until every agent has come within the
     destination tolerance of the gathering point (NaN: no order, or not all arrived)."""
-    orders = [
-        e for e in run.events if e.get("event") == "message" and e.get("type") == "gathering"
-    ]
+    orders = [e for e in run.events if e.get("event") == "message" and e.get("type") == "gathering"]
     if not orders:
         return float("nan")
     order = orders[0]
@@ -194,4 +193,4 @@ for _name, _fn, _unit in (
     ("fraction_refuelling", fraction_refuelling, "fraction"),
     ("gathering_time", gathering_time, "iterations"),
 ):
-    register_measure(_name, _fn, (_fn.__doc__ or "").split("\n")[0].rstrip("."), _unit)
+    register_measure(_name, _fn, " ".join((_fn.__doc__ or "").split()).rstrip("."), _unit)

@@ -27,10 +27,33 @@ from pyautonomousagent.experiments.store import MANIFEST, RESULTS
 INTERVALS = ("ci95", "sd", "range", "none")
 #: Two-sided 95 % quantiles of Student's t distribution by degrees of freedom (published
 #: tables); between entries the next smaller one is used (a slightly wider interval).
-_T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 8: 2.306,
-        9: 2.262, 10: 2.228, 11: 2.201, 12: 2.179, 13: 2.160, 14: 2.145, 15: 2.131,
-        16: 2.120, 17: 2.110, 18: 2.101, 19: 2.093, 20: 2.086, 25: 2.060, 30: 2.042,
-        40: 2.021, 60: 2.000, 120: 1.980}  # fmt: skip
+_T95 = {
+    1: 12.706,
+    2: 4.303,
+    3: 3.182,
+    4: 2.776,
+    5: 2.571,
+    6: 2.447,
+    7: 2.365,
+    8: 2.306,
+    9: 2.262,
+    10: 2.228,
+    11: 2.201,
+    12: 2.179,
+    13: 2.160,
+    14: 2.145,
+    15: 2.131,
+    16: 2.120,
+    17: 2.110,
+    18: 2.101,
+    19: 2.093,
+    20: 2.086,
+    25: 2.060,
+    30: 2.042,
+    40: 2.021,
+    60: 2.000,
+    120: 1.980,
+}
 
 
 def t95(df: int) -> float:
@@ -60,8 +83,9 @@ def _column(table: pa.Table, name: str, what: str) -> list[Any]:
     if name not in table.column_names:
         close = difflib.get_close_matches(name, table.column_names, n=1)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
-        raise ExperimentError(f"unknown {what} {name!r}{hint}; the results have "
-                              f"{', '.join(table.column_names)}")  # fmt: skip
+        raise ExperimentError(
+            f"unknown {what} {name!r}{hint}; the results have {', '.join(table.column_names)}"
+        )
     return table[name].to_pylist()
 
 
@@ -169,8 +193,10 @@ def plot_measure(
     seeds = sorted({r["n"] for r in rows})
     n_text = f"{seeds[0]}" if len(seeds) == 1 else f"{seeds[0]}-{seeds[-1]}"
     band = {"ci95": "95 % CI of the mean", "sd": "± 1 sd", "range": "min-max", "none": ""}
-    ax.set_title(title or f"{measure} vs {x}: mean of {n_text} runs, {band[interval]}".rstrip(", "),
-                 fontsize=10)  # fmt: skip
+    ax.set_title(
+        title or f"{measure} vs {x}: mean of {n_text} runs, {band[interval]}".rstrip(", "),
+        fontsize=10,
+    )
     ax.grid(True, alpha=0.3)
     if by:
         ax.legend(fontsize=8)

@@ -48,8 +48,18 @@ from pyautonomousagent.registry import UnknownNameError
 MAX_RUNS = 1_000_000
 #: Columns of the results that parameters and measures may not be called.
 RESERVED = ("run", "run_id", "seed", "status", "error", "seconds", "worker")
-_KEYS = ("name", "scenario", "iterations", "set", "vary", "sample", "seeds", "measures",
-         "engine", "record_every")  # fmt: skip
+_KEYS = (
+    "name",
+    "scenario",
+    "iterations",
+    "set",
+    "vary",
+    "sample",
+    "seeds",
+    "measures",
+    "engine",
+    "record_every",
+)
 _DISTRIBUTIONS = ("uniform", "integers", "choice")
 
 
@@ -134,8 +144,10 @@ class Experiment:
     def points(self) -> list[dict[str, Any]]:
         """Every point: the grid crossed with the random samples (in that order)."""
         names = list(self.vary)
-        grid = [dict(zip(names, values, strict=True))
-                for values in itertools.product(*self.vary.values())]  # fmt: skip
+        grid = [
+            dict(zip(names, values, strict=True))
+            for values in itertools.product(*self.vary.values())
+        ]
         if not self.sample:
             return grid
         samples = draw_samples(self.sample)
@@ -167,8 +179,9 @@ class Experiment:
             "record_every": self.record_every,
         }
         if self.sample:
-            params = {k: {kind: list(args)} for k, (kind, args) in
-                      self.sample["parameters"].items()}  # fmt: skip
+            params = {
+                k: {kind: list(args)} for k, (kind, args) in self.sample["parameters"].items()
+            }
             data["sample"] = {**self.sample, "parameters": params}
         return data
 
@@ -239,7 +252,8 @@ class _Reader:
             measures=self.measures(data.get("measures")),
             fixed=self.mapping(data.get("set") or {}, "set"),
             iterations=self.whole(data["iterations"], "iterations", 1)
-            if data.get("iterations") is not None else None,  # fmt: skip
+            if data.get("iterations") is not None
+            else None,
             engine=self.text(data.get("engine", "auto"), "engine"),
             record_every=self.whole(data.get("record_every", 1), "record_every", 1),
             name=self.text(data.get("name", "experiment"), "name"),
@@ -261,8 +275,10 @@ class _Reader:
         return value
 
     def number(self, value: Any, path: str) -> float:
-        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(
-            value
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not math.isfinite(value)
         ):
             raise self.fail(path, "a number", value)
         return value
@@ -290,8 +306,10 @@ class _Reader:
         for i, item in enumerate(value):
             if isinstance(item, list | dict) or item is None:
                 raise self.fail(f"{path}[{i}]", "a number, a string or true/false", item)
-        kinds = {"bool" if isinstance(v, bool) else "str" if isinstance(v, str) else "number"
-                 for v in value}  # fmt: skip
+        kinds = {
+            "bool" if isinstance(v, bool) else "str" if isinstance(v, str) else "number"
+            for v in value
+        }
         if len(kinds) > 1:
             raise self.fail(path, "values of one kind (numbers, strings or true/false)", value)
         if len({json.dumps(v) for v in value}) != len(value):
@@ -311,11 +329,14 @@ class _Reader:
         out: dict[str, tuple[str, list[Any]]] = {}
         for name, spec in params.items():
             path = f"sample.parameters.{name}"
-            if not isinstance(spec, Mapping) or len(spec) != 1 or next(iter(spec)) not in (
-                _DISTRIBUTIONS
+            if (
+                not isinstance(spec, Mapping)
+                or len(spec) != 1
+                or next(iter(spec)) not in (_DISTRIBUTIONS)
             ):
-                raise self.fail(path, "{uniform: [lo, hi]}, {integers: [lo, hi]} or "
-                                "{choice: [values]}", spec)  # fmt: skip
+                raise self.fail(
+                    path, "{uniform: [lo, hi]}, {integers: [lo, hi]} or {choice: [values]}", spec
+                )
             kind, args = next(iter(spec.items()))
             if kind == "choice":
                 out[name] = (kind, self.values(args, f"{path}.choice"))
@@ -350,8 +371,9 @@ class _Reader:
         if value is None:
             return tuple(MEASURES.get(name) for name in MEASURES.names())
         if not isinstance(value, list) or not value:
-            raise self.fail("measures", "a non-empty list of measure names or {name: expression}",
-                            value)  # fmt: skip
+            raise self.fail(
+                "measures", "a non-empty list of measure names or {name: expression}", value
+            )
         out: list[Measure] = []
         for i, item in enumerate(value):
             path = f"measures[{i}]"
@@ -380,13 +402,15 @@ class _Reader:
         seen: dict[str, str] = {name: "a result column" for name in RESERVED}
         for name in experiment.parameters:
             if name in seen:
-                raise ExperimentError(f"{self.source}: parameter {name!r} is {seen[name]}; "
-                                      "it cannot be varied")  # fmt: skip
+                raise ExperimentError(
+                    f"{self.source}: parameter {name!r} is {seen[name]}; it cannot be varied"
+                )
             seen[name] = "a varied parameter"
         for m in experiment.measures:
             if m.name in seen:
-                raise ExperimentError(f"{self.source}: measure {m.name!r} is {seen[m.name]}; "
-                                      "rename the measure")  # fmt: skip
+                raise ExperimentError(
+                    f"{self.source}: measure {m.name!r} is {seen[m.name]}; rename the measure"
+                )
 
 
 def parse_vary(items: Sequence[str]) -> dict[str, Any]:

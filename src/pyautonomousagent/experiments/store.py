@@ -102,8 +102,9 @@ class Journal:
 
     def read(self) -> pa.Table:
         """Every row written so far (flushed), in journal order."""
-        tables = [pq.read_table(p).select(self.schema.names).cast(self.schema)
-                  for p in self.parts()]  # fmt: skip
+        tables = [
+            pq.read_table(p).select(self.schema.names).cast(self.schema) for p in self.parts()
+        ]
         return pa.concat_tables(tables) if tables else self.schema.empty_table()
 
     def append(self, row: Mapping[str, Any]) -> None:
@@ -160,8 +161,16 @@ def write_manifest(out: Path, manifest: Mapping[str, Any]) -> Path:
     return path
 
 
-def versions(packages: Iterable[str] = ("pyautonomousagent", "numpy", "pyarrow", "py_trees",
-                                         "dask", "distributed")) -> dict[str, str]:  # fmt: skip
+def versions(
+    packages: Iterable[str] = (
+        "pyautonomousagent",
+        "numpy",
+        "pyarrow",
+        "py_trees",
+        "dask",
+        "distributed",
+    ),
+) -> dict[str, str]:
     """Python's and the installed packages' versions."""
     found = {"python": platform.python_version()}
     for name in packages:

@@ -103,15 +103,17 @@ def check(experiment: Experiment, scenario: Any) -> list[str]:
         if name not in known:
             close = difflib.get_close_matches(name, known, n=1)
             hint = f" (did you mean {close[0]!r}?)" if close else ""
-            raise ExperimentError(f"experiment {experiment.name!r}: unknown parameter "
-                                  f"{name!r}{hint}")  # fmt: skip
+            raise ExperimentError(
+                f"experiment {experiment.name!r}: unknown parameter {name!r}{hint}"
+            )
         for text in sorted(texts):
             try:
                 scenario.with_overrides(**{name: json.loads(text)})
             except ScenarioError as error:
                 raise ExperimentError(f"experiment {experiment.name!r}: {error}") from None
-    probe = Simulation.create(scenario.with_overrides(agents=1, iterations=1), seed=0,
-                              engine=experiment.engine)  # fmt: skip
+    probe = Simulation.create(
+        scenario.with_overrides(agents=1, iterations=1), seed=0, engine=experiment.engine
+    )
     names = [*probe.recorder.columns, "iteration", "agents", "iterations"]
     for measure in experiment.measures:
         if isinstance(measure.fn, _Evaluate):
@@ -212,10 +214,27 @@ def sweep(
     try:
         write_manifest(out, manifest)
         runs_dir = str((out / RUNS).resolve()) if save_runs else None
-        tasks = [RunTask(run, scenario, experiment.engine, experiment.record_every,
-                         experiment.measures, runs_dir) for run in todo]  # fmt: skip
-        _execute(tasks, chosen, journal, counts, experiment.name, progress, on_result,
-                 (flush_every, flush_seconds))  # fmt: skip
+        tasks = [
+            RunTask(
+                run,
+                scenario,
+                experiment.engine,
+                experiment.record_every,
+                experiment.measures,
+                runs_dir,
+            )
+            for run in todo
+        ]
+        _execute(
+            tasks,
+            chosen,
+            journal,
+            counts,
+            experiment.name,
+            progress,
+            on_result,
+            (flush_every, flush_seconds),
+        )
         manifest["status"] = "finished"
     except BaseException:
         manifest["status"] = "interrupted"
@@ -300,8 +319,10 @@ def _manifest(
     from pyautonomousagent.experiments.measures import MEASURES
     from pyautonomousagent.simulation.scenario import to_mapping
 
-    measures = {m.name: {"doc": m.doc, "unit": m.unit, "registered": m.name in MEASURES}
-                for m in experiment.measures}  # fmt: skip
+    measures = {
+        m.name: {"doc": m.doc, "unit": m.unit, "registered": m.name in MEASURES}
+        for m in experiment.measures
+    }
     return {
         "experiment": json.loads(json.dumps(experiment.to_mapping(), default=str)),
         "scenario": to_mapping(scenario),
