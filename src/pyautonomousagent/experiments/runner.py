@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
 
 if TYPE_CHECKING:
+    from pyautonomousagent.bt.spec import Node
     from pyautonomousagent.experiments.measures import Measure
     from pyautonomousagent.experiments.spec import Run
     from pyautonomousagent.simulation import Scenario
@@ -36,6 +37,8 @@ class RunTask:
         record_every: recording decimation.
         measures: the measures to compute.
         runs_dir: folder of the per-run data, or None not to save it.
+        tree: the scenario's tree, read once by the sweep (so workers need not read the
+            tree file), or None to read it per run (when the tree itself is varied).
     """
 
     run: Run
@@ -44,6 +47,7 @@ class RunTask:
     record_every: int
     measures: tuple[Measure, ...]
     runs_dir: str | None = None
+    tree: Node | None = None
 
 
 def execute(task: RunTask) -> dict[str, Any]:
@@ -59,7 +63,11 @@ def execute(task: RunTask) -> dict[str, Any]:
     try:
         scenario = task.scenario.with_overrides(**run.point)
         sim = Simulation.create(
-            scenario, seed=run.seed, engine=task.engine, record_every=task.record_every
+            scenario,
+            seed=run.seed,
+            engine=task.engine,
+            record_every=task.record_every,
+            tree=task.tree,
         ).run(progress=False)
         data = RunData.from_simulation(sim)
         for measure in task.measures:

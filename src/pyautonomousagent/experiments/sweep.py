@@ -43,6 +43,7 @@ from pyautonomousagent.experiments.store import (
     write_results,
 )
 from pyautonomousagent.progress import Progress
+from pyautonomousagent.simulation.run import scenario_tree
 
 #: Freed memory a worker process may keep: the trim threshold set by ``allocator.py``
 #: (4 x 32 MiB), which the batched engine applies to every process it runs in.
@@ -214,6 +215,7 @@ def sweep(
     try:
         write_manifest(out, manifest)
         runs_dir = str((out / RUNS).resolve()) if save_runs else None
+        tree = None if "tree" in experiment.parameters else scenario_tree(scenario)
         tasks = [
             RunTask(
                 run,
@@ -222,6 +224,7 @@ def sweep(
                 experiment.record_every,
                 experiment.measures,
                 runs_dir,
+                tree,
             )
             for run in todo
         ]
