@@ -194,7 +194,8 @@ def plot_measure(
     n_text = f"{seeds[0]}" if len(seeds) == 1 else f"{seeds[0]}-{seeds[-1]}"
     band = {"ci95": "95 % CI of the mean", "sd": "± 1 sd", "range": "min-max", "none": ""}
     ax.set_title(
-        title or f"{measure} vs {x}: mean of {n_text} runs, {band[interval]}".rstrip(", "),
+        title
+        or f"{measure} vs {x}: mean over {n_text} runs per point, {band[interval]}".rstrip(", "),
         fontsize=10,
     )
     ax.grid(True, alpha=0.3)

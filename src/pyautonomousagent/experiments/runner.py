@@ -10,6 +10,7 @@ again writes the same file.
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 import time
@@ -52,7 +53,8 @@ class RunTask:
 
 def execute(task: RunTask) -> dict[str, Any]:
     """Run ``task``: one result row (run, run_id, parameters, seed, measures, status, error,
-    seconds). Measures that raise give NaN and the run's status "failed"."""
+    seconds). Measures that raise give NaN and the run's status "failed". The run's log
+    (e.g. one warning per drone that runs dry) is silenced: the measures count it."""
     from pyautonomousagent.experiments.measures import RunData
     from pyautonomousagent.simulation import Simulation
 
@@ -60,6 +62,8 @@ def execute(task: RunTask) -> dict[str, Any]:
     row: dict[str, Any] = {"run": run.index, "run_id": run.run_id, **run.point, "seed": run.seed}
     row.update({m.name: math.nan for m in task.measures})
     start = time.perf_counter()
+    log = logging.getLogger("pyautonomousagent")
+    was_disabled, log.disabled = log.disabled, True
     try:
         scenario = task.scenario.with_overrides(**run.point)
         sim = Simulation.create(
@@ -78,6 +82,8 @@ def execute(task: RunTask) -> dict[str, Any]:
         row.update(status="failed", error=one_line(error))
     else:
         row.update(status="ok", error=None)
+    finally:
+        log.disabled = was_disabled
     row["seconds"] = time.perf_counter() - start
     return row
 
