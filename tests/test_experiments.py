@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
@@ -26,6 +27,7 @@ from pyautonomousagent.experiments import (
 from pyautonomousagent.experiments import measures as m
 from pyautonomousagent.experiments.plot import summarize, t95
 from pyautonomousagent.experiments.spec import inclusive_range, parse_vary
+from pyautonomousagent.experiments.sweep import base_scenario, check
 
 #: A tiny patrol sweep: 5 drones x 400 iterations, thresholds high enough to refuel.
 TINY = {
@@ -243,6 +245,14 @@ def test_sweep_checks_against_the_scenario_before_running(tmp_path, change, mess
     with pytest.raises(ExperimentError, match=message.replace("(", r"\(")):
         sweep(experiment, tmp_path / "out", "serial")
     assert not (tmp_path / "out").exists()
+
+
+def test_the_worked_example_file_is_valid() -> None:
+    path = Path(__file__).parents[1] / "examples" / "threshold-sweep.yaml"
+    experiment = Experiment.from_file(path)
+    assert len(experiment.runs()) == 100 and experiment.parameters[1] == "energy_use"
+    names = check(experiment, base_scenario(experiment))
+    assert "energy" in names and base_scenario(experiment).agents == 100
 
 
 def test_experiment_file_errors(tmp_path) -> None:
