@@ -143,6 +143,10 @@ class Leaf:
         """Run the leaf for ``agents``; return a status code, or an int8 array of them."""
         raise NotImplementedError
 
+    def halt(self, agents: AgentView, world: World) -> None:
+        """Called when the leaf is interrupted while RUNNING (BehaviorTree.CPP's
+        ``onHalted``) for ``agents``; by default it does nothing."""
+
     def __repr__(self) -> str:
         params = ", ".join(f"{p.name}={getattr(self, p.name)!r}" for p in self.ports)
         return f"{type(self).__name__}({params})"

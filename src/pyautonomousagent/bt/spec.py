@@ -178,10 +178,14 @@ def control_params(node: Node) -> dict[str, Any]:
             raise TreeError(f"{where} needs parameter {key!r}")
         if key in ("memory", "synchronise") and not isinstance(value, bool):
             raise TreeError(f"{where}: {key} must be true or false, got {value!r}")
-        if key in ("num_success", "num_failures", "num_cycles", "num_attempts") and (
+        if key in ("num_success", "num_failures") and (
             isinstance(value, bool) or not isinstance(value, int) or value < 1
         ):
             raise TreeError(f"{where}: {key} must be a whole number >= 1, got {value!r}")
+        if key in ("num_cycles", "num_attempts") and (
+            isinstance(value, bool) or not isinstance(value, int) or (value < 1 and value != -1)
+        ):
+            raise TreeError(f"{where}: {key} must be a whole number >= 1 or -1, got {value!r}")
         if key in ("success_count", "failure_count"):
             parallel_threshold(value, len(node.children), f"{where}: {key}")
     if values.get("policy", "SuccessOnAll") not in PARALLEL_POLICIES:

@@ -40,6 +40,9 @@ from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
+#: A loop count no run reaches (counters are int64): ``num_cycles=-1`` and huge counts.
+LOOP_FOREVER = 2**62
+
 _CODES = {name: code for code, name in NAMES.items()}
 
 
@@ -132,13 +135,13 @@ class BatchedEngine:
         self.status = np.zeros((n, swarm.size), dtype=np.int8)
         kinds = [node.type for node in program.nodes]
         self.current = {
-            i: np.full(swarm.size, -1, dtype=np.int16)
+            i: np.full(swarm.size, -1, dtype=np.int32)
             for i, kind in enumerate(kinds)
             if kind in ("Sequence", "Selector")
         }
         counted = ("Repeat", "Retry", "SequenceWithMemory", "BTRepeat", "RetryUntilSuccessful")
         self.counter = {
-            i: np.zeros(swarm.size, dtype=np.int32)
+            i: np.zeros(swarm.size, dtype=np.int64)
             for i, kind in enumerate(kinds)
             if kind in counted
         }
@@ -149,6 +152,7 @@ class BatchedEngine:
             for i, node in enumerate(program.nodes)
             if not node.is_control
         }
+        self._halting = [i for i, leaf in self.leaves.items() if type(leaf).halt is not Leaf.halt]
         self._ticks = swarm.blackboard["number_ticks"]
         self._everyone = np.ones(swarm.size, dtype=bool)
         self._tables = {
@@ -192,7 +196,16 @@ class BatchedEngine:
         reset: it is only read while the composite is RUNNING.)"""
         need = mask & (self.status[child] != INVALID)
         if _some(need):
+            self._tell_halted(child, need)
             np.copyto(self.status[child : self.program.end[child]], INVALID, where=need)
+
+    def _tell_halted(self, child: int, need: np.ndarray) -> None:
+        """Call ``Leaf.halt`` of the RUNNING leaves of ``child``'s subtree, in tick order."""
+        for i in self._halting:
+            if child <= i < self.program.end[child]:
+                rows = np.flatnonzero(need & (self.status[i] == RUNNING))
+                if rows.size:
+                    self.leaves[i].halt(self.swarm.agents(rows), self.world)
 
     def _halt_children(self, i: int, first: int, mask: np.ndarray) -> None:
         """Halt the children of node ``i`` from position ``first`` on, for ``mask``."""
@@ -351,15 +364,21 @@ class BatchedEngine:
         return lambda mask: self._btcpp_loop(i, mask)
 
     def _sequence_with_memory(self, i: int, mask: np.ndarray) -> None:
-        index, status = self.counter[i], self.status[i]
+        index, status, kids = self.counter[i], self.status[i], self.program.children[i]
         start = index.copy()
         alive = mask.copy()
-        for k, child in enumerate(self.program.children[i]):
+        for k, child in enumerate(kids):
             ticked = alive & (start <= k)
             if _some(ticked):
+                fresh = self.status[child] != RUNNING
                 self._tickers[child](ticked)
                 result = self.status[child]
                 stopped = ticked & (result != SUCCESS)
+                if k + 1 < len(kids):  # a wake-up: yield after a first-tick success
+                    woken = ticked & fresh & (result == SUCCESS)
+                    np.copyto(index, k + 1, where=woken)
+                    np.copyto(status, RUNNING, where=woken)
+                    alive &= ~woken
                 np.copyto(index, k, where=stopped)
                 np.copyto(status, result, where=stopped)
                 alive &= ~stopped
@@ -367,15 +386,19 @@ class BatchedEngine:
         np.copyto(status, SUCCESS, where=alive)
 
     def _btcpp_loop(self, i: int, mask: np.ndarray) -> None:
-        """BTRepeat (again on SUCCESS) and RetryUntilSuccessful (again on FAILURE)."""
+        """BTRepeat (again on SUCCESS) and RetryUntilSuccessful (again on FAILURE): the child
+        is ticked again within the tick only if it was RUNNING before; a child that returns
+        ``again`` at its first tick ends the tick (RUNNING, a wake-up)."""
         node, child = self.program.nodes[i], self.program.children[i][0]
         repeat = node.type == "BTRepeat"
         again = SUCCESS if repeat else FAILURE
         limit = self.program.params[i]["num_cycles" if repeat else "num_attempts"]
+        limit = LOOP_FOREVER if limit == -1 else min(limit, LOOP_FOREVER)
         counter, status = self.counter[i], self.status[i]
         np.copyto(counter, 0, where=mask & (status != RUNNING))
         going = mask.copy()
         while _some(going):
+            fresh = self.status[child] != RUNNING
             self._tickers[child](going)
             result = self.status[child]
             looped = going & (result == again)
@@ -383,8 +406,9 @@ class BatchedEngine:
             more = looped & (counter < limit)
             ended = going & ~more
             np.copyto(status, result, where=ended)
+            np.copyto(status, RUNNING, where=more & fresh)
             np.copyto(counter, 0, where=ended & (result != RUNNING))
-            going = more
+            going = more & ~fresh
 
     def _btcpp_parallel(self, i: int, mask: np.ndarray) -> None:
         kids = list(self.program.children[i])

@@ -38,14 +38,21 @@ class SequenceWithMemory(py_trees.composites.Composite):
         self.index = 0  # the child to tick first; kept on halt, as in BT.CPP 4
 
     def tick(self) -> Iterator[Behaviour]:
-        """Tick from the remembered child on; stop at the first child that does not succeed."""
+        """Tick from the remembered child on; stop at the first child that does not succeed,
+        or yield (RUNNING) after a child that succeeded at its first tick (a wake-up)."""
         if self.status != Status.RUNNING:
             self.initialise()
         for k in range(self.index, len(self.children)):
             child = self.children[k]
             self.current_child = child
+            fresh = child.status != Status.RUNNING
             yield from child.tick()
             if child.status == Status.SUCCESS:
+                if fresh and k + 1 < len(self.children):
+                    self.index = k + 1
+                    self.status = Status.RUNNING
+                    yield self
+                    return
                 continue
             self.index = k
             if child.status == Status.RUNNING:
@@ -69,17 +76,23 @@ class _Loop(py_trees.decorators.Decorator):
         self.count = 0
 
     def tick(self) -> Iterator[Behaviour]:
-        """Tick the child until it returns something else than ``again`` or the limit is hit."""
+        """Tick the child again while it returns ``again`` and the limit is not hit; a child
+        that returned ``again`` at its first tick ends the tick instead (RUNNING, a wake-up)."""
         if self.status != Status.RUNNING:
             self.count = 0
             self.initialise()
         while True:
+            fresh = self.decorated.status != Status.RUNNING
             yield from self.decorated.tick()
             result = self.decorated.status
             if result == self.again:
                 self.count += 1
-                if self.count < self.limit:
-                    continue
+                if self.limit == -1 or self.count < self.limit:
+                    if not fresh:
+                        continue
+                    self.status = Status.RUNNING
+                    yield self
+                    return
             break
         if result != Status.RUNNING:
             self.count = 0

@@ -74,6 +74,11 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
         self._ticks[self._row] += 1
         return TO_PYTREES[self.leaf.evaluate(self.agent, self.world)]
 
+    def terminate(self, new_status: Status) -> None:
+        """A RUNNING leaf stopped from outside (halted) tells its leaf."""
+        if new_status == Status.INVALID and self.status == Status.RUNNING:
+            self.leaf.halt(self.agent, self.world)
+
 
 BehaviourFactory = Callable[..., AgentBehaviour]
 #: Hand-written py_trees behaviours: type name -> class taking (name, agent, world, **params).
