@@ -4,7 +4,9 @@ with scripted leaves that log their executions and halts, one log per agent.
 Our side: a test leaf type ``Logged`` (registered while :func:`logged_leaf_type` is active)
 returns ``statuses[tick][agent]`` and appends ``name`` (executed) or ``~name`` (halted) to its
 agent's log. BT.CPP side: one tree per agent, every leaf a stateful action dispatching on its
-node name to the same script. One iteration of ours is one ``tick_exactly_once()`` there.
+node name to the same script; leaves named ``c...`` never run and are conditions there
+(executed on every tick, as BT.CPP means conditions to be). One iteration of ours is one
+``tick_exactly_once()`` there.
 """
 
 from __future__ import annotations
@@ -65,7 +67,7 @@ def logged_leaf_type() -> Iterator[None]:
 
 def with_logged_leaves(root: Node, table: dict[str, list[list[int]]], log: list) -> Node:
     """``root`` with each leaf replaced by a Logged leaf of its name."""
-    if not root.children and not root.is_control:
+    if root.type == "Scripted":
         params = {"statuses": table[root.name], "log": log, "name": root.name}
         return Node("Logged", root.name, (), params)
     return replace(root, children=tuple(with_logged_leaves(c, table, log) for c in root.children))
@@ -96,6 +98,8 @@ def btcpp_xml(tree: Node) -> str:
     for raw in document.trees[document.main].walk():
         if not raw.children and raw.tag == "Scripted":
             raw.ports = {}
+            if (raw.name or "").startswith("c"):
+                raw.tag = "ScriptedCondition"
     return write_xml(document)
 
 
@@ -125,6 +129,7 @@ def reference(
 
         factory = btpy.BehaviorTreeFactory()
         factory.register_simple_stateful_action("Scripted", run, run, halted)
+        factory.register_simple_condition("ScriptedCondition", run)
         bt_tree = factory.create_tree_from_text(xml)
         for t in range(ticks):
             tick[0] = t

@@ -80,7 +80,22 @@ def btcpp_node(children: st.SearchStrategy[list[Node]]) -> st.SearchStrategy[Nod
         st.integers(1, 3),
         one_child,
     )
-    return st.one_of(with_memory, parallel, loops)
+    flows = st.builds(
+        lambda kind, kids: Node(kind, "a", tuple(kids)),
+        st.sampled_from(["AsyncSequence", "AsyncFallback"]),
+        children.filter(bool),
+    )
+    branches = st.builds(
+        lambda kind, kids: Node(kind, "b", tuple(kids[:3])),
+        st.sampled_from(["IfThenElse", "WhileDoElse"]),
+        children.filter(lambda kids: len(kids) >= 2),
+    )
+    parallel_all = children.filter(bool).flatmap(
+        lambda kids: _threshold(len(kids)).map(
+            lambda m: Node("ParallelAll", "pa", tuple(kids), {"max_failures": m})
+        )
+    )
+    return st.one_of(with_memory, parallel, loops, flows, branches, parallel_all)
 
 
 def _threshold(children: int) -> st.SearchStrategy[int]:

@@ -15,7 +15,7 @@ import secrets
 import numpy as np
 import pytest
 
-from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.bt.spec import CONTROL_NODES, Node
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.bt.vocabulary import TAGS
 
@@ -31,19 +31,27 @@ BTCPP_TAGS = [tag for tag in TAGS if tag.builtin]
 
 
 def random_tree(rng: np.random.Generator, leaves: list[str], depth: int = 0) -> Node:
-    """A random tree whose leaves are Scripted nodes named l0, l1, ... (appended to leaves)."""
+    """A random tree whose leaves are Scripted nodes named l0, l1, ... (appended to leaves);
+    conditions (never RUNNING; the first child of IfThenElse and WhileDoElse) are c3, ..."""
     if depth >= 3 or (depth > 0 and rng.random() < 0.35):
+        if rng.random() < 0.1:
+            kind = str(rng.choice(["AlwaysSuccess", "AlwaysFailure"]))
+            return Node(kind, f"k{rng.integers(1 << 30)}")
         name = f"l{len(leaves)}"
         leaves.append(name)
         return Node("Scripted", name, (), {"statuses": [[SUCCESS]]})
     tag = BTCPP_TAGS[rng.integers(len(BTCPP_TAGS))]
-    count = 1 if tag.kind == "Decorator" else int(rng.integers(1, 4))
+    least, most, _ = CONTROL_NODES[tag.spec]
+    count = int(rng.integers(max(least, 1), (most or 3) + 1)) if tag.kind == "Control" else 1
     kids = tuple(random_tree(rng, leaves, depth + 1) for _ in range(count))
+    if tag.tag in ("IfThenElse", "WhileDoElse"):  # the first child is a condition leaf
+        leaves.append(f"c{len(leaves)}")
+        kids = (Node("Scripted", leaves[-1], (), {"statuses": [[SUCCESS]]}), *kids[1:])
     params = dict(tag.fixed)
     for key in tag.params:
         if key in ("num_cycles", "num_attempts"):
             params[key] = int(rng.choice([-1, 1, 2, 3]))
-        elif key in ("success_count", "failure_count"):
+        elif key in ("success_count", "failure_count", "max_failures"):
             n = len(kids)
             params[key] = int(rng.choice([*range(1, n + 1), *range(-n, 0)]))
     return Node(tag.spec, f"n{depth}_{rng.integers(1 << 30)}", kids, params)
@@ -54,7 +62,10 @@ def draw(rng: np.random.Generator) -> tuple[Node, dict[str, list[list[int]]]]:
     leaves: list[str] = []
     tree = random_tree(rng, leaves)
     codes = np.array([SUCCESS, FAILURE, RUNNING])
-    table = {name: codes[rng.integers(3, size=(TICKS, AGENTS))].tolist() for name in leaves}
+    table = {
+        name: codes[rng.integers(2 if name[0] == "c" else 3, size=(TICKS, AGENTS))].tolist()
+        for name in leaves
+    }
     return tree, table
 
 

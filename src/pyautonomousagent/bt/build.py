@@ -19,6 +19,7 @@ from typing import Any
 from pyautonomousagent.bt.document import SUBTREE, Document, RawNode, TreeFileError
 from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf, LeafError
 from pyautonomousagent.bt.spec import (
+    CONTROL_NODES,
     Node,
     TreeError,
     check_structure,
@@ -226,6 +227,13 @@ class _Builder:
                 f"{tag.tag} needs at least 1 child, has 0",
                 f"put the nodes it should tick inside <{tag.tag}>...</{tag.tag}>",
             )
+        least, most, _ = CONTROL_NODES[tag.spec]
+        if len(children) < least or (most is not None and len(children) > most):
+            raise self.fail(
+                node.line,
+                f"{tag.tag} needs {least} to {most} children, has {len(children)}",
+                "the first child is the condition, then the then- and else-branch",
+            )
         params = self._params(node, tag)
         spec = Node(tag.spec, node.name or "", children, {**tag.fixed, **params})
         try:
@@ -318,7 +326,7 @@ def _a(word: str) -> str:
 
 
 def _param_fix(tag: Tag, children: int) -> str:
-    if tag.spec == "BTParallel":
+    if tag.spec in ("BTParallel", "ParallelAll"):
         return f"use a count from 1 to {children}, or -1 (all) to -{children}"
     if tag.spec == "Parallel":
         return "use policy SuccessOnAll or SuccessOnOne (synchronise only with SuccessOnAll)"

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -64,3 +64,28 @@ class Scripted(Leaf):
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return agents.pick(self.statuses[world.iteration - 1])
+
+
+class _Constant(Leaf):
+    """A leaf that always returns :attr:`status` and touches nothing (no ports)."""
+
+    status: ClassVar[int]
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        return self.status
+
+
+@register_leaf
+class AlwaysSuccess(_Constant):
+    """BehaviorTree.CPP's ``AlwaysSuccess``: SUCCESS on every tick."""
+
+    type_name = "AlwaysSuccess"
+    status = SUCCESS
+
+
+@register_leaf
+class AlwaysFailure(_Constant):
+    """BehaviorTree.CPP's ``AlwaysFailure``: FAILURE on every tick."""
+
+    type_name = "AlwaysFailure"
+    status = FAILURE

@@ -45,10 +45,18 @@ CONTROL_NODES: dict[str, tuple[int, int | None, dict[str, Any]]] = {
     "BTParallel": (1, None, {"success_count": -1, "failure_count": 1}),
     "BTRepeat": (1, 1, {"num_cycles": None}),
     "RetryUntilSuccessful": (1, 1, {"num_attempts": None}),
+    "AsyncSequence": (1, None, {}),
+    "AsyncFallback": (1, None, {}),
+    "IfThenElse": (2, 3, {}),
+    "WhileDoElse": (2, 3, {}),
+    "ParallelAll": (1, None, {"max_failures": 1}),
 }
 
 #: The control node types with BehaviorTree.CPP semantics (both engines implement them).
-BTCPP_TYPES = ("SequenceWithMemory", "BTParallel", "BTRepeat", "RetryUntilSuccessful")
+BTCPP_TYPES = (
+    "SequenceWithMemory", "BTParallel", "BTRepeat", "RetryUntilSuccessful", "AsyncSequence",
+    "AsyncFallback", "IfThenElse", "WhileDoElse", "ParallelAll",
+)  # fmt: skip
 
 PARALLEL_POLICIES = ("SuccessOnAll", "SuccessOnOne")
 
@@ -160,7 +168,13 @@ def check_structure(root: Node) -> None:
         least, most, _ = CONTROL_NODES[node.type]
         count = len(node.children)
         if count < least or (most is not None and count > most):
-            wanted = str(least) if least == most else f"at least {least}"
+            wanted = (
+                str(least)
+                if least == most
+                else f"at least {least}"
+                if most is None
+                else f"{least} to {most}"
+            )
             raise TreeError(f"{node.type} {node.name!r} needs {wanted} child(ren), has {count}")
         control_params(node)
 
@@ -186,7 +200,7 @@ def control_params(node: Node) -> dict[str, Any]:
             isinstance(value, bool) or not isinstance(value, int) or (value < 1 and value != -1)
         ):
             raise TreeError(f"{where}: {key} must be a whole number >= 1 or -1, got {value!r}")
-        if key in ("success_count", "failure_count"):
+        if key in ("success_count", "failure_count", "max_failures"):
             parallel_threshold(value, len(node.children), f"{where}: {key}")
     if values.get("policy", "SuccessOnAll") not in PARALLEL_POLICIES:
         raise TreeError(

@@ -72,6 +72,17 @@ TAGS: tuple[Tag, ...] = (
     Tag("RetryUntilSuccessful", "RetryUntilSuccessful", DECORATOR,
         params={"num_attempts": (int, True)}, symbol="↺",
         doc="after a failure ticks the child again in the same tick, num_attempts tries"),
+    Tag("AsyncSequence", "AsyncSequence", CONTROL, symbol="→a",
+        doc="like Sequence, but yields (RUNNING) after a child that succeeded at once"),
+    Tag("AsyncFallback", "AsyncFallback", CONTROL, symbol="?a",
+        doc="like Fallback, but yields (RUNNING) after a child that failed at once"),
+    Tag("IfThenElse", "IfThenElse", CONTROL, symbol="if",
+        doc="child 1 decides: SUCCESS ticks child 2, FAILURE child 3 (or fails)"),
+    Tag("WhileDoElse", "WhileDoElse", CONTROL, symbol="while",
+        doc="like IfThenElse, but asks child 1 again on every tick"),
+    Tag("ParallelAll", "ParallelAll", CONTROL, symbol="⇉all",
+        params={"max_failures": (int, False)},
+        doc="ticks unfinished children until all finished; fails at max_failures failures"),
     Tag("FailureIsRunning", "FailureIsRunning", DECORATOR, builtin=False,
         doc="py_trees: child FAILURE becomes RUNNING"),
     Tag("RunningIsFailure", "RunningIsFailure", DECORATOR, builtin=False,
@@ -96,9 +107,12 @@ BY_TAG: dict[str, Tag] = {t.tag: t for t in TAGS}
 #: BehaviorTree.CPP 4 built-ins that pyAutonomousAgent does not run, with the reason.
 UNSUPPORTED: dict[str, str] = {
     **dict.fromkeys(
-        ["AsyncSequence", "AsyncFallback", "ParallelAll", "IfThenElse", "WhileDoElse",
-         "Switch2", "Switch3", "Switch4", "Switch5", "Switch6", "ManualSelector", "TryCatch"],
-        "its control flow has no equivalent in the py_trees engine yet",
+        ["Switch2", "Switch3", "Switch4", "Switch5", "Switch6"],
+        "it reads a blackboard variable; blackboard ports are not supported yet",
+    ),
+    **dict.fromkeys(
+        ["ManualSelector", "TryCatch", "AlwaysRunning"],
+        "it is not a built-in of BehaviorTree.CPP 4.8 (the version held against)",
     ),
     **dict.fromkeys(
         ["Delay", "Timeout", "Sleep", "RunOnce", "Precondition", "LoopInt", "LoopDouble",
@@ -106,7 +120,7 @@ UNSUPPORTED: dict[str, str] = {
         "it needs wall-clock time, scripting or blackboard entries of its own",
     ),
     **dict.fromkeys(
-        ["Script", "ScriptCondition", "SetBlackboard", "UnsetBlackboard", "AlwaysRunning"],
+        ["Script", "ScriptCondition", "SetBlackboard", "UnsetBlackboard"],
         "scripting and free blackboard entries are not supported",
     ),
 }  # fmt: skip

@@ -139,13 +139,16 @@ class BatchedEngine:
             for i, kind in enumerate(kinds)
             if kind in ("Sequence", "Selector")
         }
-        counted = ("Repeat", "Retry", "SequenceWithMemory", "BTRepeat", "RetryUntilSuccessful")
+        counted = (
+            "Repeat", "Retry", "SequenceWithMemory", "BTRepeat", "RetryUntilSuccessful",
+            "AsyncSequence", "AsyncFallback", "IfThenElse",
+        )  # fmt: skip
         self.counter = {
             i: np.zeros(swarm.size, dtype=np.int64)
             for i, kind in enumerate(kinds)
             if kind in counted
         }
-        parallels = "BTParallel" in kinds
+        parallels = "BTParallel" in kinds or "ParallelAll" in kinds
         self._done = np.zeros(self.status.shape if parallels else (0, 0), dtype=bool)
         self.leaves: dict[int, Leaf] = {
             i: make_leaf(node, defaults)
@@ -361,6 +364,16 @@ class BatchedEngine:
             return lambda mask: self._sequence_with_memory(i, mask)
         if node_type == "BTParallel":
             return lambda mask: self._btcpp_parallel(i, mask)
+        if node_type == "AsyncSequence":
+            return lambda mask: self._async_sequence(i, mask, SUCCESS)
+        if node_type == "AsyncFallback":
+            return lambda mask: self._async_sequence(i, mask, FAILURE)
+        if node_type == "IfThenElse":
+            return lambda mask: self._if_then_else(i, mask)
+        if node_type == "WhileDoElse":
+            return lambda mask: self._while_do_else(i, mask)
+        if node_type == "ParallelAll":
+            return lambda mask: self._parallel_all(i, mask)
         return lambda mask: self._btcpp_loop(i, mask)
 
     def _sequence_with_memory(self, i: int, mask: np.ndarray) -> None:
@@ -438,3 +451,89 @@ class BatchedEngine:
                 np.copyto(status, np.where(won, SUCCESS, FAILURE), where=ended)
                 alive &= ~ended
         np.copyto(status, RUNNING, where=alive)
+
+    def _async_sequence(self, i: int, mask: np.ndarray, proceed: int) -> None:
+        """AsyncSequence (``proceed`` SUCCESS) and AsyncFallback (``proceed`` FAILURE); the
+        remembered child is in ``counter``."""
+        kids, index, status = self.program.children[i], self.counter[i], self.status[i]
+        np.copyto(index, 0, where=mask & (status != RUNNING))
+        start = index.copy()
+        alive = mask.copy()
+        for k, child in enumerate(kids):
+            ticked = alive & (start <= k)
+            if not _some(ticked):
+                continue
+            fresh = self.status[child] != RUNNING
+            self._tickers[child](ticked)
+            result = self.status[child]
+            stopped = ticked & (result != proceed)
+            np.copyto(status, result, where=stopped)
+            np.copyto(index, np.where(result == RUNNING, k, 0), where=stopped)
+            alive &= ~stopped
+            if k + 1 < len(kids):
+                woken = ticked & fresh & (result == proceed)
+                np.copyto(index, k + 1, where=woken)
+                np.copyto(status, RUNNING, where=woken)
+                alive &= ~woken
+        np.copyto(index, 0, where=alive)
+        np.copyto(status, proceed, where=alive)
+
+    def _if_then_else(self, i: int, mask: np.ndarray) -> None:
+        """IfThenElse; the running branch (0: none, ask the condition) is in ``counter``."""
+        kids, branch, status = self.program.children[i], self.counter[i], self.status[i]
+        np.copyto(branch, 0, where=mask & (status != RUNNING))
+        asking = mask & (branch == 0)
+        if _some(asking):
+            self._tickers[kids[0]](asking)
+            result = self.status[kids[0]]
+            np.copyto(branch, 1, where=asking & (result == SUCCESS))
+            if len(kids) == 3:
+                np.copyto(branch, 2, where=asking & (result == FAILURE))
+            np.copyto(status, result, where=asking & (branch == 0))
+        for b in range(1, len(kids)):
+            going = mask & (branch == b)
+            if _some(going):
+                self._tickers[kids[b]](going)
+                result = self.status[kids[b]]
+                np.copyto(status, result, where=going)
+                finished = going & (result != RUNNING)
+                self._halt_children(i, 0, finished)
+                np.copyto(branch, 0, where=finished)
+
+    def _while_do_else(self, i: int, mask: np.ndarray) -> None:
+        """WhileDoElse: the condition is asked on every tick."""
+        kids, status = self.program.children[i], self.status[i]
+        self._tickers[kids[0]](mask)
+        asked = self.status[kids[0]].copy()
+        result = asked.copy()
+        yes, no = mask & (asked == SUCCESS), mask & (asked == FAILURE)
+        if len(kids) == 3:
+            self._halt(kids[2], yes)
+        if _some(yes):
+            self._tickers[kids[1]](yes)
+            np.copyto(result, self.status[kids[1]], where=yes)
+        if len(kids) == 3:
+            self._halt(kids[1], no)
+            if _some(no):
+                self._tickers[kids[2]](no)
+                np.copyto(result, self.status[kids[2]], where=no)
+        self._halt_children(i, 0, mask & (asked != RUNNING) & (result != RUNNING))
+        np.copyto(status, result, where=mask)
+
+    def _parallel_all(self, i: int, mask: np.ndarray) -> None:
+        """ParallelAll: ``_done`` marks the finished children."""
+        kids = list(self.program.children[i])
+        status, done = self.status[i], self._done
+        need_failure = parallel_threshold(self.program.params[i]["max_failures"], len(kids))
+        done[kids] &= ~(mask & (status != RUNNING))
+        for child in kids:
+            ticked = mask & ~done[child]
+            if _some(ticked):
+                self._tickers[child](ticked)
+                done[child] |= ticked & (self.status[child] != RUNNING)
+        finished = mask & done[kids].all(axis=0)
+        failures = (self.status[kids] == FAILURE).sum(axis=0)
+        verdict = np.where(failures >= need_failure, FAILURE, SUCCESS)
+        np.copyto(status, np.where(finished, verdict, RUNNING), where=mask)
+        self._halt_children(i, 0, finished)
+        done[kids] &= ~finished
