@@ -330,6 +330,8 @@ def _param_fix(tag: Tag, children: int) -> str:
         return f"use a count from 1 to {children}, or -1 (all) to -{children}"
     if tag.spec == "Parallel":
         return "use policy SuccessOnAll or SuccessOnOne (synchronise only with SuccessOnAll)"
+    if tag.spec in ("BTRepeat", "RetryUntilSuccessful"):
+        return "use a whole number >= 1, or -1 for no limit"
     return "use a whole number >= 1"
 
 
