@@ -15,9 +15,9 @@ import secrets
 import numpy as np
 import pytest
 
-from pyautonomousagent.bt.spec import CONTROL_NODES, Node
+from pyautonomousagent.bt.spec import Node, node_type
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
-from pyautonomousagent.bt.vocabulary import TAGS
+from pyautonomousagent.bt.vocabulary import tags
 
 from .btcpp_reference import ours, reference
 
@@ -27,7 +27,7 @@ TREES, AGENTS, TICKS = 300, 4, 6
 SEED = int(os.environ.get("PYAA_CONFORMANCE_SEED", secrets.randbits(32)))
 
 #: The BT.CPP tags drawn (our py_trees-only tags have no BT.CPP counterpart).
-BTCPP_TAGS = [tag for tag in TAGS if tag.builtin]
+BTCPP_TAGS = [tag for tag in tags() if tag.builtin]
 
 
 def random_tree(rng: np.random.Generator, leaves: list[str], depth: int = 0) -> Node:
@@ -41,8 +41,9 @@ def random_tree(rng: np.random.Generator, leaves: list[str], depth: int = 0) -> 
         leaves.append(name)
         return Node("Scripted", name, (), {"statuses": [[SUCCESS]]})
     tag = BTCPP_TAGS[rng.integers(len(BTCPP_TAGS))]
-    least, most, _ = CONTROL_NODES[tag.spec]
-    count = int(rng.integers(max(least, 1), (most or 3) + 1)) if tag.kind == "Control" else 1
+    record = node_type(tag.spec)
+    most = record.most or 3
+    count = int(rng.integers(max(record.least, 1), most + 1))
     kids = tuple(random_tree(rng, leaves, depth + 1) for _ in range(count))
     if tag.tag in ("IfThenElse", "WhileDoElse"):  # the first child is a condition leaf
         leaves.append(f"c{len(leaves)}")

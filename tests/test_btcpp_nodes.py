@@ -84,27 +84,27 @@ def test_retry_until_successful_tries_again_at_the_next_tick(
     ],
 )
 def test_repeat_repeats_at_the_next_tick(harness, engine, script, expected, ticks):
-    h = harness(decorated("BTRepeat", scripted("a", script), num_cycles=3), engine=engine)
+    h = harness(decorated("Repeat", scripted("a", script), num_cycles=3), engine=engine)
     run(h, expected, ticks)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("cycles", [-1, 99999999999999999999])
 def test_endless_repeat_ticks_its_child_once_per_tick(harness, engine, cycles):
-    h = harness(decorated("BTRepeat", scripted("a", "SSSS"), num_cycles=cycles), engine=engine)
+    h = harness(decorated("Repeat", scripted("a", "SSSS"), num_cycles=cycles), engine=engine)
     run(h, ["R S"] * 4, [1] * 4)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
 def test_repeat_counts_cycles_across_ticks(harness, engine):
     child = sequence_with_memory("m", scripted("p", "SSSS"), scripted("q", "RSSS"))
-    h = harness(decorated("BTRepeat", child, num_cycles=2), engine=engine)
+    h = harness(decorated("Repeat", child, num_cycles=2), engine=engine)
     # tick 2: q (running) finishes cycle 1 and p starts cycle 2 in the same tick
     run(h, ["R R SI", "R R SS", "S S SS"], [1, 2, 1])
 
 
 def parallel(*kids: Node, success: int, failure: int) -> Node:
-    return Node("BTParallel", "p", kids, {"success_count": success, "failure_count": failure})
+    return Node("Parallel", "p", kids, {"success_count": success, "failure_count": failure})
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -138,9 +138,9 @@ def test_fallback_and_reactive_fallback_are_py_trees_selectors(harness, engine):
 @pytest.mark.parametrize(
     ("node", "message"),
     [
-        (Node("BTParallel", "p", (scripted("a", "S"),), {"success_count": 2}), "asks for 2 of 1"),
-        (Node("BTParallel", "p", (scripted("a", "S"),), {"failure_count": 0}), "other than 0"),
-        (Node("BTRepeat", "r", (scripted("a", "S"),), {"num_cycles": 0}), ">= 1 or -1"),
+        (Node("Parallel", "p", (scripted("a", "S"),), {"success_count": 2}), "asks for 2 of 1"),
+        (Node("Parallel", "p", (scripted("a", "S"),), {"failure_count": 0}), "other than 0"),
+        (Node("Repeat", "r", (scripted("a", "S"),), {"num_cycles": 0}), ">= 1 or -1"),
         (Node("RetryUntilSuccessful", "r", (scripted("a", "S"),)), "needs parameter"),
         (Node("SequenceWithMemory", "m", ()), "at least 1"),
     ],
@@ -173,3 +173,14 @@ def test_more_children_than_an_int16_holds_under_one_node(harness):
     counts = h.swarm.blackboard["number_ticks"]
     assert letters(h.tick()[[0, -1], 0]) == "RR" and counts[0] == 33_001
     assert letters(h.tick()[[0, -1], 0]) == "SS" and counts[0] == 33_002  # resumed at the last
+
+
+def test_every_node_type_record_has_both_engines_and_a_file_tag():
+    from pyautonomousagent.bt.nodes import NODE_TYPES
+    from pyautonomousagent.engines.batched import BATCHED_NODES
+    from pyautonomousagent.engines.pytrees import PYTREES_NODES
+
+    for name, record in NODE_TYPES.items():
+        assert name in PYTREES_NODES, name
+        assert name in BATCHED_NODES or record.status_map is not None, name
+        assert record.tags, name

@@ -18,7 +18,6 @@ from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.state import AgentView
 from pyautonomousagent.world import World
 
-
 #: The statuses a leaf may return: INVALID is the engines' "not ticked / halted" mark, which
 #: py_trees and BehaviorTree.CPP treat differently when a leaf returns it, so it is refused.
 RETURNABLE = [SUCCESS, FAILURE, RUNNING]

@@ -28,11 +28,10 @@ import numpy as np
 from pyautonomousagent.allocator import reuse_freed_memory
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
 from pyautonomousagent.bt.spec import (
-    BTCPP_TYPES,
-    STATUS_MAPS,
     Node,
     TreeError,
     control_params,
+    node_type,
     parallel_threshold,
 )
 from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
@@ -99,7 +98,7 @@ def _some(mask: np.ndarray) -> bool:
 def _status_table(type_name: str) -> np.ndarray:
     """Lookup table child status -> own status of a status-mapping decorator."""
     table = np.arange(len(NAMES), dtype=np.int8)
-    for child, own in STATUS_MAPS[type_name].items():
+    for child, own in (node_type(type_name).status_map or {}).items():
         table[_CODES[child]] = _CODES[own]
     return table
 
@@ -137,19 +136,14 @@ class BatchedEngine:
         self.current = {
             i: np.full(swarm.size, -1, dtype=np.int32)
             for i, kind in enumerate(kinds)
-            if kind in ("Sequence", "Selector")
+            if kind in ("Sequence", "Fallback")
         }
-        counted = (
-            "Repeat", "Retry", "SequenceWithMemory", "BTRepeat", "RetryUntilSuccessful",
-            "AsyncSequence", "AsyncFallback", "IfThenElse",
-        )  # fmt: skip
         self.counter = {
             i: np.zeros(swarm.size, dtype=np.int64)
-            for i, kind in enumerate(kinds)
-            if kind in counted
+            for i, node in enumerate(program.nodes)
+            if node.is_control
         }
-        parallels = "BTParallel" in kinds or "ParallelAll" in kinds
-        self._done = np.zeros(self.status.shape if parallels else (0, 0), dtype=bool)
+        self._done = np.zeros(self.status.shape, dtype=bool)
         self.leaves: dict[int, Leaf] = {
             i: make_leaf(node, defaults)
             for i, node in enumerate(program.nodes)
@@ -161,25 +155,18 @@ class BatchedEngine:
         self._tables = {
             i: _status_table(node.type)
             for i, node in enumerate(program.nodes)
-            if node.type in STATUS_MAPS
+            if node.is_control and node_type(node.type).status_map is not None
         }
         self._tickers = [self._ticker(i) for i in range(n)]
 
     def _ticker(self, i: int) -> Callable[[np.ndarray], None]:
-        node_type = self.program.nodes[i].type
-        if node_type in BTCPP_TYPES:
-            return self._btcpp_ticker(i)
-        if node_type == "Sequence":
-            return lambda mask: self._sequence(i, mask)
-        if node_type == "Selector":
-            return lambda mask: self._selector(i, mask)
-        if node_type == "Parallel":
-            return lambda mask: self._parallel(i, mask)
-        if node_type in STATUS_MAPS:
+        node = self.program.nodes[i]
+        if not node.is_control:
+            return lambda mask: self._leaf(i, mask)
+        if i in self._tables:
             return lambda mask: self._decorator(i, mask)
-        if node_type in ("Repeat", "Retry"):
-            return lambda mask: self._counted(i, mask)
-        return lambda mask: self._leaf(i, mask)
+        method = BATCHED_NODES[node.type]
+        return lambda mask: method(self, i, mask)
 
     def tick(self) -> None:
         """Tick the tree once for every agent."""
@@ -329,13 +316,14 @@ class BatchedEngine:
         self._settle(i, child, mask, result, self._tables[i][result])
 
     def _counted(self, i: int, mask: np.ndarray) -> None:
-        """Repeat (counts successes) and Retry (counts failures), as py_trees' decorators."""
+        """PyTreesRepeat (counts successes) and PyTreesRetry (counts failures), as py_trees'
+        decorators."""
         node, child = self.program.nodes[i], self.program.children[i][0]
         counter = self.counter[i]
         np.copyto(counter, 0, where=mask & (self.status[i] != RUNNING))
         self._tickers[child](mask)
         result = self.status[child]
-        if node.type == "Repeat":
+        if node.type == "PyTreesRepeat":
             success = mask & (result == SUCCESS)
             np.add(counter, 1, out=counter, where=success)
             done = success & (counter == self.program.params[i]["num_success"])
@@ -356,25 +344,7 @@ class BatchedEngine:
 
     # BehaviorTree.CPP's control nodes (see engines/btcpp.py for the same rules on py_trees).
     # ``counter`` holds SequenceWithMemory's remembered child and the loop counts of
-    # BTRepeat / RetryUntilSuccessful; ``_done`` marks the finished children of a BTParallel.
-
-    def _btcpp_ticker(self, i: int) -> Callable[[np.ndarray], None]:
-        node_type = self.program.nodes[i].type
-        if node_type == "SequenceWithMemory":
-            return lambda mask: self._sequence_with_memory(i, mask)
-        if node_type == "BTParallel":
-            return lambda mask: self._btcpp_parallel(i, mask)
-        if node_type == "AsyncSequence":
-            return lambda mask: self._async_sequence(i, mask, SUCCESS)
-        if node_type == "AsyncFallback":
-            return lambda mask: self._async_sequence(i, mask, FAILURE)
-        if node_type == "IfThenElse":
-            return lambda mask: self._if_then_else(i, mask)
-        if node_type == "WhileDoElse":
-            return lambda mask: self._while_do_else(i, mask)
-        if node_type == "ParallelAll":
-            return lambda mask: self._parallel_all(i, mask)
-        return lambda mask: self._btcpp_loop(i, mask)
+    # Repeat / RetryUntilSuccessful; ``_done`` marks the finished children of a Parallel.
 
     def _sequence_with_memory(self, i: int, mask: np.ndarray) -> None:
         index, status, kids = self.counter[i], self.status[i], self.program.children[i]
@@ -399,11 +369,11 @@ class BatchedEngine:
         np.copyto(status, SUCCESS, where=alive)
 
     def _btcpp_loop(self, i: int, mask: np.ndarray) -> None:
-        """BTRepeat (again on SUCCESS) and RetryUntilSuccessful (again on FAILURE): the child
+        """Repeat (again on SUCCESS) and RetryUntilSuccessful (again on FAILURE): the child
         is ticked again within the tick only if it was RUNNING before; a child that returns
         ``again`` at its first tick ends the tick (RUNNING, a wake-up)."""
         node, child = self.program.nodes[i], self.program.children[i][0]
-        repeat = node.type == "BTRepeat"
+        repeat = node.type == "Repeat"
         again = SUCCESS if repeat else FAILURE
         limit = self.program.params[i]["num_cycles" if repeat else "num_attempts"]
         limit = LOOP_FOREVER if limit == -1 else min(limit, LOOP_FOREVER)
@@ -537,3 +507,24 @@ class BatchedEngine:
         np.copyto(status, np.where(finished, verdict, RUNNING), where=mask)
         self._halt_children(i, 0, finished)
         done[kids] &= ~finished
+
+
+#: Node type -> the method that ticks it, called with (engine, node index, mask): one entry
+#: per record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES` (status-mapping decorators
+#: all use ``_decorator`` with the record's ``status_map``).
+BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
+    "Sequence": BatchedEngine._sequence,
+    "Fallback": BatchedEngine._selector,
+    "PyTreesParallel": BatchedEngine._parallel,
+    "PyTreesRepeat": BatchedEngine._counted,
+    "PyTreesRetry": BatchedEngine._counted,
+    "SequenceWithMemory": BatchedEngine._sequence_with_memory,
+    "Parallel": BatchedEngine._btcpp_parallel,
+    "Repeat": BatchedEngine._btcpp_loop,
+    "RetryUntilSuccessful": BatchedEngine._btcpp_loop,
+    "AsyncSequence": lambda engine, i, mask: engine._async_sequence(i, mask, SUCCESS),
+    "AsyncFallback": lambda engine, i, mask: engine._async_sequence(i, mask, FAILURE),
+    "IfThenElse": BatchedEngine._if_then_else,
+    "WhileDoElse": BatchedEngine._while_do_else,
+    "ParallelAll": BatchedEngine._parallel_all,
+}

@@ -16,7 +16,8 @@ The batched engine implements the same rules on arrays; docs/tree-files.md has t
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -307,15 +308,17 @@ class ParallelAll(py_trees.composites.Composite):
         yield self
 
 
-#: Spec node type -> py_trees class (called with name, children and the node's parameters).
-BTCPP_BEHAVIOURS = {
-    "SequenceWithMemory": SequenceWithMemory,
-    "BTParallel": Parallel,
-    "BTRepeat": Repeat,
-    "RetryUntilSuccessful": RetryUntilSuccessful,
-    "AsyncSequence": lambda name, children: AsyncSequence(name, children, Status.SUCCESS),
-    "AsyncFallback": lambda name, children: AsyncSequence(name, children, Status.FAILURE),
-    "IfThenElse": IfThenElse,
-    "WhileDoElse": WhileDoElse,
-    "ParallelAll": ParallelAll,
+#: Node type -> py_trees behaviour, called with (name, children, parameters).
+BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Behaviour]] = {
+    "SequenceWithMemory": lambda name, kids, p: SequenceWithMemory(name, kids),
+    "Parallel": lambda name, kids, p: Parallel(name, kids, p["success_count"], p["failure_count"]),
+    "Repeat": lambda name, kids, p: Repeat(name, kids[0], p["num_cycles"]),
+    "RetryUntilSuccessful": lambda name, kids, p: RetryUntilSuccessful(
+        name, kids[0], p["num_attempts"]
+    ),
+    "AsyncSequence": lambda name, kids, p: AsyncSequence(name, kids, Status.SUCCESS),
+    "AsyncFallback": lambda name, kids, p: AsyncSequence(name, kids, Status.FAILURE),
+    "IfThenElse": lambda name, kids, p: IfThenElse(name, kids),
+    "WhileDoElse": lambda name, kids, p: WhileDoElse(name, kids),
+    "ParallelAll": lambda name, kids, p: ParallelAll(name, kids, p["max_failures"]),
 }
