@@ -366,14 +366,30 @@ def scenarios_command() -> int:
     return 0
 
 
-def _tree_source(source: str) -> tuple[Document, str]:
-    """The tree document ``source`` names (a tree file, or a scenario's tree) and a name."""
+def _tree_source(source: str) -> tuple[Document, str, dict[str, Any]]:
+    """The tree document ``source`` names (a tree file, or a scenario's tree), a name, and
+    the parameters that give leaf ports their defaults (every mission's, for a bare file)."""
     if source not in names() and is_tree_file(source) and not _is_scenario_file(source):
-        return read_document(source), Path(source).stem
+        return read_document(source), Path(source).stem, _all_defaults()
     scenario = load(source)
+    defaults = vars(scenario.parameters)
     if is_tree_file(scenario.tree):
-        return read_document(scenario.tree), scenario.name
-    return document_from_node(tree_by_name(scenario.tree), scenario.tree), scenario.name
+        return read_document(scenario.tree), scenario.name, defaults
+    return document_from_node(tree_by_name(scenario.tree), scenario.tree), scenario.name, defaults
+
+
+def _all_defaults() -> dict[str, Any]:
+    """The default of every parameter any registered mission or motion model declares."""
+    from pyautonomousagent.simulation.mission import MISSIONS
+    from pyautonomousagent.simulation.motion import MOTION_MODELS
+    from pyautonomousagent.simulation.scenario import CORE_PARAMETERS
+
+    params = [*CORE_PARAMETERS]
+    for model in MOTION_MODELS.values():
+        params.extend(model.parameters)
+    for mission in MISSIONS.values():
+        params.extend(mission.parameters)
+    return {p.name: p.default for p in params}
 
 
 def _is_scenario_file(path: str) -> bool:
@@ -389,25 +405,24 @@ def _is_scenario_file(path: str) -> bool:
     return isinstance(data, dict) and "agents" in data
 
 
-def _py_trees_text(tree: Node) -> str:
-    """py_trees' own drawing of the tree, built for one agent with the default parameters."""
+def _py_trees_text(tree: Node, defaults: dict[str, Any]) -> str:
+    """py_trees' own drawing of the tree, built for one agent with the parameters ``defaults``."""
     import py_trees
 
     from pyautonomousagent.datalink import Datalink
     from pyautonomousagent.engines.pytrees import build_behaviour
-    from pyautonomousagent.simulation.scenario import Parameters
     from pyautonomousagent.state import Swarm
     from pyautonomousagent.world import World
 
-    swarm = Swarm.create(["drone1"], {"number_ticks": int})
-    world = World(100.0, 100.0, Datalink(1000.0), agent_index={"drone1": 0})
-    root = build_behaviour(tree, swarm.agent(0), world, vars(Parameters()))
+    swarm = Swarm.create(["agent1"], {"number_ticks": int})
+    world = World(100.0, 100.0, Datalink(1000.0), agent_index={"agent1": 0})
+    root = build_behaviour(tree, swarm.agent(0), world, defaults)
     return str(py_trees.display.unicode_tree(root))
 
 
 def tree_command(args: argparse.Namespace) -> int:
     """``pyaa tree``: print, draw or convert a tree file or a scenario's tree."""
-    document, name = _tree_source(args.source)
+    document, name, defaults = _tree_source(args.source)
     fmt = args.format
     if fmt in ("png", "svg"):
         from pyautonomousagent.bt.draw import draw_tree
@@ -422,7 +437,7 @@ def tree_command(args: argparse.Namespace) -> int:
 
         text = to_dot(build(document), name)
     elif args.style == "py_trees":
-        text = _py_trees_text(build(document)) + "\n"
+        text = _py_trees_text(build(document), defaults) + "\n"
     else:
         text = to_text(build(document)) + "\n"
     if args.out is None:

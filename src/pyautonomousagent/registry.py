@@ -105,6 +105,13 @@ class Registry(Generic[T]):
         """(name, entry) pairs, in order of registration."""
         return list(self._entries.items())
 
+    def values(self) -> list[T]:
+        """The entries, in order of registration."""
+        return list(self._entries.values())
+
+    def __getitem__(self, name: str) -> T:
+        return self.get(name)
+
     def __contains__(self, name: object) -> bool:
         return name in self._entries
 
