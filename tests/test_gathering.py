@@ -12,7 +12,7 @@ import pytest
 from pyautonomousagent import Simulation, load
 from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.cli import main
-from pyautonomousagent.datalink import GATHERING
+from pyautonomousagent.missions.drones.leaves import GATHERING
 
 GATHER_POINT = (50.0, 50.0)
 STATE = ["x", "y", "speed", "heading", "energy", "damage"]

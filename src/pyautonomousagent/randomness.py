@@ -22,7 +22,7 @@ _M2 = np.uint64(0x94D049BB133111EB)
 _TO_UNIT = 2.0**-53
 
 
-def _mix(z: np.ndarray) -> np.ndarray:
+def _mix(z: Any) -> Any:
     """SplitMix64's finaliser: a bijection of uint64 that spreads every input bit."""
     z = (z ^ (z >> np.uint64(30))) * _M1
     z = (z ^ (z >> np.uint64(27))) * _M2
@@ -55,14 +55,19 @@ class CounterRandom:
             draw: which draw of this agent at this iteration (0, 1, ...).
         """
         with np.errstate(over="ignore"):
-            z = np.uint64(self.seed & 0xFFFFFFFFFFFFFFFF)
+            z: Any = np.uint64(self.seed & 0xFFFFFFFFFFFFFFFF)
             for part in (stream, iteration, draw):
                 z = _mix(z + _GAMMA * np.uint64(int(part) & 0xFFFFFFFFFFFFFFFF))
             agents = np.atleast_1d(np.asarray(rows)).astype(np.uint64)
             return _mix(z + _GAMMA * (agents + np.uint64(1)))
 
     def uniform(
-        self, stream: int, rows: Any, iteration: int, low: float = 0.0, high: float = 1.0,
+        self,
+        stream: int,
+        rows: Any,
+        iteration: int,
+        low: float = 0.0,
+        high: float = 1.0,
         draw: int = 0,
     ) -> Any:
         """Uniform numbers in [low, high): a float for an int ``rows``, else an array."""

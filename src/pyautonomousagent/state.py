@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -223,6 +223,10 @@ class AgentView:
         if self.is_one:
             return self.swarm.names[int(self.index)]
         return np.array(self.swarm.names, dtype=object)[self.index]
+
+    if TYPE_CHECKING:  # the mission's columns are attributes of the swarm's subclass
+
+        def __setattr__(self, key: str, value: Any) -> None: ...
 
     def __getattr__(self, key: str) -> Any:
         """Only reached for a name that is no column: AttributeError naming the columns."""

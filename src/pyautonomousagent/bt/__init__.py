@@ -5,6 +5,7 @@ to its missions (:mod:`pyautonomousagent.missions.drones.leaves`)."""
 
 from pyautonomousagent.bt import scripted  # noqa: F401  (registers the Scripted test leaf)
 from pyautonomousagent.bt.files import load_tree, save_tree
+from pyautonomousagent.bt.leaf import Leaf, LeafError, Port, register_leaf
 from pyautonomousagent.bt.spec import (
     Node,
     fallback,
@@ -14,7 +15,6 @@ from pyautonomousagent.bt.spec import (
     reactive_sequence,
     sequence,
 )
-from pyautonomousagent.bt.leaf import Leaf, LeafError, Port, register_leaf
 from pyautonomousagent.bt.status import (
     FAILURE,
     INVALID,

@@ -180,7 +180,9 @@ def resolve_mission(ref: str, folder: Path | None = None) -> type[Mission]:
         try:
             module = importlib.import_module(module_name)
         except ImportError as error:
-            raise ScenarioError(f"mission {ref!r}: cannot import {module_name!r}: {error}") from None
+            raise ScenarioError(
+                f"mission {ref!r}: cannot import {module_name!r}: {error}"
+            ) from None
         return _pick(module, attribute, ref)
     for entry in metadata.entry_points(group=ENTRY_POINT_GROUP):
         if entry.name == ref:

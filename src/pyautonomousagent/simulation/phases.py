@@ -75,8 +75,7 @@ def process_messages(sim: Simulation) -> None:
         elif kind not in sim.unhandled:
             sim.unhandled.add(kind)
             log.warning(
-                "message type %r was delivered but mission %r has no handler for it "
-                "(known: %s)",
+                "message type %r was delivered but mission %r has no handler for it (known: %s)",
                 kind,
                 sim.mission.name,
                 ", ".join(sim.handlers) or "none",

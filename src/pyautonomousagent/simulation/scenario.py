@@ -120,7 +120,8 @@ class Scenario:
         return _read(Reader(source), data, folder)
 
     def with_overrides(self, **changes: Any) -> Scenario:
-        """A copy with top-level fields or ``parameters`` keys replaced, validated again.
+        """A copy with top-level fields, ``parameters`` keys or world objects replaced,
+        validated again.
 
         ``None`` values are ignored, so CLI options that were not given change nothing.
         """
@@ -130,6 +131,8 @@ class Scenario:
                 continue
             if key in data["parameters"] and key not in data:
                 data["parameters"][key] = value
+            elif key in data["world"] and key not in data:
+                data["world"][key] = value
             else:
                 data[key] = value
         return _read(Reader(f"scenario {self.name!r}"), data, None)

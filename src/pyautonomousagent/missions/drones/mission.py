@@ -12,7 +12,12 @@ from typing import Any, ClassVar
 import numpy as np
 
 from pyautonomousagent.datalink import Delivery
-from pyautonomousagent.missions.drones.leaves import DESTINATION, REFUELING, SHARING_DATA, SURVEILLANCE
+from pyautonomousagent.missions.drones.leaves import (
+    DESTINATION,
+    REFUELING,
+    SHARING_DATA,
+    SURVEILLANCE,
+)
 from pyautonomousagent.missions.drones.sensors import (
     RadiationSource,
     accumulate_damage,
@@ -140,10 +145,14 @@ class DroneMission(Mission):
         sources = sim.world.objects.radiation_sources
         if any(source.active for source in sources):
             np.copyto(s["radiation"], radiation_level(s["x"], s["y"], sources), where=powered)
-            s["damage"][:] = accumulate_damage(s["damage"], s["radiation"], p.radiation_damage_factor)
+            s["damage"][:] = accumulate_damage(
+                s["damage"], s["radiation"], p.radiation_damage_factor
+            )
         # else: no source is active, so every reading is 0 and damage does not grow
         if not powered.all():
-            sim.alert(np.flatnonzero(~powered), "zero energy", "zero energy: sensors off, not moving")
+            sim.alert(
+                np.flatnonzero(~powered), "zero energy", "zero energy: sensors off, not moving"
+            )
         return powered
 
     def message_types(self) -> list[MessageType]:

@@ -97,4 +97,3 @@ def _last_per_key(keys: np.ndarray) -> np.ndarray:
     """Positions of the last occurrence of each distinct key."""
     reversed_first = np.unique(keys[::-1], return_index=True)[1]
     return keys.size - 1 - reversed_first
-

@@ -11,7 +11,13 @@ from pyautonomousagent.datalink import Delivery
 from pyautonomousagent.missions.drones.leaves import GATHERING
 from pyautonomousagent.missions.drones.mission import DroneMission, cycled, read_points
 from pyautonomousagent.render.marks import Mark
-from pyautonomousagent.simulation import MessageType, Param, Simulation, WorldObject, register_mission
+from pyautonomousagent.simulation import (
+    MessageType,
+    Param,
+    Simulation,
+    WorldObject,
+    register_mission,
+)
 from pyautonomousagent.simulation.params import Reader
 from pyautonomousagent.simulation.scenario import Scenario, check_point_in_world
 from pyautonomousagent.state import Swarm
@@ -43,7 +49,8 @@ class GatheringMission(DroneMission):
         sender = scenario.parameters.gathering_sender
         if sender not in names:
             raise reader.fail(
-                "parameters.gathering_sender", f"one of the drones (drone1..drone{len(names)})",
+                "parameters.gathering_sender",
+                f"one of the drones (drone1..drone{len(names)})",
                 sender,
             )
         for key in ("refueling_positions", "surveillance_positions"):
@@ -53,7 +60,9 @@ class GatheringMission(DroneMission):
     def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
         """On the refuelling slots; the first destination is the own surveillance position."""
         super().place(swarm, world, rng)
-        self.set_surveillance(swarm, cycled(self.scenario.objects.surveillance_positions, swarm.size))
+        self.set_surveillance(
+            swarm, cycled(self.scenario.objects.surveillance_positions, swarm.size)
+        )
 
     def message_types(self) -> list[MessageType]:
         """Sharing data, and "gathering" (recorded): the receiver adopts the position."""
