@@ -711,7 +711,7 @@ def test_unknown_leaf_type_with_did_you_mean():
 def test_engine_reports_leaf_errors_as_tree_errors(swarm_world):
     swarm, world = swarm_world(1)
     bad_type = sequence("root", leaf("Condition_Low_Energy_Leve", "low"))
-    with pytest.raises(TreeError, match="did you mean Condition_Low_Energy_Level") as info:
+    with pytest.raises(TreeError, match="did you mean 'Condition_Low_Energy_Level'") as info:
         PyTreesEngine(bad_type, swarm, world, DEFAULTS)
     assert "'low'" in str(info.value)  # a TreeError names the node
     bad_port = sequence("root", leaf("Condition_Low_Energy_Level", "low", level=3))

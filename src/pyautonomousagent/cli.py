@@ -40,7 +40,12 @@ class _Parser(argparse.ArgumentParser):
 def _parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="pyaa", description="Model autonomous agents with behaviour trees.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    sub.add_parser("scenarios", help="list the registered scenarios")
+    scenarios = sub.add_parser(
+        "scenarios", help="list the registered scenarios, or show one with its parameters"
+    )
+    scenarios.add_argument(
+        "name", nargs="?", help="a scenario name or .yaml file: its mission, world and parameters"
+    )
     run = sub.add_parser("run", help="run a scenario and write its data and animation")
     run.add_argument("scenario", help="a registered scenario name or a scenario .yaml file")
     run.add_argument("--agents", type=int, help="number of agents (default: the scenario's)")
@@ -355,8 +360,12 @@ def _print_summary(sim: Simulation, written: list[Path]) -> None:
         print(f"  wrote {path}")
 
 
-def scenarios_command() -> int:
-    """``pyaa scenarios``: one line per registered scenario."""
+def scenarios_command(name: str | None = None) -> int:
+    """``pyaa scenarios``: one line per registered scenario; with a name, that scenario's
+    mission, world objects and parameters (units, ranges, values)."""
+    if name is not None:
+        print(_describe(load(name)))
+        return 0
     for name in names():
         scenario = load(name)
         print(
@@ -364,6 +373,40 @@ def scenarios_command() -> int:
             f"{scenario.description}"
         )
     return 0
+
+
+def _describe(scenario: Scenario) -> str:
+    """A scenario as ``pyaa scenarios NAME`` shows it."""
+    from pyautonomousagent.simulation.params import plain
+    from pyautonomousagent.simulation.scenario import parameter_list
+
+    mission = scenario.mission_type
+    lines = [
+        f"{scenario.name}: {scenario.description}",
+        f"  mission     {scenario.mission} ({mission.description})",
+        f"  tree        {scenario.tree}",
+        f"  agents      {scenario.agents} ({mission.agent_prefix}1..)",
+        f"  iterations  {scenario.iterations}",
+        f"  model       {scenario.model}",
+        f"  world       {scenario.world[0]:g} x {scenario.world[1]:g}",
+    ]
+    for kind in mission.world_objects:
+        value = json.dumps(plain(getattr(scenario.objects, kind.name)))
+        lines.append(f"    {kind.name}: {value[:200]}  ({kind.doc})")
+    if scenario.model_settings is not None:
+        lines.append(f"  {scenario.model} settings: {json.dumps(plain(scenario.model_settings))}")
+    lines.append("  parameters (set with --set NAME=VALUE; [range], default, owner):")
+    values = vars(scenario.parameters)
+    for owner, param in parameter_list(scenario):
+        unit = f" {param.unit}" if param.unit else ""
+        low = "" if param.minimum is None else f"{param.minimum:g}"
+        high = "" if param.maximum is None else f"{param.maximum:g}"
+        bounds = f" [{low}..{high}]" if low or high else ""
+        lines.append(
+            f"    {param.name} = {values[param.name]!r}{unit}{bounds}, default "
+            f"{param.default!r}, {owner}: {param.doc}"
+        )
+    return "\n".join(lines)
 
 
 def _tree_source(source: str) -> tuple[Document, str, dict[str, Any]]:
@@ -458,7 +501,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "run":
             return run(args)
         if args.command == "scenarios":
-            return scenarios_command()
+            return scenarios_command(args.name)
         if args.command == "bench":
             return bench_command(args)
         return tree_command(args)
