@@ -58,11 +58,8 @@ class Logged(Leaf):
 @contextmanager
 def logged_leaf_type() -> Iterator[None]:
     """Register the ``Logged`` leaf type for the duration of the block."""
-    LEAF_TYPES["Logged"] = Logged
-    try:
+    with LEAF_TYPES.override("Logged", Logged):
         yield
-    finally:
-        del LEAF_TYPES["Logged"]
 
 
 def with_logged_leaves(root: Node, table: dict[str, list[list[int]]], log: list) -> Node:

@@ -175,7 +175,7 @@ def control_params(node: Node) -> dict[str, Any]:
 
 
 def parallel_threshold(value: Any, children: int, where: str = "count") -> int:
-    """A BTParallel count resolved as BehaviorTree.CPP does: ``k >= 1`` is k children,
+    """A Parallel count resolved as BehaviorTree.CPP does: ``k >= 1`` is k children,
     ``-1`` is all of them, ``-2`` all but one, ...; TreeError unless 1 <= result <= children."""
     if isinstance(value, bool) or not isinstance(value, int) or value == 0:
         raise TreeError(f"{where} must be a whole number other than 0, got {value!r}")
