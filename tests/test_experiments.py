@@ -281,6 +281,7 @@ def test_a_failing_run_is_recorded_and_the_sweep_goes_on(tmp_path) -> None:
     failed = [r for r in rows if r["status"] == "failed"]
     assert [(r["low_energy_threshold"], r["seed"]) for r in failed] == [(99, 1)]
     assert failed[0]["error"] == "ValueError: seed 1 broke" and math.isnan(failed[0]["fragile"])
+    assert failed[0]["agents"] == 5 and failed[0]["energy_use"] == 0.05
     assert all(r["fragile"] == 1.0 for r in rows if r["status"] == "ok")
     assert same_rows(pq.read_table(tmp_path / "s" / "results.parquet"), result.table)
     # per-run data: one hive-partitioned dataset, parameters and seed as columns
@@ -367,6 +368,8 @@ def test_cli_sweep_then_plot(tmp_path, capsys) -> None:
     table = pq.read_table(out / "results.parquet")
     assert table.column_names[:4] == ["run", "run_id", "low_energy_threshold", "seed"]
     assert table["low_energy_threshold"].to_pylist() == [96, 96, 99, 99]
+    assert table["agents"].to_pylist() == [5] * 4 and table["iterations"].to_pylist() == [400] * 4
+    assert table["refuel_rate"].to_pylist() == [2.0] * 4  # every parameter is a column
     assert main(["plot", str(out), "--measure", "low", "--x", "low_energy_threshold"]) == 0
     printed = capsys.readouterr().out
     assert "low_energy_threshold=96: n=2" in printed

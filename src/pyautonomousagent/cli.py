@@ -611,8 +611,8 @@ def sweep_command(args: argparse.Namespace) -> int:
         )
     except KeyboardInterrupt:
         print(
-            f"pyaa: interrupted; finished runs are kept, continue with: pyaa sweep "
-            f"{args.experiment} --out {out} --resume",
+            f"pyaa: interrupted; the finished runs are kept in {out}: run the same command "
+            "with --resume to continue",
             file=sys.stderr,
         )
         return 130

@@ -20,6 +20,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
 
+from pyautonomousagent.simulation.scenario import to_mapping
+
 if TYPE_CHECKING:
     from pyautonomousagent.bt.spec import Node
     from pyautonomousagent.experiments.measures import Measure
@@ -61,6 +63,7 @@ def execute(task: RunTask) -> dict[str, Any]:
     run = task.run
     row: dict[str, Any] = {"run": run.index, "run_id": run.run_id, **run.point, "seed": run.seed}
     row.update({m.name: math.nan for m in task.measures})
+    row.update({k: v for k, v in scenario_parameters(task.scenario).items() if k not in row})
     start = time.perf_counter()
     log = logging.getLogger("pyautonomousagent")
     was_disabled, log.disabled = log.disabled, True
@@ -86,6 +89,14 @@ def execute(task: RunTask) -> dict[str, Any]:
         log.disabled = was_disabled
     row["seconds"] = time.perf_counter() - start
     return row
+
+
+def scenario_parameters(scenario: Any) -> dict[str, Any]:
+    """A scenario's parameters as result columns: ``agents``, ``iterations`` and every
+    entry of its ``parameters`` (plain numbers, strings or booleans only)."""
+    data = to_mapping(scenario)
+    values = {"agents": data["agents"], "iterations": data["iterations"], **data["parameters"]}
+    return {k: v for k, v in values.items() if isinstance(v, bool | int | float | str)}
 
 
 def one_line(error: BaseException) -> str:

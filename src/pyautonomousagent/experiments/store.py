@@ -65,9 +65,14 @@ def column_type(values: Sequence[Any]) -> pa.DataType:
     return pa.string()
 
 
-def results_schema(parameters: Mapping[str, Sequence[Any]], measures: Sequence[str]) -> pa.Schema:
-    """The results' columns: run, run_id, each parameter, seed, each measure, status, error,
-    seconds."""
+def results_schema(
+    parameters: Mapping[str, Sequence[Any]],
+    measures: Sequence[str],
+    constants: Mapping[str, Any] | None = None,
+) -> pa.Schema:
+    """The results' columns: run, run_id, each varied parameter, seed, each measure, status,
+    error, seconds, then each parameter the experiment does not vary (``constants``), so
+    that every run's row holds all its parameters."""
     fields = [pa.field("run", pa.int64()), pa.field("run_id", pa.string())]
     fields += [pa.field(name, column_type(values)) for name, values in parameters.items()]
     fields.append(pa.field("seed", pa.int64()))
@@ -77,6 +82,10 @@ def results_schema(parameters: Mapping[str, Sequence[Any]], measures: Sequence[s
         pa.field("error", pa.string()),
         pa.field("seconds", pa.float64()),
     ]
+    taken = {f.name for f in fields}
+    for name, value in (constants or {}).items():
+        if name not in taken:
+            fields.append(pa.field(name, column_type([value])))
     return pa.schema(fields)
 
 

@@ -30,7 +30,7 @@ import pyarrow as pa
 from pyautonomousagent.experiments.backends import Backend, make_backend
 from pyautonomousagent.experiments.expression import Expression
 from pyautonomousagent.experiments.measures import _Evaluate
-from pyautonomousagent.experiments.runner import RunTask, execute, one_line
+from pyautonomousagent.experiments.runner import RunTask, execute, one_line, scenario_parameters
 from pyautonomousagent.experiments.spec import Experiment, ExperimentError, Run
 from pyautonomousagent.experiments.store import (
     RESULTS,
@@ -196,6 +196,7 @@ def sweep(
     schema = results_schema(
         {name: [p[name] for p in points] for name in experiment.parameters},
         [m.name for m in experiment.measures],
+        scenario_parameters(scenario),
     )
     owned = isinstance(backend, str)
     chosen = make_backend(backend, workers, address) if isinstance(backend, str) else backend
@@ -290,6 +291,7 @@ def failed_row(task: RunTask, error: BaseException) -> dict[str, Any]:
     run: Run = task.run
     row: dict[str, Any] = {"run": run.index, "run_id": run.run_id, **run.point, "seed": run.seed}
     row.update({m.name: math.nan for m in task.measures})
+    row.update({k: v for k, v in scenario_parameters(task.scenario).items() if k not in row})
     row.update(status="failed", error=one_line(error), seconds=math.nan)
     return row
 
