@@ -189,15 +189,12 @@ def plot_measure(
         ax.set_xticks(range(len(labels)), [str(v) for v in labels])
     unit = descriptions.get(measure, {}).get("unit", "")
     ax.set_xlabel(x)
-    ax.set_ylabel(f"{measure} ({unit})" if unit else measure)
+    ax.set_ylabel(f"{measure} ({unit})" if unit and unit != measure else measure)
     seeds = sorted({r["n"] for r in rows})
     n_text = f"{seeds[0]}" if len(seeds) == 1 else f"{seeds[0]}-{seeds[-1]}"
-    band = {"ci95": "95 % CI of the mean", "sd": "± 1 sd", "range": "min-max", "none": ""}
-    ax.set_title(
-        title
-        or f"{measure} vs {x}: mean over {n_text} runs per point, {band[interval]}".rstrip(", "),
-        fontsize=10,
-    )
+    band = {"ci95": ", 95 % CI", "sd": ", ± 1 sd", "range": ", min to max", "none": ""}
+    default = f"{measure} vs {x} (mean of {n_text} runs{band[interval]})"
+    ax.set_title(title or default, fontsize=10)
     ax.grid(True, alpha=0.3)
     if by:
         ax.legend(fontsize=8)
