@@ -215,20 +215,7 @@ def sweep(
     manifest = _manifest(experiment, scenario, runs, chosen, previous)
     try:
         write_manifest(out, manifest)
-        runs_dir = str((out / RUNS).resolve()) if save_runs else None
-        tree = None if "tree" in experiment.parameters else scenario_tree(scenario)
-        tasks = [
-            RunTask(
-                run,
-                scenario,
-                experiment.engine,
-                experiment.record_every,
-                experiment.measures,
-                runs_dir,
-                tree,
-            )
-            for run in todo
-        ]
+        tasks = _tasks(experiment, scenario, todo, out / RUNS if save_runs else None)
         _execute(
             tasks,
             chosen,
@@ -252,6 +239,26 @@ def sweep(
         write_manifest(out, manifest)
     workers_text = f"{chosen.name} x {manifest['backend']['workers']}"
     return SweepResult(out, table, counts, time.perf_counter() - start, workers_text)
+
+
+def _tasks(
+    experiment: Experiment, scenario: Any, runs: list[Run], runs_dir: Path | None
+) -> list[RunTask]:
+    """One task per run; the tree is read once here unless the tree itself is varied."""
+    tree = None if "tree" in experiment.parameters else scenario_tree(scenario)
+    folder = str(runs_dir.resolve()) if runs_dir is not None else None
+    return [
+        RunTask(
+            run,
+            scenario,
+            experiment.engine,
+            experiment.record_every,
+            experiment.measures,
+            folder,
+            tree,
+        )
+        for run in runs
+    ]
 
 
 def _execute(
