@@ -153,3 +153,29 @@ def test_dask_cluster_losing_a_worker_gives_every_result_once(on_pool, tmp_path)
             backend.close()
         for process in reversed(processes):
             _stop(process)
+
+
+def test_ctrl_c_stops_pyaa_sweep_and_resume_finishes_it(tmp_path) -> None:
+    out = tmp_path / "s"
+    command = [sys.executable, "-m", "pyautonomousagent.cli", "sweep", "patrol", "--vary",
+               "low_energy_threshold=96:99:1", "--agents", "5", "--iterations", "400",
+               "--seeds", "20", "--measure", "refuels", "--serial", "--out", str(out)]  # fmt: skip
+    process = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 30
+        while not (out / "experiment.json").exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(0.7)  # a few runs finish
+        process.send_signal(signal.SIGINT)
+        _, err = process.communicate(timeout=30)
+    finally:
+        if process.poll() is None:
+            process.kill()
+    assert process.returncode == 130 and "run the same command with --resume" in err
+    before = journal_ids(out)
+    assert 0 < len(before) < 80 and len(set(before)) == len(before)
+    finished = subprocess.run([*command, "--resume"], capture_output=True, text=True, timeout=60)
+    assert finished.returncode == 0, finished.stderr
+    assert f"({80 - len(before)} ok, 0 failed, {len(before)} done before)" in finished.stdout
+    after = journal_ids(out)
+    assert len(after) == len(set(after)) == 80 and after[: len(before)] == before
