@@ -390,3 +390,16 @@ def test_cli_bad_input_is_one_line_exit_2(tmp_path, capsys, argv, message) -> No
     assert main([*argv, *(["--out", str(tmp_path / "o")] if argv[0] == "sweep" else [])]) == 2
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1 and err.startswith("pyaa: error: ")
+
+
+def test_dask_is_imported_only_for_a_dask_backend() -> None:
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, pyautonomousagent.cli, pyautonomousagent.experiments.backends as b;"
+        "b.make_backend('pool', 1).close();"
+        "print(sorted(m for m in sys.modules if m.split('.')[0] in ('dask', 'distributed')))"
+    )
+    found = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert found.stdout.strip() == "[]"
