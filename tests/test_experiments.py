@@ -143,6 +143,16 @@ def test_gathering_time_is_when_the_last_agent_arrives() -> None:
     assert math.isnan(m.gathering_time(never))
 
 
+def test_gathering_time_of_the_gathering_scenario(gathering_run: Simulation) -> None:
+    run = RunData.from_simulation(gathering_run)
+    arrived = 5000 + m.gathering_time(run)  # the order is given at iteration 5000
+    assert 5000 < arrived < 8000
+    row = int(np.flatnonzero(run.iterations == arrived)[0])
+    x, y = run.columns["x"], run.columns["y"]
+    near = np.hypot(x[5000 : row + 1] - 50.0, y[5000 : row + 1] - 50.0) <= 0.5  # drone1's point
+    assert near.any(axis=0).all() and not near[:-1].any(axis=0).all()
+
+
 def test_measures_of_a_real_run_agree_with_its_events_and_table() -> None:
     scenario = load("patrol").with_overrides(agents=5, iterations=150, energy_use=1.0)
     sim = Simulation.create(scenario, seed=0).run(progress=False)
