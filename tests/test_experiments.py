@@ -317,6 +317,15 @@ def test_sweep_refuses_another_sweeps_folder_and_a_changed_experiment(tmp_path) 
     assert again.counts == {"ok": 0, "failed": 0, "skipped": 4}
 
 
+def test_a_measure_the_pool_cannot_receive_is_refused_before_running(tmp_path) -> None:
+    with MEASURES.override("here", Measure("here", lambda run: 1.0)):
+        experiment = Experiment.from_mapping({**TINY, "measures": ["here"]})
+    with pytest.raises(ExperimentError, match="cannot be sent to the pool's processes"):
+        sweep(experiment, tmp_path / "s", "pool", workers=1)
+    assert not (tmp_path / "s").exists()
+    assert sweep(experiment, tmp_path / "t", "serial").counts["ok"] == 4
+
+
 def test_a_run_too_large_for_a_worker_is_refused(tmp_path) -> None:
     from pyautonomousagent.experiments.backends import SerialBackend
 
