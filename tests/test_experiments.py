@@ -231,6 +231,14 @@ def test_grid_ranges_samples_and_run_keys() -> None:
         ({"vary": {"seed": [1, 2]}}, "parameter 'seed' is a result column"),
         ({"vary": {"agents": {"from": 1, "to": 10**7, "step": 1}}}, "at most 1000000"),
         ({"record_every": 0}, "record_every must be a whole number >= 1"),
+        (
+            {"vary": {"agents": list(range(1, 1001)), "refuel_rate": list(range(1001))}},
+            "at most 1000000 runs",
+        ),
+        (
+            {"sample": {"count": 10**12, "seed": 1, "parameters": {"a": {"uniform": [0, 1]}}}},
+            "sample.count must be a whole number from 1 to 1000000",
+        ),
         ({"sample": {"count": 2, "seed": 1, "parameters": {"a": {"normal": 1}}}}, "uniform"),
     ],
 )
