@@ -78,6 +78,7 @@ class Recorder:
         traced: indices of the agents whose node statuses are kept.
 
     Attributes:
+        groups: the recorded column names by origin: "state", "blackboard", "model".
         nodes: the tree's nodes in tick order (``Node.walk()``), or [] without a tree.
         traced: indices of the traced agents, shape (K,).
         traces: node statuses of the traced agents, shape (records, nodes, K), int8.
@@ -102,6 +103,11 @@ class Recorder:
         self.iterations = np.zeros(records, dtype=np.int64)
         sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
         self.columns = {k: preallocated((records, swarm.size), v.dtype) for k, v in sources.items()}
+        self.groups = {
+            "state": list(swarm.columns),
+            "blackboard": list(swarm.blackboard),
+            "model": [k for k in extra or {} if k not in swarm.columns and k not in swarm.blackboard],
+        }
         self.nodes: list[Node] = list(tree.walk()) if tree is not None else []
         self._leaf_rows = np.array(
             [i for i, node in enumerate(self.nodes) if not node.is_control], dtype=np.int16
