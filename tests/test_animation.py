@@ -17,15 +17,13 @@ from pyautonomousagent.render.animation import (
     HEADING_COLOUR,
     MAX_LABELLED,
     FramePainter,
-    Palette,
-    colour_codes,
     draw_frame,
     frame_rows,
     panel_rows,
-    refuelling_slots,
-    surveillance_marks,
     write_gif,
 )
+from pyautonomousagent.render.default_marks import refuelling_slots, surveillance_marks
+from pyautonomousagent.render.gif import Palette, colour_codes
 from pyautonomousagent.scenarios import load
 from pyautonomousagent.simulation import Simulation
 
@@ -131,16 +129,21 @@ def test_patrol_marks_its_two_positions_and_many_drones_go_unlabelled():
     sim = Simulation.create(scenario, seed=0).run(progress=False)
     assert surveillance_marks(sim.recorder, scenario) == [(70, 80), (70, 20)]
     assert refuelling_slots(sim.recorder, scenario) == [(10, 50)]
-    assert FramePainter(sim.recorder, scenario).labels == []
+    assert not FramePainter(sim.recorder, scenario).labelled
 
 
-def test_panel_shows_the_iteration_and_first_drone_with_fixed_labels(run):
-    first, later = panel_rows(run.recorder, 0), panel_rows(run.recorder, 150)
+def test_panel_shows_the_iteration_and_followed_drone_with_fixed_labels_and_units(run):
+    first, later = panel_rows(run.recorder, 0, 1), panel_rows(run.recorder, 150, 1)
     assert [label for label, _ in first] == [label for label, _ in later]
-    assert later[0] == ("Iteration", "150")
+    assert later[0] == ("Iteration", "150 of 200")
+    assert later[1] == ("Following", "drone2")
     values = dict(later)
-    assert values["  ticks"] == str(run.recorder.column("number_ticks")[150, 0])
-    assert values["  energy"] == f"{run.recorder.column('energy')[150, 0]:.1f} %"
+    assert values["  leaf ticks so far"] == str(run.recorder.column("number_ticks")[150, 1])
+    assert values["  energy [%]"] == f"{run.recorder.column('energy')[150, 1]:.2f}"
+    x, y = (run.recorder.column(k)[150, 1] for k in ("x", "y"))
+    assert values["  position [u]"] == f"({x:.2f}, {y:.2f})"
+    leaf = run.recorder.nodes[run.recorder.behaviour[150, 1]].name
+    assert later[later.index(("Active behaviour (leaf)", "")) + 1] == ("", leaf)
 
 
 def fake(iterations: list[int]) -> SimpleNamespace:

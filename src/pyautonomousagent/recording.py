@@ -19,13 +19,14 @@ import json
 import mmap
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
 
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.status import INVALID, NAMES, RUNNING
-from pyautonomousagent.state import Swarm
+from pyautonomousagent.state import STATE_COLUMNS, Swarm
 
 #: Agents traced by default: all of a swarm this small, else the first this many.
 DEFAULT_TRACED = 10
@@ -253,7 +254,81 @@ def to_table(recorder: Recorder) -> pa.Table:
         data[key] = pa.array(recorder.column(key).reshape(-1))
     if recorder.behaviour is not None:
         data = _insert_after(data, "requested_heading", "behaviour", _behaviour_column(recorder))
-    return _documented(pa.table(data))
+    groups = {key: group for group, keys in recorder.groups.items() for key in keys}
+    return _documented(pa.table(data), groups=groups)
+
+
+def recorder_from_tables(
+    states: pa.Table, traces: pa.Table | None = None, nodes: Sequence[Mapping[str, Any]] = ()
+) -> Recorder:
+    """A :class:`Recorder` holding a written run again (for replays of an existing run).
+
+    Args:
+        states: the states table (:func:`to_table`, as written; CSV reads back too).
+        traces: the traces table (:func:`trace_table`), or None.
+        nodes: the tree's nodes (:func:`node_list`); by default from the traces' metadata.
+    """
+    iteration = states.column("iteration").to_numpy()
+    records = int(np.unique(iteration).size)
+    n = states.num_rows // max(records, 1)
+    recorder = Recorder.__new__(Recorder)
+    recorder.every = int(np.diff(iteration[::n]).min()) if records > 1 else 1
+    recorder.count = records
+    recorder.iterations = iteration[::n].astype(np.int64)
+    recorder.names = [str(a) for a in states.column("agent").to_pylist()[:n]]
+    skip = {"iteration", "agent", "behaviour"}
+    recorder.columns = {
+        f.name: states.column(f.name).to_numpy().reshape(records, n)
+        for f in states.schema
+        if f.name not in skip
+    }
+    recorder.groups = {"state": [], "blackboard": [], "model": []}
+    for name in recorder.columns:
+        meta = states.schema.field(name).metadata or {}
+        group = meta.get(b"group", b"").decode() or ("state" if name in STATE_COLUMNS else "model")
+        recorder.groups.setdefault(group, []).append(name)
+    if not nodes and traces is not None and traces.schema.metadata:
+        nodes = json.loads(traces.schema.metadata.get(b"pyautonomousagent.nodes", b"[]"))
+    recorder.nodes = _rebuild(nodes)
+    recorder._leaf_rows = np.array(
+        [i for i, node in enumerate(recorder.nodes) if not node.is_control], dtype=np.int16
+    )
+    recorder.behaviour = _behaviour_codes(states, recorder.nodes, records, n)
+    names = [str(a) for a in traces.column("agent").to_pylist()] if traces is not None else []
+    k = len(dict.fromkeys(names))
+    recorder.traced = np.array([recorder.names.index(a) for a in names[:k]], dtype=np.intp)
+    shape = (records, len(recorder.nodes), k)
+    recorder.traces = np.zeros(shape, dtype=np.int8)
+    if traces is not None and recorder.nodes:
+        for j, node in enumerate(recorder.nodes):
+            column = traces.column(node.name).to_numpy().astype(np.int8)
+            recorder.traces[:, j, :] = column.reshape(records, k)
+    return recorder
+
+
+def _rebuild(nodes: Sequence[Mapping[str, Any]]) -> list[Node]:
+    """:class:`Node` objects (in tick order) from :func:`node_list`'s dicts."""
+    children: dict[int, list[int]] = {i: [] for i in range(len(nodes))}
+    for i, node in enumerate(nodes):
+        if int(node["parent"]) >= 0:
+            children[int(node["parent"])].append(i)
+    built: dict[int, Node] = {}
+    for i in reversed(range(len(nodes))):
+        kids = tuple(built[c] for c in children[i])
+        built[i] = Node(str(nodes[i]["type"]), str(nodes[i]["name"]), kids)
+    return [built[i] for i in range(len(nodes))]
+
+
+def _behaviour_codes(
+    states: pa.Table, nodes: Sequence[Node], records: int, n: int
+) -> np.ndarray | None:
+    """The ``behaviour`` column as node indices (records, N), -1 for none; None if absent."""
+    if "behaviour" not in states.column_names or not nodes:
+        return None
+    index = {node.name: i for i, node in enumerate(nodes)}
+    names = states.column("behaviour").to_pylist()
+    codes = np.array([index.get(v, -1) if v else -1 for v in names], dtype=np.int16)
+    return codes.reshape(records, n)
 
 
 def trace_table(recorder: Recorder) -> pa.Table:
@@ -324,14 +399,22 @@ def _insert_after(
     return dict([*items[:at], (key, value), *items[at:]])
 
 
-def _documented(table: pa.Table, docs: Mapping[str, tuple[str, str]] | None = None) -> pa.Table:
+def _documented(
+    table: pa.Table,
+    docs: Mapping[str, tuple[str, str]] | None = None,
+    groups: Mapping[str, str] | None = None,
+) -> pa.Table:
     """``table`` with each column's unit and description as field metadata, from ``docs``
-    or else :data:`COLUMN_DOCS` (unknown columns get empty strings)."""
+    or else :data:`COLUMN_DOCS` (unknown columns get empty strings), and its ``group``
+    (state, blackboard, model) where ``groups`` gives one."""
     docs = {**COLUMN_DOCS, **(docs or {})}
     fields = []
     for field in table.schema:
         unit, text = docs.get(field.name, ("", ""))
-        fields.append(field.with_metadata({"unit": unit, "description": text}))
+        metadata = {"unit": unit, "description": text}
+        if groups and field.name in groups:
+            metadata["group"] = groups[field.name]
+        fields.append(field.with_metadata(metadata))
     return table.cast(pa.schema(fields, metadata=table.schema.metadata))
 
 
