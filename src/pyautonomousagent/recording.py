@@ -45,8 +45,11 @@ COLUMN_DOCS: dict[str, tuple[str, str]] = {
     "radiation": ("percent", "last radiation sensor reading, 0 to 100"),
     "requested_speed": ("world unit / iteration", "speed the tree asks the control system for"),
     "requested_heading": ("degree", "heading the tree asks the control system for"),
-    "behaviour": ("", "active behaviour: the leaf RUNNING after the tick, else the last leaf "
-                  "ticked (empty before the first tick)"),
+    "behaviour": (
+        "",
+        "active behaviour: the leaf RUNNING after the tick, else the last leaf "
+        "ticked (empty before the first tick)",
+    ),
     "number_ticks": ("", "blackboard: leaf ticks so far (each leaf tick counts one)"),
     "x_surveillance_position": ("world unit", "blackboard: surveillance position, east"),
     "y_surveillance_position": ("world unit", "blackboard: surveillance position, north"),
@@ -107,7 +110,9 @@ class Recorder:
         self.groups = {
             "state": list(swarm.columns),
             "blackboard": list(swarm.blackboard),
-            "model": [k for k in extra or {} if k not in swarm.columns and k not in swarm.blackboard],
+            "model": [
+                k for k in extra or {} if k not in swarm.columns and k not in swarm.blackboard
+            ],
         }
         self.nodes: list[Node] = list(tree.walk()) if tree is not None else []
         self._leaf_rows = np.array(
@@ -347,8 +352,10 @@ def trace_table(recorder: Recorder) -> pa.Table:
     statuses = recorder.traces[:records]  # (records, nodes, K)
     for j, node in enumerate(recorder.nodes):
         data[node.name] = pa.array(np.ascontiguousarray(statuses[:, j, :]).reshape(-1))
-    status = ("status code", "the node's status after the tick: 0 INVALID (not ticked), "
-              "1 SUCCESS, 2 FAILURE, 3 RUNNING")
+    status = (
+        "status code",
+        "the node's status after the tick: 0 INVALID (not ticked), 1 SUCCESS, 2 FAILURE, 3 RUNNING",
+    )
     table = _documented(pa.table(data), {node.name: status for node in recorder.nodes})
     metadata = {
         **(table.schema.metadata or {}),

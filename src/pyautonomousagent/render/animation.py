@@ -225,8 +225,14 @@ class FramePainter:
         self.panel_font = GlyphAtlas(9, dpi)
         self.label_font = GlyphAtlas(8, dpi)
         _draw_world(self.axes, scenario.world, self.marks)
-        self.figure.text(left / width, TITLE_Y / FIGSIZE[1], f"pyAutonomousAgent: {scenario.name}",
-                         fontsize=11, ha="left", va="baseline")
+        self.figure.text(
+            left / width,
+            TITLE_Y / FIGSIZE[1],
+            f"pyAutonomousAgent: {scenario.name}",
+            fontsize=11,
+            ha="left",
+            va="baseline",
+        )
         self._add_moving_artists(len(recorder.names))
         self._add_legend(width)
         self._add_panel_labels()
@@ -285,18 +291,40 @@ class FramePainter:
             else:
                 face = mark.colour if mark.fill else "none"
                 shape = "o" if mark.shape == "circle" else "s"
-                handles.append(entry(mark.legend, marker=shape, markersize=9,
-                                     markerfacecolor=face, markeredgecolor=mark.colour))
+                handles.append(
+                    entry(
+                        mark.legend,
+                        marker=shape,
+                        markersize=9,
+                        markerfacecolor=face,
+                        markeredgecolor=mark.colour,
+                    )
+                )
         handles.append(entry("agent (number = drone N)", marker="o", color=DRONE_COLOUR))
         handles.append(entry("heading", marker="o", markersize=4, color=HEADING_COLOUR))
-        handles.append(entry("followed agent", marker="o", markersize=11, markerfacecolor="none",
-                             markeredgecolor=FOLLOW_COLOUR, markeredgewidth=2))
+        handles.append(
+            entry(
+                "followed agent",
+                marker="o",
+                markersize=11,
+                markerfacecolor="none",
+                markeredgecolor=FOLLOW_COLOUR,
+                markeredgewidth=2,
+            )
+        )
         for kind in dict.fromkeys(e.kind for e in self.events):
             colour = next(e.colour for e in self.events if e.kind == kind)
             handles.append(entry(f"event: {kind}", marker="D", color=colour))
-        self.figure.legend(handles=handles, loc="lower left", fontsize=8, ncols=2,
-                           bbox_to_anchor=(PANEL_INCHES[0] / width, 0.01), frameon=False,
-                           handletextpad=0.3, columnspacing=0.8)
+        self.figure.legend(
+            handles=handles,
+            loc="lower left",
+            fontsize=8,
+            ncols=2,
+            bbox_to_anchor=(PANEL_INCHES[0] / width, 0.01),
+            frameon=False,
+            handletextpad=0.3,
+            columnspacing=0.8,
+        )
 
     def _add_panel_labels(self) -> None:
         """The panel's labels and notes (static, in the background); values are per frame."""
@@ -309,44 +337,73 @@ class FramePainter:
         self.value_left = self.panel_left + font.width("x" * (longest + 1))
         text = "\n".join(label for label, _ in rows)
         notes = "\n".join(PANEL_NOTES)
-        style: dict[str, Any] = {"family": "monospace", "fontsize": 9, "va": "top", "ha": "left",
-                                 "linespacing": self.line_height / (9 * self.figure.dpi / 72)}
+        style: dict[str, Any] = {
+            "family": "monospace",
+            "fontsize": 9,
+            "va": "top",
+            "ha": "left",
+            "linespacing": self.line_height / (9 * self.figure.dpi / 72),
+        }
         height = self.figure.bbox.height
-        self.figure.text(self.panel_left / self.figure.bbox.width,
-                         1 - (self.panel_top - 2) / height, text, **style)
+        self.figure.text(
+            self.panel_left / self.figure.bbox.width,
+            1 - (self.panel_top - 2) / height,
+            text,
+            **style,
+        )
         notes_top = self.panel_top + self.line_height * (len(rows) + 1)
         style.update(fontsize=8, color="#555555")
-        self.figure.text(self.panel_left / self.figure.bbox.width,
-                         1 - notes_top / height, notes, **style)
+        self.figure.text(
+            self.panel_left / self.figure.bbox.width, 1 - notes_top / height, notes, **style
+        )
 
     def _add_inset(self, left_inches: float) -> None:
         """The tree's node names (static) beside the status boxes drawn per frame."""
         dpi, nodes = self.figure.dpi, self.recorder.nodes
         self.inset_left = round(left_inches * dpi)
         self.inset_top = self.panel_top + 16
-        self.inset_row = max(9, min(14, round((FIGSIZE[1] * dpi - self.inset_top - 60) / max(1, len(nodes)))))
+        self.inset_row = max(
+            9, min(14, round((FIGSIZE[1] * dpi - self.inset_top - 60) / max(1, len(nodes))))
+        )
         depth = _depths(nodes)
         width, height = self.figure.bbox.width, self.figure.bbox.height
-        self.figure.text(self.inset_left / width, 1 - (self.inset_top - 16) / height,
-                         f"Tree of {self.recorder.names[self.follow]}", fontsize=9,
-                         va="bottom", ha="left", weight="bold")
+        self.figure.text(
+            self.inset_left / width,
+            1 - (self.inset_top - 16) / height,
+            f"Tree of {self.recorder.names[self.follow]}",
+            fontsize=9,
+            va="bottom",
+            ha="left",
+            weight="bold",
+        )
         self.inset_boxes = []
         for j, node in enumerate(nodes):
             x = self.inset_left + 10 * depth[j]
             y = self.inset_top + j * self.inset_row
             self.inset_boxes.append((x, y))
-            self.figure.text((x + 12) / width, 1 - (y + self.inset_row / 2) / height,
-                             node.name[:40], fontsize=6.5, family="monospace", va="center",
-                             ha="left")
+            self.figure.text(
+                (x + 12) / width,
+                1 - (y + self.inset_row / 2) / height,
+                node.name[:40],
+                fontsize=6.5,
+                family="monospace",
+                va="center",
+                ha="left",
+            )
         y = self.inset_top + len(nodes) * self.inset_row + 8
         for k, (code, label) in enumerate(
-            [(SUCCESS, "SUCCESS"), (FAILURE, "FAILURE"), (RUNNING, "RUNNING"),
-             (INVALID, "not ticked")]
+            [
+                (SUCCESS, "SUCCESS"),
+                (FAILURE, "FAILURE"),
+                (RUNNING, "RUNNING"),
+                (INVALID, "not ticked"),
+            ]
         ):
             x = self.inset_left + 62 * k
             self.inset_boxes.append((x, y))
-            self.figure.text((x + 12) / width, 1 - (y + 4) / height, label, fontsize=6.5,
-                             va="center", ha="left")
+            self.figure.text(
+                (x + 12) / width, 1 - (y + 4) / height, label, fontsize=6.5, va="center", ha="left"
+            )
         self._legend_codes = [SUCCESS, FAILURE, RUNNING, INVALID]
         self._status_rgb = {code: np.array(_rgb(c), np.uint8) for code, c in STATUS_COLOURS.items()}
 
@@ -359,8 +416,10 @@ class FramePainter:
         self.dots.set_offsets(np.column_stack([x + r * np.sin(heading), y + r * np.cos(heading)]))
         self.ring.set_offsets([[x[self.follow], y[self.follow]]])
         iteration = int(self.recorder.iterations[row])
-        active = np.array([e.iteration <= iteration < e.iteration + self.event_window
-                           for e in self.events], dtype=bool)
+        active = np.array(
+            [e.iteration <= iteration < e.iteration + self.event_window for e in self.events],
+            dtype=bool,
+        )
         shown = [e for e, a in zip(self.events, active, strict=True) if a and not np.isnan(e.x)]
         self.event_marks.set_offsets(np.array([[e.x, e.y] for e in shown]).reshape(-1, 2))
         self.event_marks.set_facecolors([e.colour for e in shown] or "none")
@@ -395,7 +454,9 @@ class FramePainter:
         if not self.labelled:
             return
         columns, font = self.recorder.columns, self.label_font
-        points = self.axes.transData.transform(np.column_stack([columns["x"][row], columns["y"][row]]))
+        points = self.axes.transData.transform(
+            np.column_stack([columns["x"][row], columns["y"][row]])
+        )
         height = pixels.shape[0]
         gap = self.radius * self.axes.transData.get_matrix()[0, 0] * 0.8
         cell_h = font.cell[0]
@@ -409,8 +470,10 @@ class FramePainter:
                 left = px + gap if dx > 0 else px - gap - w
                 top = top_y - gap - cell_h if dy < 0 else top_y + gap
                 box = (left, top, left + w, top + cell_h)
-                if all(box[2] <= b[0] or box[0] >= b[2] or box[3] <= b[1] or box[1] >= b[3]
-                       for b in placed):
+                if all(
+                    box[2] <= b[0] or box[0] >= b[2] or box[3] <= b[1] or box[1] >= b[3]
+                    for b in placed
+                ):
                     placed.append(box)
                     font.draw(pixels, text, left, top, colour, anchor="top")
                     break
@@ -453,7 +516,9 @@ def _agent_index(recorder: Recorder, agent: int | str) -> int:
     if isinstance(agent, str):
         if agent not in recorder.names:
             names = recorder.names
-            raise ValueError(f"follow: no agent named {agent!r}; agents are {names[0]}..{names[-1]}")
+            raise ValueError(
+                f"follow: no agent named {agent!r}; agents are {names[0]}..{names[-1]}"
+            )
         return recorder.names.index(agent)
     if not 0 <= agent < len(recorder.names):
         raise ValueError(f"follow: agent index {agent} is outside 0..{len(recorder.names) - 1}")
@@ -489,16 +554,32 @@ def _draw_world(axes: Any, world: tuple[float, float], marks: Sequence[Mark]) ->
     for mark in marks:
         face = mark.colour if mark.fill else "none"
         if mark.shape == "circle":
-            axes.add_patch(Circle((mark.x, mark.y), mark.size, facecolor=face,
-                                  edgecolor=mark.colour, zorder=1))
+            axes.add_patch(
+                Circle((mark.x, mark.y), mark.size, facecolor=face, edgecolor=mark.colour, zorder=1)
+            )
             at = (mark.x - mark.size - 0.5 * pad, mark.y, "right", "center")
         elif mark.shape == "rect":
-            axes.add_patch(Rectangle((mark.x, mark.y), mark.width, mark.height, facecolor=face,
-                                     edgecolor=mark.colour, zorder=1))
+            axes.add_patch(
+                Rectangle(
+                    (mark.x, mark.y),
+                    mark.width,
+                    mark.height,
+                    facecolor=face,
+                    edgecolor=mark.colour,
+                    zorder=1,
+                )
+            )
             at = (mark.x, mark.y + mark.height + 0.3 * pad, "left", "bottom")
         else:
-            axes.plot([mark.x], [mark.y], marker=_marker(mark.symbol), color=mark.colour,
-                      markersize=mark.size or 7, linestyle="none", zorder=2)
+            axes.plot(
+                [mark.x],
+                [mark.y],
+                marker=_marker(mark.symbol),
+                color=mark.colour,
+                markersize=mark.size or 7,
+                linestyle="none",
+                zorder=2,
+            )
             at = (mark.x + pad, mark.y + pad, "left", "bottom")
         if mark.label:
             x, y, ha, va = at

@@ -30,18 +30,41 @@ def default_marks(recorder: Recorder, scenario: Scenario) -> list[Mark]:
     of each active radiation source (world units)."""
     slot = SLOT_RADIUS * max(scenario.world)
     marks = [
-        Mark("circle", x, y, f"R{i}", size=slot, colour=SLOT_COLOUR, fill=True,
-             legend="refuelling slot")
+        Mark(
+            "circle",
+            x,
+            y,
+            f"R{i}",
+            size=slot,
+            colour=SLOT_COLOUR,
+            fill=True,
+            legend="refuelling slot",
+        )
         for i, (x, y) in enumerate(refuelling_slots(recorder, scenario), start=1)
     ]
     marks += [
-        Mark("point", x, y, f"S{i}", size=7.0, colour=SURVEILLANCE_COLOUR, symbol="x",
-             legend="patrol position" if scenario.patrol_positions else "surveillance position")
+        Mark(
+            "point",
+            x,
+            y,
+            f"S{i}",
+            size=7.0,
+            colour=SURVEILLANCE_COLOUR,
+            symbol="x",
+            legend="patrol position" if scenario.patrol_positions else "surveillance position",
+        )
         for i, (x, y) in enumerate(surveillance_marks(recorder, scenario), start=1)
     ]
     marks += [
-        Mark("circle", s.x, s.y, "radiation", size=s.range, colour=RADIATION_COLOUR,
-             legend="radiation source range")
+        Mark(
+            "circle",
+            s.x,
+            s.y,
+            "radiation",
+            size=s.range,
+            colour=RADIATION_COLOUR,
+            legend="radiation source range",
+        )
         for s in scenario.radiation_sources
         if s.active
     ]

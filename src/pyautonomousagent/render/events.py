@@ -43,12 +43,19 @@ class PlacedEvent:
 
     def as_dict(self) -> dict[str, Any]:
         """Plain values for JSON (NaN as None)."""
+
         def number(v: float) -> float | None:
             return None if np.isnan(v) else round(v, 4)
 
-        return {"iteration": self.iteration, "kind": self.kind, "text": self.text,
-                "x": number(self.x), "y": number(self.y), "agent": self.agent,
-                "colour": self.colour}
+        return {
+            "iteration": self.iteration,
+            "kind": self.kind,
+            "text": self.text,
+            "x": number(self.x),
+            "y": number(self.y),
+            "agent": self.agent,
+            "colour": self.colour,
+        }
 
 
 def placed_events(events: Iterable[Mapping[str, Any]], recorder: Recorder) -> list[PlacedEvent]:
@@ -82,5 +89,7 @@ def _position(recorder: Recorder, agent: str, iteration: int) -> tuple[float, fl
     if agent not in recorder.names or recorder.count == 0:
         return float("nan"), float("nan")
     i = recorder.names.index(agent)
-    row = max(0, int(np.searchsorted(recorder.iterations[: recorder.count], iteration, "right")) - 1)
+    row = max(
+        0, int(np.searchsorted(recorder.iterations[: recorder.count], iteration, "right")) - 1
+    )
     return float(recorder.columns["x"][row, i]), float(recorder.columns["y"][row, i])

@@ -166,5 +166,3 @@ def _changed_box(previous: np.ndarray | None, current: np.ndarray) -> tuple[int,
     if rows.size == 0:
         return 0, 0, 1, 1
     return int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1
-
-

@@ -71,7 +71,9 @@ class GlyphAtlas:
 
     def mask(self, text: str) -> np.ndarray:
         """Coverage of ``text`` as one line, shape (cell height, width(text)), float32."""
-        codes = self._codes[np.minimum(np.frombuffer(text.encode("ascii", "replace"), np.uint8), 127)]
+        codes = self._codes[
+            np.minimum(np.frombuffer(text.encode("ascii", "replace"), np.uint8), 127)
+        ]
         tiles = self.masks[codes]  # (len, h, w)
         return tiles.transpose(1, 0, 2).reshape(self.cell[0], -1)
 

@@ -76,9 +76,7 @@ class Mp4Stream:
 
 
 @contextmanager
-def open_stream(
-    video: str, path: Path, size: tuple[int, int], fps: float
-) -> Iterator[FrameStream]:
+def open_stream(video: str, path: Path, size: tuple[int, int], fps: float) -> Iterator[FrameStream]:
     """A frame stream writing ``path`` as ``video`` ("gif" or "mp4") at ``fps`` frames a second.
 
     GIF delays are whole hundredths: ``100 / fps`` rounded, at least 2.
