@@ -193,38 +193,40 @@ def active_leaf(statuses: np.ndarray, leaf_rows: np.ndarray) -> np.ndarray:
 
 
 def traced_agents(names: Sequence[str], trace: int | str | Sequence[str] | None) -> list[int]:
-    """Indices of the agents to trace.
+    """Indices of the agents to trace, ascending.
 
     Args:
         names: every agent's name, in order.
         trace: None (the default: every agent of a swarm of at most :data:`DEFAULT_TRACED`,
             else the first that many), a count (the first ``trace`` agents; 0 traces none),
-            "all", or agent names (a list, or one comma-separated string).
+            or a list (or one comma-separated string) of names, counts and "all", whose
+            agents are all traced: ``"4,drone57"`` is the first four and drone57.
 
     Raises:
         ValueError: a name that is no agent's, or a negative count; the message names it.
     """
     if trace is None:
-        return list(range(min(len(names), DEFAULT_TRACED)))
+        trace = DEFAULT_TRACED
     if isinstance(trace, int):
         if trace < 0:
             raise ValueError(f"trace: a count of agents must be >= 0, got {trace}")
         return list(range(min(trace, len(names))))
-    if isinstance(trace, str):
-        if trace.strip() == "all":
-            return list(range(len(names)))
-        if trace.strip().isdigit():
-            return traced_agents(names, int(trace))
-        trace = [t.strip() for t in trace.split(",") if t.strip()]
+    items = trace.split(",") if isinstance(trace, str) else list(trace)
     index = {name: i for i, name in enumerate(names)}
-    unknown = [t for t in trace if t not in index]
-    if unknown:
-        raise ValueError(
-            f"trace: no agent named {unknown[0]!r}; agents are {names[0]}..{names[-1]}"
-            if names
-            else "trace: the swarm has no agents"
-        )
-    return sorted({index[t] for t in trace})
+    chosen: set[int] = set()
+    for item in (str(t).strip() for t in items):
+        if item == "all":
+            chosen.update(range(len(names)))
+        elif item.isdigit():
+            chosen.update(range(min(int(item), len(names))))
+        elif item in index:
+            chosen.add(index[item])
+        elif item:
+            known = f"agents are {names[0]}..{names[-1]}" if names else "the swarm has no agents"
+            raise ValueError(
+                f"trace: no agent named {item!r}; {known} (or give a count, or 'all')"
+            )
+    return sorted(chosen)
 
 
 def preallocated(shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
@@ -320,7 +322,8 @@ def _rebuild(nodes: Sequence[Mapping[str, Any]]) -> list[Node]:
     built: dict[int, Node] = {}
     for i in reversed(range(len(nodes))):
         kids = tuple(built[c] for c in children[i])
-        built[i] = Node(str(nodes[i]["type"]), str(nodes[i]["name"]), kids)
+        params = dict(nodes[i].get("params") or {})
+        built[i] = Node(str(nodes[i]["type"]), str(nodes[i]["name"]), kids, params)
     return [built[i] for i in range(len(nodes))]
 
 
@@ -366,7 +369,8 @@ def trace_table(recorder: Recorder) -> pa.Table:
 
 
 def node_list(nodes: Sequence[Node]) -> list[dict[str, object]]:
-    """Nodes in tick order as plain dicts: name, type, parent index (-1: the root), depth."""
+    """Nodes in tick order as plain dicts: name, type, parent index (-1: the root), depth and
+    parameters (ports)."""
     parent: dict[int, int] = {}
     depth: dict[int, int] = {}
     for i, node in enumerate(nodes):
@@ -377,7 +381,13 @@ def node_list(nodes: Sequence[Node]) -> list[dict[str, object]]:
             parent[child], depth[child] = i, depth[i] + 1
             child += sum(1 for _ in sub.walk())
     return [
-        {"name": n.name, "type": n.type, "parent": parent[i], "depth": depth[i]}
+        {
+            "name": n.name,
+            "type": n.type,
+            "parent": parent[i],
+            "depth": depth[i],
+            "params": json.loads(json.dumps(dict(n.params), default=str)),
+        }
         for i, n in enumerate(nodes)
     ]
 
@@ -438,6 +448,17 @@ def write_table(table: pa.Table, path: Path, fmt: str = "parquet") -> Path:
     else:
         raise ValueError(f"unknown format {fmt!r}; use 'parquet' or 'csv'")
     return path
+
+
+def read_table(path: Path) -> pa.Table:
+    """A table written by :func:`write_table` (by the file's ending: .parquet or .csv)."""
+    if path.suffix == ".parquet":
+        import pyarrow.parquet as pq
+
+        return pq.read_table(path)
+    import pyarrow.csv as pcsv
+
+    return pcsv.read_csv(path)
 
 
 def _plain_agent(schema: pa.Schema) -> pa.Schema:

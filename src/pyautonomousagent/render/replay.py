@@ -120,12 +120,19 @@ def replay_data(
         "statuses": _b64(recorder.traces[rows].transpose(0, 2, 1).astype(np.int8)),
         "columns": columns,
         "groups": {**recorder.groups, "behaviour": ["behaviour"]},
-        "units": {c: COLUMN_DOCS.get(c, ("", ""))[0] for c in columns},
+        "units": {c: _short_unit(COLUMN_DOCS.get(c, ("", ""))[0]) for c in columns},
         "descriptions": {c: COLUMN_DOCS.get(c, ("", ""))[1] for c in columns},
         "values": _b64(np.ascontiguousarray(values, dtype=np.float64)),
         "marks": [asdict(m) for m in marks],
         "events": [e.as_dict() for e in placed],
     }
+
+
+def _short_unit(unit: str) -> str:
+    """"world unit / iteration" -> "u/it" (the animation's short units)."""
+    from pyautonomousagent.render.animation import UNITS
+
+    return UNITS.get(unit, unit)
 
 
 def _positions(recorder: Recorder, rows: np.ndarray) -> dict[str, Any]:
