@@ -26,7 +26,7 @@ import pyarrow as pa
 
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.status import INVALID, NAMES, RUNNING
-from pyautonomousagent.state import STATE_COLUMNS, Swarm
+from pyautonomousagent.state import CONTROL_COLUMNS, MOTION_COLUMNS, Swarm
 
 #: Agents traced by default: all of a swarm this small, else the first this many.
 DEFAULT_TRACED = 10
@@ -292,7 +292,9 @@ def recorder_from_tables(
     recorder.groups = {"state": [], "blackboard": [], "model": []}
     for name in recorder.columns:
         meta = states.schema.field(name).metadata or {}
-        group = meta.get(b"group", b"").decode() or ("state" if name in STATE_COLUMNS else "model")
+        group = meta.get(b"group", b"").decode() or (
+            "state" if name in MOTION_COLUMNS or name in CONTROL_COLUMNS else "model"
+        )
         recorder.groups.setdefault(group, []).append(name)
     if not nodes and traces is not None and traces.schema.metadata:
         nodes = json.loads(traces.schema.metadata.get(b"pyautonomousagent.nodes", b"[]"))

@@ -37,7 +37,7 @@ from pyautonomousagent.bt.spec import (
 )
 from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES
-from pyautonomousagent.state import Swarm
+from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
 _CODES = {name: code for code, name in NAMES.items()}
@@ -206,17 +206,33 @@ class BatchedEngine:
         masked view of all N when many (no gathering of values)."""
         reached = np.count_nonzero(mask)
         if reached == mask.size:
-            result = self.leaves[i].evaluate(self.swarm.agents(slice(None)), self.world)
+            result = self._evaluate(i, self.swarm.agents(slice(None)))
             self.status[i] = result
             self._ticks += 1
         elif 4 * reached >= mask.size:
-            result = self.leaves[i].evaluate(self.swarm.agents(mask), self.world)
+            result = self._evaluate(i, self.swarm.agents(mask))
             np.copyto(self.status[i], result, where=mask)
             np.add(self._ticks, 1, out=self._ticks, where=mask)
         else:
             rows = np.flatnonzero(mask)
-            self.status[i, rows] = self.leaves[i].evaluate(self.swarm.agents(rows), self.world)
+            self.status[i, rows] = self._evaluate(i, self.swarm.agents(rows))
             self._ticks[rows] += 1
+
+    def _evaluate(self, i: int, agents: AgentView) -> Any:
+        """Leaf ``i``'s statuses for a group of agents; a leaf written for one agent only
+        (``if agents.energy < 40:`` on an array) gets a message naming the node and the fix."""
+        try:
+            return self.leaves[i].evaluate(agents, self.world)
+        except ValueError as error:
+            if "truth value of an array" not in str(error):
+                raise
+            node = self.program.nodes[i]
+            raise TreeError(
+                f"leaf {node.name!r} ({node.type}) works on one agent only: the batched engine "
+                "calls it with arrays of many agents. Write its conditions with the helpers of "
+                "pyautonomousagent.arrays (choose, minimum, ...) and status_if/success_if instead "
+                "of if/and/or, or run the tree with engine='pytrees'"
+            ) from None
 
     def _sequence(self, i: int, mask: np.ndarray) -> None:
         kids, memory = self.program.children[i], self.program.params[i]["memory"]

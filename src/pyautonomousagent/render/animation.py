@@ -183,7 +183,7 @@ class FramePainter:
         recorder: the run's records (x, y and heading are required; shape (records, N)).
         scenario: the run's scenario (world size and name; the default marks).
         dpi: pixels per inch; the frame is ``FIGSIZE * dpi`` pixels (wider with the inset).
-        marks: the mission's static marks; by default today's (:mod:`.default_marks`).
+        marks: the static marks; by default the scenario's mission's (``Mission.marks()``).
         events: the run's events (``sim.events``), marked while they are recent.
         follow: the agent (index or name) the panel and the inset show.
         inset: draw the tree coloured by the followed agent's statuses (it must be traced).
@@ -202,7 +202,6 @@ class FramePainter:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
 
-        from pyautonomousagent.render.default_marks import default_marks
         from pyautonomousagent.render.glyphs import GlyphAtlas
 
         if recorder.count == 0:
@@ -211,7 +210,7 @@ class FramePainter:
         self.follow = _agent_index(recorder, follow)
         self.trace = recorder.trace(self.follow) if inset else None
         self.radius = DRONE_RADIUS * max(scenario.world)
-        self.marks = list(default_marks(recorder, scenario) if marks is None else marks)
+        self.marks = list(scenario.create_mission().marks() if marks is None else marks)
         self.events = placed_events(events, recorder)
         last = int(recorder.iterations[recorder.count - 1])
         self.event_window = max(1, round(EVENT_SHOWN * last))

@@ -36,11 +36,9 @@ class Views:
     timings: dict[str, float] = field(default_factory=dict)
 
 
-def run_marks(recorder: Recorder, scenario: Scenario) -> list[Mark]:
-    """The marks drawn for a run: today's missions' (the one place to ask the mission)."""
-    from pyautonomousagent.render.default_marks import default_marks
-
-    return default_marks(recorder, scenario)
+def run_marks(scenario: Scenario) -> list[Mark]:
+    """The marks drawn for a run: its mission's."""
+    return scenario.create_mission().marks()
 
 
 def write_views(
@@ -53,7 +51,7 @@ def write_views(
     """Write the chosen views of a recorded run into ``out``; ``views.written`` and
     ``views.timings`` (seconds per view) say what was done."""
     events = list(events)
-    marks = run_marks(recorder, scenario)
+    marks = run_marks(scenario)
     if views.video:
         from pyautonomousagent.render.animation import write_animation
 

@@ -1,7 +1,8 @@
-"""The simulation: the swarm, its world and engine, and the loop in the paper's phase order."""
+"""The simulation: the swarm, its world, mission and engine, and the loop in the paper's order."""
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -13,28 +14,21 @@ import pyarrow as pa
 from pyautonomousagent.bt.files import is_tree_file, load_tree
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.trees import tree_by_name
-from pyautonomousagent.datalink import Datalink, Delivery, SharedData
+from pyautonomousagent.datalink import Datalink, Delivery
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, PyTreesEngine
 from pyautonomousagent.progress import Progress
+from pyautonomousagent.randomness import CounterRandom
 from pyautonomousagent.recording import Recorder, to_table, trace_table, traced_agents
+from pyautonomousagent.registry import Registry
 from pyautonomousagent.simulation import phases
-from pyautonomousagent.simulation.motion import build_model
+from pyautonomousagent.simulation.mission import MessageType, Mission
+from pyautonomousagent.simulation.motion import Model, build_model
 from pyautonomousagent.simulation.scenario import Scenario, ScenarioError
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
-
-class Model(Protocol):
-    """What the loop needs of a motion model."""
-
-    name: str
-
-    def columns(self) -> dict[str, np.ndarray]: ...
-
-    def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None: ...
-
-    def control(self, s: dict[str, np.ndarray]) -> None: ...
+log = logging.getLogger("pyautonomousagent")
 
 
 class Engine(Protocol):
@@ -51,7 +45,9 @@ class Engine(Protocol):
     def node_statuses(self) -> np.ndarray: ...
 
 
-ENGINES: dict[str, type[Engine]] = {"pytrees": PyTreesEngine, "batched": BatchedEngine}
+ENGINES: Registry[type[Engine]] = Registry("engine")
+ENGINES.register("pytrees", PyTreesEngine)
+ENGINES.register("batched", BatchedEngine)
 
 
 def choose_engine(tree: Node) -> str:
@@ -74,32 +70,36 @@ class Simulation:
     Attributes:
         scenario: what is simulated.
         seed: the seed of ``rng``.
-        rng: the run's only source of randomness.
+        rng: the run's source of sequential randomness (placement, sensors).
+        mission: the run's mission (its sensors, message handlers, run state).
         swarm: the agents' state and blackboards.
-        world: the shared world (clock, datalink, radiation).
+        world: the shared world (clock, datalink, world objects, counter-based randomness).
         model: the motion model (Phase 2 motion, Phase 4 control).
         engine: the decision engine of Phase 3.
         recorder: Phase 6's preallocated records.
+        handlers: the mission's message types by name.
         inbox: messages delivered in Phase 5, acted on in the next Phase 2.
-        shared: what each agent last heard by "sharing data": ``shared[receiver][sender]``.
         events: alerts and recorded messages, as plain dicts.
-        alerted: agents that have raised their zero-energy alert, shape (N,).
         timings: seconds spent per stage.
     """
 
     scenario: Scenario
     seed: int
     rng: np.random.Generator
+    mission: Mission
     swarm: Swarm
     world: World
     model: Model
     engine: Engine
     recorder: Recorder
-    shared: SharedData
+    handlers: dict[str, MessageType] = field(default_factory=dict)
     inbox: list[Delivery] = field(default_factory=list)
     events: list[dict[str, Any]] = field(default_factory=list)
-    alerted: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     timings: dict[str, float] = field(default_factory=dict)
+    everyone: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    recorded_types: tuple[str, ...] = ()
+    unhandled: set[str] = field(default_factory=set)
+    _alerted: set[tuple[str, int]] = field(default_factory=set)
 
     @classmethod
     def create(
@@ -112,11 +112,11 @@ class Simulation:
         implementation: str | None = None,
         trace: int | str | Sequence[str] | None = None,
     ) -> Simulation:
-        """Phase 1 and set-up: agents, world, engine and recorder for ``scenario``.
+        """Phase 1 and set-up: mission, agents, world, engine and recorder for ``scenario``.
 
         Args:
             scenario: the scenario to run.
-            seed: seed of the run's random generator.
+            seed: seed of the run's random generators.
             engine: name of the decision engine (see :data:`ENGINES`), or "auto": the
                 batched engine unless the tree has hand-written py_trees behaviours.
             record_every: record every K-th iteration (and the initial state).
@@ -129,27 +129,28 @@ class Simulation:
         """
         tree = tree or scenario_tree(scenario)
         engine = choose_engine(tree) if engine == "auto" else engine
-        if engine not in ENGINES:
-            choices = ", ".join(["auto", *ENGINES])
-            raise ValueError(f"unknown engine {engine!r}; choose from {choices}")
+        engine_type = ENGINES.get(engine)
         start = time.perf_counter()
         rng = np.random.default_rng(seed)
-        swarm = phases.create_agents(scenario, rng)
+        mission = scenario.create_mission()
         p = scenario.parameters
         world = World(
             width=scenario.world[0],
             height=scenario.world[1],
             datalink=Datalink(p.datalink_range),
-            radiation_sources=scenario.radiation_sources,
-            agent_index={name: i for i, name in enumerate(swarm.names)},
+            objects=scenario.objects,
+            random=CounterRandom(seed),
         )
-        defaults = vars(p)
+        swarm = phases.create_agents(mission, world, rng)
+        world.agent_index = {name: i for i, name in enumerate(swarm.names)}
         model = build_model(scenario, swarm, engine, seed, implementation)
-        decision = ENGINES[engine](tree, swarm, world, defaults)
+        decision = engine_type(tree, swarm, world, vars(p))
+        handlers = {kind.name: kind for kind in mission.message_types()}
         sim = cls(
             scenario=scenario,
             seed=seed,
             rng=rng,
+            mission=mission,
             swarm=swarm,
             world=world,
             model=model,
@@ -162,8 +163,9 @@ class Simulation:
                 tree=tree,
                 traced=_traced(swarm.names, trace),
             ),
-            shared=SharedData(swarm.size),
-            alerted=np.zeros(swarm.size, dtype=bool),
+            handlers=handlers,
+            everyone=np.ones(swarm.size, dtype=bool),
+            recorded_types=tuple(name for name, kind in handlers.items() if kind.recorded),
         )
         phases.record(sim)  # the initial state, iteration 0
         sim.timings["setup"] = time.perf_counter() - start
@@ -195,6 +197,26 @@ class Simulation:
     def trace_table(self) -> pa.Table:
         """The traced agents' node statuses: one row per record and traced agent."""
         return trace_table(self.recorder)
+
+    def alert(self, rows: np.ndarray, kind: str, message: str) -> None:
+        """Record an ``alert`` event (and log a warning) the first time each agent of ``rows``
+        raises an alert of ``kind`` in this run.
+
+        Args:
+            rows: agent rows, int array.
+            kind: a short name of the alert (e.g. ``"zero energy"``); each agent raises it once.
+            message: what happened, for the event and the log.
+        """
+        for i in np.asarray(rows).tolist():
+            if (kind, i) in self._alerted:
+                continue
+            self._alerted.add((kind, i))
+            name = self.swarm.names[i]
+            self.events.append(
+                {"iteration": self.world.iteration, "event": "alert", "agent": name,
+                 "message": message}
+            )  # fmt: skip
+            log.warning("iteration %d: %s: %s", self.world.iteration, name, message)
 
     def table(self) -> pa.Table:
         """The recorded data: one row per recorded iteration and agent."""
