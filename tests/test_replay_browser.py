@@ -143,7 +143,8 @@ def test_replay_offline_shows_the_recorded_statuses_and_blackboard(browser, run_
     )
     assert [u for u in urls if not u.startswith(("data:", "file:"))] == []
     text = page.read_text()
-    loads = re.findall(r"""(?:src|href)\s*=\s*["']?(?!data:)[a-z]+:|url\(\s*["']?http|fetch\(""", text)
+    loading = r"""(?:src|href)\s*=\s*["']?(?!data:)[a-z]+:|url\(\s*["']?http|fetch\("""
+    loads = re.findall(loading, text)
     assert loads == [] and "XMLHttpRequest" not in text
     errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
     assert errors == []

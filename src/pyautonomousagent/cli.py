@@ -429,9 +429,12 @@ def replay_command(args: argparse.Namespace) -> int:
     recorder = recorder_from_tables(states, traces, summary.get("trace", {}).get("nodes", ()))
     out = args.out.parent if args.out else folder
     views = _write_views(
-        recorder, scenario, summary.get("events", []), out, argparse.Namespace(
-            video=None, no_replay=False, btlog=args.btlog, follow=None, inset=False
-        ), None
+        recorder,
+        scenario,
+        summary.get("events", []),
+        out,
+        argparse.Namespace(video=None, no_replay=False, btlog=args.btlog, follow=None, inset=False),
+        None,
     )
     if args.out and views.written:
         views.written[0] = views.written[0].replace(args.out)

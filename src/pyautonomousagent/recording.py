@@ -223,9 +223,7 @@ def traced_agents(names: Sequence[str], trace: int | str | Sequence[str] | None)
             chosen.add(index[item])
         elif item:
             known = f"agents are {names[0]}..{names[-1]}" if names else "the swarm has no agents"
-            raise ValueError(
-                f"trace: no agent named {item!r}; {known} (or give a count, or 'all')"
-            )
+            raise ValueError(f"trace: no agent named {item!r}; {known} (or give a count, or 'all')")
     return sorted(chosen)
 
 

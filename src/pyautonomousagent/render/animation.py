@@ -141,7 +141,8 @@ def _value_rows(
     columns: Mapping[str, np.ndarray], keys: Sequence[str], row: int, agent: int
 ) -> list[tuple[str, str]]:
     """Panel lines for ``keys``: ``x_K, y_K`` (or ``x, y``) pairs as one point, others alone."""
-    lines, done = [], set()
+    lines: list[tuple[str, str]] = []
+    done: set[str] = set()
     for key in keys:
         if key in done:
             continue
@@ -390,7 +391,7 @@ class FramePainter:
                 ha="left",
             )
         y = self.inset_top + len(nodes) * self.inset_row + 8
-        for k, (code, label) in enumerate(
+        for k, (_code, label) in enumerate(
             [
                 (SUCCESS, "SUCCESS"),
                 (FAILURE, "FAILURE"),
@@ -421,7 +422,7 @@ class FramePainter:
         )
         shown = [e for e, a in zip(self.events, active, strict=True) if a and not np.isnan(e.x)]
         self.event_marks.set_offsets(np.array([[e.x, e.y] for e in shown]).reshape(-1, 2))
-        self.event_marks.set_facecolors([e.colour for e in shown] or "none")
+        self.event_marks.set_facecolor([e.colour for e in shown] or "none")
         return active
 
     def render(self, row: int) -> np.ndarray:

@@ -129,7 +129,7 @@ def replay_data(
 
 
 def _short_unit(unit: str) -> str:
-    """"world unit / iteration" -> "u/it" (the animation's short units)."""
+    """ "world unit / iteration" -> "u/it" (the animation's short units)."""
     from pyautonomousagent.render.animation import UNITS
 
     return UNITS.get(unit, unit)

@@ -80,9 +80,9 @@ def write_views(
     for agent in views.btlog:
         from pyautonomousagent.render.btlog import write_btlog
 
-        root = recorder.nodes[0]
+        iterations = recorder.iterations[: recorder.count]
         path = write_btlog(
-            out / f"{agent}.btlog", root, recorder.iterations[: recorder.count], recorder.trace(agent)
+            out / f"{agent}.btlog", recorder.nodes[0], iterations, recorder.trace(agent)
         )
         views.written.append(path)
     return views
