@@ -20,7 +20,8 @@ from pyautonomousagent.simulation import Simulation
 def page_data(path: Path) -> dict:
     """The JSON inside a replay page."""
     text = path.read_text()
-    found = re.search(r'<script type="application/json" id="replay-data">(.*?)</script>', text, re.S)
+    script = r'<script type="application/json" id="replay-data">(.*?)</script>'
+    found = re.search(script, text, re.S)
     assert found, "no replay data in the page"
     return json.loads(found.group(1))
 
