@@ -179,3 +179,35 @@ def test_importing_the_module_does_not_import_matplotlib():
         cwd=Path(__file__).parent,
     )
     assert result.stdout.strip() == "False"
+
+
+def overlap(a, b) -> bool:
+    return not (a[3] <= b[1] or a[1] >= b[3] or a[4] <= b[2] or a[2] >= b[4])
+
+
+def test_labels_of_bunched_agents_do_not_pile_up(run):
+    scenario = load("patrol").with_overrides(agents=10, iterations=1)
+    sim = Simulation.create(scenario, seed=0).run(progress=False)  # all ten on one slot
+    boxes = FramePainter(sim.recorder, scenario).label_boxes(0)
+    assert 1 <= len(boxes) < 10
+    assert not any(overlap(a, b) for k, a in enumerate(boxes) for b in boxes[k + 1 :])
+    apart = FramePainter(run.recorder, run.scenario).label_boxes(150)
+    assert [b[0] for b in apart] == [0, 1, 2, 3]  # drones apart: every one labelled
+
+
+def test_events_are_marked_while_recent_and_the_inset_shows_the_followed_statuses(run):
+    from pyautonomousagent.render.animation import EVENT_SHOWN, STATUS_COLOURS
+
+    order = {"iteration": 100, "event": "message", "type": "gathering", "sender": "drone1",
+             "receivers": "all", "data": {"x": 90.0, "y": 10.0}}  # fmt: skip
+    painter = FramePainter(run.recorder, run.scenario, events=[order], follow="drone3", inset=True)
+    assert painter.size == (int((FIGSIZE[0] + 3.4) * 80), int(FIGSIZE[1] * 80))
+    colour = painter.events[0].colour
+    assert max(1, round(EVENT_SHOWN * 200)) == painter.event_window == 8
+    assert near(painter.draw(104), painter, 90.0, 10.0, colour)
+    assert not near(painter.draw(99), painter, 90.0, 10.0, colour)
+    assert not near(painter.draw(120), painter, 90.0, 10.0, colour)
+    pixels = painter.render(150)
+    statuses = run.recorder.trace("drone3")[150]
+    for (x, y), code in zip(painter.inset_boxes, statuses, strict=False):
+        assert tuple(pixels[y + 2, x + 2, :3]) == tuple(rgb(STATUS_COLOURS[int(code)])), (x, y)

@@ -448,35 +448,41 @@ class FramePainter:
             self._draw_inset(pixels, row)
         return pixels
 
-    def _draw_labels(self, pixels: np.ndarray, row: int) -> None:
-        """Agent numbers beside the agents; a label that would overlap one already placed is
-        tried on the other three diagonals, then left out."""
+    def label_boxes(self, row: int) -> list[tuple[int, float, float, float, float]]:
+        """Where the agent numbers of record ``row`` go: (agent, left, top, right, bottom) in
+        pixels from the top-left. Each label goes to the upper right of its agent, else to
+        another diagonal, whichever first overlaps no label already placed; a label that fits
+        nowhere is left out (so bunched agents do not pile their numbers up)."""
         if not self.labelled:
-            return
+            return []
         columns, font = self.recorder.columns, self.label_font
         points = self.axes.transData.transform(
             np.column_stack([columns["x"][row], columns["y"][row]])
         )
-        height = pixels.shape[0]
+        height = self.figure.bbox.height
         gap = self.radius * self.axes.transData.get_matrix()[0, 0] * 0.8
         cell_h = font.cell[0]
-        placed: list[tuple[float, float, float, float]] = []
-        colour = _rgb(DRONE_COLOUR)
+        placed: list[tuple[int, float, float, float, float]] = []
         for i, (px, py) in enumerate(points):
-            text = str(i + 1)
-            w = font.width(text)
+            w = font.width(str(i + 1))
             top_y = height - py
             for dx, dy in ((1, -1), (1, 1), (-1, -1), (-1, 1)):
                 left = px + gap if dx > 0 else px - gap - w
                 top = top_y - gap - cell_h if dy < 0 else top_y + gap
-                box = (left, top, left + w, top + cell_h)
+                box = (i, left, top, left + w, top + cell_h)
                 if all(
-                    box[2] <= b[0] or box[0] >= b[2] or box[3] <= b[1] or box[1] >= b[3]
+                    box[3] <= b[1] or box[1] >= b[3] or box[4] <= b[2] or box[2] >= b[4]
                     for b in placed
                 ):
                     placed.append(box)
-                    font.draw(pixels, text, left, top, colour, anchor="top")
                     break
+        return placed
+
+    def _draw_labels(self, pixels: np.ndarray, row: int) -> None:
+        """Agent numbers beside the agents (:meth:`label_boxes`)."""
+        colour = _rgb(DRONE_COLOUR)
+        for i, left, top, _, _ in self.label_boxes(row):
+            self.label_font.draw(pixels, str(i + 1), left, top, colour, anchor="top")
 
     def _draw_panel(self, pixels: np.ndarray, row: int) -> None:
         font, colour = self.panel_font, (0, 0, 0)
