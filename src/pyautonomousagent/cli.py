@@ -400,6 +400,7 @@ def _write_views(
     progress: bool | None,
 ) -> Views:
     """The animation, replay.html and Groot2 logs ``args`` ask for, written into ``out``."""
+    from pyautonomousagent.render.video import VideoError
     from pyautonomousagent.render.views import Views, write_views
 
     views = Views(
@@ -412,7 +413,7 @@ def _write_views(
     )
     try:
         return write_views(recorder, scenario, events, out, views)
-    except (KeyError, ValueError) as error:  # an agent not traced or not there, a bad size
+    except (KeyError, ValueError, VideoError) as error:  # an agent not traced, no ffmpeg, ...
         message = error.args[0] if isinstance(error, KeyError) and error.args else str(error)
         raise ScenarioError(str(message)) from None
 
