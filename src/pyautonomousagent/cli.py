@@ -769,6 +769,7 @@ def plot_command(args: argparse.Namespace) -> int:
 def experiments_command(args: argparse.Namespace) -> int:
     """``pyaa sweep``, ``pyaa plot`` and ``pyaa measures``; bad input is one line (exit 2)."""
     from pyautonomousagent.experiments import MEASURES, ExperimentError, ExpressionError
+    from pyautonomousagent.experiments.backends import BackendError
 
     try:
         if args.command == "sweep":
@@ -778,7 +779,7 @@ def experiments_command(args: argparse.Namespace) -> int:
         for name, measure in MEASURES.items():
             print(f"{name:22s} {measure.unit:12s} {measure.doc}")
         return 0
-    except (ExperimentError, ExpressionError) as error:
+    except (ExperimentError, ExpressionError, BackendError) as error:
         print(f"pyaa: error: {error}", file=sys.stderr)
         return 2
 
