@@ -39,14 +39,17 @@ class Circle:
 
 Obstacle = Rectangle | Circle
 
+MAX_OBSTACLES = 1000
+"""The most obstacles a room may have (the sonar looks at every one for every robot)."""
 _FIELDS = {"rect": ("x", "y", "width", "height"), "circle": ("x", "y", "radius")}
 
 
 def read_obstacles(reader: Reader, data: Any, path: str) -> tuple[Obstacle, ...]:
     """``world.obstacles``: a list of ``{shape: rect, x, y, width, height}`` (lower-left corner)
     and ``{shape: circle, x, y, radius}``, world units."""
-    if not isinstance(data, list):
-        raise reader.fail(path, "a list of {shape: rect|circle, ...} obstacles", data)
+    if not isinstance(data, list) or len(data) > MAX_OBSTACLES:
+        must = f"a list of at most {MAX_OBSTACLES} {{shape: rect|circle, ...}} obstacles"
+        raise reader.fail(path, must, data)
     obstacles: list[Obstacle] = []
     for i, item in enumerate(data):
         where = f"{path}[{i}]"
@@ -62,8 +65,8 @@ def read_obstacles(reader: Reader, data: Any, path: str) -> tuple[Obstacle, ...]
             height = reader.number(given["height"], f"{where}.height", above=0.0)
             obstacles.append(Rectangle(x, y, width, height))
         else:
-            obstacles.append(Circle(x, y, reader.number(given["radius"], f"{where}.radius",
-                                                        above=0.0)))  # fmt: skip
+            radius = reader.number(given["radius"], f"{where}.radius", above=0.0)
+            obstacles.append(Circle(x, y, radius))
     return tuple(obstacles)
 
 
