@@ -146,6 +146,10 @@ class Leaf:
         """Run the leaf for ``agents``; return a status code, or an int8 array of them."""
         raise NotImplementedError
 
+    def halt(self, agents: AgentView, world: World) -> None:
+        """Called when the leaf is interrupted while RUNNING (BehaviorTree.CPP's
+        ``onHalted``) for ``agents``; by default it does nothing."""
+
     def uniform(
         self, agents: AgentView, world: World, low: float = 0.0, high: float = 1.0, draw: int = 0
     ) -> Any:
