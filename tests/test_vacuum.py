@@ -150,3 +150,12 @@ def test_pyaa_run_writes_identical_data_on_both_engines_and_a_gif(tmp_path, caps
     assert tables[0].num_rows == 151 * 2
     assert {"sonar", "vacuuming", "cleaned_cells", "cruise_heading"} <= set(tables[0].column_names)
     assert tables[0].equals(tables[1])
+
+
+def test_pyaa_scenarios_lists_both_new_missions(capsys):
+    assert main(["scenarios"]) == 0
+    listed = [line.split()[0] for line in capsys.readouterr().out.splitlines()]
+    assert {"vacuum", "radiation-search"} <= set(listed)
+    assert main(["scenarios", "vacuum"]) == 0
+    shown = capsys.readouterr().out
+    assert "obstacles" in shown and "collision_distance" in shown and "robot1.." in shown

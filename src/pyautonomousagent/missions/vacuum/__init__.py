@@ -66,6 +66,9 @@ OBSTACLE_COLOUR = "#969696"
 """Grey of the obstacles."""
 START_COLOUR = "#31a354"
 """Green of the start positions."""
+STOP_MARGIN = 1e-6
+"""World units kept between a robot's predicted next position and any obstacle or wall, so
+that a motion step a rounding error away from the prediction still stays out."""
 MAX_CELLS = 4_000_000
 """The largest cleaned-area grid a scenario may ask for (cells)."""
 
@@ -157,7 +160,7 @@ class VacuumMission(Mission):
         for i, point in enumerate(scenario.objects.start_positions):
             where = f"world.start_positions[{i}]"
             check_point_in_world(reader, scenario, point, where)
-            if room.blocked(np.array([point[0]]), np.array([point[1]]))[0]:
+            if room.blocked(np.array([point[0]]), np.array([point[1]]), STOP_MARGIN)[0]:
                 raise reader.fail(where, "a point clear of every obstacle", list(point))
 
     def blackboard(self) -> dict[str, Any]:
@@ -189,7 +192,7 @@ class VacuumMission(Mission):
         rad = s["heading"] * (np.pi / 180.0)  # the drone2d step (paper eqs. 1-2)
         next_x = s["x"] + s["speed"] * np.sin(rad)
         next_y = s["y"] + s["speed"] * np.cos(rad)
-        return ~self.room.blocked(next_x, next_y)
+        return ~self.room.blocked(next_x, next_y, STOP_MARGIN)
 
     def coverage(self) -> float:
         """The fraction of the room's free cells cleaned so far, in [0, 1]."""

@@ -87,22 +87,27 @@ class Room:
         self.rects = np.asarray(rects, dtype=np.float64).reshape(-1, 4)  # x0, y0, x1, y1
         self.circles = np.asarray(circles, dtype=np.float64).reshape(-1, 3)  # x, y, r
 
-    def blocked(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Whether (x, y) lies outside the room or in (or on the edge of) an obstacle.
+    def blocked(self, x: np.ndarray, y: np.ndarray, margin: float = 0.0) -> np.ndarray:
+        """Whether (x, y) lies outside the room or in (or on the edge of) an obstacle, with
+        walls and obstacles grown by ``margin``.
 
         Args:
             x, y: positions, shape (N,).
+            margin: world units added around every obstacle and inside every wall.
 
         Returns:
             bool, shape (N,).
         """
         x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        outside = (x < 0.0) | (x > self.width) | (y < 0.0) | (y > self.height)
+        m = margin
+        outside = (x < m) | (x > self.width - m) | (y < m) | (y > self.height - m)
         px, py = x[:, None], y[:, None]
         r = self.rects
-        in_rect = (px >= r[:, 0]) & (px <= r[:, 2]) & (py >= r[:, 1]) & (py <= r[:, 3])
+        in_rect = (
+            (px >= r[:, 0] - m) & (px <= r[:, 2] + m) & (py >= r[:, 1] - m) & (py <= r[:, 3] + m)
+        )
         c = self.circles
-        in_circle = (px - c[:, 0]) ** 2 + (py - c[:, 1]) ** 2 <= c[:, 2] ** 2
+        in_circle = (px - c[:, 0]) ** 2 + (py - c[:, 1]) ** 2 <= (c[:, 2] + m) ** 2
         return outside | in_rect.any(axis=1) | in_circle.any(axis=1)
 
     def sonar(self, x: np.ndarray, y: np.ndarray, heading: np.ndarray, reach: float) -> np.ndarray:
