@@ -16,10 +16,12 @@ from pyautonomousagent.missions.radiation_search import FOUND, leaves
 from pyautonomousagent.testing import check_engines_agree, check_leaf
 
 
-@pytest.fixture(scope="module")
-def search_run() -> Simulation:
-    """The scenario as shipped: 4 drones, 2500 iterations (batched, seed 0)."""
-    return Simulation.create(load("radiation-search"), seed=0, engine="batched").run(progress=False)
+@pytest.fixture(scope="module", params=[0, 3])
+def search_run(request) -> Simulation:
+    """The scenario as shipped: 4 drones, 2500 iterations (batched; seeds 0 and 3: the source
+    is found at iterations 229 and 470)."""
+    scenario = load("radiation-search")
+    return Simulation.create(scenario, seed=request.param, engine="batched").run(progress=False)
 
 
 def found_messages(sim: Simulation) -> list[dict]:

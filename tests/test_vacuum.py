@@ -16,11 +16,11 @@ from pyautonomousagent.testing import check_engines_agree, check_leaf, make_harn
 ITERATIONS = 1500
 
 
-@pytest.fixture(scope="module")
-def vacuum_run() -> Simulation:
-    """Three robots for 1500 iterations in the scenario's room (batched, seed 0)."""
+@pytest.fixture(scope="module", params=[0, 2])
+def vacuum_run(request) -> Simulation:
+    """Three robots for 1500 iterations in the scenario's room (batched, seeds 0 and 2)."""
     scenario = load("vacuum").with_overrides(agents=3, iterations=ITERATIONS)
-    return Simulation.create(scenario, seed=0, engine="batched").run(progress=False)
+    return Simulation.create(scenario, seed=request.param, engine="batched").run(progress=False)
 
 
 def entered(scenario, x: np.ndarray, y: np.ndarray) -> np.ndarray:
