@@ -55,9 +55,10 @@ def test_the_docs_example_runs_from_its_folder_on_both_engines(example, tmp_path
     a = pq.read_table(out["pytrees"] / "states.parquet")
     b = pq.read_table(out["batched"] / "states.parquet")
     assert a.equals(b)
-    # its own sensor column and blackboard keys are recorded
+    # its own sensor column and blackboard keys are recorded, with their units and meanings
     for column in ("depot_distance", "goal", "deliveries", "heard"):
-        assert column in a.column_names
+        assert a.schema.field(column).metadata[b"description"]
+    assert a.schema.field("depot_distance").metadata[b"unit"] == b"world unit"
     # its message type is delivered, handled and recorded
     events = json.loads((out["batched"] / "run.json").read_text())["events"]
     assert events == json.loads((out["pytrees"] / "run.json").read_text())["events"]
