@@ -653,12 +653,13 @@ def _add_experiments(sub: Any) -> None:
     sweep.add_argument("--record-every", type=int, metavar="K", help="record every K-th iteration")
     sweep.add_argument("--out", type=Path, help="sweep folder (default: runs/sweeps/NAME)")
     sweep.add_argument("--workers", type=int, help="local processes (default: all cores)")
-    sweep.add_argument(
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument(
         "--dask",
         metavar="ADDRESS|local",
         help="run on a Dask cluster (scheduler address) or a local Dask cluster",
     )
-    sweep.add_argument("--serial", action="store_true", help="run in this process, one by one")
+    where.add_argument("--serial", action="store_true", help="run in this process, one by one")
     sweep.add_argument("--resume", action="store_true", help="continue the sweep in --out")
     sweep.add_argument(
         "--save-runs",
