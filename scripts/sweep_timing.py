@@ -12,6 +12,7 @@ patrol --agents 100 --no-gif`` (a new process each, median of ``--single``).
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import subprocess
 import sys
@@ -49,7 +50,8 @@ def main() -> None:
     args = parser.parse_args()
     experiment = Experiment.from_file(args.experiment)
     runs = len(experiment.runs())
-    print(f"{experiment.name}: {runs} runs of {experiment.scenario}", flush=True)
+    load = os.getloadavg()[0]
+    print(f"{experiment.name}: {runs} runs of {experiment.scenario}; load {load:.2f}", flush=True)
     for workers in (int(w) for w in args.workers.split(",")):
         with tempfile.TemporaryDirectory() as out:
             start = time.perf_counter()
@@ -60,7 +62,7 @@ def main() -> None:
         print(
             f"  {workers} worker(s): {wall:.1f} s for {runs} runs; {per_run:.3f} s per run "
             f"(x workers); a run took {on_worker:.3f} s on its worker; overhead "
-            f"{per_run - on_worker:.3f} s per run",
+            f"{per_run - on_worker:.3f} s per run; load {os.getloadavg()[0]:.2f}",
             flush=True,
         )
     single = single_runs(args.single, experiment)
