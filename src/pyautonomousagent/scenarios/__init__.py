@@ -12,9 +12,8 @@ import difflib
 from importlib import resources
 from pathlib import Path
 
-import yaml
-
 from pyautonomousagent.bt.files import is_tree_file
+from pyautonomousagent.inputs import InputError, load_yaml, read_text, shown
 from pyautonomousagent.simulation.scenario import Scenario, ScenarioError
 
 _PACKAGED = resources.files(__name__)
@@ -49,13 +48,14 @@ def load(name_or_path: str | Path) -> Scenario:
     else:
         close = difflib.get_close_matches(key, names(), n=1)
         hint = f" (did you mean {close[0]!r}?)" if close else ""
-        raise ScenarioError(f"unknown scenario {key!r}{hint}; known: {', '.join(names())}")
+        raise ScenarioError(
+            f"unknown scenario {shown(key)}{hint}; known: {', '.join(names())} "
+            "(or give a scenario file ending in .yaml)"
+        )
     try:
-        data = yaml.safe_load(path.read_text())
-    except OSError as error:
-        raise ScenarioError(f"cannot read scenario file {path}: {error.strerror}") from None
-    except yaml.YAMLError as error:
-        raise ScenarioError(f"{path}: not valid YAML: {error}") from None
+        data = load_yaml(read_text(path, "scenario file"), str(path))
+    except InputError as error:
+        raise ScenarioError(str(error)) from None
     if isinstance(data, dict) and isinstance(data.get("tree"), str) and is_tree_file(data["tree"]):
         data["tree"] = str(tree_path(data["tree"], path.parent))
     return Scenario.from_mapping(data, source=str(path.name))

@@ -12,6 +12,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from pyautonomousagent.inputs import InputError, finite, shown
 from pyautonomousagent.models.x8 import TURBULENCE_INTENSITIES, X8Settings
 from pyautonomousagent.sensors import RadiationSource
 
@@ -21,7 +22,7 @@ Point = tuple[float, float]
 MODELS = ("drone2d", "x8")
 
 
-class ScenarioError(ValueError):
+class ScenarioError(InputError):
     """Bad scenario input; the message names the field and what it must be."""
 
 
@@ -136,7 +137,7 @@ class _Reader:
         self.source = source
 
     def fail(self, path: str, must: str, value: Any) -> ScenarioError:
-        return ScenarioError(f"{self.source}: {path} must be {must}, got {value!r}")
+        return ScenarioError(f"{self.source}: {path} must be {must}, got {shown(value)}")
 
     def keys(self, data: Any, path: str, allowed: list[str], required: list[str]) -> dict[str, Any]:
         if not isinstance(data, Mapping):
@@ -146,7 +147,7 @@ class _Reader:
                 close = difflib.get_close_matches(str(key), allowed, n=1)
                 hint = f" (did you mean {close[0]!r}?)" if close else ""
                 where = f"{path}.{key}" if path else str(key)
-                raise ScenarioError(f"{self.source}: unknown key {where!r}{hint}")
+                raise ScenarioError(f"{self.source}: unknown key {shown(where)}{hint}")
         for key in required:
             if key not in data:
                 raise ScenarioError(
@@ -166,6 +167,8 @@ class _Reader:
         must = "a whole number" if whole else "a number"
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.fail(path, must, value)
+        if not finite(value):
+            raise self.fail(path, f"a finite {must[2:]}", value)
         if whole and float(value) != int(value):
             raise self.fail(path, must, value)
         if minimum is not None and value < minimum:
