@@ -21,7 +21,7 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed
-	$(BIN)/pyaa run gathering --out runs/gathering
+	$(BIN)/pyaa run gathering --out runs/gathering --overwrite
 
 test: $(VENV)/.installed-test
 	$(BIN)/ruff check src tests
