@@ -69,7 +69,7 @@ def test_arctan2_gives_the_same_bits_for_scalars_and_arrays():
     y = rng.normal(size=3000) * rng.choice([1e-6, 1.0, 1e6], 3000)
     x = rng.normal(size=3000)
     y[:20], x[10:30] = 0.0, 0.0
-    x[40:50] = -x[40:50] ** 2
+    x[40:50] = -(x[40:50] ** 2)
     array = arctan2(y, x)
     scalar = np.array([arctan2(float(a), float(b)) for a, b in zip(y, x, strict=True)])
     assert np.array_equal(array, scalar)

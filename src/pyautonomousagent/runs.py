@@ -123,8 +123,7 @@ def check_target(folder: str | Path, overwrite: bool = False) -> Path:
                 )
         parent = path.absolute().parent
         parent.mkdir(parents=True, exist_ok=True)
-        if not os.access(parent, os.W_OK | os.X_OK):
-            raise RunError(f"cannot write in {parent}: permission denied; {fix}")
+        os.rmdir(tempfile.mkdtemp(prefix=f".{path.name}.probe-", dir=parent))  # writable?
     except OSError as error:
         raise RunError(f"cannot use output folder {path}: {_reason(error)}; {fix}") from None
     return path
