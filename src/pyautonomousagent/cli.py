@@ -328,11 +328,11 @@ def run(args: argparse.Namespace) -> int:
     if args.tree is not None:
         file_format(args.tree)  # refuse other endings before anything runs
         scenario = scenario.with_overrides(tree=str(args.tree.resolve()))
-    out = check_target(args.out or default_folder(scenario.name), args.overwrite)
     progress = None if not args.quiet else False
     sim = Simulation.create(
         scenario, seed=args.seed, engine=args.engine, record_every=args.record_every
     )
+    out = check_target(args.out or default_folder(scenario.name), args.overwrite)
     status = simulate(sim, progress)
     saved = save_run(
         sim,
@@ -385,6 +385,11 @@ def _tree_source(source: str) -> tuple[Document, str]:
     """The tree document ``source`` names (a tree file, or a scenario's tree) and a name."""
     if source not in names() and is_tree_file(source) and not _is_scenario_file(source):
         return read_document(source), Path(source).stem
+    if source not in names() and not is_tree_file(source):
+        raise InputError(
+            f"{shown(source)} is neither a registered scenario ({', '.join(names())}) nor a "
+            "tree or scenario file; give a file ending in .xml, .yaml or .yml"
+        )
     scenario = load(source)
     if is_tree_file(scenario.tree):
         return read_document(scenario.tree), scenario.name
@@ -393,13 +398,13 @@ def _tree_source(source: str) -> tuple[Document, str]:
 
 def _is_scenario_file(path: str) -> bool:
     """Whether a .yaml file is a scenario (it has ``agents``) rather than a tree file."""
-    import yaml
-
     if not path.endswith((".yaml", ".yml")):
         return False
+    from pyautonomousagent.inputs import load_yaml, read_text
+
     try:
-        data = yaml.safe_load(Path(path).read_text())
-    except (OSError, yaml.YAMLError):
+        data = load_yaml(read_text(path, "file"), path)
+    except InputError:
         return False  # the tree reader reports it, with the line
     return isinstance(data, dict) and "agents" in data
 

@@ -177,8 +177,9 @@ def load_yaml(text: str, file: str) -> Any:
     Raises:
         InputError: ``file:line: problem; fix``, one line.
     """
-    loader = Loader(text)
+    loader = None
     try:
+        loader = Loader(text)
         return loader.get_single_data()
     except YamlLimitError as error:
         line, problem = yaml_error_line(error)
@@ -192,4 +193,5 @@ def load_yaml(text: str, file: str) -> Any:
     except (ValueError, OverflowError, TypeError) as error:  # e.g. a date 2024-02-30
         raise InputError(f"{file}: a value cannot be read ({clip(str(error), 120)})") from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()

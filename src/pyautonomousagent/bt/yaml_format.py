@@ -214,7 +214,11 @@ class _Reader:
 
 def read_yaml(text: str, file: str) -> Document:
     """Read a YAML tree file into a :class:`Document`."""
-    reader = _Reader(text, file)
+    try:
+        reader = _Reader(text, file)
+    except yaml.YAMLError as error:  # the reader refuses some characters at once
+        line, problem = yaml_error_line(error)
+        raise TreeFileError(file, line, f"not valid YAML ({problem})", "remove it") from None
     try:
         return reader.document()
     finally:
