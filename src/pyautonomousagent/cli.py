@@ -385,7 +385,8 @@ def _tree_source(source: str) -> tuple[Document, str]:
     """The tree document ``source`` names (a tree file, or a scenario's tree) and a name."""
     if source not in names() and is_tree_file(source) and not _is_scenario_file(source):
         return read_document(source), Path(source).stem
-    if source not in names() and not is_tree_file(source):
+    looks_like_a_file = bool(Path(source).suffix) or "/" in source
+    if source not in names() and looks_like_a_file and not is_tree_file(source):
         raise InputError(
             f"{shown(source)} is neither a registered scenario ({', '.join(names())}) nor a "
             "tree or scenario file; give a file ending in .xml, .yaml or .yml"
