@@ -53,43 +53,54 @@ def wrap_degrees(angle: Any) -> Any:
     return angle - 360.0 if angle >= 360.0 else angle
 
 
-#: 1 / (2k + 1), k = 0..15: the arctangent's series, enough for |t| <= tan(pi / 12).
-_SERIES = tuple(1.0 / (2 * k + 1) * (-1.0) ** k for k in range(16))
+#: (-1)**k / (2k + 1), k = 0..15: the arctangent's series, enough for |t| <= tan(pi / 12).
+_SERIES = tuple((-1.0) ** k / (2 * k + 1) for k in range(16))
 _TAN_PI_12 = 2.0 - math.sqrt(3.0)
 _SQRT3 = math.sqrt(3.0)
 
 
+def copysign(magnitude: Any, sign: Any) -> Any:
+    """``magnitude`` with the sign bit of ``sign`` (a bit operation, exact)."""
+    if isinstance(magnitude, np.ndarray) or isinstance(sign, np.ndarray):
+        return np.copysign(magnitude, sign)
+    return math.copysign(magnitude, sign)
+
+
 def _atan_unit(t: Any) -> Any:
-    """``atan(t)`` for t in [0, 1], from ``+ - * /`` only (radians; scalar or array).
+    """``atan(t)`` for t in [0, 1], radians, from ``+ - * /`` only.
 
     Above tan(pi/12) the argument is reduced with atan(t) = pi/6 + atan((sqrt(3) t - 1) /
-    (t + sqrt(3))), which brings it into [-tan(pi/12), tan(pi/12)]; there 16 terms of the
-    series ``t - t**3/3 + t**5/5 - ...`` are within 1e-17 of the true value.
+    (t + sqrt(3))), which brings it into [-tan(pi/12), tan(pi/12)], where 16 terms of the
+    series ``t - t**3/3 + t**5/5 - ...`` are within 1e-17 of the arctangent. The branch is
+    taken by multiplying with 0 or 1, which is exact here (every value is finite and ``t``
+    is not negative), so arrays need no ``numpy.where`` (ten times slower than a product).
     """
     big = t > _TAN_PI_12
-    u = choose(big, (t * _SQRT3 - 1.0) / (t + _SQRT3), t)
+    u = big * ((t * _SQRT3 - 1.0) / (t + _SQRT3)) + (1.0 - big) * t
     z = u * u
     total = z * _SERIES[-1]  # a new array (or float), so the in-place steps below are safe
     for coefficient in _SERIES[-2:0:-1]:
         total += coefficient
         total *= z
     total += _SERIES[0]
-    return choose(big, math.pi / 6.0 + u * total, u * total)
+    return (math.pi / 6.0) * big + u * total
 
 
 def arctan2(y: Any, x: Any) -> Any:
     """The angle of the vector (x, y) from the +x axis, radians in [-pi, pi].
 
-    Agrees with ``math.atan2`` to within a few ulp, and gives the same bits for scalars and
-    for arrays, on every CPU (see the module's docstring). (0, 0) gives 0.
+    Within a few ulp of ``math.atan2`` (same quadrant and signed-zero rules), and the same
+    bits for scalars and for arrays on every CPU (see the module's docstring): the octant
+    is applied with exact steps (a sign flip, adding 0, pi/2 or pi, ``copysign``).
     """
     ay, ax = abs(y), abs(x)
-    low, high = minimum(ay, ax), maximum(ay, ax)
-    ratio = low / choose(high > 0.0, high, 1.0)
-    angle = _atan_unit(ratio)
-    angle = choose(ay > ax, math.pi / 2.0 - angle, angle)
-    angle = choose(x < 0.0, math.pi - angle, angle)
-    return choose(y < 0.0, -angle, angle)
+    steep = ay > ax  # the angle is pi/2 - atan(ax / ay)
+    high = maximum(ay, ax)
+    angle = _atan_unit(minimum(ay, ax) / (high + (high == 0.0)))  # (0, 0) -> atan(0)
+    angle = (math.pi / 2.0) * steep + (1.0 - 2.0 * steep) * angle
+    west = 1.0 - copysign(1.0, x)  # 0 for x >= +0, 2 for x <= -0: pi - angle
+    angle = (math.pi / 2.0) * west + (1.0 - west) * angle
+    return copysign(angle, y)
 
 
 def bearing(x: Any, y: Any, to_x: Any, to_y: Any) -> Any:
