@@ -10,12 +10,12 @@ import numpy as np
 import py_trees
 import pytest
 
-from pyautonomousagent import Parameters, Simulation, load
-from pyautonomousagent.bt import library  # noqa: F401  (registers the leaf types)
+from pyautonomousagent import Simulation, load
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.datalink import Datalink
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.pytrees import PyTreesEngine
+from pyautonomousagent.missions.drones import DroneMission
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
@@ -37,8 +37,13 @@ BLACKBOARD_KEYS: dict[str, type] = {
 
 
 def make_swarm(n: int = 1) -> Swarm:
-    """N zero-filled agents ``drone1``..``droneN`` with the full blackboard."""
-    return Swarm.create([f"drone{i + 1}" for i in range(n)], BLACKBOARD_KEYS)
+    """N zero-filled drones ``drone1``..``droneN`` with the full blackboard."""
+    return Swarm.create([f"drone{i + 1}" for i in range(n)], BLACKBOARD_KEYS, DroneMission.columns)
+
+
+def default_parameters() -> dict[str, Any]:
+    """The gathering scenario's parameters (every drone leaf's port default)."""
+    return vars(load("gathering").parameters)
 
 
 def make_world(swarm: Swarm, datalink_range: float = 1000.0) -> World:
@@ -82,7 +87,7 @@ def make_harness(
     """Swarm + World + an engine ("pytrees" or "batched") for ``tree`` and ``n`` agents."""
     swarm = make_swarm(n)
     world = make_world(swarm)
-    params = vars(Parameters()) if defaults is None else defaults
+    params = default_parameters() if defaults is None else defaults
     kind = PyTreesEngine if engine == "pytrees" else BatchedEngine
     return Harness(tree, swarm, world, kind(tree, swarm, world, params))
 

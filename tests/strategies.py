@@ -8,7 +8,8 @@ from itertools import count
 
 from hypothesis import strategies as st
 
-from pyautonomousagent.bt.spec import STATUS_MAPS, Node
+from pyautonomousagent.bt.nodes import NODE_TYPES
+from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 
 STATUSES = st.sampled_from([SUCCESS, FAILURE, RUNNING])
@@ -26,13 +27,13 @@ def control_node(children: st.SearchStrategy[list[Node]]) -> st.SearchStrategy[N
     """A composite or decorator over drawn children."""
     composites = st.builds(
         lambda kind, memory, kids: Node(kind, "c", tuple(kids), {"memory": memory}),
-        st.sampled_from(["Sequence", "Selector"]),
+        st.sampled_from(["Sequence", "Fallback"]),
         st.booleans(),
         children,
     )
     parallels = st.builds(
         lambda policy, sync, kids: Node(
-            "Parallel",
+            "PyTreesParallel",
             "p",
             tuple(kids),
             {"policy": policy, **({"synchronise": sync} if policy == "SuccessOnAll" else {})},
@@ -44,14 +45,17 @@ def control_node(children: st.SearchStrategy[list[Node]]) -> st.SearchStrategy[N
     one_child = children.filter(bool).map(lambda kids: kids[:1])
     mapped = st.builds(
         lambda kind, kids: Node(kind, "d", tuple(kids)),
-        st.sampled_from(sorted(STATUS_MAPS)),
+        st.sampled_from(sorted(n for n, r in NODE_TYPES.items() if r.status_map is not None)),
         one_child,
     )
     counted = st.builds(
         lambda kind, n, kids: Node(
-            kind, "r", tuple(kids), {"num_success" if kind == "Repeat" else "num_failures": n}
+            kind,
+            "r",
+            tuple(kids),
+            {"num_success" if kind == "PyTreesRepeat" else "num_failures": n},
         ),
-        st.sampled_from(["Repeat", "Retry"]),
+        st.sampled_from(["PyTreesRepeat", "PyTreesRetry"]),
         st.integers(1, 3),
         one_child,
     )
@@ -59,13 +63,13 @@ def control_node(children: st.SearchStrategy[list[Node]]) -> st.SearchStrategy[N
 
 
 def btcpp_node(children: st.SearchStrategy[list[Node]]) -> st.SearchStrategy[Node]:
-    """A node with BehaviorTree.CPP semantics: SequenceWithMemory, BTParallel with random
-    thresholds, BTRepeat or RetryUntilSuccessful."""
+    """A node with BehaviorTree.CPP semantics: SequenceWithMemory, Parallel with random
+    thresholds, Repeat or RetryUntilSuccessful."""
     with_memory = children.map(lambda kids: Node("SequenceWithMemory", "m", tuple(kids)))
     parallel = children.flatmap(
         lambda kids: st.builds(
             lambda s, f: Node(
-                "BTParallel", "q", tuple(kids), {"success_count": s, "failure_count": f}
+                "Parallel", "q", tuple(kids), {"success_count": s, "failure_count": f}
             ),
             _threshold(len(kids)),
             _threshold(len(kids)),
@@ -74,17 +78,32 @@ def btcpp_node(children: st.SearchStrategy[list[Node]]) -> st.SearchStrategy[Nod
     one_child = children.filter(bool).map(lambda kids: kids[:1])
     loops = st.builds(
         lambda kind, n, kids: Node(
-            kind, "l", tuple(kids), {"num_cycles" if kind == "BTRepeat" else "num_attempts": n}
+            kind, "l", tuple(kids), {"num_cycles" if kind == "Repeat" else "num_attempts": n}
         ),
-        st.sampled_from(["BTRepeat", "RetryUntilSuccessful"]),
+        st.sampled_from(["Repeat", "RetryUntilSuccessful"]),
         st.integers(1, 3),
         one_child,
     )
-    return st.one_of(with_memory, parallel, loops)
+    flows = st.builds(
+        lambda kind, kids: Node(kind, "a", tuple(kids)),
+        st.sampled_from(["AsyncSequence", "AsyncFallback"]),
+        children.filter(bool),
+    )
+    branches = st.builds(
+        lambda kind, kids: Node(kind, "b", tuple(kids[:3])),
+        st.sampled_from(["IfThenElse", "WhileDoElse"]),
+        children.filter(lambda kids: len(kids) >= 2),
+    )
+    parallel_all = children.filter(bool).flatmap(
+        lambda kids: _threshold(len(kids)).map(
+            lambda m: Node("ParallelAll", "pa", tuple(kids), {"max_failures": m})
+        )
+    )
+    return st.one_of(with_memory, parallel, loops, flows, branches, parallel_all)
 
 
 def _threshold(children: int) -> st.SearchStrategy[int]:
-    """A valid BTParallel count for ``children`` children: 1..n or -n..-1."""
+    """A valid Parallel count for ``children`` children: 1..n or -n..-1."""
     return st.one_of(st.integers(1, children), st.integers(-children, -1))
 
 

@@ -22,8 +22,6 @@ from pyautonomousagent.render.animation import (
     draw_frame,
     frame_rows,
     panel_rows,
-    refuelling_slots,
-    surveillance_marks,
     write_gif,
 )
 from pyautonomousagent.scenarios import load
@@ -119,18 +117,28 @@ def test_draw_frame_rejects_rows_outside_the_records(run):
         draw_frame(run.recorder, run.scenario, run.recorder.count)
 
 
-def test_static_marks_come_from_the_first_record(run):
+def marks_of(scenario, legend: str) -> list[tuple[str, float, float]]:
+    """(label, x, y) of the mission's marks with that legend."""
+    marks = scenario.create_mission().marks()
+    return [(m.label, m.x, m.y) for m in marks if m.legend == legend]
+
+
+def test_static_marks_are_the_missions(run):
     slots = [(20, 65), (20, 55), (20, 45), (20, 35)]
-    assert refuelling_slots(run.recorder, run.scenario) == slots
-    marks = [(50, 50), (70, 80), (40, 70), (60, 25)]
-    assert surveillance_marks(run.recorder, run.scenario) == marks
+    assert marks_of(run.scenario, "refuelling slot") == [
+        (f"R{i}", x, y) for i, (x, y) in enumerate(slots, start=1)
+    ]
+    points = [(50, 50), (70, 80), (40, 70), (60, 25)]
+    assert marks_of(run.scenario, "surveillance position") == [
+        (f"S{i}", x, y) for i, (x, y) in enumerate(points, start=1)
+    ]
 
 
 def test_patrol_marks_its_two_positions_and_many_drones_go_unlabelled():
     scenario = load("patrol").with_overrides(agents=MAX_LABELLED + 1, iterations=5)
     sim = Simulation.create(scenario, seed=0).run(progress=False)
-    assert surveillance_marks(sim.recorder, scenario) == [(70, 80), (70, 20)]
-    assert refuelling_slots(sim.recorder, scenario) == [(10, 50)]
+    assert marks_of(scenario, "surveillance position") == [("S1", 70, 80), ("S2", 70, 20)]
+    assert marks_of(scenario, "refuelling slot") == [("R1", 10, 50)]
     assert FramePainter(sim.recorder, scenario).labels == []
 
 

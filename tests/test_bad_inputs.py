@@ -9,6 +9,7 @@ The deadline is generous (a hang guard, not a timing assertion).
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import signal
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -21,12 +22,13 @@ from pyautonomousagent.bt.document import TreeFileError
 from pyautonomousagent.bt.files import from_text_format, load_tree
 from pyautonomousagent.cli import main
 from pyautonomousagent.inputs import InputError
-from pyautonomousagent.scenarios import REGISTRY
-from pyautonomousagent.simulation import Scenario, ScenarioError
+from pyautonomousagent.scenarios import SCENARIOS
+from pyautonomousagent.simulation import ScenarioError
 
 DEADLINE_S = 30
-BASE = yaml.safe_load(REGISTRY["gathering"].read_text())
-BASE["tree"] = str(REGISTRY["gathering"].parent / "gathering.xml")
+GATHERING = SCENARIOS.get("gathering")
+BASE = yaml.safe_load(GATHERING.read_text())
+BASE["tree"] = str(GATHERING.parent / "gathering.xml")
 
 
 class HungError(Exception):
@@ -112,34 +114,41 @@ FIELD_CASES: list[tuple[str, Any, str]] = [
     ("iterations", "long", "iterations"),
     ("iterations", 2.5, "iterations"),
     ("iterations", 10**15, "needs at least"),
-    ("world", [NAN, 100], "world"),
-    ("world", [100, INF], "world"),
-    ("world", [-1, 100], "world"),
-    ("world", [0, 0], "world"),
-    ("world", [100], "world"),
-    ("world", "big", "world"),
-    ("world", [100, 100, 100], "world"),
-    ("refueling_positions", [], "refueling_positions"),
-    ("refueling_positions", [[NAN, 1]], "refueling_positions"),
-    ("refueling_positions", [[1]], "refueling_positions"),
-    ("refueling_positions", [[1, INF]], "refueling_positions"),
-    ("refueling_positions", "x", "refueling_positions"),
-    ("surveillance_positions", [[NAN, 2]], "surveillance_positions"),
-    ("surveillance_positions", [1, 2], "surveillance_positions"),
+    ("world.size", [NAN, 100], "world"),
+    ("world.size", [100, INF], "world"),
+    ("world.size", [-1, 100], "world"),
+    ("world.size", [0, 0], "world"),
+    ("world.size", [100], "world"),
+    ("world.size", "big", "world"),
+    ("world.size", [100, 100, 100], "world"),
+    ("world", [100, 100], "world"),
+    ("world.moon", 1, "moon"),
+    ("world.refueling_positions", [], "refueling_positions"),
+    ("world.refueling_positions", [[NAN, 1]], "refueling_positions"),
+    ("world.refueling_positions", [[1]], "refueling_positions"),
+    ("world.refueling_positions", [[1, INF]], "refueling_positions"),
+    ("world.refueling_positions", "x", "refueling_positions"),
+    ("world.surveillance_positions", [[NAN, 2]], "surveillance_positions"),
+    ("world.surveillance_positions", [1, 2], "surveillance_positions"),
     ("initial_heading", NAN, "initial_heading"),
     ("initial_heading", INF, "initial_heading"),
     ("initial_heading", "north", "initial_heading"),
     ("frame_every", 0, "frame_every"),
     ("frame_every", INF, "frame_every"),
-    ("radiation_sources", [{"x": NAN, "y": 1, "range": 1}], "radiation_sources[0].x"),
-    ("radiation_sources", [{"x": 1, "y": 1, "range": 0}], "range"),
-    ("radiation_sources", [{"x": 1, "y": 1, "range": INF}], "range"),
-    ("radiation_sources", [{"x": 1, "y": 1}], "missing key"),
-    ("radiation_sources", "x", "radiation_sources"),
-    ("radiation_sources", [{"x": 1, "y": 1, "range": 1, "active": "yes"}], "active"),
-    ("radiation_sources", [{"x": 1, "y": 1, "range": 1, "colour": 1}], "colour"),
+    ("world.radiation_sources", [{"x": NAN, "y": 1, "range": 1}], "radiation_sources[0].x"),
+    ("world.radiation_sources", [{"x": 1, "y": 1, "range": 0}], "range"),
+    ("world.radiation_sources", [{"x": 1, "y": 1, "range": INF}], "range"),
+    ("world.radiation_sources", [{"x": 1, "y": 1}], "missing key"),
+    ("world.radiation_sources", "x", "radiation_sources"),
+    ("world.radiation_sources", [{"x": 1, "y": 1, "range": 1, "active": "yes"}], "active"),
+    ("world.radiation_sources", [{"x": 1, "y": 1, "range": 1, "colour": 1}], "colour"),
     ("model", "car", "model"),
-    ("x8", {"dt": 0.01}, "model"),
+    ("x8", {"dt": 0.01}, "x8"),
+    ("mission", "nowhere", "nowhere"),
+    ("mission", "", "mission"),
+    ("parameters.low_energy_threshold", 150, "low_energy_threshold"),
+    ("parameters.gathering_sender", "drone9", "gathering_sender"),
+    ("world.surveillance_positions", [[500, 500]], "surveillance_positions"),
     ("name", "", "name"),
     ("tree", "", "tree"),
     ("tree", "missing_tree.xml", "cannot read"),
@@ -340,7 +349,7 @@ CLI_CASES: list[tuple[list[str], str]] = [
     ([*RUN, "--set", "novalue"], "KEY=VALUE"),
     ([*RUN, "--set", "agents=5"], "use the option --agents 5"),
     ([*RUN, "--set", "iterations=3"], "--iterations"),
-    ([*RUN, "--set", "foo=1"], "parameters: reference_speed"),
+    ([*RUN, "--set", "foo=1"], "unknown parameter 'foo'; parameters: "),
     ([*RUN, "--set", "low_energy_treshold=30"], "did you mean 'low_energy_threshold'"),
     ([*RUN, "--set", "energy_use=lots"], "energy_use must be a number"),
     ([*RUN, "--set", "energy_use=.nan"], "finite"),
@@ -397,10 +406,8 @@ def test_output_folder_problems(tmp_path, capsys):
 # ---------------------------------------------------------------------------- Python API
 
 SHORT = load("patrol").with_overrides(agents=2, iterations=5)
-RAW = Scenario(
-    name="direct", description="", tree="patrol.xml", agents=-1, iterations=10,
-    world=(100.0, 100.0), refueling_positions=((1.0, 1.0),),
-)  # fmt: skip
+RAW = dataclasses.replace(SHORT, agents=-1)  # built directly, not validated yet
+RAW_WORLD = dataclasses.replace(SHORT, world=(NAN, 100.0))
 
 API_CASES: list[tuple[str, Callable[[], Any], type[Exception], str]] = [
     ("name_not_scenario", lambda: Simulation.create("gathering"), TypeError, "load('gathering')"),
@@ -417,6 +424,7 @@ API_CASES: list[tuple[str, Callable[[], Any], type[Exception], str]] = [
     ("engine_number", lambda: Simulation.create(SHORT, engine=3), TypeError, "engine"),
     ("engine_unknown", lambda: Simulation.create(SHORT, engine="fast"), ValueError, "engine"),
     ("scenario_built_directly", lambda: Simulation.create(RAW), ScenarioError, "agents"),
+    ("scenario_nan_world", lambda: Simulation.create(RAW_WORLD), ScenarioError, "world"),
     ("override_nan", lambda: SHORT.with_overrides(energy_use=NAN), ScenarioError, "finite"),
     ("override_negative", lambda: SHORT.with_overrides(agents=-1), ScenarioError, "agents"),
     ("load_unknown", lambda: load("nothing"), ScenarioError, "unknown scenario"),

@@ -34,9 +34,10 @@ def decorated(kind: str, child: Node, **params: int) -> Node:
 
 @pytest.mark.parametrize("engine", ENGINES)
 def test_sequence_with_memory_resumes_at_the_failed_child(harness, engine):
-    kids = (scripted("a", "SFF"), scripted("b", "FSS"), scripted("c", "SSS"))
+    kids = (scripted("a", "SFFF"), scripted("b", "SFSS"), scripted("c", "SSSS"))
     h = harness(sequence_with_memory("m", *kids), engine=engine)
-    run(h, ["F SFI", "S SSS", "F FSS"], [2, 2, 1])  # tick 2 skips a; tick 3 starts over
+    # a first-tick success yields (a wake-up): one child per tick; tick 3 resumes at b
+    run(h, ["R SII", "F SFI", "R SSI", "S SSS"], [1, 1, 1, 1])
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -51,7 +52,7 @@ def test_sequence_with_memory_keeps_its_place_when_halted(harness, engine):
     guarded = sequence_with_memory("m", scripted("a", "SFF"), scripted("b", "RRS"))
     h = harness(reactive_fallback("rf", scripted("x", "FSF"), guarded), engine=engine)
     # tick 2: x succeeds and the reactive fallback halts m; tick 3: m resumes at b, not a
-    run(h, ["R F R SR", "S S I II", "S F S IS"], [3, 1, 2])
+    run(h, ["R F R SI", "S S I II", "S F S IS"], [2, 1, 2])
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -59,12 +60,14 @@ def test_sequence_with_memory_keeps_its_place_when_halted(harness, engine):
     ("script", "expected", "ticks"),
     [
         ("S", ["S S"], [1]),
-        ("F", ["F F"], [3]),  # three attempts within one tick
-        ("RF", ["R R", "F F"], [1, 3]),
+        ("FFF", ["R F", "R F", "F F"], [1, 1, 1]),  # one attempt per tick (wake-ups)
+        ("RF", ["R R", "R F"], [1, 2]),  # a child that was running is retried at once
         ("RS", ["R R", "S S"], [1, 1]),
     ],
 )
-def test_retry_until_successful_loops_within_a_tick(harness, engine, script, expected, ticks):
+def test_retry_until_successful_tries_again_at_the_next_tick(
+    harness, engine, script, expected, ticks
+):
     h = harness(
         decorated("RetryUntilSuccessful", scripted("a", script), num_attempts=3), engine=engine
     )
@@ -74,23 +77,34 @@ def test_retry_until_successful_loops_within_a_tick(harness, engine, script, exp
 @pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize(
     ("script", "expected", "ticks"),
-    [("S", ["S S"], [3]), ("F", ["F F"], [1]), ("RS", ["R R", "S S"], [1, 3])],
+    [
+        ("SSS", ["R S", "R S", "S S"], [1, 1, 1]),
+        ("F", ["F F"], [1]),
+        ("RSS", ["R R", "R S", "S S"], [1, 2, 1]),
+    ],
 )
-def test_repeat_loops_within_a_tick(harness, engine, script, expected, ticks):
-    h = harness(decorated("BTRepeat", scripted("a", script), num_cycles=3), engine=engine)
+def test_repeat_repeats_at_the_next_tick(harness, engine, script, expected, ticks):
+    h = harness(decorated("Repeat", scripted("a", script), num_cycles=3), engine=engine)
     run(h, expected, ticks)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("cycles", [-1, 99999999999999999999])
+def test_endless_repeat_ticks_its_child_once_per_tick(harness, engine, cycles):
+    h = harness(decorated("Repeat", scripted("a", "SSSS"), num_cycles=cycles), engine=engine)
+    run(h, ["R S"] * 4, [1] * 4)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
 def test_repeat_counts_cycles_across_ticks(harness, engine):
-    child = sequence_with_memory("m", scripted("p", "SS"), scripted("q", "RS"))
-    h = harness(decorated("BTRepeat", child, num_cycles=3), engine=engine)
-    # tick 2: q finishes cycle 1, then two whole cycles p, q run within the same tick
-    run(h, ["R R SR", "S S SS"], [2, 5])
+    child = sequence_with_memory("m", scripted("p", "SSSS"), scripted("q", "RSSS"))
+    h = harness(decorated("Repeat", child, num_cycles=2), engine=engine)
+    # tick 2: q (running) finishes cycle 1 and p starts cycle 2 in the same tick
+    run(h, ["R R SI", "R R SS", "S S SS"], [1, 2, 1])
 
 
 def parallel(*kids: Node, success: int, failure: int) -> Node:
-    return Node("BTParallel", "p", kids, {"success_count": success, "failure_count": failure})
+    return Node("Parallel", "p", kids, {"success_count": success, "failure_count": failure})
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -124,9 +138,9 @@ def test_fallback_and_reactive_fallback_are_py_trees_selectors(harness, engine):
 @pytest.mark.parametrize(
     ("node", "message"),
     [
-        (Node("BTParallel", "p", (scripted("a", "S"),), {"success_count": 2}), "asks for 2 of 1"),
-        (Node("BTParallel", "p", (scripted("a", "S"),), {"failure_count": 0}), "other than 0"),
-        (Node("BTRepeat", "r", (scripted("a", "S"),), {"num_cycles": -1}), ">= 1"),
+        (Node("Parallel", "p", (scripted("a", "S"),), {"success_count": 2}), "asks for 2 of 1"),
+        (Node("Parallel", "p", (scripted("a", "S"),), {"failure_count": 0}), "other than 0"),
+        (Node("Repeat", "r", (scripted("a", "S"),), {"num_cycles": 0}), ">= 1 or -1"),
         (Node("RetryUntilSuccessful", "r", (scripted("a", "S"),)), "needs parameter"),
         (Node("SequenceWithMemory", "m", ()), "at least 1"),
     ],
@@ -143,3 +157,30 @@ def test_reactive_nodes_halt_a_running_child_when_an_earlier_one_runs(harness, e
     h = harness(reactive("r", scripted("a", first), scripted("b", "RR")), engine=engine)
     # BT.CPP: a child returning RUNNING halts its siblings, so b (running) is halted
     run(h, [f"R {first[0]}R", "R RI"], [2, 1])
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_leaf_scripted_to_return_invalid_is_refused_when_the_tree_is_built(harness, engine):
+    tree = fallback("f", leaf("Scripted", "a", statuses=[[0]]), scripted("b", "S"))
+    with pytest.raises(TreeError, match="never returns 0"):
+        harness(tree, engine=engine)
+
+
+def test_more_children_than_an_int16_holds_under_one_node(harness):
+    kids = [leaf("Scripted", f"k{i}", statuses=[[2], [2]]) for i in range(33_000)]
+    kids.append(scripted("last", "RS"))
+    h = harness(fallback("f", *kids), engine="batched")
+    counts = h.swarm.blackboard["number_ticks"]
+    assert letters(h.tick()[[0, -1], 0]) == "RR" and counts[0] == 33_001
+    assert letters(h.tick()[[0, -1], 0]) == "SS" and counts[0] == 33_002  # resumed at the last
+
+
+def test_every_node_type_record_has_both_engines_and_a_file_tag():
+    from pyautonomousagent.bt.nodes import NODE_TYPES
+    from pyautonomousagent.engines.batched import BATCHED_NODES
+    from pyautonomousagent.engines.pytrees import PYTREES_NODES
+
+    for name, record in NODE_TYPES.items():
+        assert name in PYTREES_NODES, name
+        assert name in BATCHED_NODES or record.status_map is not None, name
+        assert record.tags, name

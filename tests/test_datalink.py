@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from pyautonomousagent import Simulation, load
-from pyautonomousagent.datalink import GATHERING, SHARING_DATA, Datalink, message_events
+from pyautonomousagent.datalink import Datalink, message_events
+from pyautonomousagent.missions.drones.leaves import GATHERING, SHARING_DATA
 from pyautonomousagent.simulation import phases
 
 from .conftest import on_channel
@@ -218,7 +219,7 @@ def test_gathering_message_outside_range_is_lost():
 
 
 def heard(sim: Simulation, receiver: int) -> dict[int, dict[str, float]]:
-    return dict(sim.shared[receiver])
+    return dict(sim.mission.shared[receiver])
 
 
 def test_shared_data_keeps_the_latest_per_sender():
@@ -261,6 +262,6 @@ def test_shared_data_has_no_entries_for_agents_that_do_not_exist():
     )
     for receiver in (4, 99):
         with pytest.raises((IndexError, KeyError)):
-            sim.shared[receiver]
+            sim.mission.shared[receiver]
     # iterating over it must end (at most one entry per agent), not run on forever
-    assert len(list(itertools.islice(iter(sim.shared), 10))) <= 4
+    assert len(list(itertools.islice(iter(sim.mission.shared), 10))) <= 4

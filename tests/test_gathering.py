@@ -12,7 +12,7 @@ import pytest
 from pyautonomousagent import Simulation, load
 from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.cli import main
-from pyautonomousagent.datalink import GATHERING
+from pyautonomousagent.missions.drones.leaves import GATHERING
 
 GATHER_POINT = (50.0, 50.0)
 STATE = ["x", "y", "speed", "heading", "energy", "damage"]
@@ -134,7 +134,7 @@ def test_refuelling_happens_at_the_slot_standing_still(gathering_run):
 def test_no_drone_runs_out_of_energy(gathering_run):
     energy = column(gathering_run, "energy")
     assert energy.min() > 0.0
-    assert not gathering_run.alerted.any()
+    assert not [e for e in gathering_run.events if e["event"] == "alert"]
 
 
 def test_number_ticks_grows_every_iteration(gathering_run):

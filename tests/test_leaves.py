@@ -5,22 +5,20 @@ A batch is an :class:`AgentView` with an index array; it leaves the other agents
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 
-from pyautonomousagent import Parameters
+from pyautonomousagent import load
 from pyautonomousagent.bt import leaf, sequence
 from pyautonomousagent.bt.leaf import LEAF_TYPES, Leaf, LeafError, leaf_type
 from pyautonomousagent.bt.spec import TreeError
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
-from pyautonomousagent.datalink import GATHERING, SHARING_DATA
 from pyautonomousagent.engines.pytrees import PyTreesEngine
+from pyautonomousagent.missions.drones.leaves import GATHERING, SHARING_DATA
 
-from .conftest import on_channel
+from .conftest import default_parameters, on_channel
 
-DEFAULTS = vars(Parameters())
+DEFAULTS = default_parameters()
 BATCH = np.array([0, 2])  # agents 0 and 2 of three; agent 1 must stay untouched
 
 #: Leaf types covered by this file (kept in step with the registry, see the last test).
@@ -646,7 +644,7 @@ class TestActionRepairDamageA:
 
 def test_port_defaults_come_from_the_given_parameters():
     params = vars(
-        dataclasses.replace(Parameters(), low_energy_threshold=25.0, reference_speed=0.07)
+        load("gathering").with_overrides(low_energy_threshold=25.0, reference_speed=0.07).parameters
     )
     low = leaf_type("Condition_Low_Energy_Level").create({}, params, "t")
     nav = leaf_type("Action_Navigate_To_Destination_A").create({}, params, "t")
@@ -704,7 +702,7 @@ def test_missing_default_raises():
 def test_unknown_leaf_type_with_did_you_mean():
     with pytest.raises(LeafError, match="unknown leaf type 'Action_Refuel'") as info:
         leaf_type("Action_Refuel")
-    assert "did you mean Action_Refuel_A" in str(info.value)
+    assert "did you mean 'Action_Refuel_A'" in str(info.value)
     with pytest.raises(LeafError) as info:
         leaf_type("Zzzz")
     assert "did you mean" not in str(info.value)
@@ -713,7 +711,7 @@ def test_unknown_leaf_type_with_did_you_mean():
 def test_engine_reports_leaf_errors_as_tree_errors(swarm_world):
     swarm, world = swarm_world(1)
     bad_type = sequence("root", leaf("Condition_Low_Energy_Leve", "low"))
-    with pytest.raises(TreeError, match="did you mean Condition_Low_Energy_Level") as info:
+    with pytest.raises(TreeError, match="did you mean 'Condition_Low_Energy_Level'") as info:
         PyTreesEngine(bad_type, swarm, world, DEFAULTS)
     assert "'low'" in str(info.value)  # a TreeError names the node
     bad_port = sequence("root", leaf("Condition_Low_Energy_Level", "low", level=3))
@@ -737,8 +735,9 @@ def test_engine_reports_missing_blackboard_keys():
 
 
 def test_every_library_leaf_is_tested():
-    # a new leaf type needs its own tests here (Scripted is the test helper itself)
-    assert set(LEAF_TYPES) - {"Scripted"} == COVERED
+    # a new leaf type needs its own tests here (Scripted is the test helper itself; the
+    # BehaviorTree.CPP built-ins AlwaysSuccess/AlwaysFailure are tested in test_btcpp_nodes)
+    assert set(LEAF_TYPES) - {"Scripted", "AlwaysSuccess", "AlwaysFailure"} == COVERED
 
 
 @pytest.mark.parametrize("type_name", sorted(COVERED))

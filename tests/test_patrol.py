@@ -20,12 +20,12 @@ def test_patrol_run_shape(patrol_run):
 
 
 def test_every_drone_visits_both_surveillance_positions(patrol_run):
-    for point in patrol_run.scenario.patrol_positions:
+    for point in patrol_run.scenario.objects.patrol_positions:
         assert (min_distance(patrol_run, point) <= TOLERANCE).all(), point
 
 
 def test_every_drone_visits_its_refuelling_slot_and_refuels(patrol_run):
-    (slot,) = patrol_run.scenario.refueling_positions
+    (slot,) = patrol_run.scenario.objects.refueling_positions
     # they start there; a visit is a return after having left it
     x, y = patrol_run.recorder.column("x"), patrol_run.recorder.column("y")
     d = np.hypot(x - slot[0], y - slot[1])

@@ -56,3 +56,13 @@ def test_decorator_registers_and_returns_the_object() -> None:
         pass
 
     assert reg.get("thing") is Thing
+
+
+def test_scoped_restores_everything() -> None:
+    reg: Registry[int] = Registry("number")
+    reg.register("a", 1)
+    with reg.scoped():
+        reg.register("b", 2)
+        reg.unregister("a")
+        assert reg.names() == ["b"]
+    assert reg.names() == ["a"] and reg.get("a") == 1

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from pyautonomousagent import Parameters, Scenario, ScenarioError, load
+from pyautonomousagent import Scenario, ScenarioError, load
 from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.cli import main
 from pyautonomousagent.scenarios import names
@@ -18,12 +18,17 @@ def base() -> dict:
 
 
 def bad(**changes) -> str:
+    """The one-line error for the gathering scenario with ``changes`` (world objects go into
+    ``world:``; ``parameters={...}`` updates the parameters; KeyError removes a key)."""
     data = base()
     for key, value in changes.items():
-        if value is KeyError:
-            del data[key]
+        where = data["world"] if key in data["world"] else data
+        if key == "parameters":
+            data["parameters"].update(value)
+        elif value is KeyError:
+            del where[key]
         else:
-            data[key] = value
+            where[key] = value
     with pytest.raises(ScenarioError) as info:
         Scenario.from_mapping(data, source="my.yaml")
     message = str(info.value)
@@ -36,11 +41,15 @@ def test_packaged_scenarios_load():
     gathering, patrol = load("gathering"), load("patrol")
     assert (gathering.agents, gathering.iterations) == (4, 8000)
     assert Path(gathering.tree).name == "gathering.xml" and Path(gathering.tree).is_file()
-    assert gathering.refueling_positions == ((20, 65), (20, 55), (20, 45), (20, 35))
-    assert gathering.surveillance_positions == ((50, 50), (70, 80), (40, 70), (60, 25))
-    assert gathering.parameters == Parameters()
+    assert gathering.objects.refueling_positions == ((20, 65), (20, 55), (20, 45), (20, 35))
+    assert gathering.objects.surveillance_positions == ((50, 50), (70, 80), (40, 70), (60, 25))
+    assert (gathering.mission, patrol.mission) == ("gathering", "patrol")
+    assert (gathering.parameters.low_energy_threshold, gathering.parameters.energy_use) == (
+        40,
+        0.05,
+    )
     assert (patrol.agents, patrol.iterations, Path(patrol.tree).name) == (10, 4000, "patrol.xml")
-    assert patrol.patrol_positions == ((70, 80), (70, 20))
+    assert patrol.objects.patrol_positions == ((70, 80), (70, 20))
     assert patrol.initial_heading == "random"
     assert names()[:2] == ["gathering", "patrol"]
 
@@ -120,48 +129,61 @@ def test_unknown_key_without_a_close_match():
     assert "did you mean" not in str(info.value)
 
 
-@pytest.mark.parametrize(
-    "key", ["name", "tree", "agents", "iterations", "world", "refueling_positions"]
-)
+@pytest.mark.parametrize("key", ["name", "mission", "tree", "agents", "iterations", "world"])
 def test_missing_key(key):
     assert f"missing key '{key}'" in bad(**{key: KeyError})
 
 
-def test_missing_surveillance_positions_without_patrol():
-    message = bad(surveillance_positions=KeyError)
-    assert "surveillance_positions" in message
+@pytest.mark.parametrize("key", ["refueling_positions", "surveillance_positions"])
+def test_missing_world_object(key):
+    assert f"missing key 'world.{key}'" in bad(**{key: KeyError})
 
 
 @pytest.mark.parametrize(
     ("field", "value", "path"),
     [
-        ("world", [100], "world must be a pair [x, y]"),
-        ("world", [100, "wide"], "world[1] must be a number"),
-        ("world", [100, 0], "world must be a positive [width, height]"),
-        ("refueling_positions", [[20, 65], [20]], "refueling_positions[1] must be a pair [x, y]"),
+        ("size", [100], "world.size must be a pair [x, y]"),
+        ("size", [100, "wide"], "world.size[1] must be a number"),
+        ("size", [100, 0], "world.size must be a positive [width, height]"),
+        ("refueling_positions", [[20, 65], [20]], "world.refueling_positions[1] must be a pair"),
         ("refueling_positions", [[20, 65], ["a", 1]], "refueling_positions[1][0] must be a number"),
-        ("refueling_positions", [], "refueling_positions must be a list of at least 1"),
-        ("surveillance_positions", "here", "surveillance_positions must be a list"),
-        ("patrol_positions", [[1, 2]], "patrol_positions must be a list of exactly 2"),
-        (
-            "patrol_positions",
-            [[1, 2], [3, 4], [5, 6]],
-            "patrol_positions must be a list of exactly 2",
-        ),
+        ("refueling_positions", [], "world.refueling_positions must be a list of at least 1"),
+        ("surveillance_positions", "here", "world.surveillance_positions must be a list"),
+        ("refueling_positions", [[20, 65], [120, 5]], "must be inside the world [0, 100]"),
     ],
 )
 def test_bad_point(field, value, path):
     assert path in bad(**{field: value})
 
 
+@pytest.mark.parametrize("value", [[[1, 2]], [[1, 2], [3, 4], [5, 6]]])
+def test_patrol_needs_exactly_two_positions(value):
+    data = to_mapping(load("patrol"))
+    data["world"]["patrol_positions"] = value
+    with pytest.raises(ScenarioError, match="patrol_positions must be a list of exactly 2"):
+        Scenario.from_mapping(data, source="my.yaml")
+
+
+def test_checks_across_fields():
+    assert "gathering_sender must be one of the drones (drone1..drone4)" in bad(
+        parameters={"gathering_sender": "drone9"}
+    )
+    assert "low_energy_threshold must be a number <= 100" in bad(
+        parameters={"low_energy_threshold": 150}
+    )
+    assert "must be a finite number" in bad(parameters={"energy_use": float("nan")})
+
+
 def test_bad_radiation_source():
-    assert "radiation_sources[0].range must be a number > 0" in bad(
+    assert "world.radiation_sources[0].range must be a number > 0" in bad(
         radiation_sources=[{"x": 1, "y": 2, "range": 0}]
     )
     assert "radiation_sources[0].active must be true or false" in bad(
         radiation_sources=[{"x": 1, "y": 2, "range": 3, "active": "yes"}]
     )
-    assert "missing key 'radiation_sources[0].range'" in bad(radiation_sources=[{"x": 1, "y": 2}])
+    assert "missing key 'world.radiation_sources[0].range'" in bad(
+        radiation_sources=[{"x": 1, "y": 2}]
+    )
 
 
 def test_not_a_mapping():
@@ -180,8 +202,8 @@ def test_bad_yaml_file(tmp_path):
 def test_yaml_file_with_a_bad_field_names_the_file(tmp_path):
     path = tmp_path / "mine.yaml"
     path.write_text(
-        "name: mine\ntree: gathering\nagents: -1\niterations: 10\nworld: [10, 10]\n"
-        "refueling_positions: [[1, 1]]\nsurveillance_positions: [[5, 5]]\n"
+        "name: mine\nmission: gathering\ntree: gathering\nagents: -1\niterations: 10\n"
+        "world: {size: [10, 10], refueling_positions: [[1, 1]], surveillance_positions: [[5, 5]]}\n"
     )
     with pytest.raises(ScenarioError, match=r"mine\.yaml: agents must be a whole number >= 1"):
         load(str(path))
@@ -190,13 +212,14 @@ def test_yaml_file_with_a_bad_field_names_the_file(tmp_path):
 def test_own_yaml_file_loads(tmp_path):
     path = tmp_path / "mine.yaml"
     path.write_text(
-        "name: mine\ntree: patrol\nagents: 2\niterations: 10\nworld: [10, 10]\n"
-        "refueling_positions: [[1, 1]]\npatrol_positions: [[5, 5], [5, 1]]\n"
+        "name: mine\nmission: patrol\ntree: patrol\nagents: 2\niterations: 10\n"
+        "world: {size: [10, 10], refueling_positions: [[1, 1]],\n"
+        "        patrol_positions: [[5, 5], [5, 1]]}\n"
         "parameters: {energy_use: 0.5}\n"
     )
     scenario = load(str(path))
     assert (scenario.name, scenario.agents, scenario.parameters.energy_use) == ("mine", 2, 0.5)
-    assert scenario.surveillance_positions == ()
+    assert scenario.objects.radiation_sources == ()
 
 
 def test_missing_file(tmp_path):
@@ -206,7 +229,7 @@ def test_missing_file(tmp_path):
 
 def test_unknown_scenario_name():
     with pytest.raises(
-        ScenarioError, match=r"unknown scenario 'gatherin' \(did you mean 'gathering'\?\)"
+        ScenarioError, match=r"unknown scenario 'gatherin'; did you mean 'gathering'\?"
     ):
         load("gatherin")
     with pytest.raises(ScenarioError, match="known: gathering, patrol"):

@@ -25,6 +25,7 @@ from pyautonomousagent.bt.files import (
 from pyautonomousagent.bt.leaf import LEAF_TYPES
 from pyautonomousagent.bt.spec import Node, leaf, sequence
 from pyautonomousagent.bt.trees import gathering_tree, patrol_tree
+from pyautonomousagent.bt.vocabulary import BTCPP_LEAVES
 from pyautonomousagent.cli import main
 
 from .strategies import trees
@@ -32,7 +33,12 @@ from .strategies import trees
 ROOT = Path(__file__).parent.parent
 GROOT2 = ROOT / "examples" / "gathering_groot2.xml"
 REFUEL_EARLY = ROOT / "examples" / "refuel_early.yaml"
-PACKAGED = ROOT / "src" / "pyautonomousagent" / "scenarios"
+MISSIONS = ROOT / "src" / "pyautonomousagent" / "missions"
+
+
+def packaged(file: str) -> Path:
+    """A packaged scenario or tree file: ``gathering.xml`` is in ``missions/gathering/``."""
+    return MISSIONS / file.split(".")[0].removeprefix("x8-") / file
 BUILDERS = {"gathering": gathering_tree, "patrol": patrol_tree}
 FORMATS = ["xml", "yaml"]
 
@@ -46,8 +52,8 @@ def test_scenario_trees_round_trip(name: str, fmt: str):
 
 @pytest.mark.parametrize("name", list(BUILDERS))
 def test_packaged_tree_files_are_the_paper_trees(name: str):
-    assert load_tree(PACKAGED / f"{name}.xml") == BUILDERS[name]()
-    assert load(name).tree == str(PACKAGED / f"{name}.xml")
+    assert load_tree(packaged(f"{name}.xml")) == BUILDERS[name]()
+    assert load(name).tree == str(packaged(f"{name}.xml"))
 
 
 @settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -165,8 +171,8 @@ def test_hand_written_yaml_example_runs_on_both_engines():
 def test_xml_file_declares_the_leaf_library_for_groot2():
     text = to_text_format(gathering_tree(), "xml")
     for type_name, cls in LEAF_TYPES.items():
-        if type_name == "Scripted":
-            assert 'ID="Scripted"' not in text
+        if type_name == "Scripted" or type_name in BTCPP_LEAVES:  # BT.CPP knows its own
+            assert f'ID="{type_name}"' not in text
             continue
         assert f'ID="{type_name}"' in text
         for port in cls.ports:
@@ -175,7 +181,7 @@ def test_xml_file_declares_the_leaf_library_for_groot2():
 
 
 def test_py_trees_only_nodes_are_declared_and_read_back():
-    tree = Node("Repeat", "r", (leaf("Action_Refuel_A"),), {"num_success": 2})
+    tree = Node("PyTreesRepeat", "r", (leaf("Action_Refuel_A"),), {"num_success": 2})
     text = to_text_format(tree, "xml")
     assert '<PyTreesRepeat name="r" num_success="2">' in text
     assert '<Decorator ID="PyTreesRepeat">' in text
@@ -249,7 +255,7 @@ def test_cli_prints_dot_and_reads_groot2_files(capsys):
 
 def test_cli_reads_a_scenario_yaml_that_names_a_tree_file(tmp_path, capsys):
     save_tree(patrol_tree(), tmp_path / "my_tree.yaml")
-    scenario = (PACKAGED / "patrol.yaml").read_text().replace("patrol.xml", "my_tree.yaml")
+    scenario = (packaged("patrol.yaml")).read_text().replace("patrol.xml", "my_tree.yaml")
     (tmp_path / "mine.yaml").write_text(scenario)
     code, out, _ = cli(["tree", str(tmp_path / "mine.yaml")], capsys)
     assert code == 0 and out.startswith("R? reactive_fallback_root")
@@ -267,7 +273,7 @@ def test_cli_run_with_a_tree_file(tmp_path, capsys):
 
 
 def test_a_copied_scenario_finds_the_packaged_tree_file(tmp_path):
-    (tmp_path / "copy.yaml").write_text((PACKAGED / "gathering.yaml").read_text())
-    assert load(str(tmp_path / "copy.yaml")).tree == str(PACKAGED / "gathering.xml")
-    (tmp_path / "gathering.xml").write_text((PACKAGED / "patrol.xml").read_text())
+    (tmp_path / "copy.yaml").write_text((packaged("gathering.yaml")).read_text())
+    assert load(str(tmp_path / "copy.yaml")).tree == str(packaged("gathering.xml"))
+    (tmp_path / "gathering.xml").write_text((packaged("patrol.xml")).read_text())
     assert load(str(tmp_path / "copy.yaml")).tree == str(tmp_path / "gathering.xml")

@@ -51,15 +51,16 @@ def column(sim: Simulation, key: str) -> np.ndarray:
 def test_scenario_follows_the_paper():
     s = load("x8-patrol")
     assert (s.model, s.tree, s.iterations, s.world) == ("x8", "patrol", 4000, (1000, 1000))
-    assert s.patrol_positions == ((700, 800), (700, 200))
-    assert s.refueling_positions == ((100, 500),)
+    assert s.objects.patrol_positions == ((700, 800), (700, 200))
+    assert s.objects.refueling_positions == ((100, 500),)
     p = s.parameters
     assert (p.reference_speed, p.destination_tolerance) == (22, TOLERANCE)
     assert (p.energy_use, p.refuel_rate, p.low_energy_threshold) == (0.01, 2.0, 40)
-    assert s.x8 is not None and (s.x8.altitude, s.x8.dt, s.x8.turbulence) == (20, 0.01, False)
-    assert (s.x8.course_kp, s.x8.course_ki, s.x8.course_kd, s.x8.max_roll) == (1, 1e-5, 0.01, 45)
-    assert (s.x8.altitude_ki, s.x8.altitude_kd, s.x8.max_pitch) == (1e-4, 0.01, 30)
-    assert s.x8.altitude_kp == 0.1  # not the notebook's 1.0: docs/x8.md
+    x8 = s.model_settings
+    assert x8 is not None and (x8.altitude, x8.dt, x8.turbulence) == (20, 0.01, False)
+    assert (x8.course_kp, x8.course_ki, x8.course_kd, x8.max_roll) == (1, 1e-5, 0.01, 45)
+    assert (x8.altitude_ki, x8.altitude_kd, x8.max_pitch) == (1e-4, 0.01, 30)
+    assert x8.altitude_kp == 0.1  # not the notebook's 1.0: docs/x8.md
 
 
 def test_engines_fly_their_implementations(reference, patrol):

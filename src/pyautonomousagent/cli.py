@@ -40,7 +40,12 @@ class _Parser(argparse.ArgumentParser):
 def _parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="pyaa", description="Model autonomous agents with behaviour trees.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    sub.add_parser("scenarios", help="list the registered scenarios")
+    scenarios = sub.add_parser(
+        "scenarios", help="list the registered scenarios, or show one with its parameters"
+    )
+    scenarios.add_argument(
+        "name", nargs="?", help="a scenario name or .yaml file: its mission, world and parameters"
+    )
     run = sub.add_parser("run", help="run a scenario and write its data and animation")
     run.add_argument("scenario", help="a registered scenario name or a scenario .yaml file")
     run.add_argument("--agents", type=int, help="number of agents (default: the scenario's)")
@@ -370,8 +375,12 @@ def _print_summary(sim: Simulation, written: list[Path]) -> None:
         print(f"  wrote {path}")
 
 
-def scenarios_command() -> int:
-    """``pyaa scenarios``: one line per registered scenario."""
+def scenarios_command(name: str | None = None) -> int:
+    """``pyaa scenarios``: one line per registered scenario; with a name, that scenario's
+    mission, world objects and parameters (units, ranges, values)."""
+    if name is not None:
+        print(_describe(load(name)))
+        return 0
     for name in names():
         scenario = load(name)
         print(
@@ -381,10 +390,45 @@ def scenarios_command() -> int:
     return 0
 
 
-def _tree_source(source: str) -> tuple[Document, str]:
-    """The tree document ``source`` names (a tree file, or a scenario's tree) and a name."""
+def _describe(scenario: Scenario) -> str:
+    """A scenario as ``pyaa scenarios NAME`` shows it."""
+    from pyautonomousagent.simulation.params import plain
+    from pyautonomousagent.simulation.scenario import parameter_list
+
+    mission = scenario.mission_type
+    lines = [
+        f"{scenario.name}: {scenario.description}",
+        f"  mission     {scenario.mission} ({mission.description})",
+        f"  tree        {scenario.tree}",
+        f"  agents      {scenario.agents} ({mission.agent_prefix}1..)",
+        f"  iterations  {scenario.iterations}",
+        f"  model       {scenario.model}",
+        f"  world       {scenario.world[0]:g} x {scenario.world[1]:g}",
+    ]
+    for kind in mission.world_objects:
+        value = json.dumps(plain(getattr(scenario.objects, kind.name)))
+        lines.append(f"    {kind.name}: {value[:200]}  ({kind.doc})")
+    if scenario.model_settings is not None:
+        lines.append(f"  {scenario.model} settings: {json.dumps(plain(scenario.model_settings))}")
+    lines.append("  parameters (set with --set NAME=VALUE; [range], default, owner):")
+    values = vars(scenario.parameters)
+    for owner, param in parameter_list(scenario):
+        unit = f" {param.unit}" if param.unit else ""
+        low = "" if param.minimum is None else f"{param.minimum:g}"
+        high = "" if param.maximum is None else f"{param.maximum:g}"
+        bounds = f" [{low}..{high}]" if low or high else ""
+        lines.append(
+            f"    {param.name} = {values[param.name]!r}{unit}{bounds}, default "
+            f"{param.default!r}, {owner}: {param.doc}"
+        )
+    return "\n".join(lines)
+
+
+def _tree_source(source: str) -> tuple[Document, str, dict[str, Any]]:
+    """The tree document ``source`` names (a tree file, or a scenario's tree), a name, and
+    the parameters that give leaf ports their defaults (every mission's, for a bare file)."""
     if source not in names() and is_tree_file(source) and not _is_scenario_file(source):
-        return read_document(source), Path(source).stem
+        return read_document(source), Path(source).stem, _all_defaults()
     looks_like_a_file = bool(Path(source).suffix) or "/" in source
     if source not in names() and looks_like_a_file and not is_tree_file(source):
         raise InputError(
@@ -392,9 +436,24 @@ def _tree_source(source: str) -> tuple[Document, str]:
             "tree or scenario file; give a file ending in .xml, .yaml or .yml"
         )
     scenario = load(source)
+    defaults = vars(scenario.parameters)
     if is_tree_file(scenario.tree):
-        return read_document(scenario.tree), scenario.name
-    return document_from_node(tree_by_name(scenario.tree), scenario.tree), scenario.name
+        return read_document(scenario.tree), scenario.name, defaults
+    return document_from_node(tree_by_name(scenario.tree), scenario.tree), scenario.name, defaults
+
+
+def _all_defaults() -> dict[str, Any]:
+    """The default of every parameter any registered mission or motion model declares."""
+    from pyautonomousagent.simulation.mission import MISSIONS
+    from pyautonomousagent.simulation.motion import MOTION_MODELS
+    from pyautonomousagent.simulation.scenario import CORE_PARAMETERS
+
+    params = [*CORE_PARAMETERS]
+    for model in MOTION_MODELS.values():
+        params.extend(model.parameters)
+    for mission in MISSIONS.values():
+        params.extend(mission.parameters)
+    return {p.name: p.default for p in params}
 
 
 def _is_scenario_file(path: str) -> bool:
@@ -410,25 +469,24 @@ def _is_scenario_file(path: str) -> bool:
     return isinstance(data, dict) and "agents" in data
 
 
-def _py_trees_text(tree: Node) -> str:
-    """py_trees' own drawing of the tree, built for one agent with the default parameters."""
+def _py_trees_text(tree: Node, defaults: dict[str, Any]) -> str:
+    """py_trees' own drawing of the tree, built for one agent with the parameters ``defaults``."""
     import py_trees
 
     from pyautonomousagent.datalink import Datalink
     from pyautonomousagent.engines.pytrees import build_behaviour
-    from pyautonomousagent.simulation.scenario import Parameters
     from pyautonomousagent.state import Swarm
     from pyautonomousagent.world import World
 
-    swarm = Swarm.create(["drone1"], {"number_ticks": int})
-    world = World(100.0, 100.0, Datalink(1000.0), agent_index={"drone1": 0})
-    root = build_behaviour(tree, swarm.agent(0), world, vars(Parameters()))
+    swarm = Swarm.create(["agent1"], {"number_ticks": int})
+    world = World(100.0, 100.0, Datalink(1000.0), agent_index={"agent1": 0})
+    root = build_behaviour(tree, swarm.agent(0), world, defaults)
     return str(py_trees.display.unicode_tree(root))
 
 
 def tree_command(args: argparse.Namespace) -> int:
     """``pyaa tree``: print, draw or convert a tree file or a scenario's tree."""
-    document, name = _tree_source(args.source)
+    document, name, defaults = _tree_source(args.source)
     fmt = args.format
     if fmt in ("png", "svg"):
         from pyautonomousagent.bt.draw import draw_tree
@@ -448,7 +506,7 @@ def tree_command(args: argparse.Namespace) -> int:
 
         text = to_dot(build(document), name)
     elif args.style == "py_trees":
-        text = _py_trees_text(build(document)) + "\n"
+        text = _py_trees_text(build(document), defaults) + "\n"
     else:
         text = to_text(build(document)) + "\n"
     if args.out is None:
@@ -478,7 +536,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "run":
             return run(args)
         if args.command == "scenarios":
-            return scenarios_command()
+            return scenarios_command(args.name)
         if args.command == "bench":
             return bench_command(args)
         return tree_command(args)

@@ -4,7 +4,8 @@ A message has a sender, receivers (everyone, or a list of agent indices), a type
 and the sender's position when it was sent. Messages sent during an iteration wait in the
 channel; :meth:`Datalink.deliver` hands each to every receiver within range of the
 sender's position (never to the sender) and clears the channel. Receivers act on them in
-Phase 2 of the next iteration (:func:`pyautonomousagent.simulation.phases.process_messages`).
+Phase 2 of the next iteration: the mission's handler of each message type
+(:func:`pyautonomousagent.simulation.phases.process_messages`).
 
 One call of :meth:`Datalink.send` may carry the messages of many senders at once (the
 batched engine); the py_trees engine sends one at a time. Delivery puts the messages of a
@@ -19,14 +20,11 @@ pairs in range, not N^2.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-
-SHARING_DATA = "sharing data"
-GATHERING = "gathering"
 
 
 @dataclass
@@ -34,7 +32,7 @@ class Messages:
     """Messages of one type, one row each.
 
     Attributes:
-        type: message type, e.g. ``"sharing data"`` or ``"gathering"``.
+        type: message type, a name the mission declares (e.g. ``"gathering"``).
         senders: sending agents, shape (M,).
         order: per-sender sending order (a global counter), shape (M,).
         x, y: sender positions when sent, shape (M,).
@@ -259,98 +257,10 @@ def grid_pairs(
     return np.concatenate(found_receivers), np.concatenate(found_rows)
 
 
-@dataclass
-class SharedData:
-    """What each agent last heard from each other agent by "sharing data" messages.
-
-    A broadcast that reached everyone is stored once per sender (O(N) memory); deliveries
-    that reached only some agents are stored per (receiver, sender) pair that occurred.
-
-    Attributes:
-        fields: the payload names kept, e.g. ``("x", "y", "speed", ...)``.
-    """
-
-    n_agents: int
-    fields: tuple[str, ...] = ("x", "y", "speed", "heading", "damage", "energy")
-    _everyone_iteration: np.ndarray = field(init=False)
-    _everyone_data: np.ndarray = field(init=False)
-    _pair_keys: np.ndarray = field(init=False)
-    _pair_iteration: np.ndarray = field(init=False)
-    _pair_data: np.ndarray = field(init=False)
-
-    def __post_init__(self) -> None:
-        n, f = self.n_agents, len(self.fields)
-        self._everyone_iteration = np.full(n, -1, dtype=np.int64)
-        self._everyone_data = np.zeros((n, f))
-        self._pair_keys = np.zeros(0, dtype=np.int64)
-        self._pair_iteration = np.zeros(0, dtype=np.int64)
-        self._pair_data = np.zeros((0, f))
-
-    def store(self, delivery: Delivery, iteration: int) -> None:
-        """Remember the latest message per sender (and per receiver) of ``delivery``."""
-        messages = delivery.messages
-        values = np.stack([messages.data[k] for k in self.fields], axis=1)
-        if delivery.to_all:
-            last = _last_per_key(messages.senders)
-            self._everyone_iteration[messages.senders[last]] = iteration
-            self._everyone_data[messages.senders[last]] = values[last]
-            return
-        keys = delivery.receivers * self.n_agents + messages.senders[delivery.rows]
-        last = _last_per_key(keys)
-        self._merge_pairs(keys[last], iteration, values[delivery.rows[last]])
-
-    def _merge_pairs(self, keys: np.ndarray, iteration: int, values: np.ndarray) -> None:
-        order = np.argsort(keys)
-        keys, values = keys[order], values[order]
-        at = np.searchsorted(self._pair_keys, keys)
-        known = at < self._pair_keys.size
-        known[known] = self._pair_keys[at[known]] == keys[known]
-        self._pair_iteration[at[known]] = iteration
-        self._pair_data[at[known]] = values[known]
-        new = ~known
-        self._pair_keys = np.insert(self._pair_keys, at[new], keys[new])
-        self._pair_iteration = np.insert(self._pair_iteration, at[new], iteration)
-        self._pair_data = np.insert(self._pair_data, at[new], values[new], axis=0)
-
-    def __len__(self) -> int:
-        return self.n_agents
-
-    def __iter__(self) -> Iterator[dict[int, dict[str, float]]]:
-        return (self[r] for r in range(self.n_agents))
-
-    def __getitem__(self, receiver: int) -> dict[int, dict[str, float]]:
-        """Sender -> latest data (with its ``iteration``) as heard by ``receiver``."""
-        if not 0 <= receiver < self.n_agents:
-            raise IndexError(f"no agent {receiver}; there are {self.n_agents}")
-        heard: dict[int, dict[str, float]] = {}
-        for sender in np.flatnonzero(self._everyone_iteration >= 0).tolist():
-            if sender != receiver:
-                heard[sender] = self._row(
-                    self._everyone_data[sender], self._everyone_iteration[sender]
-                )
-        lo, hi = np.searchsorted(
-            self._pair_keys, [receiver * self.n_agents, (receiver + 1) * self.n_agents]
-        )
-        for k in range(lo, hi):
-            sender = int(self._pair_keys[k] % self.n_agents)
-            if sender not in heard or heard[sender]["iteration"] < self._pair_iteration[k]:
-                heard[sender] = self._row(self._pair_data[k], self._pair_iteration[k])
-        return heard
-
-    def _row(self, values: np.ndarray, iteration: Any) -> dict[str, float]:
-        return {**dict(zip(self.fields, values.tolist(), strict=True)), "iteration": int(iteration)}
-
-
-def _last_per_key(keys: np.ndarray) -> np.ndarray:
-    """Positions of the last occurrence of each distinct key."""
-    reversed_first = np.unique(keys[::-1], return_index=True)[1]
-    return keys.size - 1 - reversed_first
-
-
 def message_events(
     deliveries: list[Delivery], types: tuple[str, ...], iteration: int, names: Sequence[str]
 ) -> list[dict[str, Any]]:
-    """Recordable events for the messages of the given types (e.g. gathering orders).
+    """Recordable events for the messages of the given types (the mission's recorded types).
 
     Agents are given by name (``names[i]`` is agent i); one event per message, in
     canonical order.

@@ -97,6 +97,17 @@ class Registry(Generic[T]):
             else:
                 self._entries[name] = old  # type: ignore[assignment]
 
+    @contextmanager
+    def scoped(self) -> Iterator[Registry[T]]:
+        """Within the block, register and unregister freely; afterwards the registry holds
+        exactly what it held before (what a test registers, it removes)."""
+        saved = dict(self._entries)
+        try:
+            yield self
+        finally:
+            self._entries.clear()
+            self._entries.update(saved)
+
     def names(self) -> list[str]:
         """The registered names, in order of registration."""
         return list(self._entries)
@@ -104,6 +115,13 @@ class Registry(Generic[T]):
     def items(self) -> list[tuple[str, T]]:
         """(name, entry) pairs, in order of registration."""
         return list(self._entries.items())
+
+    def values(self) -> list[T]:
+        """The entries, in order of registration."""
+        return list(self._entries.values())
+
+    def __getitem__(self, name: str) -> T:
+        return self.get(name)
 
     def __contains__(self, name: object) -> bool:
         return name in self._entries

@@ -11,21 +11,21 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-#: Agent state columns shared by every motion model: name -> dtype.
-STATE_COLUMNS: dict[str, type] = {
+#: The state every motion model moves: name -> dtype.
+MOTION_COLUMNS: dict[str, type] = {
     "x": np.float64,  # east position (world units)
     "y": np.float64,  # north position (world units)
     "speed": np.float64,  # world units per iteration
     "heading": np.float64,  # degrees clockwise from north (+y), in [0, 360)
-    "energy": np.float64,  # percent, [0, 100]
-    "damage": np.float64,  # percent, [0, 100]
-    "radiation": np.float64,  # percent, [0, 100], last sensor reading
-    "requested_speed": np.float64,  # reference for the control system
-    "requested_heading": np.float64,  # reference for the control system, degrees
+}
+#: The references the control system (Phase 4) follows: name -> dtype.
+CONTROL_COLUMNS: dict[str, type] = {
+    "requested_speed": np.float64,  # world units per iteration
+    "requested_heading": np.float64,  # degrees clockwise from north
 }
 
 
@@ -35,29 +35,42 @@ class Swarm:
 
     Attributes:
         names: agent identifiers, e.g. ``["drone1", ...]``; length N.
-        columns: state arrays, each of shape ``(N,)`` (see :data:`STATE_COLUMNS`).
+        columns: state arrays, each of shape ``(N,)``: the motion columns
+            (:data:`MOTION_COLUMNS`), the mission's columns, then the control references
+            (:data:`CONTROL_COLUMNS`).
         blackboard: blackboard arrays, each of shape ``(N,)``: key -> values per agent.
+        view_type: the :class:`AgentView` class of this swarm, with one attribute per column.
     """
 
     names: list[str]
     columns: dict[str, np.ndarray] = field(default_factory=dict)
     blackboard: dict[str, np.ndarray] = field(default_factory=dict)
+    view_type: type[AgentView] = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        self.view_type = view_type(self.columns)
 
     @classmethod
     def create(
-        cls, names: Iterable[str], blackboard_keys: Mapping[str, Any] | None = None
+        cls,
+        names: Iterable[str],
+        blackboard_keys: Mapping[str, Any] | None = None,
+        columns: Mapping[str, Any] | None = None,
     ) -> Swarm:
         """Zero-filled state for the named agents, with the given blackboard keys.
 
         Args:
             names: agent identifiers.
             blackboard_keys: key -> dtype (e.g. ``{"number_ticks": np.int64}``).
+            columns: the mission's own state columns, name -> dtype (e.g. ``{"energy":
+                np.float64}``), placed between the motion and the control columns.
         """
         names = list(names)
         n = len(names)
-        columns: dict[str, np.ndarray] = {k: np.zeros(n, dtype=t) for k, t in STATE_COLUMNS.items()}
+        kinds = {**MOTION_COLUMNS, **(columns or {}), **CONTROL_COLUMNS}
+        state = {k: np.zeros(n, dtype=t) for k, t in kinds.items()}
         board = {k: np.zeros(n, dtype=t) for k, t in (blackboard_keys or {}).items()}
-        return cls(names=names, columns=columns, blackboard=board)
+        return cls(names=names, columns=state, blackboard=board)
 
     @property
     def size(self) -> int:
@@ -66,13 +79,13 @@ class Swarm:
 
     def agent(self, index: int) -> AgentView:
         """The view of one agent (``agent.energy`` is a number)."""
-        return AgentView(self, index)
+        return self.view_type(self, index)
 
     def agents(self, indices: np.ndarray | slice | None = None) -> AgentView:
         """The view of a group of agents (``agents.energy`` is an array); all if None.
 
         ``indices`` is an int array, a slice or a boolean mask of shape (N,)."""
-        return AgentView(self, np.arange(self.size) if indices is None else indices)
+        return self.view_type(self, np.arange(self.size) if indices is None else indices)
 
     def index_of(self, name: str) -> int:
         """The row of the agent called ``name``; ValueError if there is none."""
@@ -154,9 +167,10 @@ class AgentView:
     (N,) (a group: attributes are whole (N,) arrays, and writes change only the rows where
     the mask holds; the batched engine uses this when most agents are in the group).
 
-    State columns are attributes (``x``, ``y``, ``speed``, ``heading``, ``energy``,
-    ``damage``, ``radiation``, ``requested_speed``, ``requested_heading``); the blackboard
-    is ``view.blackboard``. Values in "view shape" are what attributes return.
+    State columns are attributes (``x``, ``y``, ``speed``, ``heading``,
+    ``requested_speed``, ``requested_heading`` and the mission's columns, e.g. ``energy``);
+    the blackboard is ``view.blackboard``. Values in "view shape" are what attributes return.
+    Each swarm makes its own subclass with the mission's columns (:func:`view_type`).
     """
 
     __slots__ = ("swarm", "index", "blackboard", "masked")
@@ -165,9 +179,6 @@ class AgentView:
     y = _Column()
     speed = _Column()
     heading = _Column()
-    energy = _Column()
-    damage = _Column()
-    radiation = _Column()
     requested_speed = _Column()
     requested_heading = _Column()
 
@@ -213,5 +224,30 @@ class AgentView:
             return self.swarm.names[int(self.index)]
         return np.array(self.swarm.names, dtype=object)[self.index]
 
+    if TYPE_CHECKING:  # the mission's columns are attributes of the swarm's subclass
+
+        def __setattr__(self, key: str, value: Any) -> None: ...
+
+    def __getattr__(self, key: str) -> Any:
+        """Only reached for a name that is no column: AttributeError naming the columns."""
+        if key.startswith("__"):
+            raise AttributeError(key)
+        known = ", ".join(self.swarm.columns)
+        raise AttributeError(f"agents have no state column {key!r} (columns: {known})")
+
     def __repr__(self) -> str:
         return f"AgentView({self.name!r})"
+
+
+def view_type(columns: Iterable[str]) -> type[AgentView]:
+    """The :class:`AgentView` subclass with an attribute per column (a descriptor, as fast as
+    the built-in ones); :class:`AgentView` itself when there are no others."""
+    extra = [k for k in columns if not hasattr(AgentView, k)]
+    if not extra:
+        return AgentView
+    attributes: dict[str, Any] = {"__slots__": ()}
+    for key in extra:
+        column = _Column()
+        column.name = key
+        attributes[key] = column
+    return type("AgentView", (AgentView,), attributes)

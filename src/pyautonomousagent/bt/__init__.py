@@ -1,8 +1,11 @@
-"""Behaviour trees: the engine-independent tree description, the leaf-node library, and
-tree files (BehaviorTree.CPP XML, YAML: :func:`load_tree`, :func:`save_tree`)."""
+"""Behaviour trees: the engine-independent tree description, leaves (:class:`Leaf`,
+:class:`Port`, :func:`register_leaf`, the status codes and helpers), and tree files
+(BehaviorTree.CPP XML, YAML: :func:`load_tree`, :func:`save_tree`). The paper's leaves belong
+to its missions (:mod:`pyautonomousagent.missions.drones.leaves`)."""
 
-from pyautonomousagent.bt import library, scripted  # noqa: F401  (register the leaf types)
+from pyautonomousagent.bt import scripted  # noqa: F401  (registers the Scripted test leaf)
 from pyautonomousagent.bt.files import load_tree, save_tree
+from pyautonomousagent.bt.leaf import Leaf, LeafError, Port, register_leaf
 from pyautonomousagent.bt.spec import (
     Node,
     fallback,
@@ -12,20 +15,33 @@ from pyautonomousagent.bt.spec import (
     reactive_sequence,
     sequence,
 )
-from pyautonomousagent.bt.status import FAILURE, INVALID, RUNNING, SUCCESS
+from pyautonomousagent.bt.status import (
+    FAILURE,
+    INVALID,
+    RUNNING,
+    SUCCESS,
+    status_if,
+    success_if,
+)
 
 __all__ = [
     "FAILURE",
     "INVALID",
+    "Leaf",
+    "LeafError",
     "RUNNING",
     "SUCCESS",
     "Node",
+    "Port",
     "fallback",
     "inverter",
     "leaf",
     "load_tree",
     "reactive_fallback",
     "reactive_sequence",
+    "register_leaf",
     "save_tree",
     "sequence",
+    "status_if",
+    "success_if",
 ]

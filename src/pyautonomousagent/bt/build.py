@@ -19,18 +19,19 @@ from typing import Any
 from pyautonomousagent.bt.document import SUBTREE, Document, RawNode, TreeFileError
 from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf, LeafError
 from pyautonomousagent.bt.limits import check_document
+from pyautonomousagent.bt.nodes import DECORATOR
 from pyautonomousagent.bt.spec import (
     Node,
     TreeError,
     check_structure,
     control_params,
+    node_type,
     snake_case,
 )
 from pyautonomousagent.bt.vocabulary import (
-    BY_TAG,
-    DECORATOR,
     UNSUPPORTED,
     Tag,
+    by_tag,
     closest,
     leaf_category,
 )
@@ -189,7 +190,8 @@ class _Builder:
     def convert(self, node: RawNode) -> Node:
         """The spec node for an inlined, named raw node."""
         children = tuple(self.convert(child) for child in node.children)
-        tag = BY_TAG.get(node.tag)
+        tags = by_tag()
+        tag = tags.get(node.tag)
         if tag is not None:
             return self._control(node, tag, children)
         if node.tag in LEAF_TYPES or node.tag in ENGINE_LEAF_TYPES:
@@ -200,7 +202,7 @@ class _Builder:
                 f"BehaviorTree.CPP node {node.tag!r} is not supported: {UNSUPPORTED[node.tag]}",
                 f"build it from the supported nodes listed in {DOCS}",
             )
-        known = list(BY_TAG) + list(LEAF_TYPES) + sorted(ENGINE_LEAF_TYPES)
+        known = list(tags) + list(LEAF_TYPES) + sorted(ENGINE_LEAF_TYPES)
         hint = closest(node.tag, known)
         raise self.fail(
             node.line,
@@ -227,6 +229,15 @@ class _Builder:
                 node.line,
                 f"{tag.tag} needs at least 1 child, has 0",
                 f"put the nodes it should tick inside <{tag.tag}>...</{tag.tag}>",
+            )
+        record = node_type(tag.spec)
+        if len(children) < record.least or (
+            record.most is not None and len(children) > record.most
+        ):
+            raise self.fail(
+                node.line,
+                f"{tag.tag} needs {record.least} to {record.most} children, has {len(children)}",
+                "the first child is the condition, then the then- and else-branch",
             )
         params = self._params(node, tag)
         spec = Node(tag.spec, node.name or "", children, {**tag.fixed, **params})
@@ -320,10 +331,12 @@ def _a(word: str) -> str:
 
 
 def _param_fix(tag: Tag, children: int) -> str:
-    if tag.spec == "BTParallel":
+    if tag.spec in ("Parallel", "ParallelAll"):
         return f"use a count from 1 to {children}, or -1 (all) to -{children}"
-    if tag.spec == "Parallel":
+    if tag.spec == "PyTreesParallel":
         return "use policy SuccessOnAll or SuccessOnOne (synchronise only with SuccessOnAll)"
+    if tag.spec in ("Repeat", "RetryUntilSuccessful"):
+        return "use a whole number >= 1, or -1 for no limit"
     return "use a whole number >= 1"
 
 

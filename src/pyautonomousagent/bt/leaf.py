@@ -9,7 +9,6 @@ method, so they cannot drift apart.
 
 from __future__ import annotations
 
-import difflib
 import math
 from collections.abc import Container, Mapping
 from dataclasses import dataclass
@@ -17,6 +16,8 @@ from typing import Any, ClassVar
 
 from pyautonomousagent.bt.spec import Node, TreeError, check_structure
 from pyautonomousagent.inputs import shown
+from pyautonomousagent.randomness import stream_key
+from pyautonomousagent.registry import Registry, UnknownNameError
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -89,12 +90,14 @@ class Leaf:
     """Base class of the leaf library.
 
     Subclasses set :attr:`type_name`, :attr:`ports`, :attr:`keys` (the blackboard keys
-    they use) and implement :meth:`evaluate`. Port values become attributes.
+    they use) and implement :meth:`evaluate`. Port values become attributes; :attr:`stream`
+    keys the leaf's random numbers (:meth:`uniform`) and is set from the node's name.
     """
 
     type_name: ClassVar[str]
     ports: ClassVar[tuple[Port, ...]] = ()
     keys: ClassVar[tuple[str, ...]] = ()
+    stream: int = 0
 
     def __init__(self, **values: Any) -> None:
         for name, value in values.items():
@@ -149,12 +152,27 @@ class Leaf:
         """Run the leaf for ``agents``; return a status code, or an int8 array of them."""
         raise NotImplementedError
 
+    def halt(self, agents: AgentView, world: World) -> None:
+        """Called when the leaf is interrupted while RUNNING (BehaviorTree.CPP's
+        ``onHalted``) for ``agents``; by default it does nothing."""
+
+    def uniform(
+        self, agents: AgentView, world: World, low: float = 0.0, high: float = 1.0, draw: int = 0
+    ) -> Any:
+        """Uniform random numbers in [low, high), one per agent of the view (view shape).
+
+        An agent draws the same number at an iteration whichever engine ticks it: the
+        number is keyed by the run's seed, this node (:attr:`stream`), the agent, the
+        iteration and ``draw`` (use 0, 1, ... for several draws in one tick).
+        """
+        return world.random.uniform(self.stream, agents.rows, world.iteration, low, high, draw)
+
     def __repr__(self) -> str:
         params = ", ".join(f"{p.name}={getattr(self, p.name)!r}" for p in self.ports)
         return f"{type(self).__name__}({params})"
 
 
-LEAF_TYPES: dict[str, type[Leaf]] = {}
+LEAF_TYPES: Registry[type[Leaf]] = Registry("leaf type")
 
 #: Leaf type names known to an engine only (hand-written py_trees behaviours): tree files
 #: may use them, with their ports passed through as written.
@@ -167,19 +185,23 @@ def declare_leaf_type(type_name: str) -> None:
 
 
 def register_leaf(cls: type[Leaf]) -> type[Leaf]:
-    """Class decorator: make ``cls`` available under ``cls.type_name`` in tree descriptions."""
-    LEAF_TYPES[cls.type_name] = cls
-    return cls
+    """Class decorator: make ``cls`` available under ``cls.type_name`` in tree descriptions.
+
+    Raises:
+        TypeError: ``cls`` is no :class:`Leaf` subclass with a ``type_name``.
+        ValueError: another class is registered under that name.
+    """
+    if not (isinstance(cls, type) and issubclass(cls, Leaf)) or not getattr(cls, "type_name", ""):
+        raise TypeError(f"register_leaf takes a Leaf subclass with a type_name, got {cls!r}")
+    return LEAF_TYPES.register(cls.type_name, cls)
 
 
 def leaf_type(type_name: str) -> type[Leaf]:
     """The registered leaf class; LeafError with the closest known names if there is none."""
     try:
-        return LEAF_TYPES[type_name]
-    except KeyError:
-        close = difflib.get_close_matches(type_name, list(LEAF_TYPES), n=3)
-        hint = f"; did you mean {' or '.join(close)}?" if close else ""
-        raise LeafError(f"unknown leaf type {type_name!r}{hint}") from None
+        return LEAF_TYPES.get(type_name)
+    except UnknownNameError as error:
+        raise LeafError(str(error)) from None
 
 
 def make_leaf(node: Node, defaults: Mapping[str, Any]) -> Leaf:
@@ -189,9 +211,11 @@ def make_leaf(node: Node, defaults: Mapping[str, Any]) -> Leaf:
     except LeafError as error:
         raise TreeError(f"node {node.name!r}: {error}") from None
     try:
-        return cls.create(node.params, defaults, where=f"leaf {node.name!r} ({node.type})")
+        made = cls.create(node.params, defaults, where=f"leaf {node.name!r} ({node.type})")
     except LeafError as error:
         raise TreeError(str(error)) from None
+    made.stream = stream_key(node.name)
+    return made
 
 
 def check_leaves(

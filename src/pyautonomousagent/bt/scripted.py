@@ -9,14 +9,18 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from pyautonomousagent.bt.leaf import Leaf, LeafError, register_leaf
-from pyautonomousagent.bt.status import NAMES
+from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.state import AgentView
 from pyautonomousagent.world import World
+
+#: The statuses a leaf may return: INVALID is the engines' "not ticked / halted" mark, which
+#: py_trees and BehaviorTree.CPP treat differently when a leaf returns it, so it is refused.
+RETURNABLE = [SUCCESS, FAILURE, RUNNING]
 
 
 @register_leaf
@@ -31,8 +35,11 @@ class Scripted(Leaf):
         if set(params) != {"statuses"}:
             raise LeafError(f"{where}: Scripted takes exactly one port, 'statuses'")
         table = np.asarray(params["statuses"], dtype=np.int8)
-        if table.ndim != 2 or not np.isin(table, list(NAMES)).all():
-            raise LeafError(f"{where}: statuses must be a (ticks, agents) table of status codes")
+        if table.ndim != 2 or not np.isin(table, RETURNABLE).all():
+            raise LeafError(
+                f"{where}: statuses must be a (ticks, agents) table of the codes 1 (SUCCESS), "
+                "2 (FAILURE) and 3 (RUNNING); a leaf never returns 0 (INVALID)"
+            )
         return cls(statuses=table)
 
     @classmethod
@@ -56,3 +63,28 @@ class Scripted(Leaf):
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return agents.pick(self.statuses[world.iteration - 1])
+
+
+class _Constant(Leaf):
+    """A leaf that always returns :attr:`status` and touches nothing (no ports)."""
+
+    status: ClassVar[int]
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        return self.status
+
+
+@register_leaf
+class AlwaysSuccess(_Constant):
+    """BehaviorTree.CPP's ``AlwaysSuccess``: SUCCESS on every tick."""
+
+    type_name = "AlwaysSuccess"
+    status = SUCCESS
+
+
+@register_leaf
+class AlwaysFailure(_Constant):
+    """BehaviorTree.CPP's ``AlwaysFailure``: FAILURE on every tick."""
+
+    type_name = "AlwaysFailure"
+    status = FAILURE

@@ -19,36 +19,7 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-#: Decorators that map their child's status: type -> {child status name: own status name}.
-STATUS_MAPS: dict[str, dict[str, str]] = {
-    "Inverter": {"SUCCESS": "FAILURE", "FAILURE": "SUCCESS"},
-    "FailureIsSuccess": {"FAILURE": "SUCCESS"},
-    "FailureIsRunning": {"FAILURE": "RUNNING"},
-    "SuccessIsFailure": {"SUCCESS": "FAILURE"},
-    "SuccessIsRunning": {"SUCCESS": "RUNNING"},
-    "RunningIsFailure": {"RUNNING": "FAILURE"},
-    "RunningIsSuccess": {"RUNNING": "SUCCESS"},
-    "PassThrough": {},
-}
-
-#: Control node types: type -> (least children, most children or None, {parameter: default}).
-#: A default of None marks a required parameter.
-CONTROL_NODES: dict[str, tuple[int, int | None, dict[str, Any]]] = {
-    "Sequence": (0, None, {"memory": None}),
-    "Selector": (0, None, {"memory": None}),
-    "Parallel": (0, None, {"policy": "SuccessOnAll", "synchronise": True}),
-    "Repeat": (1, 1, {"num_success": None}),
-    "Retry": (1, 1, {"num_failures": None}),
-    **{name: (1, 1, {}) for name in STATUS_MAPS},
-    # BehaviorTree.CPP semantics where py_trees has no equal (see docs/tree-files.md):
-    "SequenceWithMemory": (1, None, {}),
-    "BTParallel": (1, None, {"success_count": -1, "failure_count": 1}),
-    "BTRepeat": (1, 1, {"num_cycles": None}),
-    "RetryUntilSuccessful": (1, 1, {"num_attempts": None}),
-}
-
-#: The control node types with BehaviorTree.CPP semantics (both engines implement them).
-BTCPP_TYPES = ("SequenceWithMemory", "BTParallel", "BTRepeat", "RetryUntilSuccessful")
+from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType
 
 PARALLEL_POLICIES = ("SuccessOnAll", "SuccessOnOne")
 
@@ -62,7 +33,8 @@ class Node:
     """One node of a tree description.
 
     Attributes:
-        type: a control type from :data:`CONTROL_NODES` or a registered leaf type name.
+        type: a control node type (:data:`~pyautonomousagent.bt.nodes.NODE_TYPES`) or a
+            registered leaf type name.
         name: the instance name (e.g. ``"action_navigate_to_destination_a_1"``).
         children: child nodes, left (highest priority) first.
         params: parameters: ``memory`` for composites, ports for leaves.
@@ -76,7 +48,7 @@ class Node:
     @property
     def is_control(self) -> bool:
         """True for composites and decorators, False for leaves."""
-        return self.type in CONTROL_NODES
+        return self.type in NODE_TYPES
 
     def walk(self) -> Iterator[Node]:
         """This node and all below it, depth first, left to right (tick order)."""
@@ -106,7 +78,7 @@ def reactive_sequence(name: str, *children: Node) -> Node:
 
 def fallback(name: str, *children: Node, memory: bool = True) -> Node:
     """A fallback / selector ("?"; with ``memory=False`` the reactive fallback "R?")."""
-    return Node("Selector", name, tuple(children), {"memory": memory})
+    return Node("Fallback", name, tuple(children), {"memory": memory})
 
 
 def reactive_fallback(name: str, *children: Node) -> Node:
@@ -122,11 +94,11 @@ def inverter(name: str, child: Node) -> Node:
 def parallel(
     name: str, *children: Node, policy: str = "SuccessOnAll", synchronise: bool = True
 ) -> Node:
-    """A parallel ("⇉"): ticks every child every tick; ``policy`` decides its success."""
+    """py_trees' parallel: ticks every child every tick; ``policy`` decides its success."""
     params: dict[str, Any] = {"policy": policy}
     if policy == "SuccessOnAll":
         params["synchronise"] = synchronise
-    return Node("Parallel", name, tuple(children), params)
+    return Node("PyTreesParallel", name, tuple(children), params)
 
 
 def sequence_with_memory(name: str, *children: Node) -> Node:
@@ -136,7 +108,7 @@ def sequence_with_memory(name: str, *children: Node) -> Node:
 
 
 def decorator(type_name: str, name: str, child: Node, **params: Any) -> Node:
-    """A decorator of type ``type_name`` (e.g. ``"Repeat"``, ``num_success=3``)."""
+    """A decorator of type ``type_name`` (e.g. ``"Repeat"``, ``num_cycles=3``)."""
     return Node(type_name, name, (child,), dict(params))
 
 
@@ -157,37 +129,44 @@ def check_structure(root: Node) -> None:
             if node.children:
                 raise TreeError(f"leaf {node.name!r} ({node.type}) cannot have children")
             continue
-        least, most, _ = CONTROL_NODES[node.type]
+        record = node_type(node.type)
         count = len(node.children)
-        if count < least or (most is not None and count > most):
-            wanted = str(least) if least == most else f"at least {least}"
-            raise TreeError(f"{node.type} {node.name!r} needs {wanted} child(ren), has {count}")
+        if count < record.least or (record.most is not None and count > record.most):
+            raise TreeError(f"{node.type} {node.name!r} needs {_arity(record)}, has {count}")
         control_params(node)
+
+
+def node_type(type_name: str) -> NodeType:
+    """The record of a control node type."""
+    return NODE_TYPES.get(type_name)
+
+
+def _arity(record: NodeType) -> str:
+    """``"1 child(ren)"``, ``"at least 1 child(ren)"``, ``"2 to 3 child(ren)"``."""
+    if record.least == record.most:
+        return f"{record.least} child(ren)"
+    if record.most is None:
+        return f"at least {record.least} child(ren)"
+    return f"{record.least} to {record.most} child(ren)"
 
 
 def control_params(node: Node) -> dict[str, Any]:
     """A control node's parameters with defaults filled in; TreeError if one is bad."""
-    defaults = CONTROL_NODES[node.type][2]
+    record = node_type(node.type)
+    defaults = record.defaults()
     where = f"{node.type} {node.name!r}"
     unknown = sorted(set(node.params) - set(defaults))
     if unknown:
         raise TreeError(f"{where} has unknown parameter(s) {unknown}; it takes {sorted(defaults)}")
     values = {**defaults, **node.params}
-    for key, value in values.items():
+    for param in record.params:
+        value = values[param.name]
         if value is None:
-            raise TreeError(f"{where} needs parameter {key!r}")
-        if key in ("memory", "synchronise") and not isinstance(value, bool):
-            raise TreeError(f"{where}: {key} must be true or false, got {value!r}")
-        if key in ("num_success", "num_failures", "num_cycles", "num_attempts") and (
-            isinstance(value, bool) or not isinstance(value, int) or value < 1
-        ):
-            raise TreeError(f"{where}: {key} must be a whole number >= 1, got {value!r}")
-        if key in ("success_count", "failure_count"):
-            parallel_threshold(value, len(node.children), f"{where}: {key}")
-    if values.get("policy", "SuccessOnAll") not in PARALLEL_POLICIES:
-        raise TreeError(
-            f"{where}: policy must be one of {PARALLEL_POLICIES}, got {values['policy']!r}"
-        )
+            raise TreeError(f"{where} needs parameter {param.name!r}")
+        problem = param.check(value, len(node.children)) if param.check else ""
+        if problem:
+            joint = "" if problem.startswith("=") else " "
+            raise TreeError(f"{where}: {param.name}{joint}{problem}")
     if values.get("policy") == "SuccessOnOne":
         if node.params.get("synchronise"):
             raise TreeError(f"{where}: policy SuccessOnOne cannot synchronise")
@@ -196,7 +175,7 @@ def control_params(node: Node) -> dict[str, Any]:
 
 
 def parallel_threshold(value: Any, children: int, where: str = "count") -> int:
-    """A BTParallel count resolved as BehaviorTree.CPP does: ``k >= 1`` is k children,
+    """A Parallel count resolved as BehaviorTree.CPP does: ``k >= 1`` is k children,
     ``-1`` is all of them, ``-2`` all but one, ...; TreeError unless 1 <= result <= children."""
     if isinstance(value, bool) or not isinstance(value, int) or value == 0:
         raise TreeError(f"{where} must be a whole number other than 0, got {value!r}")

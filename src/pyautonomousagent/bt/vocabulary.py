@@ -2,10 +2,11 @@
 
 XML files and YAML files use the same vocabulary: a control node is written with its
 BehaviorTree.CPP tag (``Sequence``, ``ReactiveFallback``, ``Repeat``, ...), a leaf with its
-leaf type (``Condition_Low_Energy_Level``). Each tag maps to one spec node type with some
-parameters fixed by the tag (``ReactiveSequence`` is ``Sequence`` with ``memory=False``).
-py_trees node types that BehaviorTree.CPP lacks have tags of their own (``PyTreesRepeat``,
-``FailureIsRunning``, ...), declared in the file's ``TreeNodesModel`` so Groot2 shows them.
+leaf type (``Condition_Low_Energy_Level``). The tags come from the node type records of
+:mod:`pyautonomousagent.bt.nodes`; a tag may fix parameters (``ReactiveSequence`` is
+``Sequence`` with ``memory=False``). py_trees node types that BehaviorTree.CPP lacks have
+tags of their own (``PyTreesRepeat``, ``FailureIsRunning``, ...), declared in the file's
+``TreeNodesModel`` so Groot2 shows them.
 """
 
 from __future__ import annotations
@@ -15,12 +16,13 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType
 from pyautonomousagent.bt.spec import Node
 
 
 @dataclass(frozen=True)
 class Tag:
-    """A control node as files write it.
+    """A control node as files write it (a view of a :class:`NodeType` and one of its tags).
 
     Attributes:
         tag: the XML tag (and YAML ``type``).
@@ -43,62 +45,37 @@ class Tag:
     doc: str = ""
 
 
-CONTROL = "Control"
-DECORATOR = "Decorator"
+def tags() -> list[Tag]:
+    """Every file tag of every registered control node type."""
+    out = []
+    for record in NODE_TYPES.items():
+        node_type: NodeType = record[1]
+        params = {p.name: (p.type, p.default is None) for p in node_type.params if p.in_files}
+        for t in node_type.tags:
+            out.append(
+                Tag(t.tag, node_type.name, node_type.kind, t.fixed, params,
+                    node_type.builtin, t.symbol, t.doc)
+            )  # fmt: skip
+    return out
 
-TAGS: tuple[Tag, ...] = (
-    Tag("Sequence", "Sequence", CONTROL, {"memory": True}, symbol="→",
-        doc="ticks children in order; resumes at a RUNNING child; restarts after a failure"),
-    Tag("ReactiveSequence", "Sequence", CONTROL, {"memory": False}, symbol="R→",
-        doc="ticks children from the first on every tick"),
-    Tag("SequenceWithMemory", "SequenceWithMemory", CONTROL, symbol="→*",
-        doc="like Sequence, but after a failure resumes at the failed child"),
-    Tag("Fallback", "Selector", CONTROL, {"memory": True}, symbol="?",
-        doc="tries children in order until one does not fail; resumes at a RUNNING child"),
-    Tag("ReactiveFallback", "Selector", CONTROL, {"memory": False}, symbol="R?",
-        doc="tries children from the first on every tick"),
-    Tag("Parallel", "BTParallel", CONTROL, symbol="⇉",
-        params={"success_count": (int, False), "failure_count": (int, False)},
-        doc="ticks unfinished children; decides by success_count / failure_count"),
-    Tag("Inverter", "Inverter", DECORATOR, symbol="≠", doc="swaps SUCCESS and FAILURE"),
-    Tag("ForceSuccess", "FailureIsSuccess", DECORATOR, symbol="✓",
-        doc="SUCCESS when the child finishes; RUNNING while it runs"),
-    Tag("ForceFailure", "SuccessIsFailure", DECORATOR, symbol="✗",
-        doc="FAILURE when the child finishes; RUNNING while it runs"),
-    Tag("KeepRunningUntilFailure", "SuccessIsRunning", DECORATOR, symbol="∞",
-        doc="RUNNING when the child succeeds; FAILURE when it fails"),
-    Tag("Repeat", "BTRepeat", DECORATOR, params={"num_cycles": (int, True)}, symbol="↻",
-        doc="after a success ticks the child again in the same tick, num_cycles times"),
-    Tag("RetryUntilSuccessful", "RetryUntilSuccessful", DECORATOR,
-        params={"num_attempts": (int, True)}, symbol="↺",
-        doc="after a failure ticks the child again in the same tick, num_attempts tries"),
-    Tag("FailureIsRunning", "FailureIsRunning", DECORATOR, builtin=False,
-        doc="py_trees: child FAILURE becomes RUNNING"),
-    Tag("RunningIsFailure", "RunningIsFailure", DECORATOR, builtin=False,
-        doc="py_trees: child RUNNING becomes FAILURE"),
-    Tag("RunningIsSuccess", "RunningIsSuccess", DECORATOR, builtin=False,
-        doc="py_trees: child RUNNING becomes SUCCESS"),
-    Tag("PassThrough", "PassThrough", DECORATOR, builtin=False,
-        doc="py_trees: returns the child's status"),
-    Tag("PyTreesRepeat", "Repeat", DECORATOR, params={"num_success": (int, True)},
-        builtin=False,
-        doc="py_trees Repeat: RUNNING until the child succeeded num_success times, one per tick"),
-    Tag("PyTreesRetry", "Retry", DECORATOR, params={"num_failures": (int, True)},
-        builtin=False,
-        doc="py_trees Retry: a failure is RUNNING until the num_failures-th, one per tick"),
-    Tag("PyTreesParallel", "Parallel", CONTROL, builtin=False,
-        params={"policy": (str, False), "synchronise": (bool, False)},
-        doc="py_trees Parallel: ticks all children; policy SuccessOnAll or SuccessOnOne"),
-)  # fmt: skip
 
-BY_TAG: dict[str, Tag] = {t.tag: t for t in TAGS}
+def by_tag() -> dict[str, Tag]:
+    """File tag -> :class:`Tag`."""
+    return {t.tag: t for t in tags()}
+
+
+#: Leaf types that are BehaviorTree.CPP 4 built-ins (not declared in a TreeNodesModel).
+BTCPP_LEAVES = frozenset({"AlwaysSuccess", "AlwaysFailure"})
 
 #: BehaviorTree.CPP 4 built-ins that pyAutonomousAgent does not run, with the reason.
 UNSUPPORTED: dict[str, str] = {
     **dict.fromkeys(
-        ["AsyncSequence", "AsyncFallback", "ParallelAll", "IfThenElse", "WhileDoElse",
-         "Switch2", "Switch3", "Switch4", "Switch5", "Switch6", "ManualSelector", "TryCatch"],
-        "its control flow has no equivalent in the py_trees engine yet",
+        ["Switch2", "Switch3", "Switch4", "Switch5", "Switch6"],
+        "it reads a blackboard variable; blackboard ports are not supported yet",
+    ),
+    **dict.fromkeys(
+        ["ManualSelector", "TryCatch", "AlwaysRunning"],
+        "it is not a built-in of BehaviorTree.CPP 4.8 (the version held against)",
     ),
     **dict.fromkeys(
         ["Delay", "Timeout", "Sleep", "RunOnce", "Precondition", "LoopInt", "LoopDouble",
@@ -106,7 +83,7 @@ UNSUPPORTED: dict[str, str] = {
         "it needs wall-clock time, scripting or blackboard entries of its own",
     ),
     **dict.fromkeys(
-        ["Script", "ScriptCondition", "SetBlackboard", "UnsetBlackboard", "AlwaysRunning"],
+        ["Script", "ScriptCondition", "SetBlackboard", "UnsetBlackboard"],
         "scripting and free blackboard entries are not supported",
     ),
 }  # fmt: skip
@@ -120,7 +97,7 @@ SCRIPT_ATTRIBUTES = (
 
 def tag_of(node: Node) -> Tag:
     """The file tag that writes a (checked) control node."""
-    for tag in TAGS:
+    for tag in tags():
         if tag.spec == node.type and all(
             node.params.get(key) == value for key, value in tag.fixed.items()
         ):

@@ -26,8 +26,9 @@ from pyautonomousagent.bt.document import (
 from pyautonomousagent.bt.leaf import LEAF_TYPES
 from pyautonomousagent.bt.limits import MAX_TREE_DEPTH
 from pyautonomousagent.bt.vocabulary import (
-    BY_TAG,
+    BTCPP_LEAVES,
     SCRIPT_ATTRIBUTES,
+    by_tag,
     closest,
     leaf_category,
 )
@@ -228,7 +229,7 @@ def _node(element: _Element, file: str) -> RawNode:
         else:
             node.tag, node.category = node_id, element.tag
     elif "ID" in attrs:
-        tag = BY_TAG.get(element.tag)
+        tag = by_tag().get(element.tag)
         category = tag.kind if tag else leaf_category(element.tag)
         raise TreeFileError(
             file,
@@ -337,7 +338,7 @@ def _models(document: Document) -> list[str]:
     used = {n.tag for root in document.trees.values() for n in root.walk()}
     out = []
     for type_name, cls in LEAF_TYPES.items():
-        if type_name in BY_TAG or (type_name == "Scripted" and type_name not in used):
+        if type_name in BTCPP_LEAVES or (type_name == "Scripted" and type_name not in used):
             continue
         ports = []
         for port in cls.ports:
@@ -347,7 +348,7 @@ def _models(document: Document) -> list[str]:
                 f"{escape(doc)}</input_port>"
             )
         out.extend(_model(leaf_category(type_name), type_name, ports))
-    for tag in BY_TAG.values():
+    for tag in by_tag().values():
         if not tag.builtin and tag.tag in used:
             ports = [
                 f'<input_port name="{k}" type="{XML_TYPES[t]}"/>'

@@ -28,17 +28,19 @@ import numpy as np
 from pyautonomousagent.allocator import reuse_freed_memory
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
 from pyautonomousagent.bt.spec import (
-    BTCPP_TYPES,
-    STATUS_MAPS,
     Node,
     TreeError,
     control_params,
+    node_type,
     parallel_threshold,
 )
 from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES
-from pyautonomousagent.state import Swarm
+from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
+
+#: A loop count no run reaches (counters are int64): ``num_cycles=-1`` and huge counts.
+LOOP_FOREVER = 2**62
 
 _CODES = {name: code for code, name in NAMES.items()}
 
@@ -96,7 +98,7 @@ def _some(mask: np.ndarray) -> bool:
 def _status_table(type_name: str) -> np.ndarray:
     """Lookup table child status -> own status of a status-mapping decorator."""
     table = np.arange(len(NAMES), dtype=np.int8)
-    for child, own in STATUS_MAPS[type_name].items():
+    for child, own in (node_type(type_name).status_map or {}).items():
         table[_CODES[child]] = _CODES[own]
     return table
 
@@ -132,47 +134,39 @@ class BatchedEngine:
         self.status = np.zeros((n, swarm.size), dtype=np.int8)
         kinds = [node.type for node in program.nodes]
         self.current = {
-            i: np.full(swarm.size, -1, dtype=np.int16)
+            i: np.full(swarm.size, -1, dtype=np.int32)
             for i, kind in enumerate(kinds)
-            if kind in ("Sequence", "Selector")
+            if kind in ("Sequence", "Fallback")
         }
-        counted = ("Repeat", "Retry", "SequenceWithMemory", "BTRepeat", "RetryUntilSuccessful")
         self.counter = {
-            i: np.zeros(swarm.size, dtype=np.int32)
-            for i, kind in enumerate(kinds)
-            if kind in counted
+            i: np.zeros(swarm.size, dtype=np.int64)
+            for i, node in enumerate(program.nodes)
+            if node.is_control
         }
-        parallels = "BTParallel" in kinds
-        self._done = np.zeros(self.status.shape if parallels else (0, 0), dtype=bool)
+        self._done = np.zeros(self.status.shape, dtype=bool)
         self.leaves: dict[int, Leaf] = {
             i: make_leaf(node, defaults)
             for i, node in enumerate(program.nodes)
             if not node.is_control
         }
+        self._halting = [i for i, leaf in self.leaves.items() if type(leaf).halt is not Leaf.halt]
         self._ticks = swarm.blackboard["number_ticks"]
         self._everyone = np.ones(swarm.size, dtype=bool)
         self._tables = {
             i: _status_table(node.type)
             for i, node in enumerate(program.nodes)
-            if node.type in STATUS_MAPS
+            if node.is_control and node_type(node.type).status_map is not None
         }
         self._tickers = [self._ticker(i) for i in range(n)]
 
     def _ticker(self, i: int) -> Callable[[np.ndarray], None]:
-        node_type = self.program.nodes[i].type
-        if node_type in BTCPP_TYPES:
-            return self._btcpp_ticker(i)
-        if node_type == "Sequence":
-            return lambda mask: self._sequence(i, mask)
-        if node_type == "Selector":
-            return lambda mask: self._selector(i, mask)
-        if node_type == "Parallel":
-            return lambda mask: self._parallel(i, mask)
-        if node_type in STATUS_MAPS:
+        node = self.program.nodes[i]
+        if not node.is_control:
+            return lambda mask: self._leaf(i, mask)
+        if i in self._tables:
             return lambda mask: self._decorator(i, mask)
-        if node_type in ("Repeat", "Retry"):
-            return lambda mask: self._counted(i, mask)
-        return lambda mask: self._leaf(i, mask)
+        method = BATCHED_NODES[node.type]
+        return lambda mask: method(self, i, mask)
 
     def tick(self) -> None:
         """Tick the tree once for every agent."""
@@ -192,7 +186,16 @@ class BatchedEngine:
         reset: it is only read while the composite is RUNNING.)"""
         need = mask & (self.status[child] != INVALID)
         if _some(need):
+            self._tell_halted(child, need)
             np.copyto(self.status[child : self.program.end[child]], INVALID, where=need)
+
+    def _tell_halted(self, child: int, need: np.ndarray) -> None:
+        """Call ``Leaf.halt`` of the RUNNING leaves of ``child``'s subtree, in tick order."""
+        for i in self._halting:
+            if child <= i < self.program.end[child]:
+                rows = np.flatnonzero(need & (self.status[i] == RUNNING))
+                if rows.size:
+                    self.leaves[i].halt(self.swarm.agents(rows), self.world)
 
     def _halt_children(self, i: int, first: int, mask: np.ndarray) -> None:
         """Halt the children of node ``i`` from position ``first`` on, for ``mask``."""
@@ -206,17 +209,33 @@ class BatchedEngine:
         masked view of all N when many (no gathering of values)."""
         reached = np.count_nonzero(mask)
         if reached == mask.size:
-            result = self.leaves[i].evaluate(self.swarm.agents(slice(None)), self.world)
+            result = self._evaluate(i, self.swarm.agents(slice(None)))
             self.status[i] = result
             self._ticks += 1
         elif 4 * reached >= mask.size:
-            result = self.leaves[i].evaluate(self.swarm.agents(mask), self.world)
+            result = self._evaluate(i, self.swarm.agents(mask))
             np.copyto(self.status[i], result, where=mask)
             np.add(self._ticks, 1, out=self._ticks, where=mask)
         else:
             rows = np.flatnonzero(mask)
-            self.status[i, rows] = self.leaves[i].evaluate(self.swarm.agents(rows), self.world)
+            self.status[i, rows] = self._evaluate(i, self.swarm.agents(rows))
             self._ticks[rows] += 1
+
+    def _evaluate(self, i: int, agents: AgentView) -> Any:
+        """Leaf ``i``'s statuses for a group of agents; a leaf written for one agent only
+        (``if agents.energy < 40:`` on an array) gets a message naming the node and the fix."""
+        try:
+            return self.leaves[i].evaluate(agents, self.world)
+        except ValueError as error:
+            if "truth value of an array" not in str(error):
+                raise
+            node = self.program.nodes[i]
+            raise TreeError(
+                f"leaf {node.name!r} ({node.type}) works on one agent only: the batched engine "
+                "calls it with arrays of many agents. Write its conditions with the helpers of "
+                "pyautonomousagent.arrays (choose, minimum, ...) and status_if/success_if instead "
+                "of if/and/or, or run the tree with engine='pytrees'"
+            ) from None
 
     def _sequence(self, i: int, mask: np.ndarray) -> None:
         kids, memory = self.program.children[i], self.program.params[i]["memory"]
@@ -313,13 +332,14 @@ class BatchedEngine:
         self._settle(i, child, mask, result, self._tables[i][result])
 
     def _counted(self, i: int, mask: np.ndarray) -> None:
-        """Repeat (counts successes) and Retry (counts failures), as py_trees' decorators."""
+        """PyTreesRepeat (counts successes) and PyTreesRetry (counts failures), as py_trees'
+        decorators."""
         node, child = self.program.nodes[i], self.program.children[i][0]
         counter = self.counter[i]
         np.copyto(counter, 0, where=mask & (self.status[i] != RUNNING))
         self._tickers[child](mask)
         result = self.status[child]
-        if node.type == "Repeat":
+        if node.type == "PyTreesRepeat":
             success = mask & (result == SUCCESS)
             np.add(counter, 1, out=counter, where=success)
             done = success & (counter == self.program.params[i]["num_success"])
@@ -340,26 +360,24 @@ class BatchedEngine:
 
     # BehaviorTree.CPP's control nodes (see engines/btcpp.py for the same rules on py_trees).
     # ``counter`` holds SequenceWithMemory's remembered child and the loop counts of
-    # BTRepeat / RetryUntilSuccessful; ``_done`` marks the finished children of a BTParallel.
-
-    def _btcpp_ticker(self, i: int) -> Callable[[np.ndarray], None]:
-        node_type = self.program.nodes[i].type
-        if node_type == "SequenceWithMemory":
-            return lambda mask: self._sequence_with_memory(i, mask)
-        if node_type == "BTParallel":
-            return lambda mask: self._btcpp_parallel(i, mask)
-        return lambda mask: self._btcpp_loop(i, mask)
+    # Repeat / RetryUntilSuccessful; ``_done`` marks the finished children of a Parallel.
 
     def _sequence_with_memory(self, i: int, mask: np.ndarray) -> None:
-        index, status = self.counter[i], self.status[i]
+        index, status, kids = self.counter[i], self.status[i], self.program.children[i]
         start = index.copy()
         alive = mask.copy()
-        for k, child in enumerate(self.program.children[i]):
+        for k, child in enumerate(kids):
             ticked = alive & (start <= k)
             if _some(ticked):
+                fresh = self.status[child] != RUNNING
                 self._tickers[child](ticked)
                 result = self.status[child]
                 stopped = ticked & (result != SUCCESS)
+                if k + 1 < len(kids):  # a wake-up: yield after a first-tick success
+                    woken = ticked & fresh & (result == SUCCESS)
+                    np.copyto(index, k + 1, where=woken)
+                    np.copyto(status, RUNNING, where=woken)
+                    alive &= ~woken
                 np.copyto(index, k, where=stopped)
                 np.copyto(status, result, where=stopped)
                 alive &= ~stopped
@@ -367,15 +385,19 @@ class BatchedEngine:
         np.copyto(status, SUCCESS, where=alive)
 
     def _btcpp_loop(self, i: int, mask: np.ndarray) -> None:
-        """BTRepeat (again on SUCCESS) and RetryUntilSuccessful (again on FAILURE)."""
+        """Repeat (again on SUCCESS) and RetryUntilSuccessful (again on FAILURE): the child
+        is ticked again within the tick only if it was RUNNING before; a child that returns
+        ``again`` at its first tick ends the tick (RUNNING, a wake-up)."""
         node, child = self.program.nodes[i], self.program.children[i][0]
-        repeat = node.type == "BTRepeat"
+        repeat = node.type == "Repeat"
         again = SUCCESS if repeat else FAILURE
         limit = self.program.params[i]["num_cycles" if repeat else "num_attempts"]
+        limit = LOOP_FOREVER if limit == -1 else min(limit, LOOP_FOREVER)
         counter, status = self.counter[i], self.status[i]
         np.copyto(counter, 0, where=mask & (status != RUNNING))
         going = mask.copy()
         while _some(going):
+            fresh = self.status[child] != RUNNING
             self._tickers[child](going)
             result = self.status[child]
             looped = going & (result == again)
@@ -383,8 +405,9 @@ class BatchedEngine:
             more = looped & (counter < limit)
             ended = going & ~more
             np.copyto(status, result, where=ended)
+            np.copyto(status, RUNNING, where=more & fresh)
             np.copyto(counter, 0, where=ended & (result != RUNNING))
-            going = more
+            going = more & ~fresh
 
     def _btcpp_parallel(self, i: int, mask: np.ndarray) -> None:
         kids = list(self.program.children[i])
@@ -414,3 +437,110 @@ class BatchedEngine:
                 np.copyto(status, np.where(won, SUCCESS, FAILURE), where=ended)
                 alive &= ~ended
         np.copyto(status, RUNNING, where=alive)
+
+    def _async_sequence(self, i: int, mask: np.ndarray, proceed: int) -> None:
+        """AsyncSequence (``proceed`` SUCCESS) and AsyncFallback (``proceed`` FAILURE); the
+        remembered child is in ``counter``."""
+        kids, index, status = self.program.children[i], self.counter[i], self.status[i]
+        np.copyto(index, 0, where=mask & (status != RUNNING))
+        start = index.copy()
+        alive = mask.copy()
+        for k, child in enumerate(kids):
+            ticked = alive & (start <= k)
+            if not _some(ticked):
+                continue
+            fresh = self.status[child] != RUNNING
+            self._tickers[child](ticked)
+            result = self.status[child]
+            stopped = ticked & (result != proceed)
+            np.copyto(status, result, where=stopped)
+            np.copyto(index, np.where(result == RUNNING, k, 0), where=stopped)
+            alive &= ~stopped
+            if k + 1 < len(kids):
+                woken = ticked & fresh & (result == proceed)
+                np.copyto(index, k + 1, where=woken)
+                np.copyto(status, RUNNING, where=woken)
+                alive &= ~woken
+        np.copyto(index, 0, where=alive)
+        np.copyto(status, proceed, where=alive)
+
+    def _if_then_else(self, i: int, mask: np.ndarray) -> None:
+        """IfThenElse; the running branch (0: none, ask the condition) is in ``counter``."""
+        kids, branch, status = self.program.children[i], self.counter[i], self.status[i]
+        np.copyto(branch, 0, where=mask & (status != RUNNING))
+        asking = mask & (branch == 0)
+        if _some(asking):
+            self._tickers[kids[0]](asking)
+            result = self.status[kids[0]]
+            np.copyto(branch, 1, where=asking & (result == SUCCESS))
+            if len(kids) == 3:
+                np.copyto(branch, 2, where=asking & (result == FAILURE))
+            np.copyto(status, result, where=asking & (branch == 0))
+        for b in range(1, len(kids)):
+            going = mask & (branch == b)
+            if _some(going):
+                self._tickers[kids[b]](going)
+                result = self.status[kids[b]]
+                np.copyto(status, result, where=going)
+                finished = going & (result != RUNNING)
+                self._halt_children(i, 0, finished)
+                np.copyto(branch, 0, where=finished)
+
+    def _while_do_else(self, i: int, mask: np.ndarray) -> None:
+        """WhileDoElse: the condition is asked on every tick."""
+        kids, status = self.program.children[i], self.status[i]
+        self._tickers[kids[0]](mask)
+        asked = self.status[kids[0]].copy()
+        result = asked.copy()
+        yes, no = mask & (asked == SUCCESS), mask & (asked == FAILURE)
+        if len(kids) == 3:
+            self._halt(kids[2], yes)
+        if _some(yes):
+            self._tickers[kids[1]](yes)
+            np.copyto(result, self.status[kids[1]], where=yes)
+        if len(kids) == 3:
+            self._halt(kids[1], no)
+            if _some(no):
+                self._tickers[kids[2]](no)
+                np.copyto(result, self.status[kids[2]], where=no)
+        self._halt_children(i, 0, mask & (asked != RUNNING) & (result != RUNNING))
+        np.copyto(status, result, where=mask)
+
+    def _parallel_all(self, i: int, mask: np.ndarray) -> None:
+        """ParallelAll: ``_done`` marks the finished children."""
+        kids = list(self.program.children[i])
+        status, done = self.status[i], self._done
+        need_failure = parallel_threshold(self.program.params[i]["max_failures"], len(kids))
+        done[kids] &= ~(mask & (status != RUNNING))
+        for child in kids:
+            ticked = mask & ~done[child]
+            if _some(ticked):
+                self._tickers[child](ticked)
+                done[child] |= ticked & (self.status[child] != RUNNING)
+        finished = mask & done[kids].all(axis=0)
+        failures = (self.status[kids] == FAILURE).sum(axis=0)
+        verdict = np.where(failures >= need_failure, FAILURE, SUCCESS)
+        np.copyto(status, np.where(finished, verdict, RUNNING), where=mask)
+        self._halt_children(i, 0, finished)
+        done[kids] &= ~finished
+
+
+#: Node type -> the method that ticks it, called with (engine, node index, mask): one entry
+#: per record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES` (status-mapping decorators
+#: all use ``_decorator`` with the record's ``status_map``).
+BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
+    "Sequence": BatchedEngine._sequence,
+    "Fallback": BatchedEngine._selector,
+    "PyTreesParallel": BatchedEngine._parallel,
+    "PyTreesRepeat": BatchedEngine._counted,
+    "PyTreesRetry": BatchedEngine._counted,
+    "SequenceWithMemory": BatchedEngine._sequence_with_memory,
+    "Parallel": BatchedEngine._btcpp_parallel,
+    "Repeat": BatchedEngine._btcpp_loop,
+    "RetryUntilSuccessful": BatchedEngine._btcpp_loop,
+    "AsyncSequence": lambda engine, i, mask: engine._async_sequence(i, mask, SUCCESS),
+    "AsyncFallback": lambda engine, i, mask: engine._async_sequence(i, mask, FAILURE),
+    "IfThenElse": BatchedEngine._if_then_else,
+    "WhileDoElse": BatchedEngine._while_do_else,
+    "ParallelAll": BatchedEngine._parallel_all,
+}

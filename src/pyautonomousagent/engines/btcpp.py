@@ -16,7 +16,8 @@ The batched engine implements the same rules on arrays; docs/tree-files.md has t
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
@@ -38,14 +39,21 @@ class SequenceWithMemory(py_trees.composites.Composite):
         self.index = 0  # the child to tick first; kept on halt, as in BT.CPP 4
 
     def tick(self) -> Iterator[Behaviour]:
-        """Tick from the remembered child on; stop at the first child that does not succeed."""
+        """Tick from the remembered child on; stop at the first child that does not succeed,
+        or yield (RUNNING) after a child that succeeded at its first tick (a wake-up)."""
         if self.status != Status.RUNNING:
             self.initialise()
         for k in range(self.index, len(self.children)):
             child = self.children[k]
             self.current_child = child
+            fresh = child.status != Status.RUNNING
             yield from child.tick()
             if child.status == Status.SUCCESS:
+                if fresh and k + 1 < len(self.children):
+                    self.index = k + 1
+                    self.status = Status.RUNNING
+                    yield self
+                    return
                 continue
             self.index = k
             if child.status == Status.RUNNING:
@@ -69,17 +77,23 @@ class _Loop(py_trees.decorators.Decorator):
         self.count = 0
 
     def tick(self) -> Iterator[Behaviour]:
-        """Tick the child until it returns something else than ``again`` or the limit is hit."""
+        """Tick the child again while it returns ``again`` and the limit is not hit; a child
+        that returned ``again`` at its first tick ends the tick instead (RUNNING, a wake-up)."""
         if self.status != Status.RUNNING:
             self.count = 0
             self.initialise()
         while True:
+            fresh = self.decorated.status != Status.RUNNING
             yield from self.decorated.tick()
             result = self.decorated.status
             if result == self.again:
                 self.count += 1
-                if self.count < self.limit:
-                    continue
+                if self.limit == -1 or self.count < self.limit:
+                    if not fresh:
+                        continue
+                    self.status = Status.RUNNING
+                    yield self
+                    return
             break
         if result != Status.RUNNING:
             self.count = 0
@@ -165,10 +179,146 @@ class Parallel(py_trees.composites.Composite):
         self.stop(verdict)
 
 
-#: Spec node type -> py_trees class (called with name, children and the node's parameters).
-BTCPP_BEHAVIOURS = {
-    "SequenceWithMemory": SequenceWithMemory,
-    "BTParallel": Parallel,
-    "BTRepeat": Repeat,
-    "RetryUntilSuccessful": RetryUntilSuccessful,
+def _halt_all(children: Sequence[Behaviour]) -> None:
+    """BT.CPP's ``resetChildren()``: every child not INVALID is halted (set INVALID)."""
+    for child in children:
+        if child.status != Status.INVALID:
+            child.stop(Status.INVALID)
+
+
+class AsyncSequence(py_trees.composites.Composite):
+    """BT.CPP ``AsyncSequence`` (``proceed=SUCCESS``) and ``AsyncFallback``
+    (``proceed=FAILURE``): a Sequence / Fallback with memory that, after a child ended with
+    ``proceed`` at its first tick, yields (RUNNING) and goes on at the next tick."""
+
+    def __init__(self, name: str, children: Sequence[Behaviour], proceed: Status) -> None:
+        super().__init__(name, list(children))
+        self.proceed = proceed
+        self.index = 0
+
+    def tick(self) -> Iterator[Behaviour]:
+        """Tick from the remembered child; stop at a child that does not end with proceed."""
+        if self.status != Status.RUNNING:
+            self.index = 0
+            self.initialise()
+        for k in range(self.index, len(self.children)):
+            child = self.children[k]
+            fresh = child.status != Status.RUNNING
+            yield from child.tick()
+            if child.status == self.proceed:
+                if fresh and k + 1 < len(self.children):
+                    self.index, self.status = k + 1, Status.RUNNING
+                    yield self
+                    return
+                continue
+            self.index = k if child.status == Status.RUNNING else 0
+            self.status = child.status
+            yield self
+            return
+        self.index = 0
+        self.status = self.proceed
+        yield self
+
+
+class IfThenElse(py_trees.composites.Composite):
+    """BT.CPP ``IfThenElse``: the first child decides; SUCCESS ticks the second, FAILURE the
+    third (or fails, with two children); a running branch is resumed without asking again."""
+
+    def __init__(self, name: str, children: Sequence[Behaviour]) -> None:
+        super().__init__(name, list(children))
+        self.branch = 0
+
+    def tick(self) -> Iterator[Behaviour]:
+        """Ask the condition (unless a branch is running), then tick the chosen branch."""
+        if self.status != Status.RUNNING:
+            self.branch = 0
+            self.initialise()
+        if self.branch == 0:
+            condition = self.children[0]
+            yield from condition.tick()
+            if condition.status == Status.SUCCESS:
+                self.branch = 1
+            elif condition.status == Status.FAILURE and len(self.children) == 3:
+                self.branch = 2
+            else:
+                self.status = condition.status
+                yield self
+                return
+        branch = self.children[self.branch]
+        yield from branch.tick()
+        self.status = branch.status
+        if branch.status != Status.RUNNING:
+            _halt_all(self.children)
+            self.branch = 0
+        yield self
+
+
+class WhileDoElse(py_trees.composites.Composite):
+    """BT.CPP ``WhileDoElse``: the first child is asked on every tick; SUCCESS ticks the
+    second (halting the third), FAILURE the third (halting the second) or fails."""
+
+    def tick(self) -> Iterator[Behaviour]:
+        """Ask the condition, then tick the branch it picks; reset all when it finishes."""
+        if self.status != Status.RUNNING:
+            self.initialise()
+        condition = self.children[0]
+        yield from condition.tick()
+        result = condition.status
+        if result == Status.SUCCESS:
+            if len(self.children) == 3:
+                _halt_all(self.children[2:])
+            yield from self.children[1].tick()
+            result = self.children[1].status
+        elif result == Status.FAILURE and len(self.children) == 3:
+            _halt_all(self.children[1:2])
+            yield from self.children[2].tick()
+            result = self.children[2].status
+        if condition.status != Status.RUNNING and result != Status.RUNNING:
+            _halt_all(self.children)
+        self.status = result
+        yield self
+
+
+class ParallelAll(py_trees.composites.Composite):
+    """BT.CPP ``ParallelAll``: ticks the unfinished children until all have finished; then
+    FAILURE if at least ``max_failures`` of them failed (-1: all, -2: all but one, ...)."""
+
+    def __init__(self, name: str, children: Sequence[Behaviour], max_failures: int) -> None:
+        super().__init__(name, list(children))
+        self.need_failure = parallel_threshold(max_failures, len(self.children))
+        self.done: set[int] = set()
+
+    def tick(self) -> Iterator[Behaviour]:
+        """Tick every unfinished child once; decide when none is left."""
+        if self.status != Status.RUNNING:
+            self.done = set()
+            self.initialise()
+        for k, child in enumerate(self.children):
+            if k not in self.done:
+                yield from child.tick()
+                if child.status != Status.RUNNING:
+                    self.done.add(k)
+        if len(self.done) < len(self.children):
+            self.status = Status.RUNNING
+        else:
+            failures = sum(1 for c in self.children if c.status == Status.FAILURE)
+            self.status = Status.FAILURE if failures >= self.need_failure else Status.SUCCESS
+            _halt_all(self.children)
+            self.done = set()
+        yield self
+
+
+#: Node type -> py_trees behaviour, called with (name, children, parameters).
+BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Behaviour]] = {
+    "SequenceWithMemory": lambda name, kids, p: SequenceWithMemory(name, kids),
+    "Parallel": lambda name, kids, p: Parallel(name, kids, p["success_count"], p["failure_count"]),
+    "Repeat": lambda name, kids, p: Repeat(name, kids[0], p["num_cycles"]),
+    "RetryUntilSuccessful": lambda name, kids, p: RetryUntilSuccessful(
+        name, kids[0], p["num_attempts"]
+    ),
+    "AsyncSequence": lambda name, kids, p: AsyncSequence(name, kids, Status.SUCCESS),
+    "AsyncFallback": lambda name, kids, p: AsyncSequence(name, kids, Status.FAILURE),
+    "IfThenElse": lambda name, kids, p: IfThenElse(name, kids),
+    "WhileDoElse": lambda name, kids, p: WhileDoElse(name, kids),
+    "ParallelAll": lambda name, kids, p: ParallelAll(name, kids, p["max_failures"]),
 }

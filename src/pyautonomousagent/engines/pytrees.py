@@ -17,7 +17,7 @@ from py_trees.common import Status
 
 from pyautonomousagent.bt import status as codes
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
-from pyautonomousagent.bt.spec import CONTROL_NODES, Node, control_params
+from pyautonomousagent.bt.spec import Node, control_params
 from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
@@ -74,6 +74,11 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
         self._ticks[self._row] += 1
         return TO_PYTREES[self.leaf.evaluate(self.agent, self.world)]
 
+    def terminate(self, new_status: Status) -> None:
+        """A RUNNING leaf stopped from outside (halted) tells its leaf."""
+        if new_status == Status.INVALID and self.status == Status.RUNNING:
+            self.leaf.halt(self.agent, self.world)
+
 
 BehaviourFactory = Callable[..., AgentBehaviour]
 #: Hand-written py_trees behaviours: type name -> class taking (name, agent, world, **params).
@@ -110,23 +115,44 @@ def _control_behaviour(
     node: Node, children: list[py_trees.behaviour.Behaviour]
 ) -> py_trees.behaviour.Behaviour:
     """The py_trees composite or decorator for a control node."""
-    params = control_params(node)
-    if node.type in BTCPP_BEHAVIOURS:
-        single = CONTROL_NODES[node.type][1] == 1
-        return BTCPP_BEHAVIOURS[node.type](node.name, children[0] if single else children, **params)
-    if node.type in ("Sequence", "Selector"):
-        composite = getattr(py_trees.composites, node.type)
-        return composite(node.name, params["memory"], children)
-    if node.type == "Parallel":
-        policies = py_trees.common.ParallelPolicy
-        policy = (
-            policies.SuccessOnOne()
-            if params["policy"] == "SuccessOnOne"
-            else policies.SuccessOnAll(synchronise=params["synchronise"])
-        )
-        return py_trees.composites.Parallel(node.name, policy, children)
-    decorator = getattr(py_trees.decorators, node.type)
-    return decorator(node.name, children[0], **params)
+    return PYTREES_NODES[node.type](node.name, children, control_params(node))
+
+
+def _parallel(
+    name: str, children: list[py_trees.behaviour.Behaviour], params: dict[str, Any]
+) -> py_trees.behaviour.Behaviour:
+    policies = py_trees.common.ParallelPolicy
+    policy = (
+        policies.SuccessOnOne()
+        if params["policy"] == "SuccessOnOne"
+        else policies.SuccessOnAll(synchronise=params["synchronise"])
+    )
+    return py_trees.composites.Parallel(name, policy, children)
+
+
+def _decorator(cls: type) -> Callable[[str, list[Any], dict[str, Any]], Any]:
+    return lambda name, kids, params: cls(name, kids[0])
+
+
+_decorators = py_trees.decorators
+#: Node type -> py_trees behaviour, called with (name, children, parameters): one entry per
+#: record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES`.
+PYTREES_NODES: dict[str, Callable[[str, list[Any], dict[str, Any]], Any]] = {
+    "Sequence": lambda name, kids, p: py_trees.composites.Sequence(name, p["memory"], kids),
+    "Fallback": lambda name, kids, p: py_trees.composites.Selector(name, p["memory"], kids),
+    "PyTreesParallel": _parallel,
+    "PyTreesRepeat": lambda name, kids, p: _decorators.Repeat(name, kids[0], p["num_success"]),
+    "PyTreesRetry": lambda name, kids, p: _decorators.Retry(name, kids[0], p["num_failures"]),
+    "Inverter": _decorator(_decorators.Inverter),
+    "ForceSuccess": _decorator(_decorators.FailureIsSuccess),
+    "ForceFailure": _decorator(_decorators.SuccessIsFailure),
+    "KeepRunningUntilFailure": _decorator(_decorators.SuccessIsRunning),
+    "FailureIsRunning": _decorator(_decorators.FailureIsRunning),
+    "RunningIsFailure": _decorator(_decorators.RunningIsFailure),
+    "RunningIsSuccess": _decorator(_decorators.RunningIsSuccess),
+    "PassThrough": _decorator(_decorators.PassThrough),
+    **BTCPP_BEHAVIOURS,
+}
 
 
 class PyTreesEngine:

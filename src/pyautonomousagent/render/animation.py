@@ -25,7 +25,8 @@ import numpy as np
 
 from pyautonomousagent.progress import Progress
 from pyautonomousagent.recording import Recorder
-from pyautonomousagent.simulation.scenario import Point, Scenario
+from pyautonomousagent.render.marks import Mark
+from pyautonomousagent.simulation.scenario import Scenario
 
 if TYPE_CHECKING:
     from PIL import Image
@@ -38,8 +39,6 @@ PANEL_XY = (0.66, 0.92)
 """Top-left corner of the text panel, figure fractions."""
 DRONE_RADIUS = 0.015
 """A drone's radius as a fraction of the world's larger side (1.5 units in a 100 x 100 world)."""
-SLOT_RADIUS = 2.5 * DRONE_RADIUS
-"""A refuelling slot's radius, same convention as ``DRONE_RADIUS``."""
 MAX_LABELLED = 50
 """Above this many agents the drones are drawn without their index labels."""
 PALETTE_COLOURS = 256
@@ -48,8 +47,6 @@ DRONE_COLOUR = "#08306b"
 """Dark blue of the drones and their index labels."""
 HEADING_COLOUR = "#e31a1c"
 """Red of the heading dot."""
-SLOT_COLOUR = "#9ecae1"
-"""Light blue of the refuelling slots."""
 
 
 @dataclass(frozen=True)
@@ -84,40 +81,6 @@ def frame_rows(recorder: Recorder, frame_every: int) -> np.ndarray:
     first = np.ones(len(window), dtype=bool)
     first[1:] = window[1:] != window[:-1]
     return np.flatnonzero(first)
-
-
-def refuelling_slots(recorder: Recorder, scenario: Scenario) -> list[Point]:
-    """Distinct refuelling slots (world units), in agent order, from the first record.
-
-    Falls back to ``scenario.refueling_positions`` when the blackboard was not recorded.
-    """
-    return _distinct(_first_points(recorder, "refueling_position") or scenario.refueling_positions)
-
-
-def surveillance_marks(recorder: Recorder, scenario: Scenario) -> list[Point]:
-    """Distinct surveillance positions to mark (world units).
-
-    Patrol scenarios: the two patrol positions. Otherwise each agent's initial surveillance
-    position from the first record, or ``scenario.surveillance_positions`` if not recorded.
-    """
-    if scenario.patrol_positions:
-        return _distinct(scenario.patrol_positions)
-    recorded = _first_points(recorder, "surveillance_position")
-    return _distinct(recorded or scenario.surveillance_positions)
-
-
-def _first_points(recorder: Recorder, name: str) -> list[Point]:
-    """The blackboard points ``x_<name>, y_<name>`` of every agent at row 0, or []."""
-    keys = f"x_{name}", f"y_{name}"
-    if recorder.count == 0 or not all(k in recorder.columns for k in keys):
-        return []
-    xs, ys = (recorder.columns[k][0] for k in keys)
-    return [(float(x), float(y)) for x, y in zip(xs, ys, strict=True)]
-
-
-def _distinct(points: Iterable[Point]) -> list[Point]:
-    """``points`` without repeats, first occurrence first."""
-    return list(dict.fromkeys((float(x), float(y)) for x, y in points))
 
 
 def panel_rows(recorder: Recorder, row: int) -> list[tuple[str, str]]:
@@ -187,7 +150,7 @@ class FramePainter:
         self.figure = Figure(figsize=FIGSIZE, dpi=dpi)
         self.canvas = FigureCanvasAgg(self.figure)
         self.axes = self.figure.add_axes(AXES_RECT, anchor="W")
-        _draw_background(self.axes, recorder, scenario, self.radius)
+        _draw_background(self.axes, scenario, self.radius)
         self._add_moving_artists(len(recorder.names))
         self._add_panel()
         self.canvas.draw()
@@ -287,10 +250,8 @@ class FramePainter:
         return Image.fromarray(np.ascontiguousarray(self.render(row)[..., :3]))
 
 
-def _draw_background(axes: Any, recorder: Recorder, scenario: Scenario, radius: float) -> None:
-    """The static part of Fig. 5 on ``axes``: world box, slots R1.., surveillance marks S1.."""
-    from matplotlib.patches import Circle
-
+def _draw_background(axes: Any, scenario: Scenario, radius: float) -> None:
+    """The static part of Fig. 5 on ``axes``: the world box and the mission's marks."""
     width, height = scenario.world
     axes.set_xlim(0, width)
     axes.set_ylim(0, height)
@@ -298,13 +259,34 @@ def _draw_background(axes: Any, recorder: Recorder, scenario: Scenario, radius: 
     axes.set_xlabel("x")
     axes.set_ylabel("y")
     axes.set_title(f"pyAutonomousAgent: {scenario.name}", fontsize=11)
-    slot = SLOT_RADIUS / DRONE_RADIUS * radius
-    for i, (x, y) in enumerate(refuelling_slots(recorder, scenario), start=1):
-        axes.add_patch(Circle((x, y), slot, facecolor=SLOT_COLOUR, edgecolor="none", zorder=1))
-        axes.text(x - 1.2 * slot, y, f"R{i}", fontsize=8, ha="right", va="center", zorder=2)
-    for i, (x, y) in enumerate(surveillance_marks(recorder, scenario), start=1):
-        axes.plot([x], [y], marker="x", color="black", markersize=7, linestyle="none", zorder=2)
-        axes.text(x + radius, y + radius, f"S{i}", fontsize=8, ha="left", va="bottom", zorder=2)
+    draw_marks(axes, scenario.create_mission().marks(), radius)
+
+
+def draw_marks(axes: Any, marks: Iterable[Mark], radius: float) -> None:
+    """Draw a mission's marks (world units) on ``axes``; ``radius`` is a drone's radius,
+    the offset of point labels."""
+    from matplotlib.patches import Circle, Rectangle
+
+    for mark in marks:
+        if mark.shape == "circle":
+            face = mark.colour if mark.fill else "none"
+            edge = "none" if mark.fill else mark.colour
+            axes.add_patch(Circle((mark.x, mark.y), mark.size, facecolor=face, edgecolor=edge,
+                                  zorder=1))  # fmt: skip
+            at, align = (mark.x - 1.2 * mark.size, mark.y), "right"
+        elif mark.shape == "rect":
+            face = mark.colour if mark.fill else "none"
+            axes.add_patch(Rectangle((mark.x, mark.y), mark.width, mark.height, facecolor=face,
+                                     edgecolor=mark.colour, zorder=1))  # fmt: skip
+            at, align = (mark.x, mark.y + mark.height), "left"
+        else:
+            size = mark.size or 7
+            axes.plot([mark.x], [mark.y], marker=mark.symbol, color=mark.colour, markersize=size,
+                      linestyle="none", zorder=2)  # fmt: skip
+            at, align = (mark.x + radius, mark.y + radius), "left"
+        if mark.label:
+            va = "center" if align == "right" else "bottom"
+            axes.text(*at, mark.label, fontsize=8, ha=align, va=va, zorder=2)
 
 
 def draw_frame(recorder: Recorder, scenario: Scenario, row: int = 0, dpi: int = 80) -> Image.Image:

@@ -1,6 +1,26 @@
-"""The simulation loop, its phases and the scenario description."""
+"""The simulation loop, its phases, missions and the scenario description."""
 
-from pyautonomousagent.simulation.run import Simulation
-from pyautonomousagent.simulation.scenario import Parameters, Scenario, ScenarioError
+from pyautonomousagent.simulation.mission import (
+    MISSIONS,
+    MessageType,
+    Mission,
+    WorldObject,
+    register_mission,
+)
+from pyautonomousagent.simulation.params import Param, ScenarioError, Values
+from pyautonomousagent.simulation.run import ENGINES, Simulation
+from pyautonomousagent.simulation.scenario import Scenario
 
-__all__ = ["Parameters", "Scenario", "ScenarioError", "Simulation"]
+__all__ = [
+    "ENGINES",
+    "MISSIONS",
+    "MessageType",
+    "Mission",
+    "Param",
+    "Scenario",
+    "ScenarioError",
+    "Simulation",
+    "Values",
+    "WorldObject",
+    "register_mission",
+]

@@ -1,24 +1,70 @@
-"""Which motion model a run uses: the scenario names the aircraft, the engine the implementation.
+"""Motion models: a registry of the aircraft a scenario can name with ``model:``.
 
-- ``model: drone2d`` (the default): the paper's 2-D drone, whatever the engine.
-- ``model: x8``: the Skywalker X8. The py_trees engine flies the reference implementation
-  (one PyFly simulator per agent, as the paper did); the batched engine flies the vectorised
-  one. ``implementation`` overrides that choice, e.g. to hold the two against each other on
-  the same engine.
+- ``drone2d`` (the default): the paper's 2-D drone, whatever the engine; its parameters
+  (``max_speed``, ``speed_step``, ``turn_step``) are read from ``parameters:``.
+- ``x8``: the Skywalker X8, with its settings in the scenario's ``x8:`` section. The py_trees
+  engine flies the reference implementation (one PyFly simulator per agent, as the paper
+  did); the batched engine flies the vectorised one. ``implementation`` overrides that
+  choice, e.g. to hold the two against each other on the same engine.
+
+A new model is one :class:`MotionModel` record registered in :data:`MOTION_MODELS`.
 """
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
 from importlib.util import find_spec
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, Protocol
+
+import numpy as np
 
 from pyautonomousagent.models.drone2d import Drone2D, DroneParameters
-from pyautonomousagent.models.x8 import X8Settings
-from pyautonomousagent.simulation.scenario import Scenario, ScenarioError
+from pyautonomousagent.models.x8 import TURBULENCE_INTENSITIES, X8Settings
+from pyautonomousagent.registry import Registry
+from pyautonomousagent.simulation.params import Param, Reader, ScenarioError
 from pyautonomousagent.state import Swarm
 
 if TYPE_CHECKING:
-    from pyautonomousagent.simulation.run import Model
+    from pyautonomousagent.simulation.scenario import Scenario
+
+
+class Model(Protocol):
+    """What the loop needs of a motion model."""
+
+    name: str
+
+    def columns(self) -> dict[str, np.ndarray]: ...
+
+    def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None: ...
+
+    def control(self, s: dict[str, np.ndarray]) -> None: ...
+
+
+@dataclass(frozen=True)
+class MotionModel:
+    """A motion model a scenario can name.
+
+    Attributes:
+        name: the scenario's ``model:`` value.
+        build: ``build(scenario, swarm, engine, seed, implementation)`` -> the model, set at
+            the agents' initial state.
+        parameters: its parameters, read from the scenario's ``parameters:``.
+        section: the top-level key of its own settings (e.g. ``"x8"``), or None.
+        read_settings: ``read_settings(reader, mapping or None)`` -> its settings.
+        doc: one line.
+    """
+
+    name: str
+    build: Callable[[Scenario, Swarm, str, int, str | None], Model]
+    parameters: tuple[Param, ...] = ()
+    section: str | None = None
+    read_settings: Callable[[Reader, Any], Any] | None = None
+    doc: str = ""
+
+
+MOTION_MODELS: Registry[MotionModel] = Registry("motion model")
 
 #: X8 implementations: the PyFly reference and the vectorised model.
 X8_IMPLEMENTATIONS = ("pyfly", "vectorised")
@@ -44,23 +90,26 @@ def pyfly_installed() -> bool:
 def build_model(
     scenario: Scenario, swarm: Swarm, engine: str, seed: int, implementation: str | None = None
 ) -> Model:
-    """The motion model of ``scenario`` for ``swarm``, set at the agents' initial state.
+    """The motion model of ``scenario`` for ``swarm`` (see :class:`MotionModel`)."""
+    return MOTION_MODELS.get(scenario.model).build(scenario, swarm, engine, seed, implementation)
 
-    Args:
-        scenario: the scenario (its ``model`` and settings).
-        swarm: the agents after Phase 1; an X8 fills their columns from its state.
-        engine: the decision engine's name.
-        seed: the run's seed (seeds the PyFly simulators).
-        implementation: for the X8, "pyfly" or "vectorised" instead of the engine's default.
+
+def _drone2d(
+    scenario: Scenario, swarm: Swarm, engine: str, seed: int, implementation: str | None
+) -> Model:
+    p = scenario.parameters
+    return Drone2D(DroneParameters(p.max_speed, p.speed_step, p.turn_step), swarm.size)
+
+
+def _x8(
+    scenario: Scenario, swarm: Swarm, engine: str, seed: int, implementation: str | None
+) -> Model:
+    """The X8: vectorised on the batched engine, PyFly on the py_trees engine.
 
     Raises:
-        ScenarioError: the X8 without the ``[x8]`` extra, or with turbulence on the vectorised
-            model.
+        ScenarioError: without the ``[x8]`` extra, or with turbulence on the vectorised model.
     """
-    p = scenario.parameters
-    if scenario.model == "drone2d":
-        return Drone2D(DroneParameters(p.max_speed, p.speed_step, p.turn_step), swarm.size)
-    settings = scenario.x8 or X8Settings()
+    settings = scenario.model_settings or X8Settings()
     if not pyfly_installed():
         raise ScenarioError(
             f"scenario {scenario.name!r} flies the Skywalker X8, which needs the [x8] extra: "
@@ -78,3 +127,51 @@ def build_model(
     from pyautonomousagent.models.x8_pyfly import X8PyFly
 
     return X8PyFly(settings, swarm.columns, seed)
+
+
+def read_x8_settings(reader: Reader, data: Any) -> X8Settings:
+    """The ``x8:`` mapping as :class:`X8Settings` (defaults for a missing key)."""
+    fields = [f.name for f in dataclasses.fields(X8Settings)]
+    given = reader.keys(data if data is not None else {}, "x8", fields, [])
+    values: dict[str, Any] = {}
+    for key, value in given.items():
+        default, path = getattr(X8Settings(), key), f"x8.{key}"
+        if isinstance(default, bool):
+            values[key] = reader.flag(value, path)
+        elif isinstance(default, str):
+            if value not in TURBULENCE_INTENSITIES:
+                raise reader.fail(path, f"one of {', '.join(TURBULENCE_INTENSITIES)}", value)
+            values[key] = value
+        else:
+            above = 0 if key in ("dt", "initial_airspeed") else None
+            values[key] = reader.number(value, path, float, minimum=0, above=above)
+    return X8Settings(**values)
+
+
+_DRONE = DroneParameters()
+MOTION_MODELS.register(
+    "drone2d",
+    MotionModel(
+        "drone2d",
+        _drone2d,
+        (
+            Param("max_speed", _DRONE.max_speed, "world units per iteration",
+                  "upper speed limit", minimum=0.0),
+            Param("speed_step", _DRONE.speed_step, "world units per iteration",
+                  "magnitude of the speed control signal u_v", minimum=0.0),
+            Param("turn_step", _DRONE.turn_step, "degrees per iteration",
+                  "magnitude of the heading control signal u_a", minimum=0.0),
+        ),
+        doc="the paper's 2-D drone (eqs. 1-4) with bang-bang control",
+    ),
+)  # fmt: skip
+MOTION_MODELS.register(
+    "x8",
+    MotionModel(
+        "x8",
+        _x8,
+        section="x8",
+        read_settings=read_x8_settings,
+        doc="the Skywalker X8 6-DOF fixed wing (the [x8] extra)",
+    ),
+)

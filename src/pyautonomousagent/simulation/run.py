@@ -1,7 +1,8 @@
-"""The simulation: the swarm, its world and engine, and the loop in the paper's phase order."""
+"""The simulation: the swarm, its world, mission and engine, and the loop in the paper's order."""
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
@@ -14,17 +15,22 @@ import pyarrow as pa
 from pyautonomousagent.bt.files import is_tree_file, load_tree
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.trees import tree_by_name
-from pyautonomousagent.datalink import Datalink, Delivery, SharedData
+from pyautonomousagent.datalink import Datalink, Delivery
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, PyTreesEngine
 from pyautonomousagent.inputs import shown
 from pyautonomousagent.progress import Progress
+from pyautonomousagent.randomness import CounterRandom
 from pyautonomousagent.recording import Recorder, check_memory, to_table
+from pyautonomousagent.registry import Registry
 from pyautonomousagent.simulation import phases
-from pyautonomousagent.simulation.motion import build_model
+from pyautonomousagent.simulation.mission import MessageType, Mission
+from pyautonomousagent.simulation.motion import Model, build_model
 from pyautonomousagent.simulation.scenario import Scenario, to_mapping
-from pyautonomousagent.state import STATE_COLUMNS, Swarm
+from pyautonomousagent.state import CONTROL_COLUMNS, MOTION_COLUMNS, Swarm
 from pyautonomousagent.world import World
+
+log = logging.getLogger("pyautonomousagent")
 
 
 def _walk(node: Node) -> Iterator[Node]:
@@ -56,6 +62,8 @@ def _checked(
             raise ValueError(f"{name} must be >= {least}, got {value}")
     if not isinstance(engine, str):
         raise TypeError(f"engine must be a name such as 'batched', got {shown(engine)}")
+    if engine != "auto" and engine not in ENGINES:
+        raise ValueError(f"engine: {ENGINES.unknown_message(engine)} (or 'auto')")
     if isinstance(tree, str | Path):
         return scenario, load_tree(tree)
     if tree is not None and not isinstance(tree, Node):
@@ -64,18 +72,6 @@ def _checked(
             f"got {type(tree).__name__}"
         )
     return scenario, tree
-
-
-class Model(Protocol):
-    """What the loop needs of a motion model."""
-
-    name: str
-
-    def columns(self) -> dict[str, np.ndarray]: ...
-
-    def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None: ...
-
-    def control(self, s: dict[str, np.ndarray]) -> None: ...
 
 
 class Engine(Protocol):
@@ -92,7 +88,9 @@ class Engine(Protocol):
     def node_statuses(self) -> np.ndarray: ...
 
 
-ENGINES: dict[str, type[Engine]] = {"pytrees": PyTreesEngine, "batched": BatchedEngine}
+ENGINES: Registry[type[Engine]] = Registry("engine")
+ENGINES.register("pytrees", PyTreesEngine)
+ENGINES.register("batched", BatchedEngine)
 
 
 def choose_engine(tree: Node) -> str:
@@ -115,32 +113,36 @@ class Simulation:
     Attributes:
         scenario: what is simulated.
         seed: the seed of ``rng``.
-        rng: the run's only source of randomness.
+        rng: the run's source of sequential randomness (placement, sensors).
+        mission: the run's mission (its sensors, message handlers, run state).
         swarm: the agents' state and blackboards.
-        world: the shared world (clock, datalink, radiation).
+        world: the shared world (clock, datalink, world objects, counter-based randomness).
         model: the motion model (Phase 2 motion, Phase 4 control).
         engine: the decision engine of Phase 3.
         recorder: Phase 6's preallocated records.
+        handlers: the mission's message types by name.
         inbox: messages delivered in Phase 5, acted on in the next Phase 2.
-        shared: what each agent last heard by "sharing data": ``shared[receiver][sender]``.
         events: alerts and recorded messages, as plain dicts.
-        alerted: agents that have raised their zero-energy alert, shape (N,).
         timings: seconds spent per stage.
     """
 
     scenario: Scenario
     seed: int
     rng: np.random.Generator
+    mission: Mission
     swarm: Swarm
     world: World
     model: Model
     engine: Engine
     recorder: Recorder
-    shared: SharedData
+    handlers: dict[str, MessageType] = field(default_factory=dict)
     inbox: list[Delivery] = field(default_factory=list)
     events: list[dict[str, Any]] = field(default_factory=list)
-    alerted: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     timings: dict[str, float] = field(default_factory=dict)
+    everyone: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    recorded_types: tuple[str, ...] = ()
+    unhandled: set[str] = field(default_factory=set)
+    _alerted: set[tuple[str, int]] = field(default_factory=set)
 
     @classmethod
     def create(
@@ -152,11 +154,11 @@ class Simulation:
         tree: Node | None = None,
         implementation: str | None = None,
     ) -> Simulation:
-        """Phase 1 and set-up: agents, world, engine and recorder for ``scenario``.
+        """Phase 1 and set-up: mission, agents, world, engine and recorder for ``scenario``.
 
         Args:
             scenario: the scenario to run.
-            seed: seed of the run's random generator.
+            seed: seed of the run's random generators.
             engine: name of the decision engine (see :data:`ENGINES`), or "auto": the
                 batched engine unless the tree has hand-written py_trees behaviours.
             record_every: record every K-th iteration (and the initial state).
@@ -172,42 +174,44 @@ class Simulation:
         scenario, tree = _checked(scenario, seed, engine, record_every, tree)
         tree = tree or scenario_tree(scenario)
         engine = choose_engine(tree) if engine == "auto" else engine
-        if engine not in ENGINES:
-            choices = ", ".join(["auto", *ENGINES])
-            raise ValueError(f"engine: unknown engine {shown(engine)}; choose from {choices}")
+        engine_type = ENGINES.get(engine)
         nodes = sum(1 for _ in _walk(tree))
         check_memory(
             scenario.agents,
             scenario.iterations,
             record_every,
-            len(STATE_COLUMNS),
+            len(MOTION_COLUMNS) + len(CONTROL_COLUMNS),
             per_agent=100 + nodes * (2000 if engine == "pytrees" else 16),
         )
         start = time.perf_counter()
         rng = np.random.default_rng(seed)
-        swarm = phases.create_agents(scenario, rng)
+        mission = scenario.create_mission()
         p = scenario.parameters
         world = World(
             width=scenario.world[0],
             height=scenario.world[1],
             datalink=Datalink(p.datalink_range),
-            radiation_sources=scenario.radiation_sources,
-            agent_index={name: i for i, name in enumerate(swarm.names)},
+            objects=scenario.objects,
+            random=CounterRandom(seed),
         )
-        defaults = vars(p)
+        swarm = phases.create_agents(mission, world, rng)
+        world.agent_index = {name: i for i, name in enumerate(swarm.names)}
         model = build_model(scenario, swarm, engine, seed, implementation)
-        decision = ENGINES[engine](tree, swarm, world, defaults)
+        decision = engine_type(tree, swarm, world, vars(p))
+        handlers = {kind.name: kind for kind in mission.message_types()}
         sim = cls(
             scenario=scenario,
             seed=seed,
             rng=rng,
+            mission=mission,
             swarm=swarm,
             world=world,
             model=model,
             engine=decision,
             recorder=Recorder(swarm, scenario.iterations, record_every, model.columns()),
-            shared=SharedData(swarm.size),
-            alerted=np.zeros(swarm.size, dtype=bool),
+            handlers=handlers,
+            everyone=np.ones(swarm.size, dtype=bool),
+            recorded_types=tuple(name for name, kind in handlers.items() if kind.recorded),
         )
         phases.record(sim)  # the initial state, iteration 0
         sim.timings["setup"] = time.perf_counter() - start
@@ -245,6 +249,26 @@ class Simulation:
         bar.close()
         self.timings["simulate"] = self.timings.get("simulate", 0.0) + time.perf_counter() - start
         return self
+
+    def alert(self, rows: np.ndarray, kind: str, message: str) -> None:
+        """Record an ``alert`` event (and log a warning) the first time each agent of ``rows``
+        raises an alert of ``kind`` in this run.
+
+        Args:
+            rows: agent rows, int array.
+            kind: a short name of the alert (e.g. ``"zero energy"``); each agent raises it once.
+            message: what happened, for the event and the log.
+        """
+        for i in np.asarray(rows).tolist():
+            if (kind, i) in self._alerted:
+                continue
+            self._alerted.add((kind, i))
+            name = self.swarm.names[i]
+            self.events.append(
+                {"iteration": self.world.iteration, "event": "alert", "agent": name,
+                 "message": message}
+            )  # fmt: skip
+            log.warning("iteration %d: %s: %s", self.world.iteration, name, message)
 
     def table(self) -> pa.Table:
         """The recorded data: one row per recorded iteration and agent."""

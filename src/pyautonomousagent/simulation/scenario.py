@@ -1,53 +1,68 @@
-"""A scenario: agents, world, tree and parameters, validated from a plain mapping (YAML).
+"""A scenario: mission, agents, world, tree and parameters, validated from a plain mapping (YAML).
 
-Every field is checked with a message that names it: a negative count, a string where a
-number belongs or an unknown key raise :class:`ScenarioError` with one clear line.
+The generic fields are checked here; the ``parameters:`` against the parameters the core, the
+motion model and the mission declare, and the ``world:`` objects against the mission's
+:class:`~pyautonomousagent.simulation.mission.WorldObject` list. Every error is a
+:class:`ScenarioError` with one line naming the field.
+
+A scenario file::
+
+    name: gathering
+    mission: gathering          # a registered mission, or mission.py next to this file
+    tree: gathering.xml
+    agents: 4
+    iterations: 8000
+    world:
+      size: [100, 100]          # width, height (world units)
+      refueling_positions: [[20, 65], [20, 55]]   # the mission's world objects
+    parameters:
+      low_energy_threshold: 40
 """
 
 from __future__ import annotations
 
-import dataclasses
-import difflib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
-from pyautonomousagent.inputs import InputError, finite, shown
-from pyautonomousagent.models.x8 import TURBULENCE_INTENSITIES, X8Settings
-from pyautonomousagent.sensors import RadiationSource
+from pyautonomousagent.simulation.mission import Mission, resolve_mission
+from pyautonomousagent.simulation.motion import MOTION_MODELS, MotionModel
+from pyautonomousagent.simulation.params import (
+    Param,
+    Point,
+    Reader,
+    ScenarioError,
+    Values,
+    plain,
+)
 
-Point = tuple[float, float]
+#: Parameters of the core itself (the datalink is part of the core).
+CORE_PARAMETERS = (
+    Param(
+        "datalink_range",
+        1000.0,
+        "world units",
+        "largest sender-receiver distance a message crosses",
+        minimum=0.0,
+    ),
+)
 
-#: Motion models a scenario can name: the paper's 2-D drone and the Skywalker X8 (6-DOF).
-MODELS = ("drone2d", "x8")
-
-
-class ScenarioError(InputError):
-    """Bad scenario input; the message names the field and what it must be."""
-
-
-@dataclass(frozen=True)
-class Parameters:
-    """Model and behaviour parameters; leaf ports take their defaults from here.
-
-    Speeds are world units per iteration, rates percent per iteration, levels percent.
-    """
-
-    reference_speed: float = 0.1
-    max_speed: float = 0.1
-    speed_step: float = 0.1
-    turn_step: float = 1.0
-    energy_use: float = 0.05
-    refuel_rate: float = 2.0
-    low_energy_threshold: float = 40.0
-    destination_tolerance: float = 0.5
-    radiation_damage_factor: float = 0.1
-    radiation_threshold: float = 0.0
-    damage_limit: float = 70.0
-    repair_rate: float = 1.0
-    datalink_range: float = 1000.0
-    gathering_iteration: int = 5000
-    gathering_sender: str = "drone1"
+#: The top-level keys of a scenario file other than the motion model's settings section.
+FIELDS = (
+    "name",
+    "description",
+    "mission",
+    "tree",
+    "agents",
+    "iterations",
+    "world",
+    "initial_heading",
+    "frame_every",
+    "parameters",
+    "model",
+)
+REQUIRED = ("name", "mission", "tree", "agents", "iterations", "world")
 
 
 @dataclass(frozen=True)
@@ -57,52 +72,56 @@ class Scenario:
     Attributes:
         name: registry name, e.g. ``"gathering"``.
         description: one line for ``pyaa scenarios``.
+        mission: the mission as the file names it (files and folders made absolute).
         tree: the behaviour tree: a tree file (.xml, .yaml; relative paths are resolved
             against the scenario file by :func:`pyautonomousagent.scenarios.load`) or a
             built-in tree name (see :mod:`pyautonomousagent.bt.trees`).
-        agents: number of agents N (named ``drone1``..``droneN``).
+        agents: number of agents N.
         iterations: iterations to simulate.
         world: (width, height) in world units.
-        refueling_positions: refuelling slots, used in turn by agents 1, 2, ... (cycled).
-        surveillance_positions: surveillance positions, used in turn (cycled); may be
-            left out when ``patrol_positions`` is given.
-        patrol_positions: the two positions patrolled by every agent, or (); the first is
-            every agent's first surveillance position.
+        objects: the mission's world objects, name -> validated value.
         initial_heading: degrees clockwise from north, or "random" (drawn from the seed).
         frame_every: iterations between animation frames.
-        radiation_sources: sources of the radiation sensor.
-        parameters: model and behaviour parameters.
-        model: the motion model, one of :data:`MODELS`.
-        x8: the X8's settings when ``model`` is "x8", else None.
+        parameters: the core's, the motion model's and the mission's parameters.
+        model: the motion model, a name of :data:`MOTION_MODELS`.
+        model_settings: the motion model's own settings section (e.g. ``x8:``), or None.
+        mission_type: the mission class (resolved from ``mission``).
     """
 
     name: str
     description: str
+    mission: str
     tree: str
     agents: int
     iterations: int
     world: Point
-    refueling_positions: tuple[Point, ...]
-    surveillance_positions: tuple[Point, ...] = ()
-    patrol_positions: tuple[Point, ...] = ()
+    objects: Values = field(default_factory=Values)
     initial_heading: float | str = 0.0
     frame_every: int = 10
-    radiation_sources: tuple[RadiationSource, ...] = ()
-    parameters: Parameters = field(default_factory=Parameters)
+    parameters: Values = field(default_factory=Values)
     model: str = "drone2d"
-    x8: X8Settings | None = None
+    model_settings: Any = None
+    mission_type: type[Mission] = field(default=Mission, compare=False, repr=False)
 
     @classmethod
-    def from_mapping(cls, data: Any, source: str = "scenario") -> Scenario:
+    def from_mapping(
+        cls, data: Any, source: str = "scenario", folder: Path | None = None
+    ) -> Scenario:
         """Validate a mapping (a parsed YAML file) into a scenario.
+
+        Args:
+            data: the parsed file.
+            source: the file's name, for messages.
+            folder: the file's folder: a mission file (``mission: mine.py``) is found there.
 
         Raises:
             ScenarioError: naming ``source`` and the offending field.
         """
-        return _Reader(source).scenario(data)
+        return _read(Reader(source), data, folder)
 
     def with_overrides(self, **changes: Any) -> Scenario:
-        """A copy with top-level fields or ``parameters`` keys replaced, validated again.
+        """A copy with top-level fields, ``parameters`` keys or world objects replaced,
+        validated again.
 
         ``None`` values are ignored, so CLI options that were not given change nothing.
         """
@@ -112,181 +131,135 @@ class Scenario:
                 continue
             if key in data["parameters"] and key not in data:
                 data["parameters"][key] = value
+            elif key in data["world"] and key not in data:
+                data["world"][key] = value
             else:
                 data[key] = value
-        return Scenario.from_mapping(data, source=f"scenario {self.name!r}")
+        return _read(Reader(f"scenario {self.name!r}"), data, None)
+
+    def create_mission(self) -> Mission:
+        """A new instance of the scenario's mission, for one run."""
+        return self.mission_type(self)
 
 
 def to_mapping(scenario: Scenario) -> dict[str, Any]:
     """The scenario as plain data (what :meth:`Scenario.from_mapping` reads back)."""
-    data = dataclasses.asdict(scenario)
-    data["radiation_sources"] = [dataclasses.asdict(s) for s in scenario.radiation_sources]
-    for key in ("world", "refueling_positions", "surveillance_positions", "patrol_positions"):
-        data[key] = _lists(data[key])
+    data: dict[str, Any] = {
+        "name": scenario.name,
+        "description": scenario.description,
+        "mission": scenario.mission,
+        "tree": scenario.tree,
+        "agents": scenario.agents,
+        "iterations": scenario.iterations,
+        "world": {"size": list(scenario.world), **plain(scenario.objects)},
+        "initial_heading": scenario.initial_heading,
+        "frame_every": scenario.frame_every,
+        "parameters": plain(scenario.parameters),
+        "model": scenario.model,
+    }
+    section = MOTION_MODELS.get(scenario.model).section
+    if section and scenario.model_settings is not None:
+        data[section] = plain(scenario.model_settings)
     return data
 
 
-def _lists(value: Any) -> Any:
-    return [_lists(v) for v in value] if isinstance(value, list | tuple) else value
+def parameter_list(scenario: Scenario) -> list[tuple[str, Param]]:
+    """(owner, parameter) of every parameter a scenario has: core, motion model, mission."""
+    model = MOTION_MODELS.get(scenario.model)
+    return [
+        *(("core", p) for p in CORE_PARAMETERS),
+        *((f"model {model.name}", p) for p in model.parameters),
+        *((f"mission {scenario.mission_type.name}", p) for p in scenario.mission_type.parameters),
+    ]
 
 
-class _Reader:
-    """Checks one field at a time, naming it in every error."""
+def _read(reader: Reader, data: Any, folder: Path | None) -> Scenario:
+    if not isinstance(data, Mapping):
+        raise reader.fail("the file", "a mapping of keys to values", data)
+    model_name = data.get("model", "drone2d")
+    if model_name not in MOTION_MODELS:
+        raise ScenarioError(f"{reader.source}: model: {MOTION_MODELS.unknown_message(model_name)}")
+    model = MOTION_MODELS.get(model_name)
+    allowed = [*FIELDS, *([model.section] if model.section else [])]
+    d = reader.keys(data, "", allowed, list(REQUIRED))
+    mission_ref = reader.text(d["mission"], "mission")
+    mission = resolve_mission(mission_ref, folder)
+    if folder is not None and ".py" in mission_ref:
+        file, sep, rest = mission_ref.partition(":")
+        mission_ref = str((folder / file).resolve()) + sep + rest
+    size, objects = _world(reader, d["world"], mission)
+    scenario = Scenario(
+        name=_name(reader, d["name"]),
+        description=str(d.get("description", "")),
+        mission=mission_ref,
+        tree=reader.text(d["tree"], "tree"),
+        agents=reader.number(d["agents"], "agents", int, minimum=1),
+        iterations=reader.number(d["iterations"], "iterations", int, minimum=1),
+        world=size,
+        objects=objects,
+        initial_heading=_heading(reader, d.get("initial_heading", 0.0)),
+        frame_every=reader.number(d.get("frame_every", 10), "frame_every", int, minimum=1),
+        parameters=reader.params(
+            d.get("parameters"), [*CORE_PARAMETERS, *model.parameters, *mission.parameters]
+        ),
+        model=model.name,
+        model_settings=_settings(reader, model, d),
+        mission_type=mission,
+    )
+    mission.check(scenario, reader)
+    return scenario
 
-    def __init__(self, source: str) -> None:
-        self.source = source
 
-    def fail(self, path: str, must: str, value: Any) -> ScenarioError:
-        return ScenarioError(f"{self.source}: {path} must be {must}, got {shown(value)}")
+def _name(reader: Reader, value: Any) -> str:
+    """A scenario name: it names the run's folder, so no path separators or dots first."""
+    name = reader.text(value, "name")
+    if "/" in name or "\\" in name or name.startswith(".") or len(name) > 100:
+        raise reader.fail("name", "a plain name (no '/', '\\' or leading '.')", value)
+    return name
 
-    def keys(self, data: Any, path: str, allowed: list[str], required: list[str]) -> dict[str, Any]:
-        if not isinstance(data, Mapping):
-            raise self.fail(path or "the file", "a mapping of keys to values", data)
-        for key in data:
-            if key not in allowed:
-                close = difflib.get_close_matches(str(key), allowed, n=1)
-                hint = f" (did you mean {close[0]!r}?)" if close else ""
-                where = f"{path}.{key}" if path else str(key)
-                raise ScenarioError(f"{self.source}: unknown key {shown(where)}{hint}")
-        for key in required:
-            if key not in data:
-                raise ScenarioError(
-                    f"{self.source}: missing key {f'{path}.{key}' if path else key!r}"
-                )
-        return dict(data)
 
-    def number(
-        self,
-        value: Any,
-        path: str,
-        kind: type = float,
-        minimum: float | None = None,
-        above: float | None = None,
-    ) -> Any:
-        whole = kind is int
-        must = "a whole number" if whole else "a number"
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise self.fail(path, must, value)
-        if not finite(value):
-            raise self.fail(path, f"a finite {must[2:]}", value)
-        if whole and float(value) != int(value):
-            raise self.fail(path, must, value)
-        if minimum is not None and value < minimum:
-            raise self.fail(path, f"{must} >= {minimum:g}", value)
-        if above is not None and value <= above:
-            raise self.fail(path, f"{must} > {above:g}", value)
-        return kind(value)
+def _heading(reader: Reader, value: Any) -> float | str:
+    if value == "random":
+        return "random"
+    return reader.number(value, "initial_heading")
 
-    def text(self, value: Any, path: str) -> str:
-        if not isinstance(value, str) or not value:
-            raise self.fail(path, "a non-empty string", value)
-        return value
 
-    def point(self, value: Any, path: str) -> Point:
-        if not isinstance(value, list | tuple) or len(value) != 2:
-            raise self.fail(path, "a pair [x, y]", value)
-        return (self.number(value[0], f"{path}[0]"), self.number(value[1], f"{path}[1]"))
+def _world(reader: Reader, value: Any, mission: type[Mission]) -> tuple[Point, Values]:
+    """``world:`` as (width, height) and the mission's objects; ``[w, h]`` is short for
+    ``{size: [w, h]}``."""
+    if isinstance(value, list | tuple):
+        value = {"size": value}
+    kinds = {o.name: o for o in mission.world_objects}
+    required = ["size", *(o.name for o in kinds.values() if o.required)]
+    given = reader.keys(value, "world", ["size", *kinds], required)
+    width, height = reader.point(given["size"], "world.size")
+    if width <= 0 or height <= 0:
+        raise reader.fail("world.size", "a positive [width, height]", given["size"])
+    objects = {
+        name: kind.read(reader, given[name], f"world.{name}") if name in given else kind.default
+        for name, kind in kinds.items()
+    }
+    return (width, height), Values(**objects)
 
-    def points(
-        self, value: Any, path: str, least: int = 1, most: int | None = None
-    ) -> tuple[Point, ...]:
-        if (
-            not isinstance(value, list | tuple)
-            or len(value) < least
-            or (most and len(value) > most)
-        ):
-            count = f"exactly {least}" if least == most else f"at least {least}"
-            raise self.fail(path, f"a list of {count} [x, y] pairs", value)
-        return tuple(self.point(p, f"{path}[{i}]") for i, p in enumerate(value))
 
-    def parameters(self, data: Any) -> Parameters:
-        fields = {f.name: f for f in dataclasses.fields(Parameters)}
-        given = self.keys(data, "parameters", list(fields), [])
-        values: dict[str, Any] = {}
-        for key, value in given.items():
-            default = getattr(Parameters(), key)
-            path = f"parameters.{key}"
-            if isinstance(default, str):
-                values[key] = self.text(value, path)
-            else:
-                values[key] = self.number(value, path, type(default), minimum=0)
-        return Parameters(**values)
+def _settings(reader: Reader, model: MotionModel, d: dict[str, Any]) -> Any:
+    if model.read_settings is None:
+        return None
+    return model.read_settings(reader, d.get(model.section or ""))
 
-    def x8_settings(self, data: Any, model: str) -> X8Settings | None:
-        """The ``x8`` mapping as :class:`X8Settings` (defaults for a missing key), or None."""
-        if model != "x8":
-            if data is not None:
-                raise self.fail("model", '"x8" when x8 settings are given', model)
-            return None
-        fields = {f.name: f for f in dataclasses.fields(X8Settings)}
-        given = self.keys(data if data is not None else {}, "x8", list(fields), [])
-        values: dict[str, Any] = {}
-        for key, value in given.items():
-            default, path = getattr(X8Settings(), key), f"x8.{key}"
-            if isinstance(default, bool):
-                if not isinstance(value, bool):
-                    raise self.fail(path, "true or false", value)
-                values[key] = value
-            elif isinstance(default, str):
-                if value not in TURBULENCE_INTENSITIES:
-                    raise self.fail(path, f"one of {', '.join(TURBULENCE_INTENSITIES)}", value)
-                values[key] = value
-            else:
-                above = 0 if key in ("dt", "initial_airspeed") else None
-                values[key] = self.number(value, path, float, minimum=0, above=above)
-        return X8Settings(**values)
 
-    def radiation(self, data: Any) -> tuple[RadiationSource, ...]:
-        if not isinstance(data, list):
-            raise self.fail("radiation_sources", "a list", data)
-        sources = []
-        for i, item in enumerate(data):
-            path = f"radiation_sources[{i}]"
-            item = self.keys(item, path, ["x", "y", "range", "active"], ["x", "y", "range"])
-            active = item.get("active", False)
-            if not isinstance(active, bool):
-                raise self.fail(f"{path}.active", "true or false", active)
-            x, y = self.number(item["x"], f"{path}.x"), self.number(item["y"], f"{path}.y")
-            sources.append(
-                RadiationSource(x, y, self.number(item["range"], f"{path}.range", above=0), active)
-            )
-        return tuple(sources)
+def check_point_in_world(reader: Reader, scenario: Scenario, point: Point, path: str) -> None:
+    """Raise if ``point`` lies outside ``[0, width] x [0, height]``."""
+    width, height = scenario.world
+    if not (0.0 <= point[0] <= width and 0.0 <= point[1] <= height):
+        raise reader.fail(path, f"inside the world [0, {width:g}] x [0, {height:g}]", list(point))
 
-    def scenario(self, data: Any) -> Scenario:
-        allowed = [f.name for f in dataclasses.fields(Scenario)]
-        required = ["name", "tree", "agents", "iterations", "world", "refueling_positions"]
-        d = self.keys(data, "", allowed, required)
-        heading = d.get("initial_heading", 0.0)
-        if heading != "random":
-            heading = self.number(heading, "initial_heading")
-        world = self.point(d["world"], "world")
-        if min(world) <= 0:
-            raise self.fail("world", "a positive [width, height]", d["world"])
-        return Scenario(
-            name=self.text(d["name"], "name"),
-            description=str(d.get("description", "")),
-            tree=self.text(d["tree"], "tree"),
-            agents=self.number(d["agents"], "agents", int, minimum=1),
-            iterations=self.number(d["iterations"], "iterations", int, minimum=1),
-            world=world,
-            refueling_positions=self.points(d["refueling_positions"], "refueling_positions"),
-            surveillance_positions=self.points(
-                d.get("surveillance_positions"), "surveillance_positions"
-            )
-            if d.get("surveillance_positions") or not d.get("patrol_positions")
-            else (),
-            patrol_positions=self.points(d["patrol_positions"], "patrol_positions", 2, 2)
-            if d.get("patrol_positions")
-            else (),
-            initial_heading=heading,
-            frame_every=self.number(d.get("frame_every", 10), "frame_every", int, minimum=1),
-            radiation_sources=self.radiation(d.get("radiation_sources", [])),
-            parameters=self.parameters(d.get("parameters", {})),
-            model=self.model(d.get("model", "drone2d")),
-            x8=self.x8_settings(d.get("x8"), d.get("model", "drone2d")),
-        )
 
-    def model(self, value: Any) -> str:
-        if value not in MODELS:
-            raise self.fail("model", f"one of {', '.join(MODELS)}", value)
-        return str(value)
+__all__ = [
+    "CORE_PARAMETERS",
+    "Scenario",
+    "ScenarioError",
+    "check_point_in_world",
+    "parameter_list",
+    "to_mapping",
+]

@@ -1,4 +1,4 @@
-"""The leaf-node library: the paper's Table 1, the patrol nodes and the radiation/damage nodes.
+"""The paper's drone leaves: Table 1, the patrol nodes and the radiation/damage nodes.
 
 Every leaf reads and writes an :class:`~pyautonomousagent.state.AgentView` with array
 expressions, so the same code runs for one agent (py_trees engine) or many at once.
@@ -12,9 +12,12 @@ from typing import Any
 from pyautonomousagent.arrays import bearing, choose, maximum, minimum
 from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS, status_if, success_if
-from pyautonomousagent.datalink import GATHERING, SHARING_DATA
 from pyautonomousagent.state import AgentView
 from pyautonomousagent.world import World
+
+#: The message types the drones send.
+SHARING_DATA = "sharing data"
+GATHERING = "gathering"
 
 DESTINATION = ("x_current_destination_position", "y_current_destination_position")
 SURVEILLANCE = ("x_surveillance_position", "y_surveillance_position")

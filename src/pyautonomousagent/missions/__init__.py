@@ -1,0 +1,28 @@
+"""The built-in missions, each in its own folder with its scenario files and tree files.
+
+- ``gathering`` (the paper's Fig. 6) and ``patrol`` (Fig. 12; also flown by the Skywalker X8
+  in ``x8-patrol``) share the paper's drones (:mod:`pyautonomousagent.missions.drones`);
+- ``vacuum``: the paper's Fig. 2 robot with a sonar;
+- ``radiation-search``: drones that wander, find a radiation source and call the others.
+
+Each is written with the public API only (:mod:`pyautonomousagent.simulation.mission`,
+:mod:`pyautonomousagent.bt.leaf`); importing this package registers them and their scenarios.
+"""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+from pyautonomousagent.missions import drones, gathering, patrol
+from pyautonomousagent.scenarios import register
+
+__all__ = ["drones", "gathering", "patrol"]
+
+_SCENARIO_FILES = {
+    "gathering": "gathering/gathering.yaml",
+    "patrol": "patrol/patrol.yaml",
+    "x8-patrol": "patrol/x8-patrol.yaml",
+}
+for _name, _file in _SCENARIO_FILES.items():
+    register(_name, Path(str(resources.files(__name__) / _file)))

@@ -1,0 +1,95 @@
+"""The paper's first scenario (Results, Fig. 5-10): drones orbit their surveillance positions,
+refuel, share their state, and gather on one drone's position when it orders it."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+
+from pyautonomousagent.datalink import Delivery
+from pyautonomousagent.missions.drones.leaves import GATHERING
+from pyautonomousagent.missions.drones.mission import DroneMission, cycled, read_points
+from pyautonomousagent.render.marks import Mark
+from pyautonomousagent.simulation import (
+    MessageType,
+    Param,
+    Simulation,
+    WorldObject,
+    register_mission,
+)
+from pyautonomousagent.simulation.params import Reader
+from pyautonomousagent.simulation.scenario import Scenario, check_point_in_world
+from pyautonomousagent.state import Swarm
+from pyautonomousagent.world import World
+
+
+@register_mission
+class GatheringMission(DroneMission):
+    """Fig. 6's mission: surveillance positions per drone and the "gathering" order."""
+
+    name = "gathering"
+    description = "drones orbit their surveillance positions, refuel, share data and gather"
+    parameters: ClassVar[tuple[Param, ...]] = (
+        *DroneMission.parameters,
+        Param("gathering_iteration", 5000, "iteration",
+              "when the sender orders the gathering", minimum=0),
+        Param("gathering_sender", "drone1", "", "the drone that orders the gathering"),
+    )  # fmt: skip
+    world_objects: ClassVar[tuple[WorldObject, ...]] = (
+        *DroneMission.world_objects,
+        WorldObject("surveillance_positions", read_points,
+                    doc="surveillance positions [x, y], used in turn by drones 1, 2, ..."),
+    )  # fmt: skip
+
+    @classmethod
+    def check(cls, scenario: Scenario, reader: Reader) -> None:
+        """The sender is one of the drones; positions lie in the world."""
+        sender = scenario.parameters.gathering_sender
+        number = sender.removeprefix(cls.agent_prefix)  # no list of names: agents may be 10**12
+        if not (number.isdigit() and number[0] != "0" and int(number) <= scenario.agents):
+            raise reader.fail(
+                "parameters.gathering_sender",
+                f"one of the drones (drone1..drone{scenario.agents})",
+                sender,
+            )
+        for key in ("refueling_positions", "surveillance_positions"):
+            for i, point in enumerate(getattr(scenario.objects, key)):
+                check_point_in_world(reader, scenario, point, f"world.{key}[{i}]")
+
+    def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
+        """On the refuelling slots; the first destination is the own surveillance position."""
+        super().place(swarm, world, rng)
+        self.set_surveillance(
+            swarm, cycled(self.scenario.objects.surveillance_positions, swarm.size)
+        )
+
+    def message_types(self) -> list[MessageType]:
+        """Sharing data, and "gathering" (recorded): the receiver adopts the position."""
+        return [
+            *super().message_types(),
+            MessageType(GATHERING, self.adopt_gathering_position, recorded=True,
+                        doc="x, y: the position to gather on"),
+        ]  # fmt: skip
+
+    def adopt_gathering_position(self, sim: Simulation, delivery: Delivery) -> None:
+        """The receiver's surveillance position becomes the message's position (the last
+        one, in canonical order, if several arrived)."""
+        bb = sim.swarm.blackboard
+        receivers, rows = delivery.pairs(sim.swarm.size)
+        last = receivers.size - 1 - np.unique(receivers[::-1], return_index=True)[1]
+        data = delivery.messages.data
+        bb["x_surveillance_position"][receivers[last]] = data["x"][rows[last]]
+        bb["y_surveillance_position"][receivers[last]] = data["y"][rows[last]]
+
+    def marks(self) -> list[Mark]:
+        """Slots R1.., surveillance positions S1.."""
+        points = self.scenario.objects.surveillance_positions
+        return [*super().marks(), *self.surveillance_marks(points)]
+
+    def gathering_point(self) -> Any:
+        """The sender's surveillance position (where everyone gathers), or None."""
+        names = [f"{self.agent_prefix}{i + 1}" for i in range(self.scenario.agents)]
+        index = names.index(self.params.gathering_sender)
+        points = self.scenario.objects.surveillance_positions
+        return points[index % len(points)]

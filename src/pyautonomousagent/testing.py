@@ -1,0 +1,200 @@
+"""Test tools for a user's leaves and missions — the ones the project's own tests use.
+
+- :class:`Harness`: a tree on one engine for a few agents, ticked one iteration at a time, with
+  every node's status after every tick;
+- :func:`check_engines_agree`: run a tree on both engines side by side and fail at the first
+  node status, state or blackboard value, or event that differs;
+- :func:`check_leaf`: prove a leaf type gives the same results on both engines when it is
+  ticked for all, most or few of the agents;
+- :func:`scoped_registrations`: whatever a test registers (leaves, missions, scenarios, motion
+  models, engines, mission files) is gone after the block.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterator
+from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf
+from pyautonomousagent.bt.spec import Node, leaf, reactive_sequence
+from pyautonomousagent.bt.status import FAILURE, SUCCESS
+from pyautonomousagent.datalink import Datalink
+from pyautonomousagent.scenarios import SCENARIOS, load
+from pyautonomousagent.simulation import phases
+from pyautonomousagent.simulation.mission import MISSIONS
+from pyautonomousagent.simulation.motion import MOTION_MODELS
+from pyautonomousagent.simulation.run import ENGINES, Engine, Simulation, scenario_tree
+from pyautonomousagent.simulation.scenario import Scenario
+from pyautonomousagent.state import Swarm
+from pyautonomousagent.world import World
+
+__all__ = [
+    "Harness",
+    "check_engines_agree",
+    "check_leaf",
+    "make_harness",
+    "scoped_registrations",
+]
+
+
+@dataclass
+class Harness:
+    """A tree on one engine for N agents, ticked one iteration at a time."""
+
+    tree: Node
+    swarm: Swarm
+    world: World
+    engine: Engine
+
+    def tick(self) -> np.ndarray:
+        """Advance the clock one iteration, tick every agent once; the node statuses,
+        shape (nodes in tick order, N), int8."""
+        self.world.iteration += 1
+        self.engine.tick()
+        return self.engine.node_statuses()
+
+    def names(self) -> list[str]:
+        """The node names in the order of :meth:`tick`'s rows."""
+        return [node.name for node in self.tree.walk()]
+
+    def statuses(self, agent: int = 0) -> dict[str, int]:
+        """Node name -> status code of one agent, after the last tick."""
+        column = self.engine.node_statuses()[:, agent]
+        return dict(zip(self.names(), (int(c) for c in column), strict=True))
+
+
+def make_harness(
+    tree: Node, agents: int = 1, scenario: str | Scenario = "gathering", engine: str = "pytrees"
+) -> Harness:
+    """A :class:`Harness` for ``tree`` with ``agents`` agents placed by the scenario's mission
+    (its blackboard, columns and parameters), no motion: only the tree runs."""
+    scenario = _scenario(scenario).with_overrides(agents=agents)
+    mission = scenario.create_mission()
+    link = Datalink(scenario.parameters.datalink_range)
+    world = World(*scenario.world, datalink=link, objects=scenario.objects)
+    swarm = phases.create_agents(mission, world, np.random.default_rng(0))
+    world.agent_index = {name: i for i, name in enumerate(swarm.names)}
+    decision = ENGINES.get(engine)(tree, swarm, world, vars(scenario.parameters))
+    return Harness(tree, swarm, world, decision)
+
+
+def check_engines_agree(
+    tree: Node | None = None,
+    scenario: str | Scenario = "gathering",
+    seed: int = 0,
+    **overrides: Any,
+) -> int:
+    """Run ``tree`` (default: the scenario's) on the pytrees and batched engines side by side.
+
+    Args:
+        tree: the tree, or None for the scenario's own.
+        scenario: a scenario name, file or object.
+        seed: the run's seed.
+        overrides: scenario changes, e.g. ``agents=6, iterations=200``.
+
+    Returns:
+        The number of iterations compared.
+
+    Raises:
+        AssertionError: naming the first iteration, node or column, and agent that differ.
+    """
+    scenario = _scenario(scenario).with_overrides(**overrides)
+    a, b = (Simulation.create(scenario, seed=seed, engine=e, tree=tree) for e in ENGINE_PAIR)
+    nodes = [node.name for node in (tree or scenario_tree(scenario)).walk()]
+    for _ in range(scenario.iterations):
+        a.step()
+        b.step()
+        _same(a.engine.node_statuses(), b.engine.node_statuses(), a, nodes, "node")
+    for key in a.recorder.columns:
+        _same(a.recorder.column(key), b.recorder.column(key), a, None, key)
+    if a.events != b.events:
+        raise AssertionError(f"events differ: {a.events[:3]} (pytrees) vs {b.events[:3]} (batched)")
+    return scenario.iterations
+
+
+ENGINE_PAIR = ("pytrees", "batched")
+
+
+def check_leaf(
+    leaf_type: type[Leaf],
+    scenario: str | Scenario = "gathering",
+    agents: int = 8,
+    iterations: int = 60,
+    seed: int = 0,
+    **ports: Any,
+) -> int:
+    """Check that a leaf type runs alike on both engines, ticked for all, most or few agents.
+
+    The leaf sits behind a gate that lets a random subset of the agents through on each tick
+    (all of them, most of them, or a few: the batched engine's three ways of calling a leaf),
+    in the scenario's world, and :func:`check_engines_agree` compares everything.
+
+    Raises:
+        TypeError: ``leaf_type`` is not a registered :class:`Leaf` subclass.
+        AssertionError: the engines disagree (naming where).
+    """
+    if not (isinstance(leaf_type, type) and issubclass(leaf_type, Leaf)):
+        raise TypeError(f"check_leaf takes a Leaf subclass, got {leaf_type!r}")
+    if LEAF_TYPES.get(leaf_type.type_name) is not leaf_type:
+        raise TypeError(f"{leaf_type.__name__} is not registered; decorate it with @register_leaf")
+    rng = np.random.default_rng(seed)
+    shares = rng.choice([1.0, 0.8, 0.15], size=iterations)
+    gate = np.where(rng.random((iterations, agents)) < shares[:, None], SUCCESS, FAILURE)
+    tree = reactive_sequence(
+        "check_leaf",
+        leaf("Scripted", "gate", statuses=gate.tolist()),
+        leaf(leaf_type.type_name, "leaf_under_test", **ports),
+    )
+    return check_engines_agree(tree, scenario, seed, agents=agents, iterations=iterations)
+
+
+@contextmanager
+def scoped_registrations() -> Iterator[None]:
+    """Within the block, register freely; afterwards every registry (leaf types, missions,
+    scenarios, motion models, engines) is as before and mission files imported in the block
+    are forgotten."""
+    modules = set(sys.modules)
+    engine_leaves = set(ENGINE_LEAF_TYPES)
+    with ExitStack() as stack:
+        for registry in (LEAF_TYPES, MISSIONS, SCENARIOS, MOTION_MODELS, ENGINES):
+            stack.enter_context(registry.scoped())
+        try:
+            yield
+        finally:
+            ENGINE_LEAF_TYPES.intersection_update(engine_leaves)
+            for name in set(sys.modules) - modules:
+                if name.startswith("pyautonomousagent_user_"):
+                    del sys.modules[name]
+
+
+def _scenario(scenario: str | Scenario) -> Scenario:
+    if isinstance(scenario, Scenario):
+        return scenario
+    if isinstance(scenario, str):
+        return load(scenario)
+    raise TypeError(f"scenario must be a name, a .yaml file or a Scenario, got {scenario!r}")
+
+
+
+
+def _same(
+    a: np.ndarray, b: np.ndarray, sim: Simulation, rows: list[str] | None, what: str
+) -> None:
+    """Raise at the first entry where ``a`` (pytrees) and ``b`` (batched) differ."""
+    if np.array_equal(a, b, equal_nan=a.dtype.kind == "f"):
+        return
+    diff = np.argwhere(~((a == b) | ((a != a) & (b != b))))[0]
+    row, agent = int(diff[0]), int(diff[1])
+    if rows is not None:
+        where = f"iteration {sim.world.iteration}, node {rows[row]!r}"
+    else:
+        where = f"column {what!r}, record {row} (iteration {int(sim.recorder.iterations[row])})"
+    raise AssertionError(
+        f"engines differ at {where}, agent {sim.swarm.names[agent]}: "
+        f"{a[row, agent]!r} (pytrees) vs {b[row, agent]!r} (batched)"
+    )

@@ -1,0 +1,137 @@
+"""Run a tree description in the real BehaviorTree.CPP (behaviortreepy) and in our engines,
+with scripted leaves that log their executions and halts, one log per agent.
+
+Our side: a test leaf type ``Logged`` (registered while :func:`logged_leaf_type` is active)
+returns ``statuses[tick][agent]`` and appends ``name`` (executed) or ``~name`` (halted) to its
+agent's log. BT.CPP side: one tree per agent, every leaf a stateful action dispatching on its
+node name to the same script; leaves named ``c...`` never run and are conditions there
+(executed on every tick, as BT.CPP means conditions to be). One iteration of ours is one
+``tick_exactly_once()`` there.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from pyautonomousagent.bt.document import document_from_node
+from pyautonomousagent.bt.leaf import LEAF_TYPES, Leaf
+from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
+from pyautonomousagent.bt.xml_format import write_xml
+from pyautonomousagent.state import AgentView
+from pyautonomousagent.world import World
+
+from .conftest import make_harness
+
+Logs = list[list[list[str]]]  # [agent][tick] -> leaf events in order
+
+
+class Logged(Leaf):
+    """Returns ``statuses[iteration - 1][agent]`` and logs each execution and halt."""
+
+    type_name = "Logged"
+
+    @classmethod
+    def create(cls, params: Mapping[str, Any], defaults: Mapping[str, Any], where: str) -> Leaf:
+        return cls(**params)
+
+    @classmethod
+    def port_names(cls) -> list[str]:
+        return ["statuses", "log", "name"]
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        rows = np.atleast_1d(agents.indices)
+        for row in rows:
+            self.log[row].append(self.name)
+        return agents.pick(np.asarray(self.statuses[world.iteration - 1], dtype=np.int8))
+
+    def halt(self, agents: AgentView, world: World) -> None:
+        for row in np.atleast_1d(agents.indices):
+            self.log[row].append("~" + self.name)
+
+
+@contextmanager
+def logged_leaf_type() -> Iterator[None]:
+    """Register the ``Logged`` leaf type for the duration of the block."""
+    with LEAF_TYPES.override("Logged", Logged):
+        yield
+
+
+def with_logged_leaves(root: Node, table: dict[str, list[list[int]]], log: list) -> Node:
+    """``root`` with each leaf replaced by a Logged leaf of its name."""
+    if root.type == "Scripted":
+        params = {"statuses": table[root.name], "log": log, "name": root.name}
+        return Node("Logged", root.name, (), params)
+    return replace(root, children=tuple(with_logged_leaves(c, table, log) for c in root.children))
+
+
+def ours(
+    tree: Node, table: dict[str, list[list[int]]], agents: int, ticks: int, engine: str
+) -> tuple[list[list[int]], list[list[list[str]]]]:
+    """Root statuses [tick][agent] and events [agent][tick] on one of our engines."""
+    log: list[list[str]] = [[] for _ in range(agents)]
+    with logged_leaf_type():
+        h = make_harness(with_logged_leaves(tree, table, log), agents, engine=engine)
+        roots, events = [], [[] for _ in range(agents)]
+        for _ in range(ticks):
+            roots.append([int(s) for s in h.tick()[0]])
+            for a in range(agents):
+                events[a].append(log[a][:])
+                log[a].clear()
+    return roots, events
+
+
+BT_STATUS = {"SUCCESS": SUCCESS, "FAILURE": FAILURE, "RUNNING": RUNNING}
+
+
+def btcpp_xml(tree: Node) -> str:
+    """The tree as we write it, with the leaves' ports left out (BT.CPP knows none)."""
+    document = document_from_node(tree)
+    for raw in document.trees[document.main].walk():
+        if not raw.children and raw.tag == "Scripted":
+            raw.ports = {}
+            if (raw.name or "").startswith("c"):
+                raw.tag = "ScriptedCondition"
+    return write_xml(document)
+
+
+def reference(
+    tree: Node, table: dict[str, list[list[int]]], agents: int, ticks: int
+) -> tuple[list[list[int]], list[list[list[str]]]]:
+    """Root statuses [tick][agent] and events [agent][tick] in BehaviorTree.CPP."""
+    import behaviortreepy as btpy
+
+    xml = btcpp_xml(tree)
+    roots: list[list[int]] = [[0] * agents for _ in range(ticks)]
+    events: list[list[list[str]]] = [[] for _ in range(agents)]
+    for agent in range(agents):
+        tick = [0]
+        log: list[str] = []
+
+        def run(node: Any, log: list[str] = log, tick: list[int] = tick, agent: int = agent) -> Any:
+            name = node.name()
+            log.append(name)
+            code = table[name][tick[0]][agent]
+            return {SUCCESS: btpy.NodeStatus.SUCCESS, FAILURE: btpy.NodeStatus.FAILURE}.get(
+                code, btpy.NodeStatus.RUNNING
+            )
+
+        def halted(node: Any, log: list[str] = log) -> None:
+            log.append("~" + node.name())
+
+        factory = btpy.BehaviorTreeFactory()
+        factory.register_simple_stateful_action("Scripted", run, run, halted)
+        factory.register_simple_condition("ScriptedCondition", run)
+        bt_tree = factory.create_tree_from_text(xml)
+        for t in range(ticks):
+            tick[0] = t
+            status = bt_tree.tick_exactly_once()
+            roots[t][agent] = BT_STATUS[str(status).split(".")[-1]]
+            events[agent].append(log[:])
+            log.clear()
+    return roots, events
