@@ -1,6 +1,6 @@
 # Two commands do all the set-up from a fresh clone:
 #   make demo   installs into .venv and runs the gathering scenario into runs/gathering/
-#   make test   installs the test dependencies (and the [x8] extra) into .venv and runs the suite
+#   make test   installs the test dependencies (and the [x8], [dask] extras) into .venv and runs the suite
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -17,7 +17,7 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[test,x8]"
+	$(BIN)/python -m pip install --quiet -e ".[test,x8,dask]"
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed

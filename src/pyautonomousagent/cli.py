@@ -86,6 +86,7 @@ def _parser() -> argparse.ArgumentParser:
         "--tree", type=Path, metavar="FILE", help="run this tree file (.xml, .yaml) instead"
     )
     _add_bench(sub)
+    _add_experiments(sub)
     tree = sub.add_parser("tree", help="print, draw or convert a behaviour tree")
     tree.add_argument(
         "source",
@@ -279,8 +280,9 @@ OPTIONS = {"agents": "--agents", "iterations": "--iterations", "frame_every": "-
            "tree": "--tree"}  # fmt: skip
 
 
-def _parse_overrides(pairs: list[str], known: list[str]) -> dict[str, Any]:
-    """``["a=1", "b=x"]`` -> ``{"a": 1, "b": "x"}`` (values read as YAML scalars)."""
+def _parse_overrides(pairs: list[str], known: list[str] | None = None) -> dict[str, Any]:
+    """``["a=1", "b=x"]`` -> ``{"a": 1, "b": "x"}`` (values read as YAML scalars); names
+    are checked against ``known`` when given."""
     from pyautonomousagent.inputs import load_yaml
 
     values = {}
@@ -289,9 +291,11 @@ def _parse_overrides(pairs: list[str], known: list[str]) -> dict[str, Any]:
         key = key.strip()
         if not sep or not key or not text.strip():
             raise ScenarioError(f"--set needs KEY=VALUE with a value, got {shown(pair)}")
-        if key in OPTIONS:
+        if known is None:
+            pass
+        elif key in OPTIONS:
             raise ScenarioError(f"--set {key}: use the option {OPTIONS[key]} {text.strip()}")
-        if key not in known:
+        elif key not in known:
             close = difflib.get_close_matches(key, known, n=1)
             hint = f"did you mean {close[0]!r}? " if close else ""
             raise ScenarioError(
@@ -526,6 +530,173 @@ def _write_output(path: Path, text: str) -> None:
         raise InputError(f"cannot write {path}: {reason}; check the folder exists") from None
 
 
+# --- experiments: pyaa sweep, pyaa plot, pyaa measures (library: pyautonomousagent.experiments)
+
+EXPERIMENT_COMMANDS = ("sweep", "plot", "measures")
+
+
+def _add_experiments(sub: Any) -> None:
+    sweep = sub.add_parser("sweep", help="run a parameter sweep with seeds, one row per run")
+    sweep.add_argument("experiment", help="an experiment .yaml file, or a scenario to sweep")
+    sweep.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        metavar="NAME=V1,V2|FROM:TO:STEP",
+        help="a parameter to vary (several: a grid), e.g. refuel_rate=1:3:1",
+    )
+    sweep.add_argument("--seeds", type=int, help="seeds 0..N-1 per point (default 1)")
+    sweep.add_argument("--iterations", type=int, help="iterations per run")
+    sweep.add_argument("--agents", type=int, help="agents per run")
+    sweep.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a fixed override for every run",
+    )
+    sweep.add_argument(
+        "--measure",
+        action="append",
+        default=[],
+        metavar="NAME|NAME=EXPR",
+        help="a registered measure or NAME=expression (default: all registered)",
+    )
+    sweep.add_argument("--engine", choices=["auto", *ENGINES], help="decision engine")
+    sweep.add_argument("--record-every", type=int, metavar="K", help="record every K-th iteration")
+    sweep.add_argument("--out", type=Path, help="sweep folder (default: runs/sweeps/NAME)")
+    sweep.add_argument("--workers", type=int, help="local processes (default: all cores)")
+    sweep.add_argument(
+        "--dask",
+        metavar="ADDRESS|local",
+        help="run on a Dask cluster (scheduler address) or a local Dask cluster",
+    )
+    sweep.add_argument("--serial", action="store_true", help="run in this process, one by one")
+    sweep.add_argument("--resume", action="store_true", help="continue the sweep in --out")
+    sweep.add_argument(
+        "--save-runs",
+        action="store_true",
+        help="also write each run's data under OUT/runs (hive-partitioned)",
+    )
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    plot = sub.add_parser("plot", help="plot a measure of a sweep against a parameter")
+    plot.add_argument("sweep", type=Path, help="a sweep folder (or its results.parquet)")
+    plot.add_argument("--measure", required=True, help="the measure (a results column)")
+    plot.add_argument("--x", required=True, help="the parameter on the horizontal axis")
+    plot.add_argument("--by", help="a second parameter: one line per value")
+    plot.add_argument(
+        "--interval",
+        default="ci95",
+        choices=["ci95", "sd", "range", "none"],
+        help="the band: 95%% CI of the mean (default), sd, min-max, none",
+    )
+    plot.add_argument("--out", type=Path, help="picture file, .png or .svg")
+    sub.add_parser("measures", help="list the registered measures")
+
+
+def _experiment(args: argparse.Namespace) -> Any:
+    import yaml
+
+    from pyautonomousagent.experiments import Experiment
+    from pyautonomousagent.experiments.spec import parse_vary
+
+    source = args.experiment
+    data: dict[str, Any] = {"scenario": source, "name": Path(source).stem + "-sweep"}
+    if source.endswith((".yaml", ".yml")) and Path(source).is_file():
+        loaded = yaml.safe_load(Path(source).read_text())
+        if isinstance(loaded, dict) and "scenario" in loaded:
+            data = {"name": Path(source).stem, **loaded}
+    data["vary"] = {**(data.get("vary") or {}), **parse_vary(args.vary)}
+    data["set"] = {**(data.get("set") or {}), **_parse_overrides(args.set)}
+    if args.agents is not None:
+        data["set"]["agents"] = args.agents
+    measures: list[Any] = []
+    for text in args.measure:
+        name, sep, expression = text.partition("=")
+        measures.append({name: expression} if sep and name.isidentifier() else text)
+    for key, value in (
+        ("seeds", args.seeds),
+        ("iterations", args.iterations),
+        ("engine", args.engine),
+        ("record_every", args.record_every),
+        ("measures", measures or None),
+    ):
+        if value is not None:
+            data[key] = value
+    return Experiment.from_mapping(data, source=source)
+
+
+def sweep_command(args: argparse.Namespace) -> int:
+    """``pyaa sweep``: run an experiment into a sweep folder (see docs/experiments.md)."""
+    from pyautonomousagent.experiments import sweep
+
+    experiment = _experiment(args)
+    out = args.out or Path("runs") / "sweeps" / experiment.name
+    backend = "serial" if args.serial else "dask" if args.dask else "pool"
+    address = None if args.dask in (None, "local") else args.dask
+    if args.workers is not None and args.workers < 1:
+        raise ScenarioError(f"--workers must be a whole number >= 1, got {args.workers}")
+    try:
+        result = sweep(
+            experiment,
+            out,
+            backend,
+            workers=args.workers,
+            address=address,
+            resume=args.resume,
+            save_runs=args.save_runs,
+            progress=False if args.quiet else None,
+        )
+    except KeyboardInterrupt:
+        print(
+            f"pyaa: interrupted; the finished runs are kept in {out}: run the same command "
+            "with --resume to continue",
+            file=sys.stderr,
+        )
+        return 130
+    if not args.quiet:
+        c = result.counts
+        print(
+            f"sweep {experiment.name}: {sum(c.values())} runs ({c['ok']} ok, {c['failed']} "
+            f"failed, {c['skipped']} done before) on {result.backend} in "
+            f"{result.seconds:.1f} s\n  wrote {out / 'results.parquet'}"
+        )
+    return 1 if result.counts["failed"] else 0
+
+
+def plot_command(args: argparse.Namespace) -> int:
+    """``pyaa plot``: a measure against a parameter, mean and interval over seeds."""
+    from pyautonomousagent.experiments.plot import plot_measure, read_results, summarize
+
+    table, _ = read_results(args.sweep)
+    for row in summarize(table, args.measure, args.x, args.by, args.interval):
+        group = f"{args.by}={row['by']} " if args.by else ""
+        print(
+            f"{group}{args.x}={row['x']}: n={row['n']} mean={row['mean']:.6g} "
+            f"[{row['low']:.6g}, {row['high']:.6g}]"
+        )
+    path = plot_measure(args.sweep, args.measure, args.x, args.by, args.out, args.interval)
+    print(f"wrote {path}")
+    return 0
+
+
+def experiments_command(args: argparse.Namespace) -> int:
+    """``pyaa sweep``, ``pyaa plot`` and ``pyaa measures``; bad input is one line (exit 2)."""
+    from pyautonomousagent.experiments import MEASURES, ExperimentError, ExpressionError
+
+    try:
+        if args.command == "sweep":
+            return sweep_command(args)
+        if args.command == "plot":
+            return plot_command(args)
+        for name, measure in MEASURES.items():
+            print(f"{name:22s} {measure.unit:12s} {measure.doc}")
+        return 0
+    except (ExperimentError, ExpressionError) as error:
+        print(f"pyaa: error: {error}", file=sys.stderr)
+        return 2
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``pyaa`` console script."""
     try:
@@ -539,6 +710,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return scenarios_command(args.name)
         if args.command == "bench":
             return bench_command(args)
+        if args.command in EXPERIMENT_COMMANDS:
+            return experiments_command(args)
         return tree_command(args)
     except USER_ERRORS as error:
         print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
