@@ -248,6 +248,7 @@ def test_bad_experiments_are_refused_in_one_line(change: dict, message: str) -> 
         ({"vary": {"agents": [2, -1]}}, "agents must be a whole number >= 1, got -1"),
         ({"measures": [{"low": "mean(enrgy)"}]}, "unknown column 'enrgy' (did you mean"),
         ({"scenario": "patrl"}, "did you mean 'patrol'"),
+        ({"vary": {"tree": ["nothere.xml"]}}, "tree: no file 'nothere.xml'"),
     ],
 )
 def test_sweep_checks_against_the_scenario_before_running(tmp_path, change, message) -> None:
@@ -360,6 +361,9 @@ def test_plot_is_written_as_png_and_svg(tmp_path) -> None:
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 5000
     svg = plot_measure(table, "refuels", "threshold", out=tmp_path / "r.svg", interval="sd")
     assert "<svg" in svg.read_text()
+    trees = table.append_column("tree", pa.array(["a/x.xml", "b.yaml"] * 4))
+    categories = plot_measure(trees, "refuels", "tree", by="rate", out=tmp_path / "t.svg")
+    assert "x.xml" in categories.read_text() and "a/x.xml" not in categories.read_text()
     with pytest.raises(ExperimentError, match="use a .png or .svg name"):
         plot_measure(table, "refuels", "threshold", out=tmp_path / "r.gif")
 

@@ -106,7 +106,7 @@ def _stop(process: subprocess.Popen) -> None:
 
 def test_dask_cluster_losing_a_worker_gives_every_result_once(on_pool, tmp_path) -> None:
     pytest.importorskip("distributed")
-    from pyautonomousagent.experiments.backends import DaskBackend
+    from pyautonomousagent.experiments.backends import BackendError, DaskBackend
 
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
@@ -122,9 +122,9 @@ def test_dask_cluster_losing_a_worker_gives_every_result_once(on_pool, tmp_path)
         deadline = time.monotonic() + 60
         while True:  # the scheduler takes a moment to listen
             try:
-                backend = DaskBackend(address)
+                backend = DaskBackend(address, timeout=5)
                 break
-            except OSError:
+            except BackendError:
                 if time.monotonic() > deadline:
                     raise
                 time.sleep(0.5)
@@ -179,3 +179,12 @@ def test_ctrl_c_stops_pyaa_sweep_and_resume_finishes_it(tmp_path) -> None:
     assert f"({80 - len(before)} ok, 0 failed, {len(before)} done before)" in finished.stdout
     after = journal_ids(out)
     assert len(after) == len(set(after)) == 80 and after[: len(before)] == before
+
+
+def test_an_unreachable_scheduler_is_one_line() -> None:
+    pytest.importorskip("distributed")
+    from pyautonomousagent.experiments.backends import BackendError, DaskBackend
+
+    address = f"tcp://127.0.0.1:{_free_port()}"
+    with pytest.raises(BackendError, match="cannot reach a Dask scheduler at 'tcp://127.0.0.1:"):
+        DaskBackend(address, timeout=1)

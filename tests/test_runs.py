@@ -3,6 +3,7 @@ is never lost or mixed with a new one (disk full, read-only folder, Ctrl-C, re-r
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -47,16 +48,17 @@ def one_line(err: str) -> str:
 
 def test_a_run_lists_its_files_with_checksums(tmp_path):
     out = tmp_path / "run"
-    assert run_cli(out, "--no-gif", "--set", "energy_use=0.1") == 0
+    assert run_cli(out, "--no-gif", "--no-replay", "--set", "energy_use=0.1") == 0
     summary = verify(out)
     assert summary["status"] == "complete"
     assert summary["iterations_done"] == 60
-    assert [f["name"] for f in summary["files"]] == ["states.parquet"]
+    assert [f["name"] for f in summary["files"]] == ["states.parquet", "traces.parquet"]
+    assert summary["trace"]["agents"] == ["drone1", "drone2", "drone3", "drone4"]
     assert summary["overrides"] == {"energy_use": 0.1}
     assert summary["tree"]["sha256"] and "<root" in summary["tree"]["content"]
     assert summary["versions"]["pyautonomousagent"]
     assert summary["command"][0] == "pyaa"
-    assert sorted(p.name for p in out.iterdir()) == ["run.json", "states.parquet"]
+    assert sorted(p.name for p in out.iterdir()) == ["run.json", "states.parquet", "traces.parquet"]
     (out / "states.parquet").write_bytes(b"changed")
     with pytest.raises(RunError, match="differs from run.json"):
         verify(out)
@@ -76,8 +78,10 @@ def test_overwrite_replaces_the_whole_folder_no_stale_files(tmp_path):
     out = tmp_path / "run"
     assert run_cli(out, "--frame-every", "30") == 0
     assert (out / "animation.gif").exists()
-    assert run_cli(out, "--no-gif", "--format", "csv", "--overwrite", "--seed", "2") == 0
-    assert sorted(p.name for p in out.iterdir()) == ["run.json", "states.csv"]
+    assert (out / "replay.html").exists()
+    argv = ["--no-gif", "--no-replay", "--format", "csv", "--overwrite", "--seed", "2"]
+    assert run_cli(out, *argv) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["run.json", "states.csv", "traces.csv"]
     assert verify(out)["seed"] == 2
     assert leftovers(tmp_path) == []
 
@@ -109,11 +113,11 @@ def test_the_python_api_saves_the_same_way(tmp_path):
 
 @pytest.fixture
 def tmpfs(tmp_path):
-    """A 2 MB tmpfs (needs root and mount; skipped with the reason elsewhere)."""
+    """A 4 MB tmpfs (needs root and mount; skipped with the reason elsewhere)."""
     mount = tmp_path / "small"
     mount.mkdir()
     done = subprocess.run(
-        ["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(mount)],
+        ["mount", "-t", "tmpfs", "-o", "size=4m", "tmpfs", str(mount)],
         capture_output=True,
         text=True,
         check=False,
@@ -127,13 +131,15 @@ def tmpfs(tmp_path):
 
 
 def fill(folder: Path) -> None:
-    with (folder / "filler").open("wb") as file:
-        try:
-            while True:
-                file.write(b"\0" * 65536)
-                file.flush()
-        except OSError:
-            pass
+    """Fill the file system of ``folder`` to the last byte."""
+    fd = os.open(folder / "filler", os.O_WRONLY | os.O_CREAT)
+    try:
+        for size in (65536, 512, 1):
+            with contextlib.suppress(OSError):
+                while True:
+                    os.write(fd, b"\0" * size)
+    finally:
+        os.close(fd)
 
 
 def test_disk_full_keeps_the_earlier_run(tmpfs, capsys):
@@ -169,7 +175,7 @@ from pyautonomousagent import cli
 from pyautonomousagent.simulation.run import Simulation
 from pyautonomousagent.render import animation
 
-step, draw = Simulation.step, animation.write_gif
+step, draw = Simulation.step, animation.write_animation
 WHEN = sys.argv.pop(1)
 
 def signal_when(at):
@@ -186,7 +192,7 @@ def patched_draw(*args, **kwargs):
     return draw(*args, **kwargs)
 
 Simulation.step = patched_step
-animation.write_gif = patched_draw
+animation.write_animation = patched_draw
 sys.exit(cli.main(sys.argv[1:]))
 """
 
@@ -237,5 +243,5 @@ def test_ctrl_c_during_the_animation_keeps_the_data_marked(tmp_path):
     assert "Ctrl-C during the animation" in one_line(err)
     summary = verify(out)
     assert summary["status"] == "interrupted" and summary["iterations_done"] == 3000
-    assert sorted(p.name for p in out.iterdir()) == ["run.json", "states.parquet"]
+    assert sorted(p.name for p in out.iterdir()) == ["run.json", "states.parquet", "traces.parquet"]
     assert leftovers(tmp_path) == []

@@ -8,7 +8,7 @@ import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from pyautonomousagent.bt.build import build
 from pyautonomousagent.bt.document import Document, document_from_node
@@ -18,11 +18,20 @@ from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.bt.text import to_text
 from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.inputs import InputError, clip, finite, shown
+from pyautonomousagent.recording import (
+    DEFAULT_TRACED,
+    Recorder,
+    read_table,
+    recorder_from_tables,
+)
 from pyautonomousagent.runs import SaveError, check_target, default_folder, save_run, simulate
 from pyautonomousagent.scenarios import load, names
 from pyautonomousagent.simulation import Scenario, ScenarioError, Simulation
 from pyautonomousagent.simulation.run import ENGINES
 from pyautonomousagent.simulation.scenario import to_mapping
+
+if TYPE_CHECKING:
+    from pyautonomousagent.render.views import Views
 
 #: Errors that mean bad input: shown as one line, no traceback (TreeFileError is a TreeError;
 #: ScenarioError and the runs' RunError are InputErrors).
@@ -85,7 +94,9 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--tree", type=Path, metavar="FILE", help="run this tree file (.xml, .yaml) instead"
     )
+    _add_view_options(run)
     _add_bench(sub)
+    _add_replay(sub)
     _add_experiments(sub)
     tree = sub.add_parser("tree", help="print, draw or convert a behaviour tree")
     tree.add_argument(
@@ -107,6 +118,46 @@ def _parser() -> argparse.ArgumentParser:
         help="text format: the paper's symbols, or py_trees' own drawing",
     )
     return parser
+
+
+def _add_view_options(run: argparse.ArgumentParser) -> None:
+    """``pyaa run``'s options for traces, the animation, the replay and Groot2 logs."""
+    run.add_argument(
+        "--trace",
+        metavar="AGENTS",
+        help="agents whose node statuses are recorded: names (drone2,drone7), a count, all, "
+        "or 0 (default: all of a swarm of at most 10, else the first 10)",
+    )
+    run.add_argument(
+        "--video", choices=["gif", "mp4"], default="gif", help="animation format (default gif)"
+    )
+    run.add_argument(
+        "--follow", metavar="AGENT", help="the agent the animation's panel shows (default: first)"
+    )
+    run.add_argument(
+        "--inset", action="store_true", help="draw the followed agent's tree beside the map"
+    )
+    run.add_argument("--no-replay", action="store_true", help="do not write replay.html")
+    run.add_argument(
+        "--btlog",
+        action="append",
+        default=[],
+        metavar="AGENT",
+        help="also write AGENT.btlog, the agent's trace as a Groot2 log (repeatable)",
+    )
+
+
+def _add_replay(sub: Any) -> None:
+    replay = sub.add_parser("replay", help="write replay.html (and Groot2 logs) of a finished run")
+    replay.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="a folder pyaa run wrote")
+    replay.add_argument("--out", type=Path, help="the page to write (default RUN_DIR/replay.html)")
+    replay.add_argument(
+        "--btlog",
+        action="append",
+        default=[],
+        metavar="AGENT",
+        help="also write RUN_DIR/AGENT.btlog for Groot2 (a traced agent; repeatable)",
+    )
 
 
 def _int_list(text: str) -> list[int]:
@@ -339,7 +390,11 @@ def run(args: argparse.Namespace) -> int:
         scenario = scenario.with_overrides(tree=str(args.tree.resolve()))
     progress = None if not args.quiet else False
     sim = Simulation.create(
-        scenario, seed=args.seed, engine=args.engine, record_every=args.record_every
+        scenario,
+        seed=args.seed,
+        engine=args.engine,
+        record_every=args.record_every,
+        trace=_trace_spec(args),
     )
     out = check_target(args.out or default_folder(scenario.name), args.overwrite)
     status = simulate(sim, progress)
@@ -348,8 +403,7 @@ def run(args: argparse.Namespace) -> int:
         out,
         status=status,
         fmt=args.format,
-        animation=not args.no_gif,
-        progress=progress,
+        views=_views(args, progress),
         overwrite=args.overwrite,
         command=["pyaa", *sys.argv[1:]] if sys.argv else None,
         overrides=_parse_overrides(args.set, list(to_mapping(scenario)["parameters"])),
@@ -365,6 +419,83 @@ def run(args: argparse.Namespace) -> int:
     if not args.quiet:
         _print_summary(sim, saved.files)
     return 0
+
+
+def _trace_spec(args: argparse.Namespace) -> str | None:
+    """The agents to trace: ``--trace``, plus the agents ``--btlog`` and ``--inset`` need."""
+    needed = list(args.btlog) + ([args.follow] if args.inset and args.follow else [])
+    if not needed:
+        return args.trace
+    return ",".join([args.trace or str(DEFAULT_TRACED), *needed])
+
+
+def _views(args: argparse.Namespace, progress: bool | None) -> Views:
+    """The views (animation, replay.html, Groot2 logs) ``args`` ask for."""
+    from pyautonomousagent.render.views import Views
+
+    return Views(
+        video=None if getattr(args, "no_gif", False) else getattr(args, "video", None),
+        replay=not getattr(args, "no_replay", False),
+        btlog=args.btlog,
+        follow=getattr(args, "follow", None) or 0,
+        inset=getattr(args, "inset", False),
+        progress=progress,
+    )
+
+
+def _write_views(
+    recorder: Recorder,
+    scenario: Scenario,
+    events: list[dict[str, Any]],
+    out: Path,
+    args: argparse.Namespace,
+    progress: bool | None,
+) -> Views:
+    """The animation, replay.html and Groot2 logs ``args`` ask for, written into ``out``."""
+    from pyautonomousagent.render.video import VideoError
+    from pyautonomousagent.render.views import write_views
+
+    try:
+        return write_views(recorder, scenario, events, out, _views(args, progress))
+    except (KeyError, ValueError, VideoError) as error:  # an agent not traced, no ffmpeg, ...
+        message = error.args[0] if isinstance(error, KeyError) and error.args else str(error)
+        raise ScenarioError(str(message)) from None
+
+
+def replay_command(args: argparse.Namespace) -> int:
+    """``pyaa replay``: replay.html (and Groot2 logs) of a run folder that pyaa run wrote."""
+    folder: Path = args.run_dir
+    summary_path = folder / "run.json"
+    if not summary_path.is_file():
+        raise ScenarioError(f"{folder}: no run.json here; give a folder that pyaa run wrote")
+    summary = json.loads(summary_path.read_text())
+    scenario = Scenario.from_mapping(summary["scenario"], source=str(summary_path))
+    states, traces = _read_run_tables(folder)
+    recorder = recorder_from_tables(states, traces, summary.get("trace", {}).get("nodes", ()))
+    out = args.out.parent if args.out else folder
+    views = _write_views(
+        recorder,
+        scenario,
+        summary.get("events", []),
+        out,
+        argparse.Namespace(video=None, no_replay=False, btlog=args.btlog, follow=None, inset=False),
+        None,
+    )
+    if args.out and views.written:
+        views.written[0] = views.written[0].replace(args.out)
+    for path in views.written:
+        print(f"wrote {path}")
+    return 0
+
+
+def _read_run_tables(folder: Path) -> tuple[Any, Any]:
+    """The states and traces tables of a run folder (Parquet or CSV); traces may be None."""
+    for fmt in ("parquet", "csv"):
+        states = folder / f"states.{fmt}"
+        if states.is_file():
+            traces = folder / f"traces.{fmt}"
+            return read_table(states), read_table(traces) if traces.is_file() else None
+    raise ScenarioError(f"{folder}: no states.parquet or states.csv; give a folder pyaa run wrote")
 
 
 def _print_summary(sim: Simulation, written: list[Path]) -> None:
@@ -683,6 +814,7 @@ def plot_command(args: argparse.Namespace) -> int:
 def experiments_command(args: argparse.Namespace) -> int:
     """``pyaa sweep``, ``pyaa plot`` and ``pyaa measures``; bad input is one line (exit 2)."""
     from pyautonomousagent.experiments import MEASURES, ExperimentError, ExpressionError
+    from pyautonomousagent.experiments.backends import BackendError
 
     try:
         if args.command == "sweep":
@@ -692,7 +824,7 @@ def experiments_command(args: argparse.Namespace) -> int:
         for name, measure in MEASURES.items():
             print(f"{name:22s} {measure.unit:12s} {measure.doc}")
         return 0
-    except (ExperimentError, ExpressionError) as error:
+    except (ExperimentError, ExpressionError, BackendError) as error:
         print(f"pyaa: error: {error}", file=sys.stderr)
         return 2
 
@@ -712,6 +844,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return bench_command(args)
         if args.command in EXPERIMENT_COMMANDS:
             return experiments_command(args)
+        if args.command == "replay":
+            return replay_command(args)
         return tree_command(args)
     except USER_ERRORS as error:
         print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)

@@ -4,7 +4,8 @@
     status = simulate(sim)                       # "complete", or "interrupted" on Ctrl-C
     saved = save_run(sim, "runs/gathering", status=status)
 
-A run's files (``states.parquet`` or ``states.csv``, ``animation.gif``, ``run.json``) are
+A run's files (``states.parquet`` or ``states.csv``, ``traces.*``, the views: ``animation.gif``,
+``replay.html``, Groot2 logs; ``run.json``) are
 written into a temporary folder beside the target (``.NAME.tmp-*``) and put in place whole
 with a rename, so an earlier run is never deleted by a failure and never mixed with a new
 one. ``run.json`` is written last and lists every file with its size and SHA-256, the
@@ -13,8 +14,8 @@ time and the status:
 
 - ``complete``: every iteration was simulated and every file written;
 - ``interrupted``: Ctrl-C stopped the simulation (the data holds the iterations done, a
-  valid table) or the animation (the data is complete, there is no GIF);
-- ``failed``: the animation could not be drawn (the data is complete; ``error`` says why).
+  valid table) or the views (the data is complete, the views are left out);
+- ``failed``: a view could not be drawn (the data is complete; ``note`` says why).
 
 The convention for an existing folder: a folder holding a run (it has ``run.json``) is
 replaced only when asked (``overwrite=True``, ``pyaa run --overwrite``); the earlier run is
@@ -46,10 +47,11 @@ from typing import TYPE_CHECKING, Any
 
 from pyautonomousagent.bt.files import is_tree_file
 from pyautonomousagent.inputs import InputError, shown
-from pyautonomousagent.recording import write_table
+from pyautonomousagent.recording import node_list, write_table
 from pyautonomousagent.simulation.scenario import to_mapping
 
 if TYPE_CHECKING:
+    from pyautonomousagent.render.views import Views
     from pyautonomousagent.simulation.run import Simulation
 
 STATUSES = ("complete", "interrupted", "failed")
@@ -149,6 +151,7 @@ def save_run(
     status: str = "complete",
     fmt: str = "parquet",
     animation: bool = True,
+    views: Views | None = None,
     progress: bool | None = None,
     overwrite: bool = False,
     command: Sequence[str] | None = None,
@@ -161,7 +164,9 @@ def save_run(
         folder: the run folder; see the module's docstring for an existing one.
         status: ``"complete"`` or ``"interrupted"`` (what :func:`simulate` returned).
         fmt: data format, ``"parquet"`` or ``"csv"``.
-        animation: draw ``animation.gif`` (Phase 7); not for an interrupted simulation.
+        animation: write the default views (``animation.gif``, ``replay.html``) when
+            ``views`` is not given; not for an interrupted simulation.
+        views: the views to write (see :class:`pyautonomousagent.render.views.Views`).
         progress: show the animation's progress bar (default: on a terminal).
         overwrite: replace an earlier run in ``folder``.
         command: the command line to record (default ``sys.argv``).
@@ -188,11 +193,18 @@ def save_run(
         start = time.perf_counter()
         with _held_interrupts() as caught:
             saved.files.append(write_table(sim.table(), temp / f"states.{fmt}", fmt))
+            if sim.recorder.traced.size:
+                traces = write_table(sim.trace_table(), temp / f"traces.{fmt}", fmt)
+                saved.files.append(traces)
         sim.timings["write_data"] = time.perf_counter() - start
         if caught:
-            saved.status, saved.note = "interrupted", "Ctrl-C while writing the data: no GIF"
-        if animation and saved.status == "complete":
-            _animate(sim, temp, progress, saved)
+            saved.status, saved.note = "interrupted", "Ctrl-C while writing the data: no views"
+        if views is None and animation:
+            from pyautonomousagent.render.views import Views
+
+            views = Views(progress=progress)
+        if views is not None and saved.status == "complete":
+            _write_views(sim, temp, views, saved)
         with _held_interrupts():
             _write_json(temp / SUMMARY, summarise(sim, saved, temp, command, overrides))
             _commit(temp, target)
@@ -207,28 +219,28 @@ def save_run(
     return saved
 
 
-def _animate(sim: Simulation, temp: Path, progress: bool | None, saved: SavedRun) -> None:
-    """Draw the GIF into ``temp``; on Ctrl-C or a drawing error, no GIF and a marked run."""
-    from pyautonomousagent.render.animation import write_gif
+def _write_views(sim: Simulation, temp: Path, views: Views, saved: SavedRun) -> None:
+    """Write the views into ``temp``; on Ctrl-C or a drawing error, none and a marked run."""
+    from pyautonomousagent.render.views import write_views
 
-    path = temp / "animation.gif"
+    before = set(temp.iterdir())
     try:
-        stats = write_gif(
-            sim.recorder, sim.scenario, path, frame_every=sim.scenario.frame_every,
-            progress=progress,
-        )  # fmt: skip
-    except KeyboardInterrupt:
-        path.unlink(missing_ok=True)
-        saved.status, saved.note = "interrupted", "Ctrl-C during the animation: no GIF"
-        return
+        write_views(sim.recorder, sim.scenario, sim.events, temp, views)
     except OSError:
         raise
-    except Exception as error:  # noqa: BLE001 - a drawing failure must not lose the data
-        path.unlink(missing_ok=True)
-        saved.status, saved.note = "failed", f"the animation failed: {shown(str(error), 200)}"
+    except BaseException as error:
+        for path in set(temp.iterdir()) - before:  # partial views go; the data stays
+            path.unlink(missing_ok=True)
+        if isinstance(error, KeyboardInterrupt):
+            saved.status, saved.note = "interrupted", "Ctrl-C during the animation: no views"
+        elif isinstance(error, Exception):
+            message = error.args[0] if isinstance(error, KeyError) and error.args else error
+            saved.status, saved.note = "failed", f"the views failed: {shown(str(message), 200)}"
+        else:
+            raise
         return
-    sim.timings["animation"] = stats.seconds
-    saved.files.append(stats.path)
+    sim.timings.update(views.timings)
+    saved.files.extend(views.written)
 
 
 def summarise(
@@ -254,6 +266,10 @@ def summarise(
         "versions": versions(),
         "timings_s": {k: round(v, 4) for k, v in sim.timings.items()},
         "events": sim.events,
+        "trace": {
+            "agents": [sim.swarm.names[i] for i in sim.recorder.traced],
+            "nodes": node_list(sim.recorder.nodes),
+        },
         "files": [file_record(folder / path.name) for path in saved.files],
     }
     if saved.note:

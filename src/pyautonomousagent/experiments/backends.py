@@ -32,6 +32,11 @@ from typing import Any, Protocol, TypeVar
 
 T = TypeVar("T")
 
+
+class BackendError(RuntimeError):
+    """A backend that cannot be used (missing package, unreachable scheduler); one line."""
+
+
 #: How often a run is given again after the worker holding it died.
 ATTEMPTS = 3
 
@@ -162,17 +167,25 @@ class DaskBackend:
             cluster of ``workers`` single-threaded worker processes for the sweep.
         workers: workers of the local cluster (default all cores).
         window: runs submitted at a time (default 4 per worker).
+        timeout: seconds to wait for the scheduler.
+
+    Raises:
+        BackendError: Dask is not installed, or no scheduler answers at ``address``.
     """
 
     name = "dask"
 
     def __init__(
-        self, address: str | None = None, workers: int | None = None, window: int | None = None
+        self,
+        address: str | None = None,
+        workers: int | None = None,
+        window: int | None = None,
+        timeout: float = 20.0,
     ) -> None:
         try:
             from distributed import Client, LocalCluster
         except ImportError:  # pragma: no cover - depends on the installation
-            raise RuntimeError(
+            raise BackendError(
                 "the Dask backend needs dask[distributed]: pip install 'pyautonomousagent[dask]'"
             ) from None
         self.address = address
@@ -186,7 +199,13 @@ class DaskBackend:
             )
             self.client = Client(self._cluster)
         else:
-            self.client = Client(address, timeout="20s")
+            try:
+                self.client = Client(address, timeout=f"{timeout}s")
+            except (OSError, ValueError, TypeError) as error:
+                raise BackendError(
+                    f"cannot reach a Dask scheduler at {address!r} within {timeout:g} s "
+                    f"({type(error).__name__}); start one (dask scheduler) or check the address"
+                ) from None
         self._window = window
         self._prefix = f"pyaa-run-{uuid.uuid4().hex[:8]}"
 

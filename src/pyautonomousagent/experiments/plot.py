@@ -177,16 +177,29 @@ def plot_measure(
     labels = sorted({r["x"] for r in rows}, key=lambda v: _order((v, None)))
     position = {v: (v if numeric else i) for i, v in enumerate(labels)}
     fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=120)
-    for group in sorted({r["by"] for r in rows}, key=lambda v: _order((v, None))):
+    groups = sorted({r["by"] for r in rows}, key=lambda v: _order((v, None)))
+    for k, group in enumerate(groups):
         line = [r for r in rows if r["by"] == group]
-        px = [position[r["x"]] for r in line]
         label = f"{by} = {group}" if by else None
-        (drawn,) = ax.plot(px, [r["mean"] for r in line], marker="o", label=label)
-        if interval != "none":
-            low, high = [r["low"] for r in line], [r["high"] for r in line]
-            ax.fill_between(px, low, high, color=drawn.get_color(), alpha=0.2, linewidth=0)
+        means = [r["mean"] for r in line]
+        low, high = [r["low"] for r in line], [r["high"] for r in line]
+        if numeric:  # a line, the interval as a band
+            px = [position[r["x"]] for r in line]
+            (drawn,) = ax.plot(px, means, marker="o", label=label)
+            if interval != "none":
+                ax.fill_between(px, low, high, color=drawn.get_color(), alpha=0.2, linewidth=0)
+        else:  # categories: points with error bars, groups side by side
+            shift = (k - (len(groups) - 1) / 2) * 0.08
+            px = [position[r["x"]] + shift for r in line]
+            spread = [
+                [m - lo for m, lo in zip(means, low, strict=True)],
+                [hi - m for m, hi in zip(means, high, strict=True)],
+            ]
+            ax.errorbar(px, means, yerr=spread, fmt="o", capsize=4, label=label)
     if not numeric:
-        ax.set_xticks(range(len(labels)), [str(v) for v in labels])
+        names = [str(v).rsplit("/", 1)[-1] for v in labels]  # a file: its name
+        ax.set_xticks(range(len(labels)), names)
+        ax.set_xlim(-0.5, len(labels) - 0.5)
     unit = descriptions.get(measure, {}).get("unit", "")
     ax.set_xlabel(x)
     ax.set_ylabel(f"{measure} ({unit})" if unit and unit != measure else measure)

@@ -108,8 +108,10 @@ def check(experiment: Experiment, scenario: Any) -> list[str]:
                 f"experiment {experiment.name!r}: unknown parameter {name!r}{hint}"
             )
         for text in sorted(texts):
+            value = json.loads(text)
+            _check_tree(name, value, experiment.name)
             try:
-                scenario.with_overrides(**{name: json.loads(text)})
+                scenario.with_overrides(**{name: value})
             except ScenarioError as error:
                 raise ExperimentError(f"experiment {experiment.name!r}: {error}") from None
     probe = Simulation.create(
@@ -120,6 +122,18 @@ def check(experiment: Experiment, scenario: Any) -> list[str]:
         if isinstance(measure.fn, _Evaluate):
             _check_names(measure.name, measure.fn.expression, names)
     return names
+
+
+def _check_tree(name: str, value: Any, experiment: str) -> None:
+    """A varied tree file must exist (it is read on the worker, relative to its folder)."""
+    from pyautonomousagent.bt.files import is_tree_file
+
+    tree_file = name == "tree" and isinstance(value, str) and is_tree_file(value)
+    if tree_file and not Path(value).is_file():
+        raise ExperimentError(
+            f"experiment {experiment!r}: tree: no file {value!r} (a varied tree is a path "
+            "relative to the working directory, or an absolute one)"
+        )
 
 
 def _check_names(name: str, expression: Expression, known: list[str]) -> None:
