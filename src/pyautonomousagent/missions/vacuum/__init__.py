@@ -169,7 +169,8 @@ class VacuumMission(Mission):
 
     def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
         """Robots on their start positions, headings rounded to whole degrees (so turns of
-        whole turn steps land exactly), cruising on them; the room and an uncleaned grid."""
+        whole turn steps land exactly), cruising on them, with a first sonar reading; the room
+        and an uncleaned grid."""
         self.room = Room(world.width, world.height, self.scenario.objects.obstacles)
         self.grid = CleaningGrid(self.room, self.params.cell_size)
         points = self.scenario.objects.start_positions
@@ -178,6 +179,7 @@ class VacuumMission(Mission):
         s["x"][:], s["y"][:] = start[:, 0], start[:, 1]
         s["heading"][:] = np.round(s["heading"]) % 360.0
         swarm.blackboard["cruise_heading"][:] = s["heading"]
+        s["sonar"][:] = self.room.sonar(s["x"], s["y"], s["heading"], self.params.sonar_range)
 
     def sense(self, sim: Simulation) -> np.ndarray:
         """Clean under the brushes that ran, read the sonar, stop robots about to collide.
