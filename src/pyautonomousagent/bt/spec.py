@@ -165,7 +165,7 @@ def control_params(node: Node) -> dict[str, Any]:
             raise TreeError(f"{where} needs parameter {param.name!r}")
         problem = param.check(value, len(node.children)) if param.check else ""
         if problem:
-            joint = "" if problem.startswith("=") else " "
+            joint = "" if problem[0] in "=:" else " "
             raise TreeError(f"{where}: {param.name}{joint}{problem}")
     if values.get("policy") == "SuccessOnOne":
         if node.params.get("synchronise"):
