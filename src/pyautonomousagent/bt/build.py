@@ -20,6 +20,7 @@ from pyautonomousagent.bt.document import SUBTREE, Document, RawNode, TreeFileEr
 from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf, LeafError
 from pyautonomousagent.bt.nodes import DECORATOR
 from pyautonomousagent.bt.spec import (
+    BlackboardRef,
     Node,
     TreeError,
     check_structure,
@@ -176,12 +177,7 @@ class _Builder:
                     f'add {key}="..." or _autoremap="true" to that <SubTree>',
                 )
             scope = scope.parent
-        raise self.fail(
-            line,
-            f"port {port!r} reads blackboard entry {{{key}}}, which is not "
-            "supported (only a SubTree's ports can be referred to)",
-            f'write the value itself, e.g. {port}="40"',
-        )
+        return BlackboardRef(key)  # the main tree: the agent's blackboard entry
 
     # -- step 3: tags to spec nodes ------------------------------------------------------
 
@@ -238,6 +234,14 @@ class _Builder:
                 "the first child is the condition, then the then- and else-branch",
             )
         params = self._params(node, tag)
+        for key, value in params.items():
+            if isinstance(value, BlackboardRef):
+                raise self.fail(
+                    node.line_of(key),
+                    f"{tag.tag}: {key}={value} reads the blackboard, which control node "
+                    "parameters cannot",
+                    f'write the value itself, e.g. {key}="3"',
+                )
         spec = Node(tag.spec, node.name or "", children, {**tag.fixed, **params})
         try:
             control_params(spec)
@@ -307,6 +311,9 @@ class _Builder:
         names = cls.port_names()
         params: dict[str, Any] = {}
         for key, value in node.ports.items():
+            if isinstance(value, BlackboardRef) and key in names and not cls.text_ports:
+                params[key] = value  # read from the agent's blackboard on every tick
+                continue
             if key not in names:
                 ports = ", ".join(names) or "none"
                 hint = closest(key, names)

@@ -241,8 +241,8 @@ def _type(node: Ast, known: dict[str, str]) -> str:
         return "bool"
     if kind == "str":
         return "int"
-    if kind == "key":
-        return known.get(node[1], "float")
+    if kind == "key":  # a key nothing assigned yet: the narrowest, widened by later passes
+        return known.get(node[1], "bool")
     if kind == "unary":
         return "bool" if node[1] == "!" else _type(node[2], known)
     if kind == "binary":

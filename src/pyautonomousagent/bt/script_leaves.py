@@ -38,6 +38,7 @@ class _PortsByName(Leaf):
 
     names: ClassVar[tuple[str, ...]] = ()
     hints: ClassVar[Mapping[str, str]] = {}
+    text_ports = True
 
     @classmethod
     def port_names(cls) -> list[str]:

@@ -24,6 +24,16 @@ from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType
 PARALLEL_POLICIES = ("SuccessOnAll", "SuccessOnOne")
 
 
+@dataclass(frozen=True)
+class BlackboardRef:
+    """A leaf port written ``{key}``: the agent's blackboard entry ``key``, read each tick."""
+
+    key: str
+
+    def __str__(self) -> str:
+        return "{" + self.key + "}"
+
+
 class TreeError(ValueError):
     """A tree description that cannot be built, with a message naming the node."""
 
