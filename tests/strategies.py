@@ -99,7 +99,26 @@ def btcpp_node(children: st.SearchStrategy[list[Node]]) -> st.SearchStrategy[Nod
             lambda m: Node("ParallelAll", "pa", tuple(kids), {"max_failures": m})
         )
     )
-    return st.one_of(with_memory, parallel, loops, flows, branches, parallel_all)
+    timed = st.builds(
+        lambda kind, msec, kids: Node(
+            kind, "t", tuple(kids), {"delay_msec" if kind == "Delay" else "msec": msec}
+        ),
+        st.sampled_from(["Delay", "Timeout"]),
+        st.sampled_from([0, 1000, 2500]),  # iterations of the default time step, 1 s
+        one_child,
+    )
+    guarded = st.builds(
+        lambda code, otherwise, kids: Node(
+            "Precondition", "g", tuple(kids), {"if": code, "else": otherwise}
+        ),
+        st.sampled_from(["number_ticks > 2", "number_ticks < 4 && number_ticks != 1"]),
+        st.sampled_from(["FAILURE", "SUCCESS", "RUNNING"]),
+        one_child,
+    )
+    once = one_child.map(lambda kids: Node("RunOnce", "o", tuple(kids), {"then_skip": False}))
+    return st.one_of(
+        with_memory, parallel, loops, flows, branches, parallel_all, timed, guarded, once
+    )
 
 
 def _threshold(children: int) -> st.SearchStrategy[int]:

@@ -65,7 +65,9 @@ def by_tag() -> dict[str, Tag]:
 
 
 #: Leaf types that are BehaviorTree.CPP 4 built-ins (not declared in a TreeNodesModel).
-BTCPP_LEAVES = frozenset({"AlwaysSuccess", "AlwaysFailure"})
+BTCPP_LEAVES = frozenset(
+    {"AlwaysSuccess", "AlwaysFailure", "Script", "ScriptCondition", "SetBlackboard", "Sleep"}
+)
 
 #: BehaviorTree.CPP 4 built-ins that pyAutonomousAgent does not run, with the reason.
 UNSUPPORTED: dict[str, str] = {

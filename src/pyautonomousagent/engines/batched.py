@@ -528,10 +528,10 @@ class BatchedEngine:
         done[kids] &= ~finished
 
     def _precondition(self, i: int, mask: np.ndarray) -> None:
-        """Precondition; ``counter`` is 1 while the child runs (the script is not asked)."""
+        """Precondition; ``counter`` is 1 from a RUNNING child to its finishing, halts
+        included (BT.CPP 4.8): the script is not asked then."""
         child, params = self.program.children[i][0], self.program.params[i]
         running, status = self.counter[i], self.status[i]
-        np.copyto(running, 0, where=mask & (status != RUNNING))
         asking = mask & (running == 0)
         allowed = mask & (running == 1)
         if _some(asking):

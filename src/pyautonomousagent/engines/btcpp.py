@@ -323,7 +323,8 @@ class _Timed(py_trees.decorators.Decorator):
 
 class Precondition(_Timed):
     """BT.CPP ``Precondition``: ticks the child while the script ``if`` holds, asked only
-    until the child runs; otherwise returns ``else``."""
+    until the child runs; otherwise returns ``else``. As in BT.CPP 4.8, only the child's
+    finishing makes it ask again: after a halt of the running child it is not asked once."""
 
     def __init__(self, name: str, child: Behaviour, condition: str, otherwise: str) -> None:
         super().__init__(name=name, child=child)
@@ -333,8 +334,6 @@ class Precondition(_Timed):
 
     def tick(self) -> Iterator[Behaviour]:
         """Ask the condition unless the child runs; tick the child or return ``else``."""
-        if self.status != Status.RUNNING:
-            self.running = False
         if not self.running and not self.script.truth(self.agent.blackboard):
             self.status = self.otherwise
             yield self
