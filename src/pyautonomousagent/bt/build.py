@@ -247,7 +247,9 @@ class _Builder:
             control_params(spec)
         except TreeError as error:
             message = str(error).replace(tag.spec, tag.tag, 1)  # the word the file uses
-            raise self.fail(node.line, message, _param_fix(tag, len(children))) from None
+            at = [k for k in params if f": {k}" in message]  # the parameter's own line
+            line = node.line_of(at[0]) if at else node.line
+            raise self.fail(line, message, _param_fix(tag, len(children))) from None
         return spec
 
     def _params(self, node: RawNode, tag: Tag) -> dict[str, Any]:
@@ -342,6 +344,12 @@ def _param_fix(tag: Tag, children: int) -> str:
         return "use policy SuccessOnAll or SuccessOnOne (synchronise only with SuccessOnAll)"
     if tag.spec in ("Repeat", "RetryUntilSuccessful"):
         return "use a whole number >= 1, or -1 for no limit"
+    if tag.spec == "Precondition":
+        return "write `if` in BehaviorTree.CPP's scripting language (docs/tree-files.md)"
+    if tag.spec == "RunOnce":
+        return 'write then_skip="false" (a skipped node is not supported)'
+    if tag.spec in ("Delay", "Timeout"):
+        return "use a whole number of milliseconds >= 0 (simulated time)"
     return "use a whole number >= 1"
 
 
