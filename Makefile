@@ -1,11 +1,12 @@
 # Two commands do all the set-up from a fresh clone:
 #   make demo   installs into .venv and runs the gathering scenario into runs/gathering/
-#   make test   installs the test dependencies (and the [x8] extra) into .venv and runs the suite
+#   make test   installs the test dependencies (and the [x8], [dask] and [video] extras, and
+#               chromium when missing) into .venv and runs the suite
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test lint clean
+.PHONY: demo test lint clean browser
 
 $(BIN)/python:
 	$(PYTHON) -c 'import sys; sys.exit("Python >= 3.11 is needed" if sys.version_info < (3, 11) else 0)'
@@ -17,13 +18,23 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[test,x8]"
+	$(BIN)/python -m pip install --quiet -e ".[test,x8,dask,video]"
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed
 	$(BIN)/pyaa run gathering --out runs/gathering
 
-test: $(VENV)/.installed-test
+# The replay's browser test drives Debian's chromium; install it when missing and we can (root).
+browser:
+	@if [ ! -x /usr/bin/chromium ] || ! command -v chromedriver >/dev/null; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    apt-get update && apt-get install -y chromium chromium-driver; \
+	  else \
+	    echo "no chromium: the browser test will be skipped (apt-get install chromium chromium-driver)"; \
+	  fi; \
+	fi
+
+test: $(VENV)/.installed-test browser
 	$(BIN)/ruff check src tests
 	$(BIN)/mypy src
 	$(BIN)/python -m pytest

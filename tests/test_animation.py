@@ -17,13 +17,12 @@ from pyautonomousagent.render.animation import (
     HEADING_COLOUR,
     MAX_LABELLED,
     FramePainter,
-    Palette,
-    colour_codes,
     draw_frame,
     frame_rows,
     panel_rows,
     write_gif,
 )
+from pyautonomousagent.render.gif import Palette, colour_codes
 from pyautonomousagent.scenarios import load
 from pyautonomousagent.simulation import Simulation
 
@@ -139,16 +138,21 @@ def test_patrol_marks_its_two_positions_and_many_drones_go_unlabelled():
     sim = Simulation.create(scenario, seed=0).run(progress=False)
     assert marks_of(scenario, "surveillance position") == [("S1", 70, 80), ("S2", 70, 20)]
     assert marks_of(scenario, "refuelling slot") == [("R1", 10, 50)]
-    assert FramePainter(sim.recorder, scenario).labels == []
+    assert not FramePainter(sim.recorder, scenario).labelled
 
 
-def test_panel_shows_the_iteration_and_first_drone_with_fixed_labels(run):
-    first, later = panel_rows(run.recorder, 0), panel_rows(run.recorder, 150)
+def test_panel_shows_the_iteration_and_followed_drone_with_fixed_labels_and_units(run):
+    first, later = panel_rows(run.recorder, 0, 1), panel_rows(run.recorder, 150, 1)
     assert [label for label, _ in first] == [label for label, _ in later]
-    assert later[0] == ("Iteration", "150")
+    assert later[0] == ("Iteration", "150 of 200")
+    assert later[1] == ("Following", "drone2")
     values = dict(later)
-    assert values["  ticks"] == str(run.recorder.column("number_ticks")[150, 0])
-    assert values["  energy"] == f"{run.recorder.column('energy')[150, 0]:.1f} %"
+    assert values["  leaf ticks so far"] == str(run.recorder.column("number_ticks")[150, 1])
+    assert values["  energy [%]"] == f"{run.recorder.column('energy')[150, 1]:.2f}"
+    x, y = (run.recorder.column(k)[150, 1] for k in ("x", "y"))
+    assert values["  position [u]"] == f"({x:.2f}, {y:.2f})"
+    leaf = run.recorder.nodes[run.recorder.behaviour[150, 1]].name
+    assert later[later.index(("Active behaviour (leaf)", "")) + 1] == ("", leaf)
 
 
 def fake(iterations: list[int]) -> SimpleNamespace:
@@ -175,3 +179,35 @@ def test_importing_the_module_does_not_import_matplotlib():
         cwd=Path(__file__).parent,
     )
     assert result.stdout.strip() == "False"
+
+
+def overlap(a, b) -> bool:
+    return not (a[3] <= b[1] or a[1] >= b[3] or a[4] <= b[2] or a[2] >= b[4])
+
+
+def test_labels_of_bunched_agents_do_not_pile_up(run):
+    scenario = load("patrol").with_overrides(agents=10, iterations=1)
+    sim = Simulation.create(scenario, seed=0).run(progress=False)  # all ten on one slot
+    boxes = FramePainter(sim.recorder, scenario).label_boxes(0)
+    assert 1 <= len(boxes) < 10
+    assert not any(overlap(a, b) for k, a in enumerate(boxes) for b in boxes[k + 1 :])
+    apart = FramePainter(run.recorder, run.scenario).label_boxes(150)
+    assert [b[0] for b in apart] == [0, 1, 2, 3]  # drones apart: every one labelled
+
+
+def test_events_are_marked_while_recent_and_the_inset_shows_the_followed_statuses(run):
+    from pyautonomousagent.render.animation import EVENT_SHOWN, STATUS_COLOURS
+
+    order = {"iteration": 100, "event": "message", "type": "gathering", "sender": "drone1",
+             "receivers": "all", "data": {"x": 90.0, "y": 10.0}}  # fmt: skip
+    painter = FramePainter(run.recorder, run.scenario, events=[order], follow="drone3", inset=True)
+    assert painter.size == (int((FIGSIZE[0] + 3.4) * 80), int(FIGSIZE[1] * 80))
+    colour = painter.events[0].colour
+    assert max(1, round(EVENT_SHOWN * 200)) == painter.event_window == 8
+    assert near(painter.draw(104), painter, 90.0, 10.0, colour)
+    assert not near(painter.draw(99), painter, 90.0, 10.0, colour)
+    assert not near(painter.draw(120), painter, 90.0, 10.0, colour)
+    pixels = painter.render(150)
+    statuses = run.recorder.trace("drone3")[150]
+    for (x, y), code in zip(painter.inset_boxes, statuses, strict=False):
+        assert tuple(pixels[y + 2, x + 2, :3]) == tuple(rgb(STATUS_COLOURS[int(code)])), (x, y)

@@ -191,7 +191,8 @@ def cli_run(tmp_path_factory):
 def test_cli_run_writes_parquet_and_run_json(cli_run):
     code, out = cli_run
     assert code == 0
-    assert sorted(p.name for p in out.iterdir()) == ["run.json", "states.parquet"]
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["replay.html", "run.json", "states.parquet", "traces.parquet"]
     table = pq.read_table(out / "states.parquet")
     assert set(EXPECTED_COLUMNS) <= set(table.column_names)
     assert table.column_names[:2] == ["iteration", "agent"]
@@ -239,7 +240,8 @@ def test_cli_run_csv_with_record_every(tmp_path, capsys):
     assert main(argv) == 0
     printed = capsys.readouterr().out
     assert "wrote" in printed and "states.csv" in printed
-    assert sorted(p.name for p in out.iterdir()) == ["run.json", "states.csv"]
+    files = sorted(p.name for p in out.iterdir())
+    assert files == ["replay.html", "run.json", "states.csv", "traces.csv"]
     table = pcsv.read_csv(out / "states.csv")
     assert set(EXPECTED_COLUMNS) <= set(table.column_names)
     assert table.num_rows == (300 // 10 + 1) * 4

@@ -10,7 +10,7 @@ import time
 from collections.abc import Sequence
 from importlib import metadata
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from pyautonomousagent.bt.build import build
 from pyautonomousagent.bt.document import Document, document_from_node
@@ -19,11 +19,21 @@ from pyautonomousagent.bt.leaf import LeafError
 from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.bt.text import to_text
 from pyautonomousagent.bt.trees import tree_by_name
-from pyautonomousagent.recording import write_table
+from pyautonomousagent.recording import (
+    DEFAULT_TRACED,
+    Recorder,
+    node_list,
+    read_table,
+    recorder_from_tables,
+    write_table,
+)
 from pyautonomousagent.scenarios import load, names
 from pyautonomousagent.simulation import Scenario, ScenarioError, Simulation
 from pyautonomousagent.simulation.run import ENGINES
 from pyautonomousagent.simulation.scenario import to_mapping
+
+if TYPE_CHECKING:
+    from pyautonomousagent.render.views import Views
 
 #: Errors that mean bad input: shown as one line, no traceback (TreeFileError is a TreeError).
 USER_ERRORS = (ScenarioError, TreeError, LeafError)
@@ -79,7 +89,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--tree", type=Path, metavar="FILE", help="run this tree file (.xml, .yaml) instead"
     )
+    _add_view_options(run)
     _add_bench(sub)
+    _add_replay(sub)
+    _add_experiments(sub)
     tree = sub.add_parser("tree", help="print, draw or convert a behaviour tree")
     tree.add_argument(
         "source",
@@ -100,6 +113,46 @@ def _parser() -> argparse.ArgumentParser:
         help="text format: the paper's symbols, or py_trees' own drawing",
     )
     return parser
+
+
+def _add_view_options(run: argparse.ArgumentParser) -> None:
+    """``pyaa run``'s options for traces, the animation, the replay and Groot2 logs."""
+    run.add_argument(
+        "--trace",
+        metavar="AGENTS",
+        help="agents whose node statuses are recorded: names (drone2,drone7), a count, all, "
+        "or 0 (default: all of a swarm of at most 10, else the first 10)",
+    )
+    run.add_argument(
+        "--video", choices=["gif", "mp4"], default="gif", help="animation format (default gif)"
+    )
+    run.add_argument(
+        "--follow", metavar="AGENT", help="the agent the animation's panel shows (default: first)"
+    )
+    run.add_argument(
+        "--inset", action="store_true", help="draw the followed agent's tree beside the map"
+    )
+    run.add_argument("--no-replay", action="store_true", help="do not write replay.html")
+    run.add_argument(
+        "--btlog",
+        action="append",
+        default=[],
+        metavar="AGENT",
+        help="also write AGENT.btlog, the agent's trace as a Groot2 log (repeatable)",
+    )
+
+
+def _add_replay(sub: Any) -> None:
+    replay = sub.add_parser("replay", help="write replay.html (and Groot2 logs) of a finished run")
+    replay.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="a folder pyaa run wrote")
+    replay.add_argument("--out", type=Path, help="the page to write (default RUN_DIR/replay.html)")
+    replay.add_argument(
+        "--btlog",
+        action="append",
+        default=[],
+        metavar="AGENT",
+        help="also write RUN_DIR/AGENT.btlog for Groot2 (a traced agent; repeatable)",
+    )
 
 
 def _int_list(text: str) -> list[int]:
@@ -310,28 +363,96 @@ def run(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     progress = None if not args.quiet else False
     sim = Simulation.create(
-        scenario, seed=args.seed, engine=args.engine, record_every=args.record_every
+        scenario,
+        seed=args.seed,
+        engine=args.engine,
+        record_every=args.record_every,
+        trace=_trace_spec(args),
     ).run(progress=progress)
     start = time.perf_counter()
     data = write_table(sim.table(), out / f"states.{args.format}", args.format)
-    sim.timings["write_data"] = time.perf_counter() - start
     written = [data]
-    if not args.no_gif:
-        from pyautonomousagent.render.animation import write_gif
-
-        stats = write_gif(
-            sim.recorder,
-            scenario,
-            out / "animation.gif",
-            frame_every=scenario.frame_every,
-            progress=progress,
-        )
-        sim.timings["animation"] = stats.seconds
-        written.append(stats.path)
+    if sim.recorder.traced.size:
+        written.append(write_table(sim.trace_table(), out / f"traces.{args.format}", args.format))
+    sim.timings["write_data"] = time.perf_counter() - start
+    views = _write_views(sim.recorder, scenario, sim.events, out, args, progress)
+    sim.timings.update(views.timings)
+    written.extend(views.written)
     written.append(_write_summary(sim, args, out / "run.json"))
     if not args.quiet:
         _print_summary(sim, written)
     return 0
+
+
+def _trace_spec(args: argparse.Namespace) -> str | None:
+    """The agents to trace: ``--trace``, plus the agents ``--btlog`` and ``--inset`` need."""
+    needed = list(args.btlog) + ([args.follow] if args.inset and args.follow else [])
+    if not needed:
+        return args.trace
+    return ",".join([args.trace or str(DEFAULT_TRACED), *needed])
+
+
+def _write_views(
+    recorder: Recorder,
+    scenario: Scenario,
+    events: list[dict[str, Any]],
+    out: Path,
+    args: argparse.Namespace,
+    progress: bool | None,
+) -> Views:
+    """The animation, replay.html and Groot2 logs ``args`` ask for, written into ``out``."""
+    from pyautonomousagent.render.video import VideoError
+    from pyautonomousagent.render.views import Views, write_views
+
+    views = Views(
+        video=None if getattr(args, "no_gif", False) else getattr(args, "video", None),
+        replay=not getattr(args, "no_replay", False),
+        btlog=args.btlog,
+        follow=getattr(args, "follow", None) or 0,
+        inset=getattr(args, "inset", False),
+        progress=progress,
+    )
+    try:
+        return write_views(recorder, scenario, events, out, views)
+    except (KeyError, ValueError, VideoError) as error:  # an agent not traced, no ffmpeg, ...
+        message = error.args[0] if isinstance(error, KeyError) and error.args else str(error)
+        raise ScenarioError(str(message)) from None
+
+
+def replay_command(args: argparse.Namespace) -> int:
+    """``pyaa replay``: replay.html (and Groot2 logs) of a run folder that pyaa run wrote."""
+    folder: Path = args.run_dir
+    summary_path = folder / "run.json"
+    if not summary_path.is_file():
+        raise ScenarioError(f"{folder}: no run.json here; give a folder that pyaa run wrote")
+    summary = json.loads(summary_path.read_text())
+    scenario = Scenario.from_mapping(summary["scenario"], source=str(summary_path))
+    states, traces = _read_run_tables(folder)
+    recorder = recorder_from_tables(states, traces, summary.get("trace", {}).get("nodes", ()))
+    out = args.out.parent if args.out else folder
+    views = _write_views(
+        recorder,
+        scenario,
+        summary.get("events", []),
+        out,
+        argparse.Namespace(video=None, no_replay=False, btlog=args.btlog, follow=None, inset=False),
+        None,
+    )
+    if args.out and views.written:
+        views.written[0] = views.written[0].replace(args.out)
+    for path in views.written:
+        print(f"wrote {path}")
+    return 0
+
+
+def _read_run_tables(folder: Path) -> tuple[Any, Any]:
+    """The states and traces tables of a run folder (Parquet or CSV); traces may be None."""
+    for fmt in ("parquet", "csv"):
+        states = folder / f"states.{fmt}"
+        if states.is_file():
+            traces = folder / f"traces.{fmt}"
+            return read_table(states), read_table(traces) if traces.is_file() else None
+    raise ScenarioError(f"{folder}: no states.parquet or states.csv; give a folder pyaa run wrote")
 
 
 def _write_summary(sim: Simulation, args: argparse.Namespace, path: Path) -> Path:
@@ -343,6 +464,10 @@ def _write_summary(sim: Simulation, args: argparse.Namespace, path: Path) -> Pat
         "versions": _versions(),
         "timings_s": {k: round(v, 4) for k, v in sim.timings.items()},
         "events": sim.events,
+        "trace": {
+            "agents": [sim.swarm.names[i] for i in sim.recorder.traced],
+            "nodes": node_list(sim.recorder.nodes),
+        },
     }
     path.write_text(json.dumps(summary, indent=2) + "\n")
     return path
@@ -491,6 +616,174 @@ def tree_command(args: argparse.Namespace) -> int:
     return 0
 
 
+# --- experiments: pyaa sweep, pyaa plot, pyaa measures (library: pyautonomousagent.experiments)
+
+EXPERIMENT_COMMANDS = ("sweep", "plot", "measures")
+
+
+def _add_experiments(sub: Any) -> None:
+    sweep = sub.add_parser("sweep", help="run a parameter sweep with seeds, one row per run")
+    sweep.add_argument("experiment", help="an experiment .yaml file, or a scenario to sweep")
+    sweep.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        metavar="NAME=V1,V2|FROM:TO:STEP",
+        help="a parameter to vary (several: a grid), e.g. refuel_rate=1:3:1",
+    )
+    sweep.add_argument("--seeds", type=int, help="seeds 0..N-1 per point (default 1)")
+    sweep.add_argument("--iterations", type=int, help="iterations per run")
+    sweep.add_argument("--agents", type=int, help="agents per run")
+    sweep.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a fixed override for every run",
+    )
+    sweep.add_argument(
+        "--measure",
+        action="append",
+        default=[],
+        metavar="NAME|NAME=EXPR",
+        help="a registered measure or NAME=expression (default: all registered)",
+    )
+    sweep.add_argument("--engine", choices=["auto", *ENGINES], help="decision engine")
+    sweep.add_argument("--record-every", type=int, metavar="K", help="record every K-th iteration")
+    sweep.add_argument("--out", type=Path, help="sweep folder (default: runs/sweeps/NAME)")
+    sweep.add_argument("--workers", type=int, help="local processes (default: all cores)")
+    sweep.add_argument(
+        "--dask",
+        metavar="ADDRESS|local",
+        help="run on a Dask cluster (scheduler address) or a local Dask cluster",
+    )
+    sweep.add_argument("--serial", action="store_true", help="run in this process, one by one")
+    sweep.add_argument("--resume", action="store_true", help="continue the sweep in --out")
+    sweep.add_argument(
+        "--save-runs",
+        action="store_true",
+        help="also write each run's data under OUT/runs (hive-partitioned)",
+    )
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    plot = sub.add_parser("plot", help="plot a measure of a sweep against a parameter")
+    plot.add_argument("sweep", type=Path, help="a sweep folder (or its results.parquet)")
+    plot.add_argument("--measure", required=True, help="the measure (a results column)")
+    plot.add_argument("--x", required=True, help="the parameter on the horizontal axis")
+    plot.add_argument("--by", help="a second parameter: one line per value")
+    plot.add_argument(
+        "--interval",
+        default="ci95",
+        choices=["ci95", "sd", "range", "none"],
+        help="the band: 95%% CI of the mean (default), sd, min-max, none",
+    )
+    plot.add_argument("--out", type=Path, help="picture file, .png or .svg")
+    sub.add_parser("measures", help="list the registered measures")
+
+
+def _experiment(args: argparse.Namespace) -> Any:
+    import yaml
+
+    from pyautonomousagent.experiments import Experiment
+    from pyautonomousagent.experiments.spec import parse_vary
+
+    source = args.experiment
+    data: dict[str, Any] = {"scenario": source, "name": Path(source).stem + "-sweep"}
+    if source.endswith((".yaml", ".yml")) and Path(source).is_file():
+        loaded = yaml.safe_load(Path(source).read_text())
+        if isinstance(loaded, dict) and "scenario" in loaded:
+            data = {"name": Path(source).stem, **loaded}
+    data["vary"] = {**(data.get("vary") or {}), **parse_vary(args.vary)}
+    data["set"] = {**(data.get("set") or {}), **_parse_overrides(args.set)}
+    if args.agents is not None:
+        data["set"]["agents"] = args.agents
+    measures: list[Any] = []
+    for text in args.measure:
+        name, sep, expression = text.partition("=")
+        measures.append({name: expression} if sep and name.isidentifier() else text)
+    for key, value in (
+        ("seeds", args.seeds),
+        ("iterations", args.iterations),
+        ("engine", args.engine),
+        ("record_every", args.record_every),
+        ("measures", measures or None),
+    ):
+        if value is not None:
+            data[key] = value
+    return Experiment.from_mapping(data, source=source)
+
+
+def sweep_command(args: argparse.Namespace) -> int:
+    """``pyaa sweep``: run an experiment into a sweep folder (see docs/experiments.md)."""
+    from pyautonomousagent.experiments import sweep
+
+    experiment = _experiment(args)
+    out = args.out or Path("runs") / "sweeps" / experiment.name
+    backend = "serial" if args.serial else "dask" if args.dask else "pool"
+    address = None if args.dask in (None, "local") else args.dask
+    if args.workers is not None and args.workers < 1:
+        raise ScenarioError(f"--workers must be a whole number >= 1, got {args.workers}")
+    try:
+        result = sweep(
+            experiment,
+            out,
+            backend,
+            workers=args.workers,
+            address=address,
+            resume=args.resume,
+            save_runs=args.save_runs,
+            progress=False if args.quiet else None,
+        )
+    except KeyboardInterrupt:
+        print(
+            f"pyaa: interrupted; the finished runs are kept in {out}: run the same command "
+            "with --resume to continue",
+            file=sys.stderr,
+        )
+        return 130
+    if not args.quiet:
+        c = result.counts
+        print(
+            f"sweep {experiment.name}: {sum(c.values())} runs ({c['ok']} ok, {c['failed']} "
+            f"failed, {c['skipped']} done before) on {result.backend} in "
+            f"{result.seconds:.1f} s\n  wrote {out / 'results.parquet'}"
+        )
+    return 1 if result.counts["failed"] else 0
+
+
+def plot_command(args: argparse.Namespace) -> int:
+    """``pyaa plot``: a measure against a parameter, mean and interval over seeds."""
+    from pyautonomousagent.experiments.plot import plot_measure, read_results, summarize
+
+    table, _ = read_results(args.sweep)
+    for row in summarize(table, args.measure, args.x, args.by, args.interval):
+        group = f"{args.by}={row['by']} " if args.by else ""
+        print(
+            f"{group}{args.x}={row['x']}: n={row['n']} mean={row['mean']:.6g} "
+            f"[{row['low']:.6g}, {row['high']:.6g}]"
+        )
+    path = plot_measure(args.sweep, args.measure, args.x, args.by, args.out, args.interval)
+    print(f"wrote {path}")
+    return 0
+
+
+def experiments_command(args: argparse.Namespace) -> int:
+    """``pyaa sweep``, ``pyaa plot`` and ``pyaa measures``; bad input is one line (exit 2)."""
+    from pyautonomousagent.experiments import MEASURES, ExperimentError, ExpressionError
+    from pyautonomousagent.experiments.backends import BackendError
+
+    try:
+        if args.command == "sweep":
+            return sweep_command(args)
+        if args.command == "plot":
+            return plot_command(args)
+        for name, measure in MEASURES.items():
+            print(f"{name:22s} {measure.unit:12s} {measure.doc}")
+        return 0
+    except (ExperimentError, ExpressionError, BackendError) as error:
+        print(f"pyaa: error: {error}", file=sys.stderr)
+        return 2
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``pyaa`` console script."""
     try:
@@ -504,6 +797,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return scenarios_command(args.name)
         if args.command == "bench":
             return bench_command(args)
+        if args.command in EXPERIMENT_COMMANDS:
+            return experiments_command(args)
+        if args.command == "replay":
+            return replay_command(args)
         return tree_command(args)
     except USER_ERRORS as error:
         print(f"pyaa: error: {error}", file=sys.stderr)

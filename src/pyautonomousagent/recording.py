@@ -3,19 +3,70 @@
 A :class:`Recorder` keeps one array of shape ``(records, N)`` per recorded column, where
 ``records = iterations // every + 1`` (the initial state, then every ``every``-th
 iteration). Nothing grows during a run. :func:`to_table` turns the arrays into a long
-table (one row per recorded iteration and agent) for Parquet, CSV or pandas.
+table (one row per recorded iteration and agent) for Parquet, CSV or pandas, with each
+column's unit and meaning in its Parquet field metadata (:data:`COLUMN_DOCS`).
+
+Given the tree, a recorder also keeps the tree's **node statuses** (the engine's
+``node_statuses()``, int8 codes of :mod:`pyautonomousagent.bt.status`) of the traced agents,
+shape ``(records, nodes, traced)``, and every agent's **active behaviour**: the leaf that is
+RUNNING after the tick, or else the last leaf (in tick order) that was ticked, as a node index
+``(records, N)`` int16 (-1 before the first tick). :func:`trace_table` writes the traces.
 """
 
 from __future__ import annotations
 
+import json
 import mmap
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
 
-from pyautonomousagent.state import Swarm
+from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.bt.status import INVALID, NAMES, RUNNING
+from pyautonomousagent.state import CONTROL_COLUMNS, MOTION_COLUMNS, Swarm
+
+#: Agents traced by default: all of a swarm this small, else the first this many.
+DEFAULT_TRACED = 10
+
+#: Unit and meaning of every recorded column: name -> (unit, meaning). Units: "" for
+#: dimensionless counts and indices; world units are the scenario's (metres for the X8).
+COLUMN_DOCS: dict[str, tuple[str, str]] = {
+    "iteration": ("iteration", "the loop iteration of this record; 0 is the initial state"),
+    "agent": ("", "the agent's name (drone1, drone2, ...)"),
+    "x": ("world unit", "east position"),
+    "y": ("world unit", "north position"),
+    "speed": ("world unit / iteration", "speed over ground (the X8: airspeed, m/s)"),
+    "heading": ("degree", "heading, clockwise from north (+y), in [0, 360)"),
+    "energy": ("percent", "energy left, 0 to 100; at 0 the agent stops and reads no sensor"),
+    "damage": ("percent", "accumulated radiation damage, 0 to 100"),
+    "radiation": ("percent", "last radiation sensor reading, 0 to 100"),
+    "requested_speed": ("world unit / iteration", "speed the tree asks the control system for"),
+    "requested_heading": ("degree", "heading the tree asks the control system for"),
+    "behaviour": (
+        "",
+        "active behaviour: the leaf RUNNING after the tick, else the last leaf "
+        "ticked (empty before the first tick)",
+    ),
+    "number_ticks": ("", "blackboard: leaf ticks so far (each leaf tick counts one)"),
+    "x_surveillance_position": ("world unit", "blackboard: surveillance position, east"),
+    "y_surveillance_position": ("world unit", "blackboard: surveillance position, north"),
+    "x_refueling_position": ("world unit", "blackboard: own refuelling slot, east"),
+    "y_refueling_position": ("world unit", "blackboard: own refuelling slot, north"),
+    "x_current_destination_position": ("world unit", "blackboard: current destination, east"),
+    "y_current_destination_position": ("world unit", "blackboard: current destination, north"),
+    "index_current_surveillance_position": ("", "blackboard: patrol position flown to (1 or 2)"),
+    "x_surveillance_position_1": ("world unit", "blackboard: patrol position 1, east"),
+    "y_surveillance_position_1": ("world unit", "blackboard: patrol position 1, north"),
+    "x_surveillance_position_2": ("world unit", "blackboard: patrol position 2, east"),
+    "y_surveillance_position_2": ("world unit", "blackboard: patrol position 2, north"),
+    "altitude": ("m", "X8: altitude above ground"),
+    "airspeed": ("m/s", "X8: airspeed"),
+    "roll": ("degree", "X8: roll angle, right wing down positive"),
+    "pitch": ("degree", "X8: pitch angle, nose up positive"),
+}
 
 
 class Recorder:
@@ -26,6 +77,17 @@ class Recorder:
         iterations: the run's length in iterations.
         every: record iteration t when ``t % every == 0`` (decimation); 1 records all.
         extra: more columns to record (e.g. a motion model's state), name -> shape (N,).
+        tree: the tree the engine ticks; given, :meth:`record` takes the node statuses and
+            keeps the traces and the active behaviour.
+        traced: indices of the agents whose node statuses are kept.
+
+    Attributes:
+        groups: the recorded column names by origin: "state", "blackboard", "model".
+        nodes: the tree's nodes in tick order (``Node.walk()``), or [] without a tree.
+        traced: indices of the traced agents, shape (K,).
+        traces: node statuses of the traced agents, shape (records, nodes, K), int8.
+        behaviour: active leaf per agent as a node index, shape (records, N), int16; -1 when
+            none was ticked; None without a tree.
     """
 
     def __init__(
@@ -34,6 +96,8 @@ class Recorder:
         iterations: int,
         every: int = 1,
         extra: Mapping[str, np.ndarray] | None = None,
+        tree: Node | None = None,
+        traced: Sequence[int] = (),
     ) -> None:
         if every < 1:
             raise ValueError(f"record_every must be >= 1, got {every}")
@@ -43,26 +107,124 @@ class Recorder:
         self.iterations = np.zeros(records, dtype=np.int64)
         sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
         self.columns = {k: preallocated((records, swarm.size), v.dtype) for k, v in sources.items()}
+        self.groups = {
+            "state": list(swarm.columns),
+            "blackboard": list(swarm.blackboard),
+            "model": [
+                k for k in extra or {} if k not in swarm.columns and k not in swarm.blackboard
+            ],
+        }
+        self.nodes: list[Node] = list(tree.walk()) if tree is not None else []
+        self._leaf_rows = np.array(
+            [i for i, node in enumerate(self.nodes) if not node.is_control], dtype=np.int16
+        )
+        self.traced = np.asarray(traced if tree is not None else (), dtype=np.intp)
+        self.traces = preallocated((records, len(self.nodes), self.traced.size), np.dtype(np.int8))
+        self.behaviour = preallocated((records, swarm.size), np.dtype(np.int16)) if tree else None
         self.count = 0
+
+    @property
+    def wants_statuses(self) -> bool:
+        """Whether :meth:`record` needs the engine's node statuses (a tree was given)."""
+        return self.behaviour is not None
 
     def due(self, iteration: int) -> bool:
         """Whether ``iteration`` is recorded."""
         return iteration % self.every == 0
 
     def record(
-        self, iteration: int, swarm: Swarm, extra: Mapping[str, np.ndarray] | None = None
+        self,
+        iteration: int,
+        swarm: Swarm,
+        extra: Mapping[str, np.ndarray] | None = None,
+        statuses: np.ndarray | None = None,
     ) -> None:
-        """Copy the swarm's current state (and the ``extra`` columns) into the next record."""
+        """Copy the swarm's current state (and the ``extra`` columns) into the next record.
+
+        ``statuses``: the engine's node statuses after this iteration's tick, shape
+        (nodes, N) int8; required when the recorder has a tree.
+        """
         row = self.count
         self.iterations[row] = iteration
         sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
         for key, values in self.columns.items():
             values[row] = sources[key]
+        if self.behaviour is not None:
+            if statuses is None:
+                raise ValueError("this recorder keeps traces: pass the engine's node statuses")
+            self.traces[row] = statuses[:, self.traced]
+            self.behaviour[row] = active_leaf(statuses, self._leaf_rows)
         self.count += 1
+
+    def trace(self, agent: int | str) -> np.ndarray:
+        """The node statuses of one traced agent (index or name), shape (records so far, nodes)."""
+        index = self.names.index(agent) if isinstance(agent, str) else agent
+        found = np.flatnonzero(self.traced == index)
+        if found.size == 0:
+            traced = ", ".join(self.names[i] for i in self.traced) or "none"
+            raise KeyError(f"agent {self.names[index]!r} was not traced (traced: {traced})")
+        return self.traces[: self.count, :, found[0]]
 
     def column(self, key: str) -> np.ndarray:
         """The recorded values of ``key``, shape (records so far, N)."""
         return self.columns[key][: self.count]
+
+
+def active_leaf(statuses: np.ndarray, leaf_rows: np.ndarray) -> np.ndarray:
+    """Each agent's active leaf as a node index, shape (N,) int16; -1 where no leaf was ticked.
+
+    The active leaf is the first leaf (in tick order) that is RUNNING, or else the last leaf
+    whose status is not INVALID (the last one ticked).
+
+    Args:
+        statuses: node statuses, shape (nodes, N), int8.
+        leaf_rows: node indices of the leaves, ascending, shape (L,).
+    """
+    n = statuses.shape[1]
+    if leaf_rows.size == 0:
+        return np.full(n, -1, dtype=np.int16)
+    leaves = statuses[leaf_rows]
+    running = leaves == RUNNING
+    ticked = leaves != INVALID
+    first_running = running.argmax(axis=0)
+    last_ticked = leaves.shape[0] - 1 - ticked[::-1].argmax(axis=0)
+    chosen = np.where(running.any(axis=0), first_running, last_ticked)
+    return np.where(ticked.any(axis=0), leaf_rows[chosen], -1).astype(np.int16)
+
+
+def traced_agents(names: Sequence[str], trace: int | str | Sequence[str] | None) -> list[int]:
+    """Indices of the agents to trace, ascending.
+
+    Args:
+        names: every agent's name, in order.
+        trace: None (the default: every agent of a swarm of at most :data:`DEFAULT_TRACED`,
+            else the first that many), a count (the first ``trace`` agents; 0 traces none),
+            or a list (or one comma-separated string) of names, counts and "all", whose
+            agents are all traced: ``"4,drone57"`` is the first four and drone57.
+
+    Raises:
+        ValueError: a name that is no agent's, or a negative count; the message names it.
+    """
+    if trace is None:
+        trace = DEFAULT_TRACED
+    if isinstance(trace, int):
+        if trace < 0:
+            raise ValueError(f"trace: a count of agents must be >= 0, got {trace}")
+        return list(range(min(trace, len(names))))
+    items = trace.split(",") if isinstance(trace, str) else list(trace)
+    index = {name: i for i, name in enumerate(names)}
+    chosen: set[int] = set()
+    for item in (str(t).strip() for t in items):
+        if item == "all":
+            chosen.update(range(len(names)))
+        elif item.isdigit():
+            chosen.update(range(min(int(item), len(names))))
+        elif item in index:
+            chosen.add(index[item])
+        elif item:
+            known = f"agents are {names[0]}..{names[-1]}" if names else "the swarm has no agents"
+            raise ValueError(f"trace: no agent named {item!r}; {known} (or give a count, or 'all')")
+    return sorted(chosen)
 
 
 def preallocated(shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
@@ -83,18 +245,194 @@ def preallocated(shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
 
 
 def to_table(recorder: Recorder) -> pa.Table:
-    """The records as a long table: columns ``iteration, agent``, the state, the blackboard."""
+    """The records as a long table: ``iteration, agent``, the state, ``behaviour`` (when the
+    recorder has a tree), the blackboard and model columns.
+
+    Each field's metadata holds its ``unit`` and ``description`` (:data:`COLUMN_DOCS`).
+    """
     records, n = recorder.count, len(recorder.names)
-    agent = pa.DictionaryArray.from_arrays(
-        pa.array(np.tile(np.arange(n, dtype=np.int32), records)), pa.array(recorder.names)
-    )
     data: dict[str, pa.Array] = {
         "iteration": pa.array(np.repeat(recorder.iterations[:records], n)),
-        "agent": agent,
+        "agent": _agent_column(recorder.names, records),
     }
     for key in recorder.columns:
         data[key] = pa.array(recorder.column(key).reshape(-1))
-    return pa.table(data)
+    if recorder.behaviour is not None:
+        data = _insert_after(data, "requested_heading", "behaviour", _behaviour_column(recorder))
+    groups = {key: group for group, keys in recorder.groups.items() for key in keys}
+    return _documented(pa.table(data), groups=groups)
+
+
+def recorder_from_tables(
+    states: pa.Table, traces: pa.Table | None = None, nodes: Sequence[Mapping[str, Any]] = ()
+) -> Recorder:
+    """A :class:`Recorder` holding a written run again (for replays of an existing run).
+
+    Args:
+        states: the states table (:func:`to_table`, as written; CSV reads back too).
+        traces: the traces table (:func:`trace_table`), or None.
+        nodes: the tree's nodes (:func:`node_list`); by default from the traces' metadata.
+    """
+    iteration = states.column("iteration").to_numpy()
+    records = int(np.unique(iteration).size)
+    n = states.num_rows // max(records, 1)
+    recorder = Recorder.__new__(Recorder)
+    recorder.every = int(np.diff(iteration[::n]).min()) if records > 1 else 1
+    recorder.count = records
+    recorder.iterations = iteration[::n].astype(np.int64)
+    recorder.names = [str(a) for a in states.column("agent").to_pylist()[:n]]
+    skip = {"iteration", "agent", "behaviour"}
+    recorder.columns = {
+        f.name: states.column(f.name).to_numpy().reshape(records, n)
+        for f in states.schema
+        if f.name not in skip
+    }
+    recorder.groups = {"state": [], "blackboard": [], "model": []}
+    for name in recorder.columns:
+        meta = states.schema.field(name).metadata or {}
+        group = meta.get(b"group", b"").decode() or (
+            "state" if name in MOTION_COLUMNS or name in CONTROL_COLUMNS else "model"
+        )
+        recorder.groups.setdefault(group, []).append(name)
+    if not nodes and traces is not None and traces.schema.metadata:
+        nodes = json.loads(traces.schema.metadata.get(b"pyautonomousagent.nodes", b"[]"))
+    recorder.nodes = _rebuild(nodes)
+    recorder._leaf_rows = np.array(
+        [i for i, node in enumerate(recorder.nodes) if not node.is_control], dtype=np.int16
+    )
+    recorder.behaviour = _behaviour_codes(states, recorder.nodes, records, n)
+    names = [str(a) for a in traces.column("agent").to_pylist()] if traces is not None else []
+    k = len(dict.fromkeys(names))
+    recorder.traced = np.array([recorder.names.index(a) for a in names[:k]], dtype=np.intp)
+    shape = (records, len(recorder.nodes), k)
+    recorder.traces = np.zeros(shape, dtype=np.int8)
+    if traces is not None and recorder.nodes:
+        for j, node in enumerate(recorder.nodes):
+            column = traces.column(node.name).to_numpy().astype(np.int8)
+            recorder.traces[:, j, :] = column.reshape(records, k)
+    return recorder
+
+
+def _rebuild(nodes: Sequence[Mapping[str, Any]]) -> list[Node]:
+    """:class:`Node` objects (in tick order) from :func:`node_list`'s dicts."""
+    children: dict[int, list[int]] = {i: [] for i in range(len(nodes))}
+    for i, node in enumerate(nodes):
+        if int(node["parent"]) >= 0:
+            children[int(node["parent"])].append(i)
+    built: dict[int, Node] = {}
+    for i in reversed(range(len(nodes))):
+        kids = tuple(built[c] for c in children[i])
+        params = dict(nodes[i].get("params") or {})
+        built[i] = Node(str(nodes[i]["type"]), str(nodes[i]["name"]), kids, params)
+    return [built[i] for i in range(len(nodes))]
+
+
+def _behaviour_codes(
+    states: pa.Table, nodes: Sequence[Node], records: int, n: int
+) -> np.ndarray | None:
+    """The ``behaviour`` column as node indices (records, N), -1 for none; None if absent."""
+    if "behaviour" not in states.column_names or not nodes:
+        return None
+    index = {node.name: i for i, node in enumerate(nodes)}
+    names = states.column("behaviour").to_pylist()
+    codes = np.array([index.get(v, -1) if v else -1 for v in names], dtype=np.int16)
+    return codes.reshape(records, n)
+
+
+def trace_table(recorder: Recorder) -> pa.Table:
+    """The traced agents' node statuses: one row per record and traced agent, columns
+    ``iteration, agent`` and one int8 column per node (named by the node, in tick order).
+
+    The schema metadata holds ``pyautonomousagent.nodes`` (JSON: per node its name, type,
+    parent index and depth) and ``pyautonomousagent.status_codes`` (JSON: code -> name).
+    """
+    records, k = recorder.count, recorder.traced.size
+    names = [recorder.names[i] for i in recorder.traced]
+    data: dict[str, pa.Array] = {
+        "iteration": pa.array(np.repeat(recorder.iterations[:records], k)),
+        "agent": _agent_column(names, records),
+    }
+    statuses = recorder.traces[:records]  # (records, nodes, K)
+    for j, node in enumerate(recorder.nodes):
+        data[node.name] = pa.array(np.ascontiguousarray(statuses[:, j, :]).reshape(-1))
+    status = (
+        "status code",
+        "the node's status after the tick: 0 INVALID (not ticked), 1 SUCCESS, 2 FAILURE, 3 RUNNING",
+    )
+    table = _documented(pa.table(data), {node.name: status for node in recorder.nodes})
+    metadata = {
+        **(table.schema.metadata or {}),
+        b"pyautonomousagent.nodes": json.dumps(node_list(recorder.nodes)).encode(),
+        b"pyautonomousagent.status_codes": json.dumps(NAMES).encode(),
+    }
+    return table.replace_schema_metadata(metadata)
+
+
+def node_list(nodes: Sequence[Node]) -> list[dict[str, object]]:
+    """Nodes in tick order as plain dicts: name, type, parent index (-1: the root), depth and
+    parameters (ports)."""
+    parent: dict[int, int] = {}
+    depth: dict[int, int] = {}
+    for i, node in enumerate(nodes):
+        depth.setdefault(i, 0)
+        parent.setdefault(i, -1)
+        child = i + 1
+        for sub in node.children:
+            parent[child], depth[child] = i, depth[i] + 1
+            child += sum(1 for _ in sub.walk())
+    return [
+        {
+            "name": n.name,
+            "type": n.type,
+            "parent": parent[i],
+            "depth": depth[i],
+            "params": json.loads(json.dumps(dict(n.params), default=str)),
+        }
+        for i, n in enumerate(nodes)
+    ]
+
+
+def _agent_column(names: Sequence[str], records: int) -> pa.DictionaryArray:
+    """Agent names repeated per record, dictionary-encoded (int32 indices)."""
+    indices = np.tile(np.arange(len(names), dtype=np.int32), records)
+    return pa.DictionaryArray.from_arrays(pa.array(indices), pa.array(list(names), pa.string()))
+
+
+def _behaviour_column(recorder: Recorder) -> pa.DictionaryArray:
+    """The active leaf's name per record and agent; null where none was ticked."""
+    assert recorder.behaviour is not None
+    codes = recorder.behaviour[: recorder.count].reshape(-1).astype(np.int32)
+    indices = pa.array(codes, mask=codes < 0)
+    dictionary = pa.array([node.name for node in recorder.nodes], pa.string())
+    return pa.DictionaryArray.from_arrays(indices, dictionary)
+
+
+def _insert_after(
+    data: dict[str, pa.Array], after: str, key: str, value: pa.Array
+) -> dict[str, pa.Array]:
+    """``data`` with ``key`` placed right after ``after`` (at the end if absent)."""
+    items = list(data.items())
+    at = next((i + 1 for i, (k, _) in enumerate(items) if k == after), len(items))
+    return dict([*items[:at], (key, value), *items[at:]])
+
+
+def _documented(
+    table: pa.Table,
+    docs: Mapping[str, tuple[str, str]] | None = None,
+    groups: Mapping[str, str] | None = None,
+) -> pa.Table:
+    """``table`` with each column's unit and description as field metadata, from ``docs``
+    or else :data:`COLUMN_DOCS` (unknown columns get empty strings), and its ``group``
+    (state, blackboard, model) where ``groups`` gives one."""
+    docs = {**COLUMN_DOCS, **(docs or {})}
+    fields = []
+    for field in table.schema:
+        unit, text = docs.get(field.name, ("", ""))
+        metadata = {"unit": unit, "description": text}
+        if groups and field.name in groups:
+            metadata["group"] = groups[field.name]
+        fields.append(field.with_metadata(metadata))
+    return table.cast(pa.schema(fields, metadata=table.schema.metadata))
 
 
 def write_table(table: pa.Table, path: Path, fmt: str = "parquet") -> Path:
@@ -112,6 +450,20 @@ def write_table(table: pa.Table, path: Path, fmt: str = "parquet") -> Path:
     return path
 
 
+def read_table(path: Path) -> pa.Table:
+    """A table written by :func:`write_table` (by the file's ending: .parquet or .csv)."""
+    if path.suffix == ".parquet":
+        import pyarrow.parquet as pq
+
+        return pq.read_table(path)
+    import pyarrow.csv as pcsv
+
+    return pcsv.read_csv(path)
+
+
 def _plain_agent(schema: pa.Schema) -> pa.Schema:
-    """The schema with the dictionary-encoded agent column as plain strings (for CSV)."""
-    return schema.set(schema.get_field_index("agent"), pa.field("agent", pa.string()))
+    """The schema with dictionary-encoded columns (agent, behaviour) as plain strings (CSV)."""
+    for i, field in enumerate(schema):
+        if pa.types.is_dictionary(field.type):
+            schema = schema.set(i, field.with_type(pa.string()))
+    return schema

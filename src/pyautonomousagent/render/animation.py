@@ -1,30 +1,36 @@
-"""Phase 7: the paper's Fig. 5 view of a recorded run, one frame per row, streamed to a GIF.
+"""Phase 7: the paper's Fig. 5 view of a recorded run, one frame per row, streamed to a video.
 
-The layout (Fig. 5): the world box ``[0, width] x [0, height]`` at equal aspect; refuelling
-slots as light-blue circles labelled R1, R2, ...; surveillance positions as "x" markers
-labelled S1, S2, ...; drones as dark-blue circles with a small red dot on the side they head
-to and their 1-based index; beside the plot, a text panel with the first drone's state and
-blackboard and the iteration number.
+The layout (Fig. 5): the world box ``[0, width] x [0, height]`` at equal aspect with the
+mission's marks (a ``list[Mark]``: refuelling slots R1.., surveillance positions S1.., ...);
+agents as dark-blue circles with a small red dot on the side they head to and their 1-based
+index (labels that would overlap another are moved or left out); events as diamonds with a
+line of text above the map for a while after they happen; beside the map, a panel with the
+iteration and the followed agent's active behaviour, state and blackboard (each with its
+unit), and a legend; optionally, an inset with the tree, each node coloured by the followed
+agent's status.
 
-Speed and memory: the static background is drawn once with Matplotlib's Agg canvas (no
-pyplot, no global backend) and each frame only redraws the moving artists on top of a copy of
-it (blitting). :func:`write_gif` writes the GIF itself, frame by frame, with Pillow's encoder
-and one fixed colour table, so it never holds more than one frame. Matplotlib and Pillow are
-imported only when a frame is drawn.
+Speed and memory: the static background (axes, marks, legend, panel labels, tree names) is
+drawn once with Matplotlib's Agg canvas (no pyplot, no global backend); each frame restores
+it and draws only the agents and event marks on top (blitting), then writes the changing
+text with pre-rendered glyphs (:mod:`.glyphs`). :func:`write_animation` streams the frames
+to a GIF (:mod:`.gif`) or an MP4 (:mod:`.video`), never holding more than one. Matplotlib
+and Pillow are imported only when a frame is drawn.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, BinaryIO
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from pyautonomousagent.bt.status import FAILURE, INVALID, RUNNING, SUCCESS
 from pyautonomousagent.progress import Progress
-from pyautonomousagent.recording import Recorder
+from pyautonomousagent.recording import COLUMN_DOCS, Recorder
+from pyautonomousagent.render.events import PlacedEvent, placed_events
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation.scenario import Scenario
 
@@ -32,31 +38,53 @@ if TYPE_CHECKING:
     from PIL import Image
 
 FIGSIZE = (10.0, 6.0)
-"""Figure size in inches; at ``dpi`` 80 a frame is 800 x 480 pixels."""
-AXES_RECT = (0.07, 0.09, 0.55, 0.84)
-"""The plot's [left, bottom, width, height] in figure fractions; the panel is to its right."""
-PANEL_XY = (0.66, 0.92)
-"""Top-left corner of the text panel, figure fractions."""
+"""Figure size in inches without the tree inset; at ``dpi`` 80 a frame is 800 x 480 pixels."""
+INSET_WIDTH = 3.4
+"""Inches added on the right for the tree inset."""
+AXES_INCHES = (0.6, 0.5, 5.6, 4.8)
+"""The map's [left, bottom, width, height] in inches."""
+PANEL_INCHES = (6.35, 5.75)
+"""Top-left corner of the text panel, inches from the figure's bottom-left."""
+TITLE_Y, BANNER_Y = 5.78, 5.45
+"""Baselines of the title and of the event banner, inches from the bottom."""
 DRONE_RADIUS = 0.015
 """A drone's radius as a fraction of the world's larger side (1.5 units in a 100 x 100 world)."""
 MAX_LABELLED = 50
 """Above this many agents the drones are drawn without their index labels."""
-PALETTE_COLOURS = 256
-"""Colours in the GIF's single global colour table (taken from the first frame)."""
 DRONE_COLOUR = "#08306b"
 """Dark blue of the drones and their index labels."""
 HEADING_COLOUR = "#e31a1c"
 """Red of the heading dot."""
+FOLLOW_COLOUR = "#ff7f0e"
+"""Orange of the ring around the followed agent."""
+STATUS_COLOURS = {
+    SUCCESS: "#2ca02c",
+    FAILURE: "#d62728",
+    RUNNING: "#ff9f1c",
+    INVALID: "#d9d9d9",
+}
+"""Inset colour per node status."""
+EVENT_SHOWN = 0.04
+"""An event stays on the map for this fraction of the run's iterations (at least 1)."""
+UNITS = {"world unit": "u", "world unit / iteration": "u/it", "degree": "deg", "percent": "%"}
+"""Short forms of :data:`~pyautonomousagent.recording.COLUMN_DOCS` units in the panel."""
+PANEL_NOTES = (
+    "u: world units  it: iterations",
+    "heading: degrees clockwise from north",
+)
+"""The panel's footnote, explaining its units."""
+LABELS = {"number_ticks": "leaf ticks so far"}
+"""Panel labels that differ from the column name."""
 
 
 @dataclass(frozen=True)
 class AnimationStats:
-    """What :func:`write_gif` wrote.
+    """What :func:`write_animation` wrote.
 
     Attributes:
-        frames: number of frames in the GIF.
+        frames: number of frames in the video.
         seconds: wall time of drawing and encoding, in seconds.
-        path: the GIF file.
+        path: the video file.
         bytes: the file's size in bytes.
     """
 
@@ -83,78 +111,134 @@ def frame_rows(recorder: Recorder, frame_every: int) -> np.ndarray:
     return np.flatnonzero(first)
 
 
-def panel_rows(recorder: Recorder, row: int) -> list[tuple[str, str]]:
-    """The text panel of record ``row`` as (label, value) lines: iteration, first drone's
-    state and blackboard.
+def panel_rows(recorder: Recorder, row: int, agent: int = 0) -> list[tuple[str, str]]:
+    """The text panel of record ``row`` for agent ``agent`` as (label, value) lines.
 
-    Positions in world units, speed in units per iteration (the X8: airspeed in m/s), heading
-    in degrees clockwise from north, energy and damage in percent; the X8 adds its altitude (m)
-    and roll (degrees). Keys that were not recorded are left out, so the labels are the same
-    for every row of a run.
+    The iteration, the agent's active behaviour (when recorded), its state (position, speed,
+    heading, energy, damage, radiation and the motion model's columns) and its blackboard
+    (``x_K``/``y_K`` pairs as one point). Labels carry the unit (see :data:`UNITS`); keys
+    that were not recorded are left out, so the labels are the same for every row of a run.
     """
-    columns = recorder.columns
-
-    def value(key: str, kind: type = float) -> Any:
-        return kind(columns[key][row, 0]) if key in columns else None
-
-    def point(name: str) -> str | None:
-        return _format("({:6.2f}, {:6.2f})", value(f"x_{name}"), value(f"y_{name}"))
-
-    name = recorder.names[0] if recorder.names else "agent 1"
-    lines = [
-        ("Iteration", f"{int(recorder.iterations[row])}"),
-        ("", ""),
-        (f"{name} state", ""),
-        ("  position", _format("({:6.2f}, {:6.2f})", value("x"), value("y"))),
-        ("  speed", _format("{:.3f}", value("speed"))),
-        ("  heading", _format("{:.1f} deg", value("heading"))),
-        ("  altitude", _format("{:.1f} m", value("altitude"))),
-        ("  roll", _format("{:.1f} deg", value("roll"))),
-        ("  energy", _format("{:.1f} %", value("energy"))),
-        ("  damage", _format("{:.1f} %", value("damage"))),
-        ("", ""),
-        (f"{name} blackboard", ""),
-        ("  ticks", _format("{}", value("number_ticks", int))),
-        ("  surveillance", point("surveillance_position")),
-        ("  destination", point("current_destination_position")),
-        ("  patrol index", _format("{}", value("index_current_surveillance_position", int))),
-    ]
-    return [(label, text) for label, text in lines if text is not None]
+    columns, last = recorder.columns, int(recorder.iterations[recorder.count - 1])
+    name = recorder.names[agent] if recorder.names else "agent 1"
+    lines = [("Iteration", f"{int(recorder.iterations[row])} of {last}"), ("Following", name)]
+    if recorder.behaviour is not None:
+        code = int(recorder.behaviour[row, agent])
+        leaf = recorder.nodes[code].name if code >= 0 else "(none yet)"
+        lines += [("Active behaviour (leaf)", ""), ("", leaf)]
+    lines += [("", ""), (f"State of {name}", "")]
+    state = [k for k in recorder.groups.get("state", []) if not k.startswith("requested_")]
+    model = recorder.groups.get("model", [])
+    lines += _value_rows(columns, [k for k in state + model if k in columns], row, agent)
+    board = [k for k in recorder.groups.get("blackboard", []) if k in columns]
+    if board:
+        lines += [("", ""), ("Blackboard", "")]
+        lines += _value_rows(columns, board, row, agent)
+    return lines
 
 
-def _format(template: str, *values: Any) -> str | None:
-    """``template.format(*values)``, or None when a value is None (not recorded)."""
-    return None if any(v is None for v in values) else template.format(*values)
+def _value_rows(
+    columns: Mapping[str, np.ndarray], keys: Sequence[str], row: int, agent: int
+) -> list[tuple[str, str]]:
+    """Panel lines for ``keys``: ``x_K, y_K`` (or ``x, y``) pairs as one point, others alone."""
+    lines: list[tuple[str, str]] = []
+    done: set[str] = set()
+    for key in keys:
+        if key in done:
+            continue
+        if key in ("x", "y") or key.startswith(("x_", "y_")):
+            partner = ("y" if key[0] == "x" else "x") + key[1:]
+            if partner in columns and partner in keys:
+                done.update((key, partner))
+                xk, yk = (key, partner) if key[0] == "x" else (partner, key)
+                stem = key[2:] if len(key) > 1 else "position"
+                label = _label(stem.removesuffix("_position") or "position", COLUMN_DOCS.get(xk))
+                value = f"({columns[xk][row, agent]:.2f}, {columns[yk][row, agent]:.2f})"
+                lines.append((label, value))
+                continue
+        values = columns[key]
+        v = values[row, agent]
+        text = f"{int(v)}" if np.issubdtype(values.dtype, np.integer) else f"{float(v):.2f}"
+        lines.append((_label(key, COLUMN_DOCS.get(key)), text))
+    return lines
+
+
+def _label(key: str, doc: tuple[str, str] | None) -> str:
+    """``"  speed [u/it]"``: the key in words, with its short unit."""
+    words = LABELS.get(key, key.replace("_", " "))
+    unit = UNITS.get(doc[0], doc[0]) if doc else ""
+    return f"  {words}" + (f" [{unit}]" if unit and key not in LABELS else "")
+
+
+def _rgb(colour: str) -> tuple[int, int, int]:
+    from matplotlib.colors import to_rgb
+
+    r, g, b = to_rgb(colour)
+    return round(255 * r), round(255 * g), round(255 * b)
 
 
 class FramePainter:
-    """Draws Fig. 5 frames of one recorded run, reusing one figure for every frame.
-
-    The static background (world box, slots, surveillance marks, axes) is rendered once;
-    :meth:`draw` restores it and redraws only the drones, their labels and the text panel.
+    """Draws the frames of one recorded run, reusing one figure for every frame.
 
     Args:
         recorder: the run's records (x, y and heading are required; shape (records, N)).
-        scenario: the run's scenario (world size, patrol positions).
-        dpi: pixels per inch; the frame is ``FIGSIZE * dpi`` pixels.
+        scenario: the run's scenario (world size and name; the default marks).
+        dpi: pixels per inch; the frame is ``FIGSIZE * dpi`` pixels (wider with the inset).
+        marks: the static marks; by default the scenario's mission's (``Mission.marks()``).
+        events: the run's events (``sim.events``), marked while they are recent.
+        follow: the agent (index or name) the panel and the inset show.
+        inset: draw the tree coloured by the followed agent's statuses (it must be traced).
     """
 
-    def __init__(self, recorder: Recorder, scenario: Scenario, dpi: int = 80) -> None:
+    def __init__(
+        self,
+        recorder: Recorder,
+        scenario: Scenario,
+        dpi: int = 80,
+        marks: Sequence[Mark] | None = None,
+        events: Iterable[Mapping[str, Any]] = (),
+        follow: int | str = 0,
+        inset: bool = False,
+    ) -> None:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
+
+        from pyautonomousagent.render.glyphs import GlyphAtlas
 
         if recorder.count == 0:
             raise ValueError("the recorder holds no records to draw")
         self.recorder = recorder
+        self.follow = _agent_index(recorder, follow)
+        self.trace = recorder.trace(self.follow) if inset else None
         self.radius = DRONE_RADIUS * max(scenario.world)
-        self.figure = Figure(figsize=FIGSIZE, dpi=dpi)
+        self.marks = list(scenario.create_mission().marks() if marks is None else marks)
+        self.events = placed_events(events, recorder)
+        last = int(recorder.iterations[recorder.count - 1])
+        self.event_window = max(1, round(EVENT_SHOWN * last))
+        width = FIGSIZE[0] + (INSET_WIDTH if inset else 0.0)
+        self.figure = Figure(figsize=(width, FIGSIZE[1]), dpi=dpi)
         self.canvas = FigureCanvasAgg(self.figure)
-        self.axes = self.figure.add_axes(AXES_RECT, anchor="W")
-        _draw_background(self.axes, scenario, self.radius)
+        left, bottom, w, h = AXES_INCHES
+        self.axes = self.figure.add_axes(
+            (left / width, bottom / FIGSIZE[1], w / width, h / FIGSIZE[1]), anchor="W"
+        )
+        self.panel_font = GlyphAtlas(9, dpi)
+        self.label_font = GlyphAtlas(8, dpi)
+        _draw_world(self.axes, scenario.world, self.marks)
+        self.figure.text(
+            left / width,
+            TITLE_Y / FIGSIZE[1],
+            f"pyAutonomousAgent: {scenario.name}",
+            fontsize=11,
+            ha="left",
+            va="baseline",
+        )
         self._add_moving_artists(len(recorder.names))
-        self._add_panel()
+        self._add_legend(width)
+        self._add_panel_labels()
+        if inset:
+            self._add_inset(FIGSIZE[0] + 0.1)
         self.canvas.draw()
-        self._place_panel_values()
         self.background = self.canvas.copy_from_bbox(self.figure.bbox)
 
     @property
@@ -166,66 +250,180 @@ class FramePainter:
     def _add_moving_artists(self, agents: int) -> None:
         from matplotlib.collections import EllipseCollection
 
-        def circles(diameter: float, colour: str) -> EllipseCollection:
+        def circles(count: int, diameter: float, face: str, edge: str = "none") -> Any:
             collection = EllipseCollection(
-                np.full(agents, diameter),
-                np.full(agents, diameter),
-                np.zeros(agents),
+                np.full(count, diameter),
+                np.full(count, diameter),
+                np.zeros(count),
                 units="xy",
-                offsets=np.zeros((agents, 2)),
+                offsets=np.zeros((count, 2)),
                 offset_transform=self.axes.transData,
-                facecolors=colour,
-                edgecolors="none",
+                facecolors=face,
+                edgecolors=edge,
+                linewidths=2.0,
                 animated=True,
                 zorder=3,
             )
             self.axes.add_collection(collection, autolim=False)
             return collection
 
-        self.bodies = circles(2 * self.radius, DRONE_COLOUR)
-        self.dots = circles(0.8 * self.radius, HEADING_COLOUR)
-        labelled = agents <= MAX_LABELLED
-        self.labels = [
-            self.axes.text(
-                0,
-                0,
-                str(i + 1),
-                fontsize=8,
-                color=DRONE_COLOUR,
-                ha="left",
-                va="bottom",
-                animated=True,
-                clip_on=True,
-                zorder=4,
+        self.ring = circles(1, 3.4 * self.radius, "none", FOLLOW_COLOUR)
+        self.bodies = circles(agents, 2 * self.radius, DRONE_COLOUR)
+        self.dots = circles(agents, 0.8 * self.radius, HEADING_COLOUR)
+        self.labelled = agents <= MAX_LABELLED
+        self.event_marks = self.axes.scatter(
+            [], [], s=110, marker="D", edgecolors="white", linewidths=1.0, animated=True, zorder=5
+        )
+
+    def _add_legend(self, width: float) -> None:
+        from matplotlib.lines import Line2D
+
+        def entry(label: str, **style: Any) -> Line2D:
+            return Line2D([], [], linestyle="none", label=label, **style)
+
+        handles, seen = [], set()
+        for mark in self.marks:
+            if not mark.legend or mark.legend in seen:
+                continue
+            seen.add(mark.legend)
+            if mark.shape == "point":
+                handles.append(entry(mark.legend, marker=_marker(mark.symbol), color=mark.colour))
+            else:
+                face = mark.colour if mark.fill else "none"
+                shape = "o" if mark.shape == "circle" else "s"
+                handles.append(
+                    entry(
+                        mark.legend,
+                        marker=shape,
+                        markersize=9,
+                        markerfacecolor=face,
+                        markeredgecolor=mark.colour,
+                    )
+                )
+        handles.append(entry("agent (number = drone N)", marker="o", color=DRONE_COLOUR))
+        handles.append(entry("heading", marker="o", markersize=4, color=HEADING_COLOUR))
+        handles.append(
+            entry(
+                "followed agent",
+                marker="o",
+                markersize=11,
+                markerfacecolor="none",
+                markeredgecolor=FOLLOW_COLOUR,
+                markeredgewidth=2,
             )
-            for i in range(agents if labelled else 0)
-        ]
+        )
+        for kind in dict.fromkeys(e.kind for e in self.events):
+            colour = next(e.colour for e in self.events if e.kind == kind)
+            handles.append(entry(f"event: {kind}", marker="D", color=colour))
+        self.figure.legend(
+            handles=handles,
+            loc="lower left",
+            fontsize=8,
+            ncols=2,
+            bbox_to_anchor=(PANEL_INCHES[0] / width, 0.01),
+            frameon=False,
+            handletextpad=0.3,
+            columnspacing=0.8,
+        )
 
-    def _add_panel(self) -> None:
-        """The panel's labels (static, in the background) and values (redrawn per frame).
+    def _add_panel_labels(self) -> None:
+        """The panel's labels and notes (static, in the background); values are per frame."""
+        rows = panel_rows(self.recorder, 0, self.follow)
+        font = self.panel_font
+        self.line_height = font.cell[0] + 1
+        self.panel_left = round(PANEL_INCHES[0] * self.figure.dpi)
+        self.panel_top = round((FIGSIZE[1] - PANEL_INCHES[1]) * self.figure.dpi)
+        longest = max(len(label) for label, _ in rows)
+        self.value_left = self.panel_left + font.width("x" * (longest + 1))
+        text = "\n".join(label for label, _ in rows)
+        notes = "\n".join(PANEL_NOTES)
+        style: dict[str, Any] = {
+            "family": "monospace",
+            "fontsize": 9,
+            "va": "top",
+            "ha": "left",
+            "linespacing": self.line_height / (9 * self.figure.dpi / 72),
+        }
+        height = self.figure.bbox.height
+        self.figure.text(
+            self.panel_left / self.figure.bbox.width,
+            1 - (self.panel_top - 2) / height,
+            text,
+            **style,
+        )
+        notes_top = self.panel_top + self.line_height * (len(rows) + 1)
+        style.update(fontsize=8, color="#555555")
+        self.figure.text(
+            self.panel_left / self.figure.bbox.width, 1 - notes_top / height, notes, **style
+        )
 
-        Only the values are redrawn: text is the costliest thing Agg draws per frame.
-        """
-        labels = "\n".join(label for label, _ in panel_rows(self.recorder, 0))
-        style: dict[str, Any] = {"family": "monospace", "fontsize": 10, "va": "top", "ha": "left"}
-        self.panel_labels = self.figure.text(*PANEL_XY, labels, **style)
-        self.panel = self.figure.text(*PANEL_XY, "", animated=True, **style)
+    def _add_inset(self, left_inches: float) -> None:
+        """The tree's node names (static) beside the status boxes drawn per frame."""
+        dpi, nodes = self.figure.dpi, self.recorder.nodes
+        self.inset_left = round(left_inches * dpi)
+        self.inset_top = self.panel_top + 16
+        self.inset_row = max(
+            9, min(14, round((FIGSIZE[1] * dpi - self.inset_top - 60) / max(1, len(nodes))))
+        )
+        depth = _depths(nodes)
+        width, height = self.figure.bbox.width, self.figure.bbox.height
+        self.figure.text(
+            self.inset_left / width,
+            1 - (self.inset_top - 16) / height,
+            f"Tree of {self.recorder.names[self.follow]}",
+            fontsize=9,
+            va="bottom",
+            ha="left",
+            weight="bold",
+        )
+        self.inset_boxes = []
+        for j, node in enumerate(nodes):
+            x = self.inset_left + 10 * depth[j]
+            y = self.inset_top + j * self.inset_row
+            self.inset_boxes.append((x, y))
+            self.figure.text(
+                (x + 12) / width,
+                1 - (y + self.inset_row / 2) / height,
+                node.name[:40],
+                fontsize=6.5,
+                family="monospace",
+                va="center",
+                ha="left",
+            )
+        y = self.inset_top + len(nodes) * self.inset_row + 8
+        for k, (_code, label) in enumerate(
+            [
+                (SUCCESS, "SUCCESS"),
+                (FAILURE, "FAILURE"),
+                (RUNNING, "RUNNING"),
+                (INVALID, "not ticked"),
+            ]
+        ):
+            x = self.inset_left + 62 * k
+            self.inset_boxes.append((x, y))
+            self.figure.text(
+                (x + 12) / width, 1 - (y + 4) / height, label, fontsize=6.5, va="center", ha="left"
+            )
+        self._legend_codes = [SUCCESS, FAILURE, RUNNING, INVALID]
+        self._status_rgb = {code: np.array(_rgb(c), np.uint8) for code, c in STATUS_COLOURS.items()}
 
-    def _place_panel_values(self) -> None:
-        """Put the values column just right of the drawn labels' longest line."""
-        right = self.panel_labels.get_window_extent().x1 + self.figure.dpi / 8
-        self.panel.set_x(right / self.figure.bbox.width)
-
-    def _update(self, row: int) -> None:
-        """Move the drones and rewrite the panel to record ``row``."""
+    def _update(self, row: int) -> np.ndarray:
+        """Move the artists to record ``row``; the active events, as a boolean mask."""
         columns, r = self.recorder.columns, self.radius
         x, y = columns["x"][row], columns["y"][row]
         heading = np.radians(columns["heading"][row])
         self.bodies.set_offsets(np.column_stack([x, y]))
         self.dots.set_offsets(np.column_stack([x + r * np.sin(heading), y + r * np.cos(heading)]))
-        for label, xi, yi in zip(self.labels, x, y, strict=False):
-            label.set_position((xi + 0.8 * r, yi + 0.8 * r))
-        self.panel.set_text("\n".join(text for _, text in panel_rows(self.recorder, row)))
+        self.ring.set_offsets([[x[self.follow], y[self.follow]]])
+        iteration = int(self.recorder.iterations[row])
+        active = np.array(
+            [e.iteration <= iteration < e.iteration + self.event_window for e in self.events],
+            dtype=bool,
+        )
+        shown = [e for e, a in zip(self.events, active, strict=True) if a and not np.isnan(e.x)]
+        self.event_marks.set_offsets(np.array([[e.x, e.y] for e in shown]).reshape(-1, 2))
+        self.event_marks.set_facecolor([e.colour for e in shown] or "none")
+        return active
 
     def render(self, row: int) -> np.ndarray:
         """The frame of record ``row`` (0 <= row < recorder.count) as RGBA pixels.
@@ -236,12 +434,81 @@ class FramePainter:
         """
         if not 0 <= row < self.recorder.count:
             raise IndexError(f"row {row} is outside the {self.recorder.count} records")
-        self._update(row)
+        active = self._update(row)
         self.canvas.restore_region(self.background)
-        for artist in (self.bodies, self.dots, *self.labels):
+        for artist in (self.ring, self.bodies, self.dots, self.event_marks):
             self.axes.draw_artist(artist)
-        self.figure.draw_artist(self.panel)
-        return np.asarray(self.canvas.buffer_rgba())
+        pixels = np.asarray(self.canvas.buffer_rgba())
+        if not pixels.flags.writeable:
+            pixels = pixels.copy()
+        self._draw_labels(pixels, row)
+        self._draw_panel(pixels, row)
+        self._draw_banner(pixels, [e for e, a in zip(self.events, active, strict=True) if a])
+        if self.trace is not None:
+            self._draw_inset(pixels, row)
+        return pixels
+
+    def label_boxes(self, row: int) -> list[tuple[int, float, float, float, float]]:
+        """Where the agent numbers of record ``row`` go: (agent, left, top, right, bottom) in
+        pixels from the top-left. Each label goes to the upper right of its agent, else to
+        another diagonal, whichever first overlaps no label already placed; a label that fits
+        nowhere is left out (so bunched agents do not pile their numbers up)."""
+        if not self.labelled:
+            return []
+        columns, font = self.recorder.columns, self.label_font
+        points = self.axes.transData.transform(
+            np.column_stack([columns["x"][row], columns["y"][row]])
+        )
+        height = self.figure.bbox.height
+        gap = self.radius * self.axes.transData.get_matrix()[0, 0] * 0.8
+        cell_h = font.cell[0]
+        placed: list[tuple[int, float, float, float, float]] = []
+        for i, (px, py) in enumerate(points):
+            w = font.width(str(i + 1))
+            top_y = height - py
+            for dx, dy in ((1, -1), (1, 1), (-1, -1), (-1, 1)):
+                left = px + gap if dx > 0 else px - gap - w
+                top = top_y - gap - cell_h if dy < 0 else top_y + gap
+                box = (i, left, top, left + w, top + cell_h)
+                if all(
+                    box[3] <= b[1] or box[1] >= b[3] or box[4] <= b[2] or box[2] >= b[4]
+                    for b in placed
+                ):
+                    placed.append(box)
+                    break
+        return placed
+
+    def _draw_labels(self, pixels: np.ndarray, row: int) -> None:
+        """Agent numbers beside the agents (:meth:`label_boxes`)."""
+        colour = _rgb(DRONE_COLOUR)
+        for i, left, top, _, _ in self.label_boxes(row):
+            self.label_font.draw(pixels, str(i + 1), left, top, colour, anchor="top")
+
+    def _draw_panel(self, pixels: np.ndarray, row: int) -> None:
+        font, colour = self.panel_font, (0, 0, 0)
+        for k, (label, value) in enumerate(panel_rows(self.recorder, row, self.follow)):
+            if not value:
+                continue
+            left = self.value_left if label else self.panel_left + font.width("  ")
+            limit = (pixels.shape[1] if self.trace is None else self.inset_left) - left - 4
+            text = value[: max(0, limit // font.cell[1])]
+            font.draw(pixels, text, left, self.panel_top + k * self.line_height, colour, "top")
+
+    def _draw_banner(self, pixels: np.ndarray, active: list[PlacedEvent]) -> None:
+        if not active:
+            return
+        event = active[-1]
+        text = f"iteration {event.iteration}: {event.text}"
+        left = round(AXES_INCHES[0] * self.figure.dpi)
+        baseline = pixels.shape[0] - BANNER_Y * self.figure.dpi
+        self.panel_font.draw(pixels, text[:70], left, baseline, _rgb(event.colour))
+
+    def _draw_inset(self, pixels: np.ndarray, row: int) -> None:
+        assert self.trace is not None
+        codes = [*self.trace[row].tolist(), *self._legend_codes]
+        for (x, y), code in zip(self.inset_boxes, codes, strict=True):
+            h = max(6, self.inset_row - 3)
+            pixels[y + 1 : y + 1 + h, x : x + 10, :3] = self._status_rgb[int(code)]
 
     def draw(self, row: int) -> Image.Image:
         """The frame of record ``row`` as an RGB image (a copy)."""
@@ -250,185 +517,136 @@ class FramePainter:
         return Image.fromarray(np.ascontiguousarray(self.render(row)[..., :3]))
 
 
-def _draw_background(axes: Any, scenario: Scenario, radius: float) -> None:
-    """The static part of Fig. 5 on ``axes``: the world box and the mission's marks."""
-    width, height = scenario.world
+def _agent_index(recorder: Recorder, agent: int | str) -> int:
+    """An agent given by index or name, checked; ValueError naming the agents otherwise."""
+    if isinstance(agent, str):
+        if agent not in recorder.names:
+            names = recorder.names
+            raise ValueError(
+                f"follow: no agent named {agent!r}; agents are {names[0]}..{names[-1]}"
+            )
+        return recorder.names.index(agent)
+    if not 0 <= agent < len(recorder.names):
+        raise ValueError(f"follow: agent index {agent} is outside 0..{len(recorder.names) - 1}")
+    return agent
+
+
+def _depths(nodes: Sequence[Any]) -> list[int]:
+    """Each node's depth, nodes in tick order (``Node.walk()``)."""
+    depth = [0] * len(nodes)
+    index = {id(n): i for i, n in enumerate(nodes)}
+    for i, node in enumerate(nodes):
+        for child in node.children:
+            depth[index[id(child)]] = depth[i] + 1
+    return depth
+
+
+def _marker(symbol: str) -> str:
+    """A Mark's point symbol as a Matplotlib marker."""
+    return {"x": "x", "o": "o", "+": "+", "*": "*", "^": "^", "s": "s"}.get(symbol, "x")
+
+
+def _draw_world(axes: Any, world: tuple[float, float], marks: Sequence[Mark]) -> None:
+    """The static map on ``axes``: the world box and the marks with their labels."""
+    from matplotlib.patches import Circle, Rectangle
+
+    width, height = world
     axes.set_xlim(0, width)
     axes.set_ylim(0, height)
     axes.set_aspect("equal", adjustable="box")
-    axes.set_xlabel("x")
-    axes.set_ylabel("y")
-    axes.set_title(f"pyAutonomousAgent: {scenario.name}", fontsize=11)
-    draw_marks(axes, scenario.create_mission().marks(), radius)
-
-
-def draw_marks(axes: Any, marks: Iterable[Mark], radius: float) -> None:
-    """Draw a mission's marks (world units) on ``axes``; ``radius`` is a drone's radius,
-    the offset of point labels."""
-    from matplotlib.patches import Circle, Rectangle
-
+    axes.set_xlabel("x [world units]")
+    axes.set_ylabel("y [world units]")
+    pad = DRONE_RADIUS * max(world)
     for mark in marks:
+        face = mark.colour if mark.fill else "none"
         if mark.shape == "circle":
-            face = mark.colour if mark.fill else "none"
-            edge = "none" if mark.fill else mark.colour
-            axes.add_patch(Circle((mark.x, mark.y), mark.size, facecolor=face, edgecolor=edge,
-                                  zorder=1))  # fmt: skip
-            at, align = (mark.x - 1.2 * mark.size, mark.y), "right"
+            axes.add_patch(
+                Circle((mark.x, mark.y), mark.size, facecolor=face, edgecolor=mark.colour, zorder=1)
+            )
+            at = (mark.x - mark.size - 0.5 * pad, mark.y, "right", "center")
         elif mark.shape == "rect":
-            face = mark.colour if mark.fill else "none"
-            axes.add_patch(Rectangle((mark.x, mark.y), mark.width, mark.height, facecolor=face,
-                                     edgecolor=mark.colour, zorder=1))  # fmt: skip
-            at, align = (mark.x, mark.y + mark.height), "left"
+            axes.add_patch(
+                Rectangle(
+                    (mark.x, mark.y),
+                    mark.width,
+                    mark.height,
+                    facecolor=face,
+                    edgecolor=mark.colour,
+                    zorder=1,
+                )
+            )
+            at = (mark.x, mark.y + mark.height + 0.3 * pad, "left", "bottom")
         else:
-            size = mark.size or 7
-            axes.plot([mark.x], [mark.y], marker=mark.symbol, color=mark.colour, markersize=size,
-                      linestyle="none", zorder=2)  # fmt: skip
-            at, align = (mark.x + radius, mark.y + radius), "left"
+            axes.plot(
+                [mark.x],
+                [mark.y],
+                marker=_marker(mark.symbol),
+                color=mark.colour,
+                markersize=mark.size or 7,
+                linestyle="none",
+                zorder=2,
+            )
+            at = (mark.x + pad, mark.y + pad, "left", "bottom")
         if mark.label:
-            va = "center" if align == "right" else "bottom"
-            axes.text(*at, mark.label, fontsize=8, ha=align, va=va, zorder=2)
+            x, y, ha, va = at
+            axes.text(x, y, mark.label, fontsize=8, ha=ha, va=va, zorder=2)
 
 
-def draw_frame(recorder: Recorder, scenario: Scenario, row: int = 0, dpi: int = 80) -> Image.Image:
-    """The Fig. 5 picture of record ``row`` as an RGB image (e.g. to show in a notebook).
+def draw_frame(
+    recorder: Recorder, scenario: Scenario, row: int = 0, dpi: int = 80, **options: Any
+) -> Image.Image:
+    """The picture of record ``row`` as an RGB image (e.g. to show in a notebook).
 
     ``row`` indexes records (0 is the initial state), not iterations; with decimated
-    recording, record ``row`` holds iteration ``recorder.iterations[row]``.
+    recording, record ``row`` holds iteration ``recorder.iterations[row]``. ``options`` are
+    :class:`FramePainter`'s (marks, events, follow, inset).
     """
-    return FramePainter(recorder, scenario, dpi).draw(row)
+    return FramePainter(recorder, scenario, dpi, **options).draw(row)
 
 
-class Palette:
-    """A fixed colour table of at most 256 colours, and an exact nearest-colour map onto it.
-
-    Colours are 24-bit codes ``R | G << 8 | B << 16``. The table is built from a sample
-    frame: Pillow's median cut groups its colours into 256 clusters, and each cluster is
-    represented by its most frequent colour (not the mean), so flat colours such as white
-    and the drone blue are kept exactly. Any colour maps to its nearest entry (Euclidean in
-    RGB), computed once per colour and memoised in a 2**24-entry table (32 MB, allocated
-    lazily by the system). Pillow's own palette mapping is not used: it merges colours up to
-    4 levels apart, which turns white into grey.
+def write_animation(
+    recorder: Recorder,
+    scenario: Scenario,
+    path: str | Path,
+    video: str = "gif",
+    frame_every: int = 10,
+    dpi: int = 80,
+    fps: int = 20,
+    progress: bool | None = None,
+    **options: Any,
+) -> AnimationStats:
+    """Draw the run as a video at ``path`` ("gif" or "mp4"), streaming frame by frame.
 
     Args:
-        pixels: the sample frame, RGB or RGBA, shape (height, width, 3|4), uint8.
+        recorder: the run's records; see :func:`frame_rows` for which rows become frames.
+        scenario: the run's scenario (world size, name).
+        path: the file to write (overwritten).
+        video: "gif", or "mp4" (H.264; needs the ``[video]`` extra, imageio-ffmpeg).
+        frame_every: iterations between frames (one frame per window of this many).
+        dpi: pixels per inch; frames are ``FIGSIZE * dpi`` pixels (800 x 480 at 80).
+        fps: frames per second when played. GIF delays are whole hundredths of a second,
+            so the GIF's delay is ``100 / fps`` rounded, and at least 2 (at most 50 fps).
+        progress: show a progress bar; by default only on a terminal.
+        options: :class:`FramePainter`'s marks, events, follow and inset.
+
+    Returns:
+        frames written, wall seconds, the path and the file size in bytes.
     """
+    from pyautonomousagent.render.video import open_stream
 
-    def __init__(self, pixels: np.ndarray) -> None:
-        from PIL import Image
-
-        rgb = Image.fromarray(np.ascontiguousarray(pixels[..., :3]))
-        clusters = np.asarray(rgb.quantize(PALETTE_COLOURS, dither=Image.Dither.NONE))
-        keys, counts = np.unique(
-            clusters.astype(np.int64) << 24 | colour_codes(pixels), return_counts=True
-        )
-        keys = keys[np.lexsort((-counts, keys >> 24))]  # by cluster, most frequent first
-        first = np.r_[True, keys[1:] >> 24 != keys[:-1] >> 24]
-        self.codes = keys[first] & 0xFFFFFF
-        self.rgb = _unpack(self.codes)
-        self._index = np.zeros(1 << 24, dtype=np.uint16)  # entry + 1; 0: not met yet
-
-    def indices(self, codes: np.ndarray) -> np.ndarray:
-        """The table entry of each colour code, uint8 of the same shape."""
-        found = self._index[codes]
-        missing = found == 0
-        if missing.any():
-            new = np.unique(codes[missing])
-            distance = ((_unpack(new)[:, None, :] - self.rgb[None, :, :]) ** 2).sum(axis=2)
-            self._index[new] = distance.argmin(axis=1) + 1
-            found = self._index[codes]
-        return (found - 1).astype(np.uint8)
-
-    def tobytes(self) -> bytes:
-        """The table as ``RGBRGB...`` bytes."""
-        return self.rgb.astype(np.uint8).tobytes()
-
-
-def colour_codes(pixels: np.ndarray) -> np.ndarray:
-    """24-bit codes ``R | G << 8 | B << 16`` of RGB or RGBA pixels (H, W, 3|4) uint8 -> (H, W)."""
-    if pixels.shape[-1] == 4 and pixels.flags.c_contiguous:
-        return pixels.view("<u4")[..., 0] & 0xFFFFFF
-    rgb = pixels[..., :3].astype(np.uint32)
-    return rgb[..., 0] | rgb[..., 1] << 8 | rgb[..., 2] << 16
-
-
-def _unpack(codes: np.ndarray) -> np.ndarray:
-    """Colour codes (K,) -> RGB (K, 3) int64."""
-    codes = codes.astype(np.int64)
-    return np.stack([codes & 0xFF, codes >> 8 & 0xFF, codes >> 16 & 0xFF], axis=1)
-
-
-class GifStream:
-    """Writes an animated, looping GIF one frame at a time, keeping no frames in memory.
-
-    The first frame's colours become the global colour table (:class:`Palette`); every
-    frame is mapped to it. Each frame after the first is stored as the smallest rectangle
-    that differs from the previous frame, drawn over it (disposal "do not dispose").
-    Encoding uses Pillow's GIF helpers and C encoder.
-
-    Args:
-        file: a binary file open for writing.
-        delay_ms: display time of each frame in milliseconds; GIF stores whole hundredths,
-            so a multiple of 10 is exact (others are truncated).
-    """
-
-    def __init__(self, file: BinaryIO, delay_ms: float) -> None:
-        self.file = file
-        self.delay_ms = delay_ms
-        self.palette: Palette | None = None
-        self.previous: np.ndarray | None = None
-        self.frames = 0
-
-    def add(self, pixels: np.ndarray) -> None:
-        """Append one frame: RGB or RGBA pixels, shape (height, width, 3|4), uint8.
-
-        Every frame must have the first frame's size.
-        """
-        from PIL import GifImagePlugin
-
-        if self.palette is None:
-            self.palette = Palette(pixels)
-        codes = colour_codes(pixels)
-        indices = self.palette.indices(codes)
-        if self.previous is None:
-            header, _ = GifImagePlugin.getheader(self._image(indices), info={"loop": 0})
-            self.file.write(b"".join(header))
-        left, top, right, bottom = _changed_box(self.previous, indices)
-        self.previous = indices
-        frame = self._image(indices[top:bottom, left:right])
-        chunks = GifImagePlugin.getdata(
-            frame, offset=(left, top), duration=self.delay_ms, disposal=1
-        )
-        self.file.write(b"".join(chunks))
-        self.frames += 1
-
-    def _image(self, indices: np.ndarray) -> Image.Image:
-        """A "P" image of palette ``indices`` (H, W) uint8 with the stream's colour table."""
-        from PIL import Image
-
-        assert self.palette is not None
-        image = Image.fromarray(np.ascontiguousarray(indices))
-        image.putpalette(self.palette.tobytes())
-        return image
-
-    def close(self) -> None:
-        """Write the GIF trailer (the file itself is left open)."""
-        self.file.write(b";")
-
-
-def _changed_box(previous: np.ndarray | None, current: np.ndarray) -> tuple[int, int, int, int]:
-    """The (left, top, right, bottom) pixel box where ``current`` differs from ``previous``.
-
-    The whole frame when there is no previous frame; one pixel when nothing changed (a GIF
-    frame cannot be empty).
-    """
-    height, width = current.shape
-    if previous is None:
-        return 0, 0, width, height
-    changed = previous != current
-    rows, cols = np.flatnonzero(changed.any(axis=1)), np.flatnonzero(changed.any(axis=0))
-    if rows.size == 0:
-        return 0, 0, 1, 1
-    return int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1
+    if fps <= 0:
+        raise ValueError(f"fps must be > 0, got {fps}")
+    start = time.perf_counter()
+    path = Path(path)
+    rows = frame_rows(recorder, frame_every)
+    painter = FramePainter(recorder, scenario, dpi, **options)
+    bar = Progress(len(rows), video, enabled=progress)
+    with open_stream(video, path, painter.size, fps) as stream:
+        for done, row in enumerate(rows, start=1):
+            stream.add(painter.render(int(row)))
+            bar.update(done)
+    bar.close()
+    return AnimationStats(stream.frames, time.perf_counter() - start, path, path.stat().st_size)
 
 
 def write_gif(
@@ -439,35 +657,9 @@ def write_gif(
     dpi: int = 80,
     fps: int = 20,
     progress: bool | None = None,
+    **options: Any,
 ) -> AnimationStats:
-    """Draw the run as an animated GIF at ``path``, streaming frame by frame.
-
-    Args:
-        recorder: the run's records; see :func:`frame_rows` for which rows become frames.
-        scenario: the run's scenario (world size, patrol positions).
-        path: the GIF file to write (overwritten).
-        frame_every: iterations between frames (one frame per window of this many).
-        dpi: pixels per inch; frames are ``FIGSIZE * dpi`` pixels (800 x 480 at 80).
-        fps: frames per second when played. GIF delays are whole hundredths of a second,
-            so the delay is ``100 / fps`` rounded, and at least 2 (at most 50 fps; browsers
-            play shorter delays slowly).
-        progress: show a progress bar; by default only on a terminal.
-
-    Returns:
-        frames written, wall seconds, the path and the file size in bytes.
-    """
-    if fps <= 0:
-        raise ValueError(f"fps must be > 0, got {fps}")
-    start = time.perf_counter()
-    path = Path(path)
-    rows = frame_rows(recorder, frame_every)
-    painter = FramePainter(recorder, scenario, dpi)
-    bar = Progress(len(rows), "gif", enabled=progress)
-    with path.open("wb") as file:
-        stream = GifStream(file, delay_ms=10 * max(2, round(100 / fps)))
-        for done, row in enumerate(rows, start=1):
-            stream.add(painter.render(int(row)))
-            bar.update(done)
-        stream.close()
-    bar.close()
-    return AnimationStats(stream.frames, time.perf_counter() - start, path, path.stat().st_size)
+    """:func:`write_animation` to an animated, looping GIF."""
+    return write_animation(
+        recorder, scenario, path, "gif", frame_every, dpi, fps, progress, **options
+    )

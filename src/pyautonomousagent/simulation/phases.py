@@ -103,6 +103,9 @@ def deliver_messages(sim: Simulation) -> None:
 
 
 def record(sim: Simulation) -> None:
-    """Phase 6: store the state and blackboard of every agent (on recorded iterations)."""
-    if sim.recorder.due(sim.world.iteration):
-        sim.recorder.record(sim.world.iteration, sim.swarm, sim.model.columns())
+    """Phase 6: store the state and blackboard of every agent, the active behaviours and the
+    traced agents' node statuses (on recorded iterations)."""
+    recorder = sim.recorder
+    if recorder.due(sim.world.iteration):
+        statuses = sim.engine.node_statuses() if recorder.wants_statuses else None
+        recorder.record(sim.world.iteration, sim.swarm, sim.model.columns(), statuses)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -20,12 +20,12 @@ from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, PyTreesEngine
 from pyautonomousagent.progress import Progress
 from pyautonomousagent.randomness import CounterRandom
-from pyautonomousagent.recording import Recorder, to_table
+from pyautonomousagent.recording import Recorder, to_table, trace_table, traced_agents
 from pyautonomousagent.registry import Registry
 from pyautonomousagent.simulation import phases
 from pyautonomousagent.simulation.mission import MessageType, Mission
 from pyautonomousagent.simulation.motion import Model, build_model
-from pyautonomousagent.simulation.scenario import Scenario
+from pyautonomousagent.simulation.scenario import Scenario, ScenarioError
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
@@ -111,6 +111,7 @@ class Simulation:
         record_every: int = 1,
         tree: Node | None = None,
         implementation: str | None = None,
+        trace: int | str | Sequence[str] | None = None,
     ) -> Simulation:
         """Phase 1 and set-up: mission, agents, world, engine and recorder for ``scenario``.
 
@@ -123,6 +124,9 @@ class Simulation:
             tree: a tree description to use instead of the scenario's own.
             implementation: the X8's implementation, "pyfly" or "vectorised", instead of
                 the engine's default (see :mod:`pyautonomousagent.simulation.motion`).
+            trace: the agents whose node statuses are recorded: None (every agent of a
+                small swarm, else the first :data:`~pyautonomousagent.recording.DEFAULT_TRACED`),
+                a count, "all", or names (see :func:`~pyautonomousagent.recording.traced_agents`).
         """
         tree = tree or scenario_tree(scenario)
         engine = choose_engine(tree) if engine == "auto" else engine
@@ -153,7 +157,14 @@ class Simulation:
             world=world,
             model=model,
             engine=decision,
-            recorder=Recorder(swarm, scenario.iterations, record_every, model.columns()),
+            recorder=Recorder(
+                swarm,
+                scenario.iterations,
+                record_every,
+                model.columns(),
+                tree=tree,
+                traced=_traced(swarm.names, trace),
+            ),
             handlers=handlers,
             everyone=np.ones(swarm.size, dtype=bool),
             recorded_types=tuple(name for name, kind in handlers.items() if kind.recorded),
@@ -185,6 +196,10 @@ class Simulation:
         self.timings["simulate"] = self.timings.get("simulate", 0.0) + time.perf_counter() - start
         return self
 
+    def trace_table(self) -> pa.Table:
+        """The traced agents' node statuses: one row per record and traced agent."""
+        return trace_table(self.recorder)
+
     def alert(self, rows: np.ndarray, kind: str, message: str) -> None:
         """Record an ``alert`` event (and log a warning) the first time each agent of ``rows``
         raises an alert of ``kind`` in this run.
@@ -208,3 +223,11 @@ class Simulation:
     def table(self) -> pa.Table:
         """The recorded data: one row per recorded iteration and agent."""
         return to_table(self.recorder)
+
+
+def _traced(names: Sequence[str], trace: int | str | Sequence[str] | None) -> list[int]:
+    """:func:`traced_agents`, its ValueError as a ScenarioError (bad input)."""
+    try:
+        return traced_agents(names, trace)
+    except ValueError as error:
+        raise ScenarioError(str(error)) from None

@@ -1,0 +1,196 @@
+"""Measures: one number per run, computed from the run's recorded data.
+
+A measure is a function of a :class:`RunData` (the recorded columns, events and scenario of
+one run) that returns a float, kept in the registry :data:`MEASURES` with a one-line
+description and a unit. The built-in ones below read what every run records today (state
+columns, blackboard columns, alert and gathering events); missions add their own with
+:func:`register_measure`. An experiment can also use a small expression over the columns
+(:mod:`pyautonomousagent.experiments.expression`).
+
+Not yet available: the fraction of time spent in each behaviour (each branch of the tree)
+needs the recorded node-status traces of issue 10; :func:`fraction_refuelling` gives the
+share of drone-records spent refuelling from the energy column meanwhile.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from pyautonomousagent.experiments.expression import Expression
+from pyautonomousagent.registry import Registry
+
+if TYPE_CHECKING:
+    from pyautonomousagent.simulation import Scenario, Simulation
+
+
+@dataclass(frozen=True)
+class RunData:
+    """What a measure reads of one finished run.
+
+    Attributes:
+        scenario: the scenario that ran (parameters included).
+        seed: the run's seed.
+        iterations: the recorded iterations, shape (records,).
+        columns: each recorded column (state and blackboard), shape (records, N).
+        events: alerts and recorded messages, as in ``Simulation.events``.
+    """
+
+    scenario: Scenario
+    seed: int
+    iterations: np.ndarray
+    columns: Mapping[str, np.ndarray]
+    events: list[dict[str, Any]] = field(default_factory=list)
+
+    @classmethod
+    def from_simulation(cls, sim: Simulation) -> RunData:
+        """The recorded data of ``sim`` (views of its recorder, not copies)."""
+        recorder = sim.recorder
+        columns = {key: recorder.column(key) for key in recorder.columns}
+        return cls(
+            sim.scenario, sim.seed, recorder.iterations[: recorder.count], columns, list(sim.events)
+        )
+
+    @property
+    def agents(self) -> int:
+        """N, the number of agents."""
+        return int(self.scenario.agents)
+
+    def parameter(self, name: str, default: float) -> float:
+        """A scenario parameter by name (``default`` if the scenario has none of that name)."""
+        return float(getattr(self.scenario.parameters, name, default))
+
+    def expression_values(self) -> dict[str, Any]:
+        """Names an expression may use: every column, ``iteration`` (shape (records, 1)),
+        ``agents`` and ``iterations`` (the run's length)."""
+        values: dict[str, Any] = dict(self.columns)
+        values["iteration"] = self.iterations.astype(np.float64)[:, None]
+        values["agents"] = float(self.agents)
+        values["iterations"] = float(self.scenario.iterations)
+        return values
+
+
+@dataclass(frozen=True)
+class Measure:
+    """A named measure of a run.
+
+    Attributes:
+        name: the column it gets in the results.
+        fn: ``fn(run) -> float`` (NaN where it does not apply, e.g. no refuel happened).
+        doc: one line saying what it is.
+        unit: its unit, e.g. ``"iterations"``, ``"%"``, ``"world units"``.
+    """
+
+    name: str
+    fn: Callable[[RunData], float]
+    doc: str = ""
+    unit: str = ""
+
+    def __call__(self, run: RunData) -> float:
+        return float(self.fn(run))
+
+
+def expression_measure(name: str, text: str, unit: str = "") -> Measure:
+    """A measure computed by an expression over the columns (checked now, evaluated later)."""
+    expression = Expression(text)
+    return Measure(name, _Evaluate(expression), f"expression: {text}", unit)
+
+
+@dataclass(frozen=True)
+class _Evaluate:
+    """A picklable ``fn`` for an expression measure."""
+
+    expression: Expression
+
+    def __call__(self, run: RunData) -> float:
+        return self.expression.evaluate(run.expression_values())
+
+
+#: The measures experiments can name.
+MEASURES: Registry[Measure] = Registry("measure")
+
+
+def register_measure(
+    name: str, fn: Callable[[RunData], float], doc: str = "", unit: str = ""
+) -> Measure:
+    """Add a measure under ``name`` (missions call this for their own measures)."""
+    return MEASURES.register(name, Measure(name, fn, doc, unit))
+
+
+def refuel_starts(run: RunData) -> np.ndarray:
+    """Where a refuel begins: energy rises now but did not at the record before,
+    shape (records - 1, N), boolean. Exact when every iteration is recorded."""
+    energy = run.columns["energy"]
+    rising = np.diff(energy, axis=0) > 0.0
+    before = np.zeros_like(rising)
+    before[1:] = rising[:-1]
+    return rising & ~before
+
+
+def refuels(run: RunData) -> float:
+    """Refuels started by all agents together."""
+    return float(np.count_nonzero(refuel_starts(run)))
+
+
+def time_to_first_refuel(run: RunData) -> float:
+    """The iteration at which the first agent starts refuelling (NaN if none does)."""
+    rows = np.flatnonzero(refuel_starts(run).any(axis=1))
+    return float(run.iterations[rows[0] + 1]) if rows.size else float("nan")
+
+
+def minimum_energy(run: RunData) -> float:
+    """The lowest energy level of any agent at any recorded iteration."""
+    return float(run.columns["energy"].min())
+
+
+def distance_flown(run: RunData) -> float:
+    """The path length of all agents together, summed over the recorded positions
+    (a lower bound when not every iteration is recorded)."""
+    x, y = run.columns["x"], run.columns["y"]
+    return float(np.hypot(np.diff(x, axis=0), np.diff(y, axis=0)).sum())
+
+
+def alerts(run: RunData) -> float:
+    """Agents that ran out of energy (one zero-energy alert each)."""
+    return float(sum(1 for event in run.events if event.get("event") == "alert"))
+
+
+def fraction_refuelling(run: RunData) -> float:
+    """The share of agent-records during which energy rises (the agent is refuelling)."""
+    energy = run.columns["energy"]
+    if energy.shape[0] < 2:
+        return float("nan")
+    return float(np.mean(np.diff(energy, axis=0) > 0.0))
+
+
+def gathering_time(run: RunData) -> float:
+    """Iterations from the first gathering order until every agent has come within the
+    destination tolerance of the gathering point (NaN: no order, or not all arrived)."""
+    orders = [e for e in run.events if e.get("event") == "message" and e.get("type") == "gathering"]
+    if not orders:
+        return float("nan")
+    order = orders[0]
+    gx, gy = order["data"]["x"], order["data"]["y"]
+    tolerance = run.parameter("destination_tolerance", 0.5)
+    after = run.iterations >= order["iteration"]
+    near = np.hypot(run.columns["x"] - gx, run.columns["y"] - gy) <= tolerance
+    near &= after[:, None]
+    if not near.any(axis=0).all():
+        return float("nan")
+    arrival = run.iterations[near.argmax(axis=0)]
+    return float(arrival.max() - order["iteration"])
+
+
+for _name, _fn, _unit in (
+    ("refuels", refuels, "refuels"),
+    ("time_to_first_refuel", time_to_first_refuel, "iterations"),
+    ("minimum_energy", minimum_energy, "%"),
+    ("distance_flown", distance_flown, "world units"),
+    ("alerts", alerts, "agents"),
+    ("fraction_refuelling", fraction_refuelling, "fraction"),
+    ("gathering_time", gathering_time, "iterations"),
+):
+    register_measure(_name, _fn, " ".join((_fn.__doc__ or "").split()).rstrip("."), _unit)

@@ -1,0 +1,218 @@
+"""Plots of a sweep: a measure against a parameter, mean and interval over the seeds.
+
+:func:`summarize` groups the results of a sweep by a parameter (and optionally a second one)
+and gives, per group, the number of runs, the mean of the measure and an interval;
+:func:`plot_measure` draws it: one line per value of the second parameter, the interval as a
+band, written as PNG or SVG. Failed runs, and runs where the measure is NaN, are left out
+(the count ``n`` says how many remained).
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from pyautonomousagent.experiments.spec import ExperimentError
+from pyautonomousagent.experiments.store import MANIFEST, RESULTS
+
+#: Intervals :func:`summarize` knows: Student-t 95 % confidence interval of the mean, one
+#: standard deviation either side, the smallest to the largest value, or none.
+INTERVALS = ("ci95", "sd", "range", "none")
+#: Two-sided 95 % quantiles of Student's t distribution by degrees of freedom (published
+#: tables); between entries the next smaller one is used (a slightly wider interval).
+_T95 = {
+    1: 12.706,
+    2: 4.303,
+    3: 3.182,
+    4: 2.776,
+    5: 2.571,
+    6: 2.447,
+    7: 2.365,
+    8: 2.306,
+    9: 2.262,
+    10: 2.228,
+    11: 2.201,
+    12: 2.179,
+    13: 2.160,
+    14: 2.145,
+    15: 2.131,
+    16: 2.120,
+    17: 2.110,
+    18: 2.101,
+    19: 2.093,
+    20: 2.086,
+    25: 2.060,
+    30: 2.042,
+    40: 2.021,
+    60: 2.000,
+    120: 1.980,
+}
+
+
+def t95(df: int) -> float:
+    """The 95 % two-sided Student-t quantile for ``df`` degrees of freedom (1.96 beyond 120)."""
+    if df > 120:
+        return 1.960
+    return _T95[max(k for k in _T95 if k <= df)]
+
+
+def read_results(source: str | Path | pa.Table) -> tuple[pa.Table, dict[str, Any]]:
+    """The results table of a sweep folder, a results file, or a table; and the manifest's
+    measure descriptions (empty if there is no manifest)."""
+    if isinstance(source, pa.Table):
+        return source, {}
+    path = Path(source)
+    folder = path if path.is_dir() else path.parent
+    file = path / RESULTS if path.is_dir() else path
+    if not file.exists():
+        raise ExperimentError(f"no sweep results at {file}; run pyaa sweep first")
+    measures: dict[str, Any] = {}
+    if (folder / MANIFEST).exists():
+        measures = json.loads((folder / MANIFEST).read_text()).get("measures", {})
+    return pq.read_table(file), measures
+
+
+def _column(table: pa.Table, name: str, what: str) -> list[Any]:
+    if name not in table.column_names:
+        close = difflib.get_close_matches(name, table.column_names, n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise ExperimentError(
+            f"unknown {what} {name!r}{hint}; the results have {', '.join(table.column_names)}"
+        )
+    return table[name].to_pylist()
+
+
+def summarize(
+    table: pa.Table, measure: str, x: str, by: str | None = None, interval: str = "ci95"
+) -> list[dict[str, Any]]:
+    """Per (``by``, ``x``) group of the runs that succeeded: ``n``, ``mean``, ``low``, ``high``.
+
+    Raises:
+        ExperimentError: an unknown column or interval, or no successful run.
+    """
+    if interval not in INTERVALS:
+        raise ExperimentError(f"unknown interval {interval!r}; choose from {', '.join(INTERVALS)}")
+    values = _column(table, measure, "measure")
+    xs = _column(table, x, "parameter")
+    groups = _column(table, by, "parameter") if by else [None] * len(xs)
+    status = _column(table, "status", "column")
+    cells: dict[tuple[Any, Any], list[float]] = {}
+    for value, xv, group, state in zip(values, xs, groups, status, strict=True):
+        if state == "ok" and value is not None and not math.isnan(value):
+            cells.setdefault((group, xv), []).append(float(value))
+    if not cells:
+        raise ExperimentError(f"no successful run has a value of {measure!r} to plot")
+    rows = []
+    for (group, xv), found in sorted(cells.items(), key=lambda item: _order(item[0])):
+        data = np.asarray(found)
+        mean = float(data.mean())
+        low, high = _interval(data, interval)
+        rows.append({"by": group, "x": xv, "n": data.size, "mean": mean, "low": low, "high": high})
+    return rows
+
+
+def _order(key: tuple[Any, Any]) -> tuple[str, Any, str, Any]:
+    """Sort numbers as numbers, strings as strings, whatever their mix."""
+    return tuple(  # type: ignore[return-value]
+        part
+        for value in key
+        for part in (("0", value) if isinstance(value, int | float) else ("1", str(value)))
+    )
+
+
+def _interval(data: np.ndarray, interval: str) -> tuple[float, float]:
+    mean = float(data.mean())
+    if interval == "range":
+        return float(data.min()), float(data.max())
+    if interval == "none" or data.size < 2:
+        return mean, mean
+    sd = float(data.std(ddof=1))
+    half = sd if interval == "sd" else t95(data.size - 1) * sd / math.sqrt(data.size)
+    return mean - half, mean + half
+
+
+def plot_measure(
+    source: str | Path | pa.Table,
+    measure: str,
+    x: str,
+    by: str | None = None,
+    out: str | Path | None = None,
+    interval: str = "ci95",
+    title: str | None = None,
+) -> Path:
+    """Draw ``measure`` against the parameter ``x`` (mean and interval over seeds), one line
+    per value of ``by``; write it as PNG or SVG (by ``out``'s suffix) and return the path.
+
+    Args:
+        source: a sweep folder, its ``results.parquet``, or a results table.
+        measure: the measure (a column of the results).
+        x: the parameter on the horizontal axis.
+        by: a second parameter: one line per value.
+        out: the picture (default: ``MEASURE-vs-X.png`` in the sweep folder, or here).
+        interval: "ci95" (default), "sd", "range" or "none".
+        title: the title (default: says what is drawn).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    table, descriptions = read_results(source)
+    rows = summarize(table, measure, x, by, interval)
+    if out is None:
+        folder = Path(source) if isinstance(source, str | Path) else Path(".")
+        folder = folder if folder.is_dir() else folder.parent
+        out = folder / f"{measure}-vs-{x}.png"
+    out = Path(out)
+    if out.suffix.lower() not in (".png", ".svg"):
+        raise ExperimentError(f"plot file {out}: use a .png or .svg name")
+    numeric = all(isinstance(r["x"], int | float) and not isinstance(r["x"], bool) for r in rows)
+    labels = sorted({r["x"] for r in rows}, key=lambda v: _order((v, None)))
+    position = {v: (v if numeric else i) for i, v in enumerate(labels)}
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=120)
+    groups = sorted({r["by"] for r in rows}, key=lambda v: _order((v, None)))
+    for k, group in enumerate(groups):
+        line = [r for r in rows if r["by"] == group]
+        label = f"{by} = {group}" if by else None
+        means = [r["mean"] for r in line]
+        low, high = [r["low"] for r in line], [r["high"] for r in line]
+        if numeric:  # a line, the interval as a band
+            px = [position[r["x"]] for r in line]
+            (drawn,) = ax.plot(px, means, marker="o", label=label)
+            if interval != "none":
+                ax.fill_between(px, low, high, color=drawn.get_color(), alpha=0.2, linewidth=0)
+        else:  # categories: points with error bars, groups side by side
+            shift = (k - (len(groups) - 1) / 2) * 0.08
+            px = [position[r["x"]] + shift for r in line]
+            spread = [
+                [m - lo for m, lo in zip(means, low, strict=True)],
+                [hi - m for m, hi in zip(means, high, strict=True)],
+            ]
+            ax.errorbar(px, means, yerr=spread, fmt="o", capsize=4, label=label)
+    if not numeric:
+        names = [str(v).rsplit("/", 1)[-1] for v in labels]  # a file: its name
+        ax.set_xticks(range(len(labels)), names)
+        ax.set_xlim(-0.5, len(labels) - 0.5)
+    unit = descriptions.get(measure, {}).get("unit", "")
+    ax.set_xlabel(x)
+    ax.set_ylabel(f"{measure} ({unit})" if unit and unit != measure else measure)
+    seeds = sorted({r["n"] for r in rows})
+    n_text = f"{seeds[0]}" if len(seeds) == 1 else f"{seeds[0]}-{seeds[-1]}"
+    band = {"ci95": ", 95 % CI", "sd": ", ± 1 sd", "range": ", min to max", "none": ""}
+    default = f"{measure} vs {x} (mean of {n_text} runs{band[interval]})"
+    ax.set_title(title or default, fontsize=10)
+    ax.grid(True, alpha=0.3)
+    if by:
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out)
+    plt.close(fig)
+    return out

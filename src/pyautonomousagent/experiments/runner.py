@@ -1,0 +1,130 @@
+"""One run of a sweep, as a worker executes it: simulate, measure, optionally save the data.
+
+:func:`execute` is what every backend calls (in this process, a pool process or a Dask
+worker). It never raises for a failing run: the row it returns then has ``status`` "failed"
+and the error's first line, so the sweep goes on. The per-run data, when asked for, is
+written under ``runs/NAME=VALUE/.../seed=S/data.parquet`` (hive partitioning) by renaming a
+finished temporary file, so a worker killed mid-write leaves no partial file and a run done
+again writes the same file.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import time
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+from urllib.parse import quote
+
+from pyautonomousagent.simulation.scenario import to_mapping
+
+if TYPE_CHECKING:
+    from pyautonomousagent.bt.spec import Node
+    from pyautonomousagent.experiments.measures import Measure
+    from pyautonomousagent.experiments.spec import Run
+    from pyautonomousagent.simulation import Scenario
+
+
+@dataclass(frozen=True)
+class RunTask:
+    """Everything a worker needs for one run (picklable).
+
+    Attributes:
+        run: the point, seed and key of the run.
+        scenario: the experiment's base scenario (fixed overrides applied).
+        engine: the decision engine.
+        record_every: recording decimation.
+        measures: the measures to compute.
+        runs_dir: folder of the per-run data, or None not to save it.
+        tree: the scenario's tree, read once by the sweep (so workers need not read the
+            tree file), or None to read it per run (when the tree itself is varied).
+    """
+
+    run: Run
+    scenario: Scenario
+    engine: str
+    record_every: int
+    measures: tuple[Measure, ...]
+    runs_dir: str | None = None
+    tree: Node | None = None
+
+
+def execute(task: RunTask) -> dict[str, Any]:
+    """Run ``task``: one result row (run, run_id, parameters, seed, measures, status, error,
+    seconds). Measures that raise give NaN and the run's status "failed". The run's log
+    (e.g. one warning per drone that runs dry) is silenced: the measures count it."""
+    from pyautonomousagent.experiments.measures import RunData
+    from pyautonomousagent.simulation import Simulation
+
+    run = task.run
+    row: dict[str, Any] = {"run": run.index, "run_id": run.run_id, **run.point, "seed": run.seed}
+    row.update({m.name: math.nan for m in task.measures})
+    row.update({k: v for k, v in scenario_parameters(task.scenario).items() if k not in row})
+    start = time.perf_counter()
+    log = logging.getLogger("pyautonomousagent")
+    was_disabled, log.disabled = log.disabled, True
+    try:
+        scenario = task.scenario.with_overrides(**run.point)
+        sim = Simulation.create(
+            scenario,
+            seed=run.seed,
+            engine=task.engine,
+            record_every=task.record_every,
+            tree=task.tree,
+        ).run(progress=False)
+        data = RunData.from_simulation(sim)
+        for measure in task.measures:
+            row[measure.name] = measure(data)
+        if task.runs_dir is not None:
+            write_run_data(sim, Path(task.runs_dir), run)
+    except Exception as error:  # a failing run is recorded, and the sweep goes on
+        row.update(status="failed", error=one_line(error))
+    else:
+        row.update(status="ok", error=None)
+    finally:
+        log.disabled = was_disabled
+    row["seconds"] = time.perf_counter() - start
+    return row
+
+
+def scenario_parameters(scenario: Any) -> dict[str, Any]:
+    """A scenario's parameters as result columns: ``agents``, ``iterations`` and every
+    entry of its ``parameters`` (plain numbers, strings or booleans only)."""
+    data = to_mapping(scenario)
+    values = {"agents": data["agents"], "iterations": data["iterations"], **data["parameters"]}
+    return {k: v for k, v in values.items() if isinstance(v, bool | int | float | str)}
+
+
+def one_line(error: BaseException) -> str:
+    """``Type: first line of the message`` (at most 300 characters)."""
+    text = str(error).strip().splitlines()
+    message = f"{type(error).__name__}: {text[0] if text else ''}".rstrip(": ")
+    return message[:300]
+
+
+def partition_dir(root: Path, run: Run) -> Path:
+    """``root/NAME=VALUE/.../seed=S`` for the run's point (values URL-quoted)."""
+    path = root
+    for name, value in run.point.items():
+        path = path / f"{name}={quote(str(value), safe='')}"
+    return path / f"seed={run.seed}"
+
+
+def write_run_data(sim: Any, root: Path, run: Run) -> Path:
+    """Write the run's recorded table as ``data.parquet`` in its partition folder."""
+    import pyarrow.parquet as pq
+
+    folder = partition_dir(root, run)
+    folder.mkdir(parents=True, exist_ok=True)
+    target = folder / "data.parquet"
+    temporary = folder / f".{uuid.uuid4().hex}.tmp"
+    try:
+        pq.write_table(sim.table(), temporary)
+        os.replace(temporary, target)
+    finally:
+        temporary.unlink(missing_ok=True)
+    return target

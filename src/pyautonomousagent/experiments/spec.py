@@ -1,0 +1,430 @@
+"""An experiment: a scenario, the parameters to vary, the seeds and the measures.
+
+Written as YAML (or given on the command line, which builds the same mapping)::
+
+    name: threshold                 # optional; names the output folder
+    scenario: patrol                # a registered scenario or a scenario .yaml file
+    iterations: 4000                # optional: the scenario's own otherwise
+    set: {agents: 100}              # optional: fixed overrides of fields or parameters
+    vary:                           # a grid: every combination of the values below
+      low_energy_threshold: {from: 20, to: 50, step: 10}   # 20, 30, 40, 50 (inclusive)
+      refuel_rate: [1, 2]                                   # a list
+    sample:                         # optional: random points (crossed with the grid)
+      count: 8
+      seed: 7
+      parameters:
+        energy_use: {uniform: [0.03, 0.07]}
+        agents: {integers: [10, 100]}     # both ends included
+        tree: {choice: [patrol.xml, my.xml]}
+    seeds: 5                        # seeds 0..4 per point, or a list [3, 7, 11]
+    measures: [refuels, alerts, {low: "mean(energy < 30)"}]
+    engine: auto
+    record_every: 1
+
+:meth:`Experiment.from_mapping` validates it; every error is an :class:`ExperimentError`
+naming the source, the field and what it must be.
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+import itertools
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from pyautonomousagent.experiments.expression import ExpressionError
+from pyautonomousagent.experiments.measures import MEASURES, Measure, expression_measure
+from pyautonomousagent.registry import UnknownNameError
+
+#: The most runs one experiment may hold.
+MAX_RUNS = 1_000_000
+#: Columns of the results that parameters and measures may not be called.
+RESERVED = ("run", "run_id", "seed", "status", "error", "seconds", "worker")
+_KEYS = (
+    "name",
+    "scenario",
+    "iterations",
+    "set",
+    "vary",
+    "sample",
+    "seeds",
+    "measures",
+    "engine",
+    "record_every",
+)
+_DISTRIBUTIONS = ("uniform", "integers", "choice")
+
+
+class ExperimentError(ValueError):
+    """Bad experiment input; the message names the source, the field and the fix."""
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run of an experiment: a point of the parameter space and a seed.
+
+    Attributes:
+        index: position in the experiment's run list (0-based).
+        point: the varied parameters' values, name -> value.
+        seed: the run's seed.
+        run_id: a stable key of (point, seed), the same in every sweep of the experiment.
+    """
+
+    index: int
+    point: dict[str, Any]
+    seed: int
+    run_id: str
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """A validated experiment (see the module docstring for the file format).
+
+    Attributes:
+        scenario: a registered scenario name or a scenario file path.
+        vary: the grid, parameter -> values.
+        sample: random points: ``{"count", "seed", "parameters": {name: (kind, args)}}``,
+            or None.
+        seeds: the seeds run at every point.
+        measures: what is computed per run.
+        fixed: overrides applied to every run (the file's ``set``).
+        iterations: the runs' length, or None for the scenario's.
+        engine: the decision engine.
+        record_every: recording decimation of every run.
+        name: the experiment's name.
+    """
+
+    scenario: str
+    vary: dict[str, list[Any]]
+    seeds: tuple[int, ...]
+    measures: tuple[Measure, ...]
+    sample: dict[str, Any] | None = None
+    fixed: dict[str, Any] = field(default_factory=dict)
+    iterations: int | None = None
+    engine: str = "auto"
+    record_every: int = 1
+    name: str = "experiment"
+
+    @classmethod
+    def from_mapping(cls, data: Any, source: str = "experiment") -> Experiment:
+        """Validate a mapping (a parsed YAML file) into an experiment.
+
+        Raises:
+            ExperimentError: naming ``source`` and the offending field.
+        """
+        return _Reader(source).experiment(data)
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> Experiment:
+        """Read and validate an experiment YAML file."""
+        path = Path(path)
+        try:
+            data = yaml.safe_load(path.read_text())
+        except OSError as error:
+            raise ExperimentError(f"cannot read experiment file {path}: {error.strerror}") from None
+        except yaml.YAMLError as error:
+            first = str(error).replace("\n", " ")
+            raise ExperimentError(f"{path}: not valid YAML: {first}") from None
+        return cls.from_mapping(data, source=str(path))
+
+    @property
+    def parameters(self) -> list[str]:
+        """The varied parameters, in column order (grid first, then sampled)."""
+        sampled = list(self.sample["parameters"]) if self.sample else []
+        return [*self.vary, *(p for p in sampled if p not in self.vary)]
+
+    def points(self) -> list[dict[str, Any]]:
+        """Every point: the grid crossed with the random samples (in that order)."""
+        names = list(self.vary)
+        grid = [
+            dict(zip(names, values, strict=True))
+            for values in itertools.product(*self.vary.values())
+        ]
+        if not self.sample:
+            return grid
+        samples = draw_samples(self.sample)
+        return [{**g, **s} for g in grid for s in samples]
+
+    def runs(self) -> list[Run]:
+        """Every (point, seed) in order: points outer, seeds inner."""
+        out: list[Run] = []
+        for point in self.points():
+            for seed in self.seeds:
+                out.append(Run(len(out), point, seed, run_key(point, seed)))
+        return out
+
+    def to_mapping(self) -> dict[str, Any]:
+        """The experiment as plain data (for the manifest; read back by :meth:`from_mapping`)."""
+        measures: list[Any] = []
+        for m in self.measures:
+            text = m.doc.removeprefix("expression: ")
+            measures.append({m.name: text} if m.doc.startswith("expression: ") else m.name)
+        data: dict[str, Any] = {
+            "name": self.name,
+            "scenario": self.scenario,
+            "iterations": self.iterations,
+            "set": dict(self.fixed),
+            "vary": {k: list(v) for k, v in self.vary.items()},
+            "seeds": list(self.seeds),
+            "measures": measures,
+            "engine": self.engine,
+            "record_every": self.record_every,
+        }
+        if self.sample:
+            params = {
+                k: {kind: list(args)} for k, (kind, args) in self.sample["parameters"].items()
+            }
+            data["sample"] = {**self.sample, "parameters": params}
+        return data
+
+
+def run_key(point: Mapping[str, Any], seed: int) -> str:
+    """A stable 16-hex-digit key of a run: the same point and seed give the same key."""
+    text = json.dumps({"point": dict(point), "seed": seed}, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def draw_samples(sample: Mapping[str, Any]) -> list[dict[str, Any]]:
+    """``count`` random points drawn from the sample's own seed (same seed, same points)."""
+    rng = np.random.default_rng(sample["seed"])
+    points: list[dict[str, Any]] = [{} for _ in range(sample["count"])]
+    for name, (kind, args) in sample["parameters"].items():
+        n = sample["count"]
+        if kind == "uniform":
+            values: list[Any] = [float(v) for v in rng.uniform(args[0], args[1], n)]
+        elif kind == "integers":
+            values = [int(v) for v in rng.integers(args[0], args[1], n, endpoint=True)]
+        else:
+            values = [args[int(i)] for i in rng.integers(0, len(args), n)]
+        for point, value in zip(points, values, strict=True):
+            point[name] = value
+    return points
+
+
+def inclusive_range(start: float, stop: float, step: float) -> list[Any]:
+    """``start, start + step, ...`` up to and including ``stop`` (whole numbers stay whole)."""
+    count = math.floor((stop - start) / step + 1e-9) + 1
+    values = [round(start + i * step, 12) for i in range(count)]
+    whole = all(isinstance(v, int) for v in (start, stop, step))
+    return [int(v) for v in values] if whole else values
+
+
+class _Reader:
+    """Checks one field at a time, naming it in every error."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+
+    def fail(self, path: str, must: str, value: Any) -> ExperimentError:
+        shown = repr(value)
+        shown = shown if len(shown) <= 80 else shown[:77] + "..."
+        return ExperimentError(f"{self.source}: {path} must be {must}, got {shown}")
+
+    def experiment(self, data: Any) -> Experiment:
+        if not isinstance(data, Mapping):
+            raise self.fail("the file", "a mapping of keys to values", data)
+        for key in data:
+            if key not in _KEYS:
+                close = difflib.get_close_matches(str(key), _KEYS, n=1)
+                hint = f" (did you mean {close[0]!r}?)" if close else ""
+                raise ExperimentError(f"{self.source}: unknown key {key!r}{hint}")
+        if "scenario" not in data:
+            raise ExperimentError(f"{self.source}: missing key 'scenario' (a scenario name)")
+        vary = self.vary(data.get("vary") or {})
+        sample = self.sample(data["sample"]) if data.get("sample") is not None else None
+        if not vary and not sample:
+            raise ExperimentError(
+                f"{self.source}: nothing varies; give 'vary' (a grid) or 'sample' (random points)"
+            )
+        experiment = Experiment(
+            scenario=self.text(data["scenario"], "scenario"),
+            vary=vary,
+            sample=sample,
+            seeds=self.seeds(data.get("seeds", 1)),
+            measures=self.measures(data.get("measures")),
+            fixed=self.mapping(data.get("set") or {}, "set"),
+            iterations=self.whole(data["iterations"], "iterations", 1)
+            if data.get("iterations") is not None
+            else None,
+            engine=self.text(data.get("engine", "auto"), "engine"),
+            record_every=self.whole(data.get("record_every", 1), "record_every", 1),
+            name=self.text(data.get("name", "experiment"), "name"),
+        )
+        self.columns(experiment)
+        total = len(experiment.points()) * len(experiment.seeds)
+        if total > MAX_RUNS:
+            raise self.fail("the experiment", f"at most {MAX_RUNS} runs", f"{total} runs")
+        return experiment
+
+    def text(self, value: Any, path: str) -> str:
+        if not isinstance(value, str) or not value:
+            raise self.fail(path, "a non-empty string", value)
+        return value
+
+    def whole(self, value: Any, path: str, minimum: int) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+            raise self.fail(path, f"a whole number >= {minimum}", value)
+        return value
+
+    def number(self, value: Any, path: str) -> float:
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not math.isfinite(value)
+        ):
+            raise self.fail(path, "a number", value)
+        return value
+
+    def mapping(self, value: Any, path: str) -> dict[str, Any]:
+        if not isinstance(value, Mapping) or not all(isinstance(k, str) for k in value):
+            raise self.fail(path, "a mapping of parameter names to values", value)
+        return dict(value)
+
+    def values(self, value: Any, path: str) -> list[Any]:
+        if isinstance(value, Mapping):
+            keys = set(value)
+            if keys != {"from", "to", "step"}:
+                raise self.fail(path, "a list of values or {from: A, to: B, step: S}", value)
+            start = self.number(value["from"], f"{path}.from")
+            stop = self.number(value["to"], f"{path}.to")
+            step = self.number(value["step"], f"{path}.step")
+            if step <= 0 or stop < start:
+                raise self.fail(path, "a range with step > 0 and to >= from", value)
+            if (stop - start) / step >= MAX_RUNS:
+                raise self.fail(path, f"a range of at most {MAX_RUNS} values", value)
+            return inclusive_range(start, stop, step)
+        if not isinstance(value, list) or not value:
+            raise self.fail(path, "a non-empty list of values or {from: A, to: B, step: S}", value)
+        for i, item in enumerate(value):
+            if isinstance(item, list | dict) or item is None:
+                raise self.fail(f"{path}[{i}]", "a number, a string or true/false", item)
+        kinds = {
+            "bool" if isinstance(v, bool) else "str" if isinstance(v, str) else "number"
+            for v in value
+        }
+        if len(kinds) > 1:
+            raise self.fail(path, "values of one kind (numbers, strings or true/false)", value)
+        if len({json.dumps(v) for v in value}) != len(value):
+            raise self.fail(path, "a list without repeated values", value)
+        return list(value)
+
+    def vary(self, data: Any) -> dict[str, list[Any]]:
+        grid = self.mapping(data, "vary")
+        return {name: self.values(values, f"vary.{name}") for name, values in grid.items()}
+
+    def sample(self, data: Any) -> dict[str, Any]:
+        if not isinstance(data, Mapping) or set(data) != {"count", "seed", "parameters"}:
+            raise self.fail("sample", "a mapping with count, seed and parameters", data)
+        params = self.mapping(data["parameters"], "sample.parameters")
+        if not params:
+            raise self.fail("sample.parameters", "at least one parameter", params)
+        out: dict[str, tuple[str, list[Any]]] = {}
+        for name, spec in params.items():
+            path = f"sample.parameters.{name}"
+            if (
+                not isinstance(spec, Mapping)
+                or len(spec) != 1
+                or next(iter(spec)) not in (_DISTRIBUTIONS)
+            ):
+                raise self.fail(
+                    path, "{uniform: [lo, hi]}, {integers: [lo, hi]} or {choice: [values]}", spec
+                )
+            kind, args = next(iter(spec.items()))
+            if kind == "choice":
+                out[name] = (kind, self.values(args, f"{path}.choice"))
+                continue
+            if not isinstance(args, list) or len(args) != 2:
+                raise self.fail(f"{path}.{kind}", "a pair [lo, hi]", args)
+            lo, hi = (self.number(a, f"{path}.{kind}") for a in args)
+            if kind == "integers":
+                lo, hi = (self.whole(a, f"{path}.{kind}", -(2**62)) for a in args)
+            if hi < lo:
+                raise self.fail(f"{path}.{kind}", "a pair [lo, hi] with lo <= hi", args)
+            out[name] = (kind, [lo, hi])
+        return {
+            "count": self.whole(data["count"], "sample.count", 1),
+            "seed": self.whole(data["seed"], "sample.seed", 0),
+            "parameters": out,
+        }
+
+    def seeds(self, value: Any) -> tuple[int, ...]:
+        if isinstance(value, int) and not isinstance(value, bool):
+            if not 1 <= value <= MAX_RUNS:
+                raise self.fail("seeds", f"a count from 1 to {MAX_RUNS} or a list of seeds", value)
+            return tuple(range(value))
+        if not isinstance(value, list) or not value:
+            raise self.fail("seeds", "a count or a non-empty list of seeds", value)
+        seeds = tuple(self.whole(s, f"seeds[{i}]", 0) for i, s in enumerate(value))
+        if len(set(seeds)) != len(seeds):
+            raise self.fail("seeds", "a list without repeated seeds", value)
+        return seeds
+
+    def measures(self, value: Any) -> tuple[Measure, ...]:
+        if value is None:
+            return tuple(MEASURES.get(name) for name in MEASURES.names())
+        if not isinstance(value, list) or not value:
+            raise self.fail(
+                "measures", "a non-empty list of measure names or {name: expression}", value
+            )
+        out: list[Measure] = []
+        for i, item in enumerate(value):
+            path = f"measures[{i}]"
+            if isinstance(item, str):
+                try:
+                    out.append(MEASURES.get(item))
+                except UnknownNameError as error:
+                    raise ExperimentError(f"{self.source}: {path}: {error}") from None
+            elif isinstance(item, Mapping) and len(item) == 1:
+                name, text = next(iter(item.items()))
+                if not isinstance(name, str) or not name.isidentifier():
+                    raise self.fail(path, "{name: expression} with a name like low_energy", item)
+                try:
+                    out.append(expression_measure(name, text))
+                except ExpressionError as error:
+                    raise ExperimentError(f"{self.source}: {path}: {error}") from None
+            else:
+                raise self.fail(path, "a measure name or {name: expression}", item)
+        names = [m.name for m in out]
+        if len(set(names)) != len(names):
+            raise self.fail("measures", "a list without repeated names", names)
+        return tuple(out)
+
+    def columns(self, experiment: Experiment) -> None:
+        """Parameters, measures and the reserved result columns must not share a name."""
+        seen: dict[str, str] = {name: "a result column" for name in RESERVED}
+        for name in experiment.parameters:
+            if name in seen:
+                raise ExperimentError(
+                    f"{self.source}: parameter {name!r} is {seen[name]}; it cannot be varied"
+                )
+            seen[name] = "a varied parameter"
+        for m in experiment.measures:
+            if m.name in seen:
+                raise ExperimentError(
+                    f"{self.source}: measure {m.name!r} is {seen[m.name]}; rename the measure"
+                )
+
+
+def parse_vary(items: Sequence[str]) -> dict[str, Any]:
+    """``--vary`` options as the file's ``vary`` mapping: ``name=1,2,3`` (a list) or
+    ``name=20:50:5`` (20, 25, ..., 50, inclusive)."""
+    vary: dict[str, Any] = {}
+    for item in items:
+        name, sep, text = item.partition("=")
+        if not sep or not name.strip() or not text.strip():
+            raise ExperimentError(f"--vary needs NAME=V1,V2,... or NAME=FROM:TO:STEP, got {item!r}")
+        parts = text.split(":")
+        if len(parts) == 3:
+            start, stop, step = (yaml.safe_load(p) for p in parts)
+            vary[name.strip()] = {"from": start, "to": stop, "step": step}
+        else:
+            vary[name.strip()] = [yaml.safe_load(v) for v in text.split(",") if v.strip()]
+    return vary

@@ -1,0 +1,190 @@
+"""A sweep's folder: the manifest, the journal of finished runs, and the results.
+
+::
+
+    OUT/experiment.json        the manifest: experiment, base scenario, runs, backend,
+                               versions, counts, start and end times
+    OUT/journal/part-*.parquet rows of finished runs, appended in batches as they finish
+    OUT/results.parquet        one row per run (the journal's last row of each run)
+    OUT/runs/NAME=VALUE/.../seed=S/data.parquet   each run's recorded data (optional)
+
+Every file is written to a temporary name and renamed, so an interrupted or killed sweep
+leaves whole files only: the journal holds exactly the runs that finished, and
+``--resume`` runs the others.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import uuid
+from collections.abc import Iterable, Mapping, Sequence
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import pyarrow as pa
+import pyarrow.compute as pc
+import pyarrow.parquet as pq
+
+MANIFEST = "experiment.json"
+RESULTS = "results.parquet"
+JOURNAL = "journal"
+RUNS = "runs"
+
+
+def atomic_write_bytes(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file and a rename."""
+    temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
+    try:
+        temporary.write_bytes(data)
+        os.replace(temporary, path)
+    finally:
+        temporary.unlink(missing_ok=True)
+
+
+def atomic_write_table(table: pa.Table, path: Path) -> None:
+    """Write ``table`` as Parquet to ``path`` through a temporary file and a rename."""
+    temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
+    try:
+        pq.write_table(table, temporary)
+        os.replace(temporary, path)
+    finally:
+        temporary.unlink(missing_ok=True)
+
+
+def column_type(values: Sequence[Any]) -> pa.DataType:
+    """The Arrow type of a parameter's values: bool, int64, float64 or string."""
+    if all(isinstance(v, bool) for v in values):
+        return pa.bool_()
+    if all(isinstance(v, int) and not isinstance(v, bool) for v in values):
+        return pa.int64()
+    if all(isinstance(v, int | float) and not isinstance(v, bool) for v in values):
+        return pa.float64()
+    return pa.string()
+
+
+def results_schema(
+    parameters: Mapping[str, Sequence[Any]],
+    measures: Sequence[str],
+    constants: Mapping[str, Any] | None = None,
+) -> pa.Schema:
+    """The results' columns: run, run_id, each varied parameter, seed, each measure, status,
+    error, seconds, then each parameter the experiment does not vary (``constants``), so
+    that every run's row holds all its parameters."""
+    fields = [pa.field("run", pa.int64()), pa.field("run_id", pa.string())]
+    fields += [pa.field(name, column_type(values)) for name, values in parameters.items()]
+    fields.append(pa.field("seed", pa.int64()))
+    fields += [pa.field(name, pa.float64()) for name in measures]
+    fields += [
+        pa.field("status", pa.string()),
+        pa.field("error", pa.string()),
+        pa.field("seconds", pa.float64()),
+    ]
+    taken = {f.name for f in fields}
+    for name, value in (constants or {}).items():
+        if name not in taken:
+            fields.append(pa.field(name, column_type([value])))
+    return pa.schema(fields)
+
+
+class Journal:
+    """The finished runs of a sweep folder, appended in batches of whole files.
+
+    Args:
+        out: the sweep folder.
+        schema: the results' schema (:func:`results_schema`).
+    """
+
+    def __init__(self, out: Path, schema: pa.Schema) -> None:
+        self.folder = out / JOURNAL
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.schema = schema
+        self.buffer: list[dict[str, Any]] = []
+        parts = self.parts()
+        self.next_part = int(parts[-1].stem.split("-")[1]) + 1 if parts else 0
+
+    def parts(self) -> list[Path]:
+        """The journal's files, in the order they were written."""
+        return sorted(self.folder.glob("part-*.parquet"))
+
+    def read(self) -> pa.Table:
+        """Every row written so far (flushed), in journal order."""
+        tables = [
+            pq.read_table(p).select(self.schema.names).cast(self.schema) for p in self.parts()
+        ]
+        return pa.concat_tables(tables) if tables else self.schema.empty_table()
+
+    def append(self, row: Mapping[str, Any]) -> None:
+        """Hold ``row`` until the next :meth:`flush`."""
+        self.buffer.append(dict(row))
+
+    def flush(self) -> None:
+        """Write the held rows as the next part (nothing if none are held)."""
+        if not self.buffer:
+            return
+        rows = [{name: row.get(name) for name in self.schema.names} for row in self.buffer]
+        table = pa.Table.from_pylist(rows, schema=self.schema)
+        atomic_write_table(table, self.folder / f"part-{self.next_part:06d}.parquet")
+        self.next_part += 1
+        self.buffer = []
+
+    def finished(self) -> set[str]:
+        """The run_ids whose latest row has status "ok"."""
+        latest = last_row_per_run(self.read())
+        ok = pc.equal(latest["status"], "ok")
+        return set(latest.filter(ok)["run_id"].to_pylist())
+
+
+def last_row_per_run(table: pa.Table) -> pa.Table:
+    """For each run_id, its last row in ``table``; sorted by ``run``."""
+    if table.num_rows == 0:
+        return table
+    ids = table["run_id"].to_pylist()
+    last = {run_id: i for i, run_id in enumerate(ids)}
+    kept = table.take(pa.array(sorted(last.values()), pa.int64()))
+    return kept.sort_by("run")
+
+
+def write_results(journal: Journal, out: Path) -> pa.Table:
+    """Compact the journal into ``results.parquet`` (one row per run) and return it."""
+    table = last_row_per_run(journal.read())
+    atomic_write_table(table, out / RESULTS)
+    return table
+
+
+def read_manifest(out: Path) -> dict[str, Any] | None:
+    """The folder's manifest, or None if there is none."""
+    path = out / MANIFEST
+    if not path.exists():
+        return None
+    data: dict[str, Any] = json.loads(path.read_text())
+    return data
+
+
+def write_manifest(out: Path, manifest: Mapping[str, Any]) -> Path:
+    """Write the manifest (pretty JSON) atomically."""
+    path = out / MANIFEST
+    atomic_write_bytes(path, (json.dumps(manifest, indent=2, default=str) + "\n").encode())
+    return path
+
+
+def versions(
+    packages: Iterable[str] = (
+        "pyautonomousagent",
+        "numpy",
+        "pyarrow",
+        "py_trees",
+        "dask",
+        "distributed",
+    ),
+) -> dict[str, str]:
+    """Python's and the installed packages' versions."""
+    found = {"python": platform.python_version()}
+    for name in packages:
+        try:
+            found[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            continue
+    return found

@@ -1,0 +1,368 @@
+"""Run an experiment: every point x seed on a backend, into a sweep folder.
+
+:func:`sweep` is the library function behind ``pyaa sweep``; call it from a notebook::
+
+    from pyautonomousagent.experiments import Experiment, sweep
+    result = sweep(Experiment.from_file("threshold.yaml"), "runs/threshold")
+    result.table.to_pandas()
+
+Before anything runs, every varied value is checked against the scenario, expression
+measures against the recorded columns, and the estimated memory of the largest run against
+what a worker may use. Runs are journaled as they finish (see
+:mod:`pyautonomousagent.experiments.store`); a run that raises is recorded as failed with
+its message and the sweep goes on; ``resume=True`` skips the runs already done.
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import pyarrow as pa
+
+from pyautonomousagent.experiments.backends import Backend, make_backend
+from pyautonomousagent.experiments.expression import Expression
+from pyautonomousagent.experiments.measures import _Evaluate
+from pyautonomousagent.experiments.runner import RunTask, execute, one_line, scenario_parameters
+from pyautonomousagent.experiments.spec import Experiment, ExperimentError, Run
+from pyautonomousagent.experiments.store import (
+    RESULTS,
+    RUNS,
+    Journal,
+    read_manifest,
+    results_schema,
+    versions,
+    write_manifest,
+    write_results,
+)
+from pyautonomousagent.progress import Progress
+from pyautonomousagent.simulation.run import scenario_tree
+
+#: Freed memory a worker process may keep: the trim threshold set by ``allocator.py``
+#: (4 x 32 MiB), which the batched engine applies to every process it runs in.
+ALLOCATOR_RETAINED_BYTES = 4 * 32 * 1024 * 1024
+#: Share of a worker's memory a run may use (Dask pauses a worker at 80 % of its limit).
+MEMORY_SHARE = 0.8
+_NOT_VARIED = ("name", "description", "parameters")
+
+
+@dataclass
+class SweepResult:
+    """What a sweep did.
+
+    Attributes:
+        out: the sweep folder.
+        table: the results, one row per run (also ``out/results.parquet``).
+        counts: runs "ok", "failed" and "skipped" (done before, with ``resume``).
+        seconds: wall-clock time of the sweep.
+        backend: the backend's name and workers, e.g. ``"pool x 2"``.
+    """
+
+    out: Path
+    table: pa.Table
+    counts: dict[str, int] = field(default_factory=dict)
+    seconds: float = 0.0
+    backend: str = ""
+
+
+def base_scenario(experiment: Experiment) -> Any:
+    """The experiment's scenario with its fixed overrides and iterations applied."""
+    from pyautonomousagent.scenarios import load
+    from pyautonomousagent.simulation import ScenarioError
+
+    try:
+        scenario = load(experiment.scenario)
+        return scenario.with_overrides(iterations=experiment.iterations, **experiment.fixed)
+    except ScenarioError as error:
+        raise ExperimentError(f"experiment {experiment.name!r}: {error}") from None
+
+
+def check(experiment: Experiment, scenario: Any) -> list[str]:
+    """Check every varied value against ``scenario`` and the expression measures against
+    the recorded columns; return the names an expression may use.
+
+    Raises:
+        ExperimentError: an unknown parameter, a bad value, or an unknown column.
+    """
+    from pyautonomousagent.simulation import ScenarioError, Simulation
+    from pyautonomousagent.simulation.scenario import to_mapping
+
+    data = to_mapping(scenario)
+    known = [k for k in data if k not in _NOT_VARIED] + list(data["parameters"])
+    values: dict[str, set[str]] = {}
+    for point in experiment.points():
+        for name, value in point.items():
+            values.setdefault(name, set()).add(json.dumps(value))
+    for name, texts in values.items():
+        if name not in known:
+            close = difflib.get_close_matches(name, known, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ExperimentError(
+                f"experiment {experiment.name!r}: unknown parameter {name!r}{hint}"
+            )
+        for text in sorted(texts):
+            value = json.loads(text)
+            _check_tree(name, value, experiment.name)
+            try:
+                scenario.with_overrides(**{name: value})
+            except ScenarioError as error:
+                raise ExperimentError(f"experiment {experiment.name!r}: {error}") from None
+    probe = Simulation.create(
+        scenario.with_overrides(agents=1, iterations=1), seed=0, engine=experiment.engine
+    )
+    names = [*probe.recorder.columns, "iteration", "agents", "iterations"]
+    for measure in experiment.measures:
+        if isinstance(measure.fn, _Evaluate):
+            _check_names(measure.name, measure.fn.expression, names)
+    return names
+
+
+def _check_tree(name: str, value: Any, experiment: str) -> None:
+    """A varied tree file must exist (it is read on the worker, relative to its folder)."""
+    from pyautonomousagent.bt.files import is_tree_file
+
+    tree_file = name == "tree" and isinstance(value, str) and is_tree_file(value)
+    if tree_file and not Path(value).is_file():
+        raise ExperimentError(
+            f"experiment {experiment!r}: tree: no file {value!r} (a varied tree is a path "
+            "relative to the working directory, or an absolute one)"
+        )
+
+
+def _check_names(name: str, expression: Expression, known: list[str]) -> None:
+    for column in expression.names:
+        if column not in known:
+            close = difflib.get_close_matches(column, known, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ExperimentError(f"measure {name!r}: unknown column {column!r}{hint}")
+
+
+def run_bytes(experiment: Experiment, scenario: Any, columns: int, save_runs: bool) -> int:
+    """Estimated peak memory of the experiment's largest run: its records (8 bytes per
+    column, agent and record; twice when the run's table is written) and the freed memory
+    the allocator keeps."""
+    points = experiment.points()
+    agents = max(int(p.get("agents", scenario.agents)) for p in points)
+    iterations = max(int(p.get("iterations", scenario.iterations)) for p in points)
+    records = iterations // experiment.record_every + 1
+    recorded = records * agents * columns * 8 * (2 if save_runs else 1)
+    return recorded + ALLOCATOR_RETAINED_BYTES
+
+
+def check_memory(needed: int, backend: Backend) -> None:
+    """Refuse a sweep whose largest run would not fit in a worker."""
+    available = backend.memory_per_worker()
+    if available is None or needed <= MEMORY_SHARE * available:
+        return
+    raise ExperimentError(
+        f"the largest run needs about {needed / 2**20:.0f} MiB but a {backend.name} worker may "
+        f"use {MEMORY_SHARE * available / 2**20:.0f} MiB; record less (--record-every), run "
+        "fewer agents, or give the workers more memory"
+    )
+
+
+def sweep(
+    experiment: Experiment,
+    out: str | Path,
+    backend: Backend | str = "pool",
+    *,
+    workers: int | None = None,
+    address: str | None = None,
+    resume: bool = False,
+    save_runs: bool = False,
+    progress: bool | None = None,
+    on_result: Callable[[dict[str, Any]], None] | None = None,
+    flush_every: int = 50,
+    flush_seconds: float = 5.0,
+) -> SweepResult:
+    """Run every point x seed of ``experiment`` into the folder ``out``.
+
+    Args:
+        experiment: what to run.
+        out: the sweep folder (created; must not hold another sweep unless ``resume``).
+        backend: "pool" (local processes, default), "serial", "dask" (``address`` of a
+            scheduler, or a local Dask cluster), or a :class:`Backend` (then not closed here).
+        workers: processes of the local pool or local Dask cluster (default: all cores).
+        address: the Dask scheduler's address, e.g. ``"tcp://10.0.0.5:8786"``.
+        resume: continue the sweep in ``out``: runs already done are skipped.
+        save_runs: also write each run's recorded data under ``out/runs`` (hive-partitioned).
+        progress: show a progress bar with ETA (default: when standard error is a terminal).
+        on_result: called with each result row as it arrives.
+        flush_every: journal finished runs at least every this many runs...
+        flush_seconds: ...and every this many seconds.
+
+    Raises:
+        ExperimentError: bad experiment, ``out`` holds another sweep, or a run too large.
+    """
+    out = Path(out)
+    scenario = base_scenario(experiment)
+    columns = check(experiment, scenario)
+    runs = experiment.runs()
+    previous = _previous_manifest(out, experiment, resume)
+    points = experiment.points()
+    schema = results_schema(
+        {name: [p[name] for p in points] for name in experiment.parameters},
+        [m.name for m in experiment.measures],
+        scenario_parameters(scenario),
+    )
+    owned = isinstance(backend, str)
+    chosen = make_backend(backend, workers, address) if isinstance(backend, str) else backend
+    try:
+        check_memory(run_bytes(experiment, scenario, len(columns) - 3, save_runs), chosen)
+    except ExperimentError:
+        if owned:
+            chosen.close()
+        raise
+    start = time.perf_counter()
+    out.mkdir(parents=True, exist_ok=True)
+    journal = Journal(out, schema)
+    done = journal.finished() if resume else set()
+    todo = [run for run in runs if run.run_id not in done]
+    counts = {"ok": 0, "failed": 0, "skipped": len(runs) - len(todo)}
+    manifest = _manifest(experiment, scenario, runs, chosen, previous)
+    try:
+        write_manifest(out, manifest)
+        tasks = _tasks(experiment, scenario, todo, out / RUNS if save_runs else None)
+        _execute(
+            tasks,
+            chosen,
+            journal,
+            counts,
+            experiment.name,
+            progress,
+            on_result,
+            (flush_every, flush_seconds),
+        )
+        manifest["status"] = "finished"
+    except BaseException:
+        manifest["status"] = "interrupted"
+        raise
+    finally:
+        journal.flush()
+        if owned:
+            chosen.close()
+        table = write_results(journal, out)
+        manifest.update(counts=counts, finished_at=_now(), seconds=time.perf_counter() - start)
+        write_manifest(out, manifest)
+    workers_text = f"{chosen.name} x {manifest['backend']['workers']}"
+    return SweepResult(out, table, counts, time.perf_counter() - start, workers_text)
+
+
+def _tasks(
+    experiment: Experiment, scenario: Any, runs: list[Run], runs_dir: Path | None
+) -> list[RunTask]:
+    """One task per run; the tree is read once here unless the tree itself is varied."""
+    tree = None if "tree" in experiment.parameters else scenario_tree(scenario)
+    folder = str(runs_dir.resolve()) if runs_dir is not None else None
+    return [
+        RunTask(
+            run,
+            scenario,
+            experiment.engine,
+            experiment.record_every,
+            experiment.measures,
+            folder,
+            tree,
+        )
+        for run in runs
+    ]
+
+
+def _execute(
+    tasks: list[RunTask],
+    backend: Backend,
+    journal: Journal,
+    counts: dict[str, int],
+    name: str,
+    progress: bool | None,
+    on_result: Callable[[dict[str, Any]], None] | None,
+    flush: tuple[int, float],
+) -> None:
+    """Run the tasks, journaling each result once (in batches)."""
+    bar = Progress(len(tasks), f"sweep {name}", enabled=progress)
+    seen: set[str] = set()
+    last_flush = time.monotonic()
+    try:
+        for task, outcome in backend.map_unordered(execute, tasks):
+            row = outcome if isinstance(outcome, dict) else failed_row(task, outcome)
+            if row["run_id"] in seen:  # never journal a run twice
+                continue
+            seen.add(row["run_id"])
+            journal.append(row)
+            counts[row["status"]] += 1
+            bar.update(len(seen))
+            if len(journal.buffer) >= flush[0] or time.monotonic() - last_flush >= flush[1]:
+                journal.flush()
+                last_flush = time.monotonic()
+            if on_result is not None:
+                on_result(row)
+    finally:
+        bar.close()
+
+
+def failed_row(task: RunTask, error: BaseException) -> dict[str, Any]:
+    """The row of a run whose worker failed (e.g. was killed more than Dask allows)."""
+    run: Run = task.run
+    row: dict[str, Any] = {"run": run.index, "run_id": run.run_id, **run.point, "seed": run.seed}
+    row.update({m.name: math.nan for m in task.measures})
+    row.update({k: v for k, v in scenario_parameters(task.scenario).items() if k not in row})
+    row.update(status="failed", error=one_line(error), seconds=math.nan)
+    return row
+
+
+def _previous_manifest(out: Path, experiment: Experiment, resume: bool) -> dict[str, Any] | None:
+    previous = read_manifest(out)
+    if previous is None:
+        return None
+    if not resume:
+        raise ExperimentError(
+            f"{out} already holds a sweep; pass --resume to continue it, or choose another --out"
+        )
+    wanted = json.loads(json.dumps(experiment.to_mapping(), default=str))
+    if previous.get("experiment") != wanted:
+        changed = [k for k in wanted if previous.get("experiment", {}).get(k) != wanted[k]]
+        raise ExperimentError(
+            f"{out} holds a different experiment ({', '.join(changed) or 'its description'} "
+            "changed); resume it with the same experiment, or choose another --out"
+        )
+    return previous
+
+
+def _manifest(
+    experiment: Experiment,
+    scenario: Any,
+    runs: list[Run],
+    backend: Backend,
+    previous: Mapping[str, Any] | None,
+) -> dict[str, Any]:
+    from pyautonomousagent.experiments.measures import MEASURES
+    from pyautonomousagent.simulation.scenario import to_mapping
+
+    measures = {
+        m.name: {"doc": m.doc, "unit": m.unit, "registered": m.name in MEASURES}
+        for m in experiment.measures
+    }
+    return {
+        "experiment": json.loads(json.dumps(experiment.to_mapping(), default=str)),
+        "scenario": to_mapping(scenario),
+        "parameters": experiment.parameters,
+        "measures": measures,
+        "runs": len(runs),
+        "results": RESULTS,
+        "backend": {"name": backend.name, "workers": backend.workers()},
+        "versions": versions(),
+        "started_at": (previous or {}).get("started_at", _now()),
+        "resumed_at": _now() if previous else None,
+        "status": "running",
+    }
+
+
+def _now() -> str:
+    return datetime.now(UTC).isoformat(timespec="seconds")

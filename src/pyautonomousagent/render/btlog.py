@@ -1,0 +1,164 @@
+"""One agent's recorded node statuses as a Groot2 log: BehaviorTree.CPP's ``.btlog``
+(the format its ``FileLogger2`` writes and Groot2's log replay opens).
+
+The layout, all integers little-endian, as BehaviorTree.CPP 4 writes it:
+
+1. the 18 bytes ``BTCPP4-FileLogger2`` and one protocol byte, 1;
+2. the tree XML's length (int32), then the XML: the tree as BehaviorTree.CPP 4 XML with
+   ``_fullpath=""`` on the ``BehaviorTree`` and a ``_uid`` on every node, numbered 1, 2, ...
+   in tick order (depth first, as BehaviorTree.CPP numbers the nodes it creates), and the
+   ``TreeNodesModel``;
+3. the start time (int64, microseconds since the Unix epoch);
+4. one 9-byte record per status transition: microseconds since the start (6 bytes), the
+   node's ``_uid`` (uint16), its new status (uint8: 0 IDLE, 1 RUNNING, 2 SUCCESS,
+   3 FAILURE, 4 SKIPPED).
+
+A recorded run gives each node's status after every recorded tick; the log holds, at each
+recorded iteration, the nodes whose status differs from the previous record (INVALID, "not
+ticked", is BehaviorTree.CPP's IDLE). Iteration ``t`` is at ``t * usec_per_iteration``.
+"""
+
+from __future__ import annotations
+
+import struct
+import time
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from pyautonomousagent.bt.files import to_text_format
+from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.bt.status import FAILURE, INVALID, RUNNING, SUCCESS
+
+MAGIC = b"BTCPP4-FileLogger2"
+"""The file's first bytes."""
+PROTOCOL = 1
+"""The protocol byte after the magic."""
+RECORD = 9
+"""Bytes per transition record."""
+IDLE, BT_RUNNING, BT_SUCCESS, BT_FAILURE, SKIPPED = range(5)
+"""BehaviorTree.CPP 4's ``NodeStatus`` codes."""
+TO_BTCPP = {INVALID: IDLE, RUNNING: BT_RUNNING, SUCCESS: BT_SUCCESS, FAILURE: BT_FAILURE}
+"""Our status code -> BehaviorTree.CPP's."""
+USEC_PER_ITERATION = 100_000
+"""Default log time of one iteration: 0.1 s, so Groot2 replays 10 iterations a second."""
+
+
+@dataclass(frozen=True)
+class BtLog:
+    """A ``.btlog`` as read.
+
+    Attributes:
+        xml: the tree XML.
+        start_usec: the start time, microseconds since the Unix epoch.
+        transitions: structured array with fields ``usec`` (since the start), ``uid`` and
+            ``status`` (BehaviorTree.CPP codes), shape (transitions,).
+        protocol: the protocol byte.
+    """
+
+    xml: str
+    start_usec: int
+    transitions: np.ndarray
+    protocol: int
+
+
+def tree_xml(root: Node) -> str:
+    """The tree as BehaviorTree.CPP 4 XML with ``_uid`` on every node (1, 2, ... in tick
+    order) and ``_fullpath=""`` on the tree, as ``FileLogger2`` writes it."""
+    document = ET.fromstring(to_text_format(root, "xml").split("?>", 1)[-1])
+    trees = document.findall("BehaviorTree")
+    elements = [e for e in trees[0].iter() if e is not trees[0]]
+    nodes = list(root.walk())
+    if len(elements) != len(nodes):
+        raise ValueError(f"the tree XML has {len(elements)} nodes, the tree {len(nodes)}")
+    trees[0].set("_fullpath", "")
+    for uid, element in enumerate(elements, start=1):
+        element.set("_uid", str(uid))
+    document.attrib.pop("main_tree_to_execute", None)
+    return ET.tostring(document, encoding="unicode")
+
+
+def transitions(
+    iterations: np.ndarray, statuses: np.ndarray, usec_per_iteration: int = USEC_PER_ITERATION
+) -> np.ndarray:
+    """The status changes of one agent's trace, in time then tick order.
+
+    Args:
+        iterations: recorded iterations, shape (records,).
+        statuses: the agent's node statuses (our codes), shape (records, nodes).
+        usec_per_iteration: log microseconds per iteration.
+
+    Returns:
+        structured array (``usec`` uint64, ``uid`` uint16, ``status`` uint8), BT.CPP codes.
+    """
+    codes = np.zeros(max(TO_BTCPP) + 1, dtype=np.uint8)
+    for ours, theirs in TO_BTCPP.items():
+        codes[ours] = theirs
+    previous = np.vstack([np.full((1, statuses.shape[1]), INVALID, statuses.dtype), statuses[:-1]])
+    rows, nodes = np.nonzero(statuses != previous)  # row-major: by record, then node
+    out = np.zeros(rows.size, dtype=[("usec", "<u8"), ("uid", "<u2"), ("status", "u1")])
+    out["usec"] = iterations[rows].astype(np.uint64) * np.uint64(usec_per_iteration)
+    out["uid"] = nodes + 1
+    out["status"] = codes[statuses[rows, nodes]]
+    return out
+
+
+def write_btlog(
+    path: str | Path,
+    root: Node,
+    iterations: np.ndarray,
+    statuses: np.ndarray,
+    usec_per_iteration: int = USEC_PER_ITERATION,
+    start_usec: int | None = None,
+) -> Path:
+    """Write one agent's trace as a ``.btlog`` at ``path``; return the path.
+
+    Args:
+        root: the tree that was ticked.
+        iterations: recorded iterations, shape (records,).
+        statuses: the agent's node statuses, shape (records, nodes in ``root.walk()`` order).
+        usec_per_iteration: log microseconds per iteration.
+        start_usec: the header's start time; by default now.
+    """
+    path = Path(path)
+    if path.suffix != ".btlog":
+        raise ValueError(f"{path}: a Groot2 log must end in .btlog")
+    xml = tree_xml(root).encode("utf-8")
+    records = transitions(iterations, statuses, usec_per_iteration)
+    if records.size and int(records["usec"].max()) >= 1 << 48:
+        raise ValueError("the run is too long for 6-byte log times; lower usec_per_iteration")
+    start = int(time.time() * 1e6) if start_usec is None else start_usec
+    packed = np.zeros((records.size, RECORD), dtype=np.uint8)
+    packed[:, :6] = records["usec"].astype("<u8").view(np.uint8).reshape(-1, 8)[:, :6]
+    packed[:, 6:8] = records["uid"].astype("<u2").view(np.uint8).reshape(-1, 2)
+    packed[:, 8] = records["status"]
+    with path.open("wb") as file:
+        file.write(MAGIC + bytes([PROTOCOL]) + struct.pack("<i", len(xml)) + xml)
+        file.write(struct.pack("<q", start))
+        file.write(packed.tobytes())
+    return path
+
+
+def read_btlog(path: str | Path) -> BtLog:
+    """Read a ``.btlog`` (ours or BehaviorTree.CPP's); ValueError if it is not one."""
+    data = Path(path).read_bytes()
+    if not data.startswith(MAGIC):
+        raise ValueError(f"{path}: not a FileLogger2 .btlog (no {MAGIC.decode()} header)")
+    at = len(MAGIC)
+    protocol = data[at]
+    (size,) = struct.unpack_from("<i", data, at + 1)
+    xml_start = at + 5
+    xml = data[xml_start : xml_start + size].decode("utf-8")
+    (start,) = struct.unpack_from("<q", data, xml_start + size)
+    body = np.frombuffer(data, dtype=np.uint8, offset=xml_start + size + 8)
+    count = body.size // RECORD
+    rows = body[: count * RECORD].reshape(count, RECORD)
+    out = np.zeros(count, dtype=[("usec", "<u8"), ("uid", "<u2"), ("status", "u1")])
+    wide = np.zeros((count, 8), dtype=np.uint8)
+    wide[:, :6] = rows[:, :6]
+    out["usec"] = wide.view("<u8")[:, 0]
+    out["uid"] = rows[:, 6:8].copy().view("<u2")[:, 0]
+    out["status"] = rows[:, 8]
+    return BtLog(xml, start, out, protocol)

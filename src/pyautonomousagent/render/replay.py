@@ -1,0 +1,193 @@
+"""``replay.html``: one self-contained page that replays a recorded run in any browser, offline.
+
+The page shows the world map (agents, trails, the mission's marks, events as they happen), the
+behaviour tree with each node coloured by the selected agent's status at the selected
+iteration, that agent's state and blackboard, the event log, and a timeline (play, pause,
+step, speed, scrubbing). A click on an agent selects it.
+
+Everything is in the file: the page (``replay_template.html``, no external script, style or
+font) and the run's data as JSON inside a ``<script type="application/json">``, with the
+large arrays base64-encoded:
+
+- ``positions``: uint16 triplets (x, y, heading) per frame and agent, scaled into the
+  ranges given beside them (about 1/65535 of the range: 0.0015 units in a 100-unit world);
+- ``statuses``: int8 node statuses per frame, traced agent and node (codes of
+  :mod:`pyautonomousagent.bt.status`);
+- ``values``: float64 state, blackboard and model values per frame, traced agent and column
+  (exact), with the active behaviour as a node index.
+
+The size is kept in check by decimation: at most ``max_frames`` frames, and at most
+:data:`MAX_AGENT_FRAMES` agent positions in all; the frames of each event's iteration and the
+iteration after it are always kept.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+import time
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import asdict, dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from pyautonomousagent.bt.status import NAMES
+from pyautonomousagent.recording import COLUMN_DOCS, Recorder, node_list
+from pyautonomousagent.render.animation import frame_rows
+from pyautonomousagent.render.events import placed_events
+from pyautonomousagent.render.marks import Mark
+
+MAX_FRAMES = 2000
+"""Default most frames in a replay."""
+MAX_AGENT_FRAMES = 400_000
+"""Most agent positions (frames x agents) in a replay: about 3.2 MB of base64."""
+TEMPLATE = "replay_template.html"
+"""The page, next to this module; ``/*__DATA__*/`` marks where the data goes."""
+
+
+@dataclass(frozen=True)
+class ReplayStats:
+    """What :func:`write_replay` wrote: the file, its size, frames, agents, traced agents and
+    the wall seconds it took."""
+
+    path: Path
+    bytes: int
+    frames: int
+    agents: int
+    traced: int
+    seconds: float
+
+
+def replay_rows(
+    recorder: Recorder, max_frames: int = MAX_FRAMES, keep: Iterable[int] = ()
+) -> np.ndarray:
+    """Record rows shown as frames: evenly spaced, at most about ``max_frames`` (fewer for a
+    large swarm, see :data:`MAX_AGENT_FRAMES`), plus the rows of the iterations ``keep``
+    (events) and of the iteration after each. Ascending row indices, int64."""
+    agents = max(1, len(recorder.names))
+    budget = max(2, min(max_frames, MAX_AGENT_FRAMES // agents))
+    last = int(recorder.iterations[recorder.count - 1])
+    step = max(1, math.ceil((last + 1) / budget))
+    rows = set(frame_rows(recorder, step).tolist())
+    recorded = {int(it): r for r, it in enumerate(recorder.iterations[: recorder.count])}
+    for iteration in keep:
+        rows.update(recorded[i] for i in (iteration, iteration + 1) if i in recorded)
+    return np.array(sorted(rows), dtype=np.int64)
+
+
+def replay_data(
+    recorder: Recorder,
+    world: tuple[float, float],
+    title: str,
+    marks: Sequence[Mark] = (),
+    events: Iterable[Mapping[str, Any]] = (),
+    max_frames: int = MAX_FRAMES,
+) -> dict[str, Any]:
+    """The replay's data as plain JSON values (see the module docstring for the arrays).
+
+    Args:
+        recorder: the run's records; traces and values are shown for its traced agents.
+        world: (width, height) of the world, world units.
+        title: the page's title (e.g. the scenario's name).
+        marks: the mission's static marks.
+        events: the run's events (``sim.events``).
+        max_frames: most frames (before events are added).
+    """
+    if recorder.count == 0:
+        raise ValueError("the recorder holds no records to replay")
+    placed = placed_events(events, recorder)
+    rows = replay_rows(recorder, max_frames, {e.iteration for e in placed})
+    traced = recorder.traced
+    columns = [c for group in recorder.groups.values() for c in group]
+    values = np.stack([recorder.columns[c][rows][:, traced] for c in columns], axis=2)
+    if recorder.behaviour is not None:
+        behaviour = recorder.behaviour[rows][:, traced].astype(np.float64)
+        values = np.concatenate([values.astype(np.float64), behaviour[..., None]], axis=2)
+        columns.append("behaviour")
+    return {
+        "title": title,
+        "world": [float(world[0]), float(world[1])],
+        "names": list(recorder.names),
+        "iterations": recorder.iterations[rows].tolist(),
+        "positions": _positions(recorder, rows),
+        "traced": [int(i) for i in traced],
+        "nodes": node_list(recorder.nodes),
+        "status_names": {str(k): v for k, v in NAMES.items()},
+        "statuses": _b64(recorder.traces[rows].transpose(0, 2, 1).astype(np.int8)),
+        "columns": columns,
+        "groups": {**recorder.groups, "behaviour": ["behaviour"]},
+        "units": {c: _short_unit(COLUMN_DOCS.get(c, ("", ""))[0]) for c in columns},
+        "descriptions": {c: COLUMN_DOCS.get(c, ("", ""))[1] for c in columns},
+        "values": _b64(np.ascontiguousarray(values, dtype=np.float64)),
+        "marks": [asdict(m) for m in marks],
+        "events": [e.as_dict() for e in placed],
+    }
+
+
+def _short_unit(unit: str) -> str:
+    """ "world unit / iteration" -> "u/it" (the animation's short units)."""
+    from pyautonomousagent.render.animation import UNITS
+
+    return UNITS.get(unit, unit)
+
+
+def _positions(recorder: Recorder, rows: np.ndarray) -> dict[str, Any]:
+    """x, y, heading of every agent at ``rows`` as uint16 triplets (frames, N, 3), base64,
+    with each quantity's offset and step: ``value = offset + code * step``."""
+    out: dict[str, Any] = {"offset": [], "step": []}
+    codes = []
+    for key in ("x", "y", "heading"):
+        v = recorder.columns[key][rows].astype(np.float64)
+        low, high = (0.0, 360.0) if key == "heading" else (float(v.min()), float(v.max()))
+        step = (high - low) / 65535 or 1.0
+        codes.append(np.clip(np.rint((v - low) / step), 0, 65535).astype("<u2"))
+        out["offset"].append(low)
+        out["step"].append(step)
+    out["data"] = _b64(np.stack(codes, axis=2))
+    return out
+
+
+def _b64(array: np.ndarray) -> str:
+    """The array's bytes (little-endian, C order) as base64 text."""
+    return base64.b64encode(np.ascontiguousarray(array).tobytes()).decode("ascii")
+
+
+def render_page(data: Mapping[str, Any]) -> str:
+    """The self-contained HTML page with ``data`` inside."""
+    template = resources.files("pyautonomousagent.render").joinpath(TEMPLATE).read_text("utf-8")
+    text = json.dumps(data, separators=(",", ":"), allow_nan=False)
+    # "</" would end the script element early; JSON allows "<\/" for "</".
+    text = text.replace("</", "<\\/")
+    return template.replace("/*__DATA__*/", text, 1).replace("__TITLE__", _escape(data["title"]))
+
+
+def _escape(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+def write_replay(
+    recorder: Recorder,
+    path: str | Path,
+    world: tuple[float, float],
+    title: str,
+    marks: Sequence[Mark] = (),
+    events: Iterable[Mapping[str, Any]] = (),
+    max_frames: int = MAX_FRAMES,
+) -> ReplayStats:
+    """Write ``replay.html`` for a recorded run at ``path`` (see :func:`replay_data`)."""
+    start = time.perf_counter()
+    data = replay_data(recorder, world, title, marks, events, max_frames)
+    path = Path(path)
+    path.write_text(render_page(data), encoding="utf-8")
+    return ReplayStats(
+        path,
+        path.stat().st_size,
+        len(data["iterations"]),
+        len(data["names"]),
+        len(data["traced"]),
+        time.perf_counter() - start,
+    )

@@ -1,0 +1,150 @@
+"""replay.html in a real headless Chromium, offline: play, scrub to iteration 5001 of the
+gathering run, click drone2 on the map, and read back what the page shows.
+
+Needs Debian's ``chromium`` and ``chromium-driver`` (``make test`` installs them when missing
+and it can) and selenium (the ``[test]`` extra); skipped, with the reason, without them.
+Screenshots go to ``$PYAA_SCREENSHOTS`` when set (else the test's temporary folder).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shutil
+import tempfile
+from pathlib import Path
+
+import pytest
+
+from pyautonomousagent.bt.status import NAMES
+from pyautonomousagent.cli import main
+from pyautonomousagent.recording import read_table
+
+CHROMIUM = "/usr/bin/chromium"
+NODES = ("sequence_gathering", "condition_low_energy_level", "action_navigate_to_destination_a_1")
+"""Three nodes whose shown status is checked."""
+AT = 5001
+"""The iteration scrubbed to: the first after the gathering order (given at 5000)."""
+
+
+def _driver_path() -> str | None:
+    return shutil.which("chromedriver") or (
+        "/usr/bin/chromedriver" if Path("/usr/bin/chromedriver").exists() else None
+    )
+
+
+@pytest.fixture(scope="module")
+def browser():
+    webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
+    if not Path(CHROMIUM).exists() or _driver_path() is None:
+        pytest.skip("no chromium/chromedriver: apt-get install chromium chromium-driver")
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = CHROMIUM
+    profile = tempfile.mkdtemp(prefix="pyaa-chromium-")
+    for flag in (
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--window-size=1400,900",
+        # The network is off: every host resolves to nothing, every proxy is refused.
+        "--host-resolver-rules=MAP * ~NOTFOUND",
+        "--proxy-server=http://127.0.0.1:9",
+        f"--user-data-dir={profile}",
+    ):
+        options.add_argument(flag)
+    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
+    driver = webdriver.Chrome(service=Service(_driver_path()), options=options)
+    yield driver
+    driver.quit()
+    shutil.rmtree(profile, ignore_errors=True)
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``pyaa run gathering`` just past the gathering order, every iteration recorded."""
+    out = tmp_path_factory.mktemp("gathering")
+    args = ["run", "gathering", "--iterations", "5100", "--no-gif", "--out", str(out), "--quiet"]
+    assert main(args) == 0
+    return out
+
+
+def shots_dir(tmp_path: Path) -> Path:
+    folder = Path(os.environ.get("PYAA_SCREENSHOTS", tmp_path))
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+def test_replay_offline_shows_the_recorded_statuses_and_blackboard(browser, run_dir, tmp_path):
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    shots = shots_dir(tmp_path)
+    page = run_dir / "replay.html"
+    browser.get(page.resolve().as_uri())
+    WebDriverWait(browser, 20).until(lambda d: d.execute_script("return !!window.replay"))
+    assert browser.current_url.startswith("file://")
+    browser.save_screenshot(str(shots / "replay-1-loaded.png"))
+
+    # Play for a while, then pause: the iteration moves on.
+    browser.find_element(By.ID, "play").click()
+    WebDriverWait(browser, 10).until(lambda d: d.execute_script("return replay.frame") > 5)
+    browser.find_element(By.ID, "play").click()
+    paused = browser.execute_script("return replay.frame")
+    assert browser.execute_script("return replay.playing") is False
+    assert browser.execute_script("return replay.frame") == paused
+    browser.save_screenshot(str(shots / "replay-2-played.png"))
+
+    # Scrub to iteration 5001, then click drone2 on the map.
+    frame = browser.execute_script(
+        "const its = JSON.parse(document.getElementById('replay-data').textContent).iterations;"
+        f"const s = document.getElementById('scrub'); s.value = its.indexOf({AT});"
+        "s.dispatchEvent(new Event('input')); return Number(s.value);"
+    )
+    assert frame > 0
+    label = browser.find_element(By.ID, "iteration-label").text
+    assert label.startswith(f"iteration {AT} ")
+    browser.find_element(By.CSS_SELECTOR, 'circle.agent[data-agent="drone2"]').click()
+    assert browser.find_element(By.ID, "tree-agent").text == "drone2"
+    browser.save_screenshot(str(shots / "replay-3-drone2-at-5001.png"))
+
+    # What the page shows equals the recorded trace and states.
+    traces = read_table(run_dir / "traces.parquet").to_pylist()
+    states = read_table(run_dir / "states.parquet").to_pylist()
+    trace = next(r for r in traces if r["iteration"] == AT and r["agent"] == "drone2")
+    state = next(r for r in states if r["iteration"] == AT and r["agent"] == "drone2")
+    for node in NODES:
+        shown = browser.find_element(By.CSS_SELECTOR, f'.node[data-node="{node}"]')
+        assert shown.get_attribute("data-status") == NAMES[trace[node]], node
+    shown_statuses = {NAMES[trace[n]] for n in NODES}
+    assert len(shown_statuses) >= 2  # the three nodes do not all agree: a real check
+    blackboard = [
+        "number_ticks",
+        "x_surveillance_position",
+        "y_surveillance_position",
+        "x_current_destination_position",
+        "y_current_destination_position",
+    ]
+    for key in blackboard:
+        row = browser.find_element(By.CSS_SELECTOR, f'tr[data-key="{key}"]')
+        assert float(row.get_attribute("data-value")) == state[key], key
+    behaviour = browser.find_element(By.CSS_SELECTOR, 'tr[data-key="behaviour"]')
+    assert behaviour.get_attribute("data-value") == state["behaviour"]
+
+    # Offline: nothing but the file itself was loaded, and no console errors.
+    urls = browser.execute_script(
+        "return performance.getEntriesByType('resource').map(e => e.name)"
+    )
+    assert [u for u in urls if not u.startswith(("data:", "file:"))] == []
+    text = page.read_text()
+    loading = r"""(?:src|href)\s*=\s*["']?(?!data:)[a-z]+:|url\(\s*["']?http|fetch\("""
+    loads = re.findall(loading, text)
+    assert loads == [] and "XMLHttpRequest" not in text
+    errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+    assert errors == []
