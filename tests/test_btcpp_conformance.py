@@ -10,6 +10,7 @@ every run unless ``PYAA_CONFORMANCE_SEED`` is set; a failure prints it.
 from __future__ import annotations
 
 import os
+import re
 import secrets
 from pathlib import Path
 
@@ -102,6 +103,14 @@ SHIPPED = sorted(ROOT.glob("examples/*.xml")) + sorted(
 )
 
 
+#: YAML tree files (not sweep files) among the examples.
+YAML_TREES = [
+    path
+    for path in sorted(ROOT.glob("examples/*.yaml"))
+    if re.search(r"(?m)^(trees?|main_tree_to_execute):", path.read_text())
+]
+
+
 @pytest.mark.parametrize("path", SHIPPED, ids=lambda p: p.name)
 def test_shipped_tree_files_load_in_behaviortree_cpp(path: Path) -> None:
     factory = btcpp_factory_with_our_leaves()
@@ -109,9 +118,7 @@ def test_shipped_tree_files_load_in_behaviortree_cpp(path: Path) -> None:
     assert tree.root_node() is not None
 
 
-@pytest.mark.parametrize(
-    "path", SHIPPED + sorted(ROOT.glob("examples/*.yaml")), ids=lambda p: p.name
-)
+@pytest.mark.parametrize("path", SHIPPED + YAML_TREES, ids=lambda p: p.name)
 def test_files_we_write_load_in_behaviortree_cpp(path: Path) -> None:
     text = to_text_format(read_document(path), "xml")
     factory = btcpp_factory_with_our_leaves()
