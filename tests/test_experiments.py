@@ -231,6 +231,14 @@ def test_grid_ranges_samples_and_run_keys() -> None:
         ({"vary": {"seed": [1, 2]}}, "parameter 'seed' is a result column"),
         ({"vary": {"agents": {"from": 1, "to": 10**7, "step": 1}}}, "at most 1000000"),
         ({"record_every": 0}, "record_every must be a whole number >= 1"),
+        (
+            {"vary": {"agents": list(range(1, 1001)), "refuel_rate": list(range(1001))}},
+            "at most 1000000 runs",
+        ),
+        (
+            {"sample": {"count": 10**12, "seed": 1, "parameters": {"a": {"uniform": [0, 1]}}}},
+            "sample.count must be a whole number from 1 to 1000000",
+        ),
         ({"sample": {"count": 2, "seed": 1, "parameters": {"a": {"normal": 1}}}}, "uniform"),
     ],
 )
@@ -315,6 +323,15 @@ def test_sweep_refuses_another_sweeps_folder_and_a_changed_experiment(tmp_path) 
         sweep(changed, tmp_path / "s", "serial", resume=True)
     again = sweep(small, tmp_path / "s", "serial", resume=True)
     assert again.counts == {"ok": 0, "failed": 0, "skipped": 4}
+
+
+def test_a_measure_the_pool_cannot_receive_is_refused_before_running(tmp_path) -> None:
+    with MEASURES.override("here", Measure("here", lambda run: 1.0)):
+        experiment = Experiment.from_mapping({**TINY, "measures": ["here"]})
+    with pytest.raises(ExperimentError, match="cannot be sent to the pool's processes"):
+        sweep(experiment, tmp_path / "s", "pool", workers=1)
+    assert not (tmp_path / "s").exists()
+    assert sweep(experiment, tmp_path / "t", "serial").counts["ok"] == 4
 
 
 def test_a_run_too_large_for_a_worker_is_refused(tmp_path) -> None:

@@ -12,7 +12,6 @@ from pyautonomousagent.bt.spec import leaf, reactive_fallback, sequence
 from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
 from pyautonomousagent.cli import main
 from pyautonomousagent.recording import (
-    COLUMN_DOCS,
     DEFAULT_TRACED,
     active_leaf,
     recorder_from_tables,
@@ -94,7 +93,7 @@ def test_states_gain_the_active_behaviour_and_every_column_is_documented(run, tm
         meta = field.metadata or {}
         assert meta.get(b"description"), f"{field.name} has no description"
         assert b"unit" in meta
-        assert field.name in COLUMN_DOCS
+        assert field.name in run.recorder.docs
     assert table.schema.field("energy").metadata[b"unit"] == b"percent"
     assert table.schema.field("x").metadata[b"group"] == b"state"
     assert table.schema.field("number_ticks").metadata[b"group"] == b"blackboard"

@@ -491,10 +491,11 @@ def scenarios_command(name: str | None = None) -> int:
     if name is not None:
         print(_describe(load(name)))
         return 0
+    width = max(12, *(len(n) for n in names()))
     for name in names():
         scenario = load(name)
         print(
-            f"{name:12s} {scenario.agents:>5d} agents {scenario.iterations:>6d} iterations  "
+            f"{name:{width}s} {scenario.agents:>5d} agents {scenario.iterations:>6d} iterations  "
             f"{scenario.description}"
         )
     return 0

@@ -182,11 +182,7 @@ def _scenario(scenario: str | Scenario) -> Scenario:
     raise TypeError(f"scenario must be a name, a .yaml file or a Scenario, got {scenario!r}")
 
 
-
-
-def _same(
-    a: np.ndarray, b: np.ndarray, sim: Simulation, rows: list[str] | None, what: str
-) -> None:
+def _same(a: np.ndarray, b: np.ndarray, sim: Simulation, rows: list[str] | None, what: str) -> None:
     """Raise at the first entry where ``a`` (pytrees) and ``b`` (batched) differ."""
     if np.array_equal(a, b, equal_nan=a.dtype.kind == "f"):
         return

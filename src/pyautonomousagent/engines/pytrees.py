@@ -184,8 +184,11 @@ class PyTreesEngine:
 
     def node_statuses(self) -> np.ndarray:
         """Status codes after the last tick, shape (nodes in tick order, N), int8."""
-        table = [[FROM_PYTREES[b.status] for b in _preorder(root)] for root in self.roots]
-        return np.asarray(table, dtype=np.int8).T
+        if getattr(self, "_flat", None) is None:  # the trees never change: flatten them once
+            self._flat = [b for root in self.roots for b in _preorder(root)]
+        codes, flat = FROM_PYTREES, self._flat
+        table = np.fromiter((codes[b.status] for b in flat), dtype=np.int8, count=len(flat))
+        return table.reshape(len(self.roots), -1).T
 
 
 def _preorder(behaviour: py_trees.behaviour.Behaviour) -> list[py_trees.behaviour.Behaviour]:

@@ -259,7 +259,8 @@ class _Reader:
             name=self.text(data.get("name", "experiment"), "name"),
         )
         self.columns(experiment)
-        total = len(experiment.points()) * len(experiment.seeds)
+        grid = math.prod(len(values) for values in experiment.vary.values())
+        total = grid * (sample["count"] if sample else 1) * len(experiment.seeds)
         if total > MAX_RUNS:
             raise self.fail("the experiment", f"at most {MAX_RUNS} runs", f"{total} runs")
         return experiment
@@ -272,6 +273,11 @@ class _Reader:
     def whole(self, value: Any, path: str, minimum: int) -> int:
         if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
             raise self.fail(path, f"a whole number >= {minimum}", value)
+        return value
+
+    def count(self, value: Any, path: str) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_RUNS:
+            raise self.fail(path, f"a whole number from 1 to {MAX_RUNS}", value)
         return value
 
     def number(self, value: Any, path: str) -> float:
@@ -350,7 +356,7 @@ class _Reader:
                 raise self.fail(f"{path}.{kind}", "a pair [lo, hi] with lo <= hi", args)
             out[name] = (kind, [lo, hi])
         return {
-            "count": self.whole(data["count"], "sample.count", 1),
+            "count": self.count(data["count"], "sample.count"),
             "seed": self.whole(data["seed"], "sample.seed", 0),
             "parameters": out,
         }

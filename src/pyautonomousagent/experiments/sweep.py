@@ -18,6 +18,7 @@ from __future__ import annotations
 import difflib
 import json
 import math
+import pickle
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -216,6 +217,8 @@ def sweep(
     chosen = make_backend(backend, workers, address) if isinstance(backend, str) else backend
     try:
         check_memory(run_bytes(experiment, scenario, len(columns) - 3, save_runs), chosen)
+        if chosen.name == "pool":
+            _check_picklable(_tasks(experiment, scenario, runs[:1], None)[0])
     except ExperimentError:
         if owned:
             chosen.close()
@@ -273,6 +276,18 @@ def _tasks(
         )
         for run in runs
     ]
+
+
+def _check_picklable(task: RunTask) -> None:
+    """Pool workers receive runs pickled: a measure defined in a notebook or a function
+    cannot be sent; say so before every run fails."""
+    try:
+        pickle.dumps(task)
+    except Exception as error:
+        raise ExperimentError(
+            f"a run cannot be sent to the pool's processes ({one_line(error)}); define custom "
+            "measures in an importable module, or use backend='serial' or 'dask'"
+        ) from None
 
 
 def _execute(

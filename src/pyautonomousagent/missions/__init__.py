@@ -14,15 +14,17 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-from pyautonomousagent.missions import drones, gathering, patrol
+from pyautonomousagent.missions import drones, gathering, patrol, radiation_search, vacuum
 from pyautonomousagent.scenarios import register
 
-__all__ = ["drones", "gathering", "patrol"]
+__all__ = ["drones", "gathering", "patrol", "radiation_search", "vacuum"]
 
 _SCENARIO_FILES = {
     "gathering": "gathering/gathering.yaml",
     "patrol": "patrol/patrol.yaml",
     "x8-patrol": "patrol/x8-patrol.yaml",
+    "vacuum": "vacuum/vacuum.yaml",
+    "radiation-search": "radiation_search/radiation-search.yaml",
 }
 for _name, _file in _SCENARIO_FILES.items():
     register(_name, Path(str(resources.files(__name__) / _file)))

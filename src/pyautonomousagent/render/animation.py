@@ -29,7 +29,7 @@ import numpy as np
 
 from pyautonomousagent.bt.status import FAILURE, INVALID, RUNNING, SUCCESS
 from pyautonomousagent.progress import Progress
-from pyautonomousagent.recording import COLUMN_DOCS, Recorder
+from pyautonomousagent.recording import Recorder
 from pyautonomousagent.render.events import PlacedEvent, placed_events
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation.scenario import Scenario
@@ -67,7 +67,7 @@ STATUS_COLOURS = {
 EVENT_SHOWN = 0.04
 """An event stays on the map for this fraction of the run's iterations (at least 1)."""
 UNITS = {"world unit": "u", "world unit / iteration": "u/it", "degree": "deg", "percent": "%"}
-"""Short forms of :data:`~pyautonomousagent.recording.COLUMN_DOCS` units in the panel."""
+"""Short forms of the recorded columns' units (``Recorder.docs``) in the panel."""
 PANEL_NOTES = (
     "u: world units  it: iterations",
     "heading: degrees clockwise from north",
@@ -129,16 +129,21 @@ def panel_rows(recorder: Recorder, row: int, agent: int = 0) -> list[tuple[str, 
     lines += [("", ""), (f"State of {name}", "")]
     state = [k for k in recorder.groups.get("state", []) if not k.startswith("requested_")]
     model = recorder.groups.get("model", [])
-    lines += _value_rows(columns, [k for k in state + model if k in columns], row, agent)
+    shown = [k for k in state + model if k in columns]
+    lines += _value_rows(columns, shown, row, agent, recorder.docs)
     board = [k for k in recorder.groups.get("blackboard", []) if k in columns]
     if board:
         lines += [("", ""), ("Blackboard", "")]
-        lines += _value_rows(columns, board, row, agent)
+        lines += _value_rows(columns, board, row, agent, recorder.docs)
     return lines
 
 
 def _value_rows(
-    columns: Mapping[str, np.ndarray], keys: Sequence[str], row: int, agent: int
+    columns: Mapping[str, np.ndarray],
+    keys: Sequence[str],
+    row: int,
+    agent: int,
+    docs: Mapping[str, tuple[str, str]],
 ) -> list[tuple[str, str]]:
     """Panel lines for ``keys``: ``x_K, y_K`` (or ``x, y``) pairs as one point, others alone."""
     lines: list[tuple[str, str]] = []
@@ -152,14 +157,14 @@ def _value_rows(
                 done.update((key, partner))
                 xk, yk = (key, partner) if key[0] == "x" else (partner, key)
                 stem = key[2:] if len(key) > 1 else "position"
-                label = _label(stem.removesuffix("_position") or "position", COLUMN_DOCS.get(xk))
+                label = _label(stem.removesuffix("_position") or "position", docs.get(xk))
                 value = f"({columns[xk][row, agent]:.2f}, {columns[yk][row, agent]:.2f})"
                 lines.append((label, value))
                 continue
         values = columns[key]
         v = values[row, agent]
         text = f"{int(v)}" if np.issubdtype(values.dtype, np.integer) else f"{float(v):.2f}"
-        lines.append((_label(key, COLUMN_DOCS.get(key)), text))
+        lines.append((_label(key, docs.get(key)), text))
     return lines
 
 

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from pyautonomousagent.bt.status import NAMES
-from pyautonomousagent.recording import COLUMN_DOCS, Recorder, node_list
+from pyautonomousagent.recording import Recorder, node_list
 from pyautonomousagent.render.animation import frame_rows
 from pyautonomousagent.render.events import placed_events
 from pyautonomousagent.render.marks import Mark
@@ -120,8 +120,8 @@ def replay_data(
         "statuses": _b64(recorder.traces[rows].transpose(0, 2, 1).astype(np.int8)),
         "columns": columns,
         "groups": {**recorder.groups, "behaviour": ["behaviour"]},
-        "units": {c: _short_unit(COLUMN_DOCS.get(c, ("", ""))[0]) for c in columns},
-        "descriptions": {c: COLUMN_DOCS.get(c, ("", ""))[1] for c in columns},
+        "units": {c: _short_unit(recorder.docs.get(c, ("", ""))[0]) for c in columns},
+        "descriptions": {c: recorder.docs.get(c, ("", ""))[1] for c in columns},
         "values": _b64(np.ascontiguousarray(values, dtype=np.float64)),
         "marks": [asdict(m) for m in marks],
         "events": [e.as_dict() for e in placed],

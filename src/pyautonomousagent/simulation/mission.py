@@ -102,6 +102,8 @@ class Mission:
         world_objects: what the scenario's ``world:`` section may list.
         columns: the mission's state columns, name -> dtype, recorded with the others
             (e.g. ``{"energy": np.float64}``); leaves read them as ``agents.energy``.
+        meanings: unit and meaning of its columns and blackboard keys, name -> (unit,
+            meaning), written into the data's schema and shown by the animation and replay.
     """
 
     name: ClassVar[str] = ""
@@ -110,6 +112,7 @@ class Mission:
     parameters: ClassVar[tuple[Param, ...]] = ()
     world_objects: ClassVar[tuple[WorldObject, ...]] = ()
     columns: ClassVar[Mapping[str, Any]] = {}
+    meanings: ClassVar[Mapping[str, tuple[str, str]]] = {}
 
     def __init__(self, scenario: Scenario) -> None:
         self.scenario = scenario

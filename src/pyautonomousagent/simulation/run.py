@@ -164,6 +164,7 @@ class Simulation:
                 model.columns(),
                 tree=tree,
                 traced=_traced(swarm.names, trace),
+                docs=mission.meanings,
             ),
             handlers=handlers,
             everyone=np.ones(swarm.size, dtype=bool),

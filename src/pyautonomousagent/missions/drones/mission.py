@@ -113,6 +113,18 @@ class DroneMission(Mission):
         "radiation": np.float64,  # percent, [0, 100], last sensor reading
     }
 
+    meanings: ClassVar[dict[str, tuple[str, str]]] = {
+        "energy": ("percent", "energy left, 0 to 100; at 0 the agent stops and reads no sensor"),
+        "damage": ("percent", "accumulated radiation damage, 0 to 100"),
+        "radiation": ("percent", "last radiation sensor reading, 0 to 100"),
+        "x_surveillance_position": ("world unit", "blackboard: surveillance position, east"),
+        "y_surveillance_position": ("world unit", "blackboard: surveillance position, north"),
+        "x_refueling_position": ("world unit", "blackboard: own refuelling slot, east"),
+        "y_refueling_position": ("world unit", "blackboard: own refuelling slot, north"),
+        "x_current_destination_position": ("world unit", "blackboard: current destination, east"),
+        "y_current_destination_position": ("world unit", "blackboard: current destination, north"),
+    }
+
     def blackboard(self) -> dict[str, Any]:
         """Table 3: the surveillance, refuelling and destination positions."""
         return {k: np.float64 for k in SURVEILLANCE + REFUELING + DESTINATION}

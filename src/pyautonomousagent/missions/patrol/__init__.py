@@ -34,6 +34,18 @@ class PatrolMission(DroneMission):
                     doc="the two positions patrolled by every drone; the first is the first"),
     )  # fmt: skip
 
+    meanings: ClassVar[dict[str, tuple[str, str]]] = {
+        **DroneMission.meanings,
+        "index_current_surveillance_position": (
+            "",
+            "blackboard: patrol position flown to (1 or 2)",
+        ),
+        "x_surveillance_position_1": ("world unit", "blackboard: patrol position 1, east"),
+        "y_surveillance_position_1": ("world unit", "blackboard: patrol position 1, north"),
+        "x_surveillance_position_2": ("world unit", "blackboard: patrol position 2, east"),
+        "y_surveillance_position_2": ("world unit", "blackboard: patrol position 2, north"),
+    }
+
     @classmethod
     def check(cls, scenario: Scenario, reader: Reader) -> None:
         """Positions lie in the world."""

@@ -1,0 +1,137 @@
+"""The radiation-search drones' leaves: wander, detect, report ``found``, fly to the report.
+
+Written with array expressions on an :class:`~pyautonomousagent.mission.AgentView`, so the
+same code runs for one drone (py_trees engine) or many at once (batched engine). Suffix
+``_S``: synchronous (SUCCESS/FAILURE); suffix ``_A``: asynchronous (RUNNING).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pyautonomousagent.arrays import bearing, choose
+from pyautonomousagent.bt import RUNNING, SUCCESS, Leaf, Port, register_leaf, success_if
+from pyautonomousagent.mission import AgentView, World
+
+FOUND = "found"
+"""The message type a drone broadcasts when it detects the source: ``x``, ``y`` where."""
+REPORTED = ("source_reported", "x_reported_position", "y_reported_position")
+"""Blackboard keys: whether the drone knows a reported position (0/1), and where it is."""
+SPEED = Port("speed", float, "search_speed", 0.0, "world units per iteration")
+
+
+@register_leaf
+class ConditionRadiationAboveThreshold(Leaf):
+    """SUCCESS if the radiation sensor reads more than ``threshold`` percent."""
+
+    type_name = "Condition_Radiation_Above_Threshold"
+    ports = (Port("threshold", float, "radiation_threshold", 0.0, "percent"),)
+    threshold: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        return success_if(agents.radiation > self.threshold)
+
+
+@register_leaf
+class ConditionSourceReported(Leaf):
+    """SUCCESS if the drone knows a reported source position (its own or a ``found``)."""
+
+    type_name = "Condition_Source_Reported"
+    keys = REPORTED
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        return success_if(agents.blackboard.source_reported == 1)
+
+
+@register_leaf
+class ConditionAtReportedPosition(Leaf):
+    """SUCCESS if the drone is within ``distance`` of the reported position."""
+
+    type_name = "Condition_At_Reported_Position"
+    ports = (Port("distance", float, "source_tolerance", 0.0, "world units"),)
+    keys = REPORTED
+    distance: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        dx = agents.x - bb.x_reported_position
+        dy = agents.y - bb.y_reported_position
+        return success_if(dx * dx + dy * dy <= self.distance * self.distance)
+
+
+@register_leaf
+class ActionReportSourceS(Leaf):
+    """Broadcast ``found`` with the drone's position and remember that position; SUCCESS."""
+
+    type_name = "Action_Report_Source_S"
+    keys = REPORTED
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        x, y = agents.compact(agents.x), agents.compact(agents.y)
+        world.datalink.send(agents.indices, FOUND, {"x": x, "y": y}, (x, y))
+        bb = agents.blackboard
+        bb.source_reported = 1
+        bb.x_reported_position = agents.x
+        bb.y_reported_position = agents.y
+        return SUCCESS
+
+
+@register_leaf
+class ActionFlyToReportedPositionA(Leaf):
+    """Request the heading toward the reported position at ``speed``; RUNNING."""
+
+    type_name = "Action_Fly_To_Reported_Position_A"
+    ports = (SPEED,)
+    keys = REPORTED
+    speed: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        agents.requested_heading = bearing(
+            agents.x, agents.y, bb.x_reported_position, bb.y_reported_position
+        )
+        agents.requested_speed = self.speed
+        return RUNNING
+
+
+@register_leaf
+class ActionHoverS(Leaf):
+    """Request speed 0, keeping the heading; SUCCESS."""
+
+    type_name = "Action_Hover_S"
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        agents.requested_speed = 0.0
+        agents.requested_heading = agents.heading
+        return SUCCESS
+
+
+@register_leaf
+class ActionWanderA(Leaf):
+    """Fly at ``speed`` on a random heading, drawn anew every ``period`` iterations; within
+    ``margin`` of the world's edge, head for the world's centre instead; RUNNING.
+
+    The headings come from :meth:`Leaf.uniform`: the same on both engines for a seed.
+    """
+
+    type_name = "Action_Wander_A"
+    ports = (
+        SPEED,
+        Port("period", int, "wander_period", 1, "iterations between new random headings"),
+        Port("margin", float, "edge_margin", 0.0,
+             "world units: nearer the edge than this, a drone heads for the centre"),
+    )  # fmt: skip
+    speed: float
+    period: int
+    margin: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        heading = agents.requested_heading
+        if world.iteration % self.period == 0:
+            heading = self.uniform(agents, world, 0.0, 360.0)
+        x, y, m = agents.x, agents.y, self.margin
+        near_edge = (x < m) | (x > world.width - m) | (y < m) | (y > world.height - m)
+        centre = bearing(x, y, world.width / 2, world.height / 2)
+        agents.requested_heading = choose(near_edge, centre, heading)
+        agents.requested_speed = self.speed
+        return RUNNING

@@ -1,0 +1,207 @@
+"""The paper's Fig. 2 example: a vacuum-cleaner robot with a sonar.
+
+Robots (``robot1``, ``robot2``, ...; motion model ``drone2d``) clean a room with obstacles.
+Fig. 2's tree (``vacuum.xml``) is a fallback of two sequences: if the sonar sees a wall or an
+obstacle closer than ``collision_distance`` (``Condition_Collision``), the robot stops and
+turns left or right (``Action_Avoid_Obstacle_S``: side and angle drawn with
+:meth:`~pyautonomousagent.bt.Leaf.uniform`, the same on both engines); otherwise it drives
+straight ahead on its cruise heading (``Action_Navigate_S``) and vacuums
+(``Action_Vacuum_S``).
+
+Written only with the public API (:mod:`pyautonomousagent.mission`,
+:mod:`pyautonomousagent.bt`, :mod:`pyautonomousagent.arrays`):
+
+- world objects (``world:``): ``obstacles``, a list of ``{shape: rect, x, y, width,
+  height}`` (lower-left corner) and ``{shape: circle, x, y, radius}``; ``start_positions``,
+  [x, y] per robot (cycled);
+- parameters: ``robot_speed``, ``collision_distance``, ``sonar_range``, ``avoid_min_angle``,
+  ``avoid_max_angle``, ``cell_size`` (see :attr:`VacuumMission.parameters`); the avoid
+  leaf's ``step`` port defaults to the motion model's ``turn_step``;
+- state columns: ``sonar`` (world units, the reading of Phase 2), ``vacuuming`` (1 when the
+  brush ran in this iteration's tick) and ``cleaned_cells`` (cells this robot cleaned first,
+  cumulative: their sum over the robots is the cleaned area in cells, never decreasing);
+- blackboard: ``cruise_heading`` (degrees);
+- Phase 2 (:meth:`VacuumMission.sense`): the cells under robots whose brush ran are cleaned
+  (:attr:`VacuumMission.grid`, :meth:`VacuumMission.coverage`), the sonar is read, and a robot
+  whose next step (the drone2d equations) would leave the room or touch an obstacle does not
+  move this iteration (it stops; the tree then turns it away). So no robot ever enters an
+  obstacle, whatever the tree does;
+- marks: the obstacles (grey) and the start positions. The cleaned area is not drawn: a
+  mission's marks are static (computed from the scenario before the run), and the animation
+  has no per-frame hook for a mission's run state.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+
+from pyautonomousagent.mission import (
+    Mark,
+    Mission,
+    Param,
+    Point,
+    Reader,
+    Scenario,
+    Simulation,
+    Swarm,
+    World,
+    WorldObject,
+    check_point_in_world,
+    register_mission,
+)
+from pyautonomousagent.missions.vacuum import leaves
+from pyautonomousagent.missions.vacuum.room import (
+    Circle,
+    CleaningGrid,
+    Rectangle,
+    Room,
+    read_obstacles,
+)
+
+__all__ = ["CleaningGrid", "Circle", "Rectangle", "Room", "VacuumMission", "leaves"]
+
+OBSTACLE_COLOUR = "#969696"
+"""Grey of the obstacles."""
+START_COLOUR = "#31a354"
+"""Green of the start positions."""
+STOP_MARGIN = 1e-6
+"""World units kept between a robot's predicted next position and any obstacle or wall, so
+that a motion step a rounding error away from the prediction still stays out."""
+MAX_CELLS = 4_000_000
+"""The largest cleaned-area grid a scenario may ask for (cells)."""
+
+
+def read_positions(reader: Reader, data: Any, path: str) -> tuple[Point, ...]:
+    """A list of at least one [x, y]."""
+    return reader.points(data, path)
+
+
+def obstacle_mark(obstacle: Rectangle | Circle) -> Mark:
+    """An obstacle as a filled grey mark."""
+    style: dict[str, Any] = {"colour": OBSTACLE_COLOUR, "fill": True, "legend": "obstacle"}
+    if isinstance(obstacle, Rectangle):
+        o = obstacle
+        return Mark("rect", o.x, o.y, width=o.width, height=o.height, **style)
+    return Mark("circle", obstacle.x, obstacle.y, size=obstacle.radius, **style)
+
+
+@register_mission
+class VacuumMission(Mission):
+    """Fig. 2's vacuum-cleaner robots: sonar, stop rule, cleaned-area grid.
+
+    Run state: :attr:`room` (walls and obstacles as arrays) and :attr:`grid` (the cleaned
+    cells), made in Phase 1.
+    """
+
+    name = "vacuum"
+    description = "vacuum-cleaner robots with a sonar clean a room with obstacles (paper Fig. 2)"
+    agent_prefix = "robot"
+    parameters: ClassVar[tuple[Param, ...]] = (
+        Param("robot_speed", 0.2, "world units per iteration",
+              "speed Action_Navigate_S requests", minimum=0.0),
+        Param("collision_distance", 1.0, "world units",
+              "sonar reading below which Condition_Collision succeeds", minimum=0.0),
+        Param("sonar_range", 5.0, "world units",
+              "farthest the sonar sees; longer distances read as this", minimum=0.0),
+        Param("avoid_min_angle", 90.0, "degrees", "smallest turn of Action_Avoid_Obstacle_S",
+              minimum=0.0, maximum=360.0),
+        Param("avoid_max_angle", 180.0, "degrees", "largest turn of Action_Avoid_Obstacle_S",
+              minimum=0.0, maximum=360.0),
+        Param("cell_size", 0.5, "world units", "side of a cell of the cleaned-area grid",
+              minimum=0.0),
+    )  # fmt: skip
+    world_objects: ClassVar[tuple[WorldObject, ...]] = (
+        WorldObject("obstacles", read_obstacles, (),
+                    "obstacles: {shape: rect, x, y, width, height} (lower-left corner) or "
+                    "{shape: circle, x, y, radius}, world units"),
+        WorldObject("start_positions", read_positions,
+                    doc="start positions [x, y], used in turn by robots 1, 2, ... (cycled)"),
+    )  # fmt: skip
+    columns: ClassVar[dict[str, Any]] = {
+        "sonar": np.float64,  # world units, [0, sonar_range]
+        "vacuuming": np.int64,  # 1 if the brush ran in this iteration's tick
+        "cleaned_cells": np.int64,  # cells this robot cleaned first, cumulative
+    }
+
+    @classmethod
+    def check(cls, scenario: Scenario, reader: Reader) -> None:
+        """drone2d motion; start positions in the room and clear of obstacles; a sonar that
+        sees farther than one step; a turn range and a grid that make sense."""
+        p = scenario.parameters
+        if scenario.model != "drone2d":
+            raise reader.fail("model", "drone2d (the stop rule predicts its next step)",
+                              scenario.model)  # fmt: skip
+        if p.sonar_range <= 0.0:
+            raise reader.fail("parameters.sonar_range", "a number > 0", p.sonar_range)
+        if not p.robot_speed < p.collision_distance <= p.sonar_range:
+            raise reader.fail(
+                "parameters.collision_distance",
+                f"a number > robot_speed ({p.robot_speed:g}) and <= sonar_range "
+                f"({p.sonar_range:g}), so the sonar sees an obstacle before the next step",
+                p.collision_distance,
+            )
+        if p.avoid_min_angle > p.avoid_max_angle:
+            raise reader.fail(
+                "parameters.avoid_min_angle",
+                f"<= avoid_max_angle ({p.avoid_max_angle:g})",
+                p.avoid_min_angle,
+            )
+        width, height = scenario.world
+        cells = np.ceil(width / p.cell_size) * np.ceil(height / p.cell_size) if p.cell_size else 0
+        if not 0 < cells <= MAX_CELLS:
+            raise reader.fail(
+                "parameters.cell_size",
+                f"a number > 0 giving at most {MAX_CELLS} cells",
+                p.cell_size,
+            )
+        room = Room(width, height, scenario.objects.obstacles)
+        for i, point in enumerate(scenario.objects.start_positions):
+            where = f"world.start_positions[{i}]"
+            check_point_in_world(reader, scenario, point, where)
+            if room.blocked(np.array([point[0]]), np.array([point[1]]), STOP_MARGIN)[0]:
+                raise reader.fail(where, "a point clear of every obstacle", list(point))
+
+    def blackboard(self) -> dict[str, Any]:
+        """``cruise_heading``: the heading Action_Navigate_S holds (degrees)."""
+        return {"cruise_heading": np.float64}
+
+    def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
+        """Robots on their start positions, headings rounded to whole degrees (so turns of
+        whole turn steps land exactly), cruising on them; the room and an uncleaned grid."""
+        self.room = Room(world.width, world.height, self.scenario.objects.obstacles)
+        self.grid = CleaningGrid(self.room, self.params.cell_size)
+        points = self.scenario.objects.start_positions
+        start = np.asarray([points[i % len(points)] for i in range(swarm.size)], dtype=np.float64)
+        s = swarm.columns
+        s["x"][:], s["y"][:] = start[:, 0], start[:, 1]
+        s["heading"][:] = np.round(s["heading"]) % 360.0
+        swarm.blackboard["cruise_heading"][:] = s["heading"]
+
+    def sense(self, sim: Simulation) -> np.ndarray:
+        """Clean under the brushes that ran, read the sonar, stop robots about to collide.
+
+        Returns:
+            The robots whose next step stays in the room and clear of every obstacle.
+        """
+        s = sim.swarm.columns
+        s["cleaned_cells"] += self.grid.clean(s["x"], s["y"], s["vacuuming"] == 1)
+        s["vacuuming"][:] = 0
+        s["sonar"][:] = self.room.sonar(s["x"], s["y"], s["heading"], self.params.sonar_range)
+        rad = s["heading"] * (np.pi / 180.0)  # the drone2d step (paper eqs. 1-2)
+        next_x = s["x"] + s["speed"] * np.sin(rad)
+        next_y = s["y"] + s["speed"] * np.cos(rad)
+        return ~self.room.blocked(next_x, next_y, STOP_MARGIN)
+
+    def coverage(self) -> float:
+        """The fraction of the room's free cells cleaned so far, in [0, 1]."""
+        return self.grid.coverage()
+
+    def marks(self) -> list[Mark]:
+        """The obstacles (grey) and the start positions (green squares)."""
+        marks = [obstacle_mark(o) for o in self.scenario.objects.obstacles]
+        for i, (x, y) in enumerate(dict.fromkeys(self.scenario.objects.start_positions), 1):
+            marks.append(Mark("point", x, y, f"D{i}", colour=START_COLOUR, symbol="s",
+                              legend="start position"))  # fmt: skip
+        return marks
