@@ -166,6 +166,19 @@ def test_measures_of_a_real_run_agree_with_its_events_and_table() -> None:
     assert expected == pa.compute.sum(zero).as_py() / table.num_rows
 
 
+def test_time_per_behaviour_from_the_recorded_active_leaf() -> None:
+    scenario = load("patrol").with_overrides(agents=5, iterations=400, low_energy_threshold=96)
+    run = RunData.from_simulation(Simulation.create(scenario, seed=0).run(progress=False))
+    fractions = m.behaviour_fractions(run)
+    assert set(fractions) <= set(run.nodes) and "action_refuel_a" in fractions
+    assert sum(fractions.values()) == pytest.approx(1 - 1 / 401)  # iteration 0: no tick yet
+    refuelling = Expression("mean(in_action_refuel_a)").evaluate(run.expression_values())
+    assert refuelling == fractions["action_refuel_a"] > 0
+    # while the refuel action runs, the energy rises
+    acting = run.behaviour[1:] == run.nodes.index("action_refuel_a")
+    assert (np.diff(run.columns["energy"], axis=0)[acting] > 0).all()
+
+
 def test_a_mission_registers_its_own_measure() -> None:
     def final_energy(run: RunData) -> float:
         return float(run.columns["energy"][-1].mean())
@@ -270,8 +283,9 @@ def test_the_worked_example_file_is_valid() -> None:
     path = Path(__file__).parents[1] / "examples" / "threshold-sweep.yaml"
     experiment = Experiment.from_file(path)
     assert len(experiment.runs()) == 100 and experiment.parameters[1] == "energy_use"
-    names = check(experiment, base_scenario(experiment))
-    assert "energy" in names and base_scenario(experiment).agents == 100
+    probe = check(experiment, base_scenario(experiment))
+    assert "energy" in probe.columns and base_scenario(experiment).agents == 100
+    assert "in_action_refuel_a" in probe.expression_values()
 
 
 def test_experiment_file_errors(tmp_path) -> None:

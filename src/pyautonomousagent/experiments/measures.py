@@ -7,14 +7,15 @@ columns, blackboard columns, alert and gathering events); missions add their own
 :func:`register_measure`. An experiment can also use a small expression over the columns
 (:mod:`pyautonomousagent.experiments.expression`).
 
-Not yet available: the fraction of time spent in each behaviour (each branch of the tree)
-needs the recorded node-status traces of issue 10; :func:`fraction_refuelling` gives the
-share of drone-records spent refuelling from the energy column meanwhile.
+The fraction of time spent in each behaviour comes from the recorded active behaviour (the
+leaf each agent is running): :func:`behaviour_fractions` gives all of them, and an expression
+``mean(in_<leaf name>)`` one, e.g. ``mean(in_action_refuel_a)``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+import re
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -37,6 +38,10 @@ class RunData:
         iterations: the recorded iterations, shape (records,).
         columns: each recorded column (state and blackboard), shape (records, N).
         events: alerts and recorded messages, as in ``Simulation.events``.
+        behaviour: each agent's active behaviour (the leaf RUNNING after the tick, else the
+            last leaf ticked) as an index into ``nodes``, shape (records, N), -1 before the
+            first tick; None if the run did not record it.
+        nodes: the tree's node names in tick order.
     """
 
     scenario: Scenario
@@ -44,14 +49,23 @@ class RunData:
     iterations: np.ndarray
     columns: Mapping[str, np.ndarray]
     events: list[dict[str, Any]] = field(default_factory=list)
+    behaviour: np.ndarray | None = None
+    nodes: list[str] = field(default_factory=list)
 
     @classmethod
     def from_simulation(cls, sim: Simulation) -> RunData:
         """The recorded data of ``sim`` (views of its recorder, not copies)."""
         recorder = sim.recorder
         columns = {key: recorder.column(key) for key in recorder.columns}
+        behaviour = getattr(recorder, "behaviour", None)
         return cls(
-            sim.scenario, sim.seed, recorder.iterations[: recorder.count], columns, list(sim.events)
+            sim.scenario,
+            sim.seed,
+            recorder.iterations[: recorder.count],
+            columns,
+            list(sim.events),
+            None if behaviour is None else behaviour[: recorder.count],
+            [node.name for node in getattr(recorder, "nodes", [])],
         )
 
     @property
@@ -63,14 +77,44 @@ class RunData:
         """A scenario parameter by name (``default`` if the scenario has none of that name)."""
         return float(getattr(self.scenario.parameters, name, default))
 
-    def expression_values(self) -> dict[str, Any]:
+    def behaviour_names(self) -> dict[str, int]:
+        """``in_<node name>`` -> node index, for every node an agent's behaviour can be
+        (characters other than letters, digits and _ become _)."""
+        if self.behaviour is None:
+            return {}
+        return {"in_" + re.sub(r"\W", "_", name): i for i, name in enumerate(self.nodes)}
+
+    def expression_values(self) -> Mapping[str, Any]:
         """Names an expression may use: every column, ``iteration`` (shape (records, 1)),
-        ``agents`` and ``iterations`` (the run's length)."""
+        ``agents`` and ``iterations`` (the run's length), and ``in_<leaf>`` (shape
+        (records, N): 1 where that leaf is the agent's active behaviour), made when used."""
         values: dict[str, Any] = dict(self.columns)
         values["iteration"] = self.iterations.astype(np.float64)[:, None]
         values["agents"] = float(self.agents)
         values["iterations"] = float(self.scenario.iterations)
-        return values
+        return _Lazy(values, self.behaviour, self.behaviour_names())
+
+
+class _Lazy(Mapping[str, Any]):
+    """Columns, plus ``in_<leaf>`` arrays computed only when an expression uses them."""
+
+    def __init__(
+        self, values: dict[str, Any], behaviour: np.ndarray | None, leaves: dict[str, int]
+    ) -> None:
+        self.plain, self.behaviour, self.leaves = values, behaviour, leaves
+
+    def __getitem__(self, name: str) -> Any:
+        if name in self.plain:
+            return self.plain[name]
+        if name in self.leaves and self.behaviour is not None:
+            return self.behaviour == self.leaves[name]
+        raise KeyError(name)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter([*self.plain, *self.leaves])
+
+    def __len__(self) -> int:
+        return len(self.plain) + len(self.leaves)
 
 
 @dataclass(frozen=True)
@@ -118,6 +162,19 @@ def register_measure(
 ) -> Measure:
     """Add a measure under ``name`` (missions call this for their own measures)."""
     return MEASURES.register(name, Measure(name, fn, doc, unit))
+
+
+def behaviour_fractions(run: RunData) -> dict[str, float]:
+    """Per leaf of the tree, the share of agent-records in which it is the active behaviour
+    (records before the first tick count as none); empty if the run recorded no behaviour."""
+    if run.behaviour is None or run.behaviour.size == 0:
+        return {}
+    counts = np.bincount(run.behaviour.reshape(-1) + 1, minlength=len(run.nodes) + 1)[1:]
+    return {
+        name: float(c) / run.behaviour.size
+        for name, c in zip(run.nodes, counts, strict=True)
+        if c > 0
+    }
 
 
 def refuel_starts(run: RunData) -> np.ndarray:

@@ -75,6 +75,7 @@ def execute(task: RunTask) -> dict[str, Any]:
             engine=task.engine,
             record_every=task.record_every,
             tree=task.tree,
+            trace=0,  # the active behaviour is kept; per-node traces are not needed
         ).run(progress=False)
         data = RunData.from_simulation(sim)
         for measure in task.measures:

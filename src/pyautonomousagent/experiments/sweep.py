@@ -30,7 +30,7 @@ import pyarrow as pa
 
 from pyautonomousagent.experiments.backends import Backend, make_backend
 from pyautonomousagent.experiments.expression import Expression
-from pyautonomousagent.experiments.measures import _Evaluate
+from pyautonomousagent.experiments.measures import RunData, _Evaluate
 from pyautonomousagent.experiments.runner import RunTask, execute, one_line, scenario_parameters
 from pyautonomousagent.experiments.spec import Experiment, ExperimentError, Run
 from pyautonomousagent.experiments.store import (
@@ -85,9 +85,9 @@ def base_scenario(experiment: Experiment) -> Any:
         raise ExperimentError(f"experiment {experiment.name!r}: {error}") from None
 
 
-def check(experiment: Experiment, scenario: Any) -> list[str]:
+def check(experiment: Experiment, scenario: Any) -> RunData:
     """Check every varied value against ``scenario`` and the expression measures against
-    the recorded columns; return the names an expression may use.
+    what a run records; return the data of a one-agent, one-iteration probe run.
 
     Raises:
         ExperimentError: an unknown parameter, a bad value, or an unknown column.
@@ -118,11 +118,12 @@ def check(experiment: Experiment, scenario: Any) -> list[str]:
     probe = Simulation.create(
         scenario.with_overrides(agents=1, iterations=1), seed=0, engine=experiment.engine
     )
-    names = [*probe.recorder.columns, "iteration", "agents", "iterations"]
+    recorded = RunData.from_simulation(probe)
+    names = list(recorded.expression_values())
     for measure in experiment.measures:
         if isinstance(measure.fn, _Evaluate):
             _check_names(measure.name, measure.fn.expression, names)
-    return names
+    return recorded
 
 
 def _check_tree(name: str, value: Any, experiment: str) -> None:
@@ -204,7 +205,7 @@ def sweep(
     """
     out = Path(out)
     scenario = base_scenario(experiment)
-    columns = check(experiment, scenario)
+    probe = check(experiment, scenario)
     runs = experiment.runs()
     previous = _previous_manifest(out, experiment, resume)
     points = experiment.points()
@@ -216,7 +217,7 @@ def sweep(
     owned = isinstance(backend, str)
     chosen = make_backend(backend, workers, address) if isinstance(backend, str) else backend
     try:
-        check_memory(run_bytes(experiment, scenario, len(columns) - 3, save_runs), chosen)
+        check_memory(run_bytes(experiment, scenario, len(probe.columns), save_runs), chosen)
         if chosen.name == "pool":
             _check_picklable(_tasks(experiment, scenario, runs[:1], None)[0])
     except ExperimentError:
