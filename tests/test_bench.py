@@ -103,3 +103,41 @@ def test_cli_prints_the_table_and_json(capsys: pytest.CaptureFixture[str]) -> No
 def test_cli_refuses_bad_input(args: list[str], capsys: pytest.CaptureFixture[str]) -> None:
     assert main(args) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_stress_probes_are_sized_for_the_full_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    seen: list[bench.Case] = []
+
+    def measure(
+        case: bench.Case, timeout: float | None = None, budget_mb: float | None = None
+    ) -> bench.Result:
+        seen.append(case)
+        return bench.Result(case, 1.0, 10.0 * case.agents)
+
+    monkeypatch.setattr(bench, "measure", measure)
+    bench.stress("patrol", "batched", 25.0, 5, 100, start=1, full_iterations=4000)
+    assert seen and all(case.full_iterations == 4000 for case in seen)
+
+
+@pytest.mark.parametrize(("ratio", "shown"), [(0.57, "0.57x"), (3.24, "3.2x"), (48.4, "48x")])
+def test_speedups_below_ten_keep_two_digits(ratio: float, shown: str) -> None:
+    assert bench.format_ratio(ratio) == shown
+
+
+def test_a_slower_engine_shows_its_fraction() -> None:
+    text = bench.table([fake("pytrees", 10, 1.0), fake("batched", 10, 1.75)], "pytrees")
+    assert "0.57x" in text.splitlines()[3]
+
+
+@pytest.mark.parametrize(
+    ("maxrss", "system", "mb"),
+    [(2048 * 1024, "linux", 2048.0), (2048 * 1024 * 1024, "darwin", 2048.0)],
+)
+def test_peak_memory_units_per_system(maxrss: int, system: str, mb: float) -> None:
+    assert bench.peak_rss_mb(maxrss, system) == mb
+
+
+@pytest.mark.parametrize("text", ["lots", "-5GB", "0", "nanMB", "inf", ""])
+def test_bad_sizes_are_refused(text: str) -> None:
+    with pytest.raises(ValueError, match="expected a positive size"):
+        bench.parse_size_mb(text)

@@ -10,6 +10,7 @@ agent-iteration over each other engine's, for the same agents, measured in the s
 from __future__ import annotations
 
 import json
+import math
 import resource
 import subprocess
 import sys
@@ -108,8 +109,15 @@ def run_case_here(case: Case) -> dict[str, float]:
     for _ in range(case.iterations):
         sim.step()
     seconds = time.perf_counter() - start
-    peak_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return {"seconds": seconds, "setup": setup, "peak_mb": peak_kb / 1024}
+    return {"seconds": seconds, "setup": setup, "peak_mb": peak_rss_mb()}
+
+
+def peak_rss_mb(maxrss: int | None = None, system: str = sys.platform) -> float:
+    """This process's peak resident memory in MB (MiB) from ``getrusage``'s ``ru_maxrss``,
+    which macOS gives in bytes and Linux (and the BSDs) in KiB."""
+    if maxrss is None:
+        maxrss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return maxrss / (1024 * 1024) if system == "darwin" else maxrss / 1024
 
 
 def measure(case: Case, timeout: float | None = None, budget_mb: float | None = None) -> Result:
@@ -187,7 +195,7 @@ def table(results: Sequence[Result], reference: str) -> str:
         if r.full_seconds is None or r.per_agent_iteration is None or r.peak_mb is None:
             lines.append(f"{c.agents:>8} {c.engine:>8} {c.record_every:>7}  failed: {r.error}")
             continue
-        ratio = f"{ratios[c]:.0f}x" if c in ratios else ""
+        ratio = format_ratio(ratios[c]) if c in ratios else ""
         seconds = f"{'~' if c.scaled else ''}{r.full_seconds:.3f}"
         lines.append(
             f"{c.agents:>8} {c.engine:>8} {c.record_every:>7} {seconds:>10} "
@@ -195,6 +203,11 @@ def table(results: Sequence[Result], reference: str) -> str:
             f"{'' if paper is None else f'{paper:.2f}':>8}"
         )
     return "\n".join(lines)
+
+
+def format_ratio(ratio: float) -> str:
+    """A speed-up as the table shows it: ``0.57x``, ``3.2x``, ``48x``."""
+    return f"{ratio:.0f}x" if ratio >= 10 else f"{ratio:.2g}x"
 
 
 def stress(
@@ -217,9 +230,8 @@ def stress(
     probes: list[Result] = []
 
     def fits(agents: int) -> bool:
-        result = measure(
-            Case(scenario, engine, agents, iterations, record_every), budget_mb=budget_mb
-        )
+        case = Case(scenario, engine, agents, iterations, record_every, full_iterations)
+        result = measure(case, budget_mb=budget_mb)
         probes.append(result)
         report(result)
         return result.peak_mb is not None and result.peak_mb <= budget_mb
@@ -237,13 +249,25 @@ def stress(
 
 
 def parse_size_mb(text: str) -> float:
-    """``"5.12GB"`` -> 5242.88 (MB, 1024-based); also MB, KB, or a bare number of MB."""
+    """``"5.12GB"`` -> 5242.88 (MB, 1024-based); also MB, KB, or a bare number of MB.
+
+    Raises:
+        ValueError: not a positive, finite size (one line naming the text).
+    """
     units = {"gb": 1024.0, "mb": 1.0, "kb": 1 / 1024}
     lowered = text.strip().lower()
-    for suffix, factor in units.items():
+    factor = 1.0
+    for suffix, unit in units.items():
         if lowered.endswith(suffix):
-            return float(lowered[: -len(suffix)]) * factor
-    return float(lowered)
+            lowered, factor = lowered[: -len(suffix)].strip(), unit
+            break
+    try:
+        size = float(lowered) * factor
+    except ValueError:
+        size = float("nan")
+    if not math.isfinite(size) or size <= 0:
+        raise ValueError(f"expected a positive size such as 5.12GB, 800MB or 512, got {text!r}")
+    return size
 
 
 if __name__ == "__main__":

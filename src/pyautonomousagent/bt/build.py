@@ -18,6 +18,7 @@ from typing import Any
 
 from pyautonomousagent.bt.document import SUBTREE, Document, RawNode, TreeFileError
 from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf, LeafError
+from pyautonomousagent.bt.limits import check_document
 from pyautonomousagent.bt.nodes import DECORATOR
 from pyautonomousagent.bt.spec import (
     BlackboardRef,
@@ -45,6 +46,7 @@ def build(document: Document) -> Node:
     Raises:
         TreeFileError: naming the file, the line and the fix.
     """
+    check_document(document)  # size and depth, before inlining anything
     builder = _Builder(document)
     root = builder.inline(document.main, _Scope(), (document.main,), "")
     _assign_names(root, document.file)
@@ -367,11 +369,13 @@ def _assign_names(root: RawNode, file: str) -> None:
                 "give each node its own name, or leave name out",
             )
         lines[node.name] = node.line
+    suffix: dict[str, int] = {}  # base -> the next number to try (linear, not quadratic)
     for node in root.walk():
         if node.name is None:
             base = node.prefix + snake_case(node.tag)
-            name, n = base, 2
+            name, n = base, suffix.get(base, 2)
             while name in lines:
                 name, n = f"{base}_{n}", n + 1
+            suffix[base] = n
             node.name = name
             lines[name] = node.line

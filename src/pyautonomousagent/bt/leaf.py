@@ -9,11 +9,13 @@ method, so they cannot drift apart.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Container, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure
+from pyautonomousagent.inputs import shown
 from pyautonomousagent.randomness import stream_key
 from pyautonomousagent.registry import Registry, UnknownNameError
 from pyautonomousagent.state import AgentView, Swarm
@@ -47,7 +49,7 @@ class Port:
             except ValueError:
                 kind = "a whole number" if self.type is int else "a number"
                 raise LeafError(
-                    f"{where}: port {self.name!r} must be {kind}, got {text!r}"
+                    f"{where}: port {self.name!r} must be {kind}, got {shown(text)}"
                 ) from None
             if value != value or value in (float("inf"), float("-inf")):
                 raise LeafError(
@@ -64,10 +66,14 @@ class Port:
         """``value`` as this port's type; LeafError naming ``where`` if it is not one."""
         if self.type is str:
             if not isinstance(value, str):
-                raise LeafError(f"{where}: port {self.name!r} must be a string, got {value!r}")
+                raise LeafError(f"{where}: port {self.name!r} must be a string, got {shown(value)}")
             return value
         if isinstance(value, bool) or not isinstance(value, int | float):
-            raise LeafError(f"{where}: port {self.name!r} must be a number, got {value!r}")
+            raise LeafError(f"{where}: port {self.name!r} must be a number, got {shown(value)}")
+        if not math.isfinite(value):
+            raise LeafError(
+                f"{where}: port {self.name!r} must be a finite number, got {shown(value)}"
+            )
         if self.type is int and float(value) != int(value):
             raise LeafError(f"{where}: port {self.name!r} must be a whole number, got {value!r}")
         converted = self.type(value)
