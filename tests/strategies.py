@@ -9,7 +9,7 @@ from itertools import count
 from hypothesis import strategies as st
 
 from pyautonomousagent.bt.nodes import NODE_TYPES
-from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.bt.spec import Node, TreeError, check_structure
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 
 STATUSES = st.sampled_from([SUCCESS, FAILURE, RUNNING])
@@ -145,4 +145,13 @@ def trees(ticks: int, agents: int, max_leaves: int = 12) -> st.SearchStrategy[No
         lambda inner: control_node(st.lists(inner, min_size=1, max_size=4)),
         max_leaves=max_leaves,
     )
-    return tree.filter(lambda node: node.is_control).map(_renamed)
+    return tree.filter(lambda node: node.is_control).map(_renamed).filter(_allowed)
+
+
+def _allowed(root: Node) -> bool:
+    """False for trees BehaviorTree.CPP refuses (two AsyncSequence under a ReactiveSequence)."""
+    try:
+        check_structure(root)
+    except TreeError:
+        return False
+    return True

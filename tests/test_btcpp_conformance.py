@@ -19,7 +19,7 @@ import pytest
 
 from pyautonomousagent.bt.document import document_from_node
 from pyautonomousagent.bt.files import read_document, to_text_format
-from pyautonomousagent.bt.spec import Node, node_type
+from pyautonomousagent.bt.spec import Node, TreeError, check_structure, node_type
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.bt.vocabulary import tags
 from pyautonomousagent.bt.xml_format import write_xml
@@ -73,8 +73,14 @@ def random_tree(rng: np.random.Generator, leaves: list[str], depth: int = 0) -> 
 
 def draw(rng: np.random.Generator) -> tuple[Node, dict[str, list[list[int]]]]:
     """A random tree and its leaves' scripts {name: [tick][agent] status codes}."""
-    leaves: list[str] = []
-    tree = random_tree(rng, leaves)
+    while True:
+        leaves: list[str] = []
+        tree = random_tree(rng, leaves)
+        try:
+            check_structure(tree)  # e.g. BT.CPP's one AsyncSequence per ReactiveSequence
+            break
+        except TreeError:
+            continue
     codes = np.array([SUCCESS, FAILURE, RUNNING])
     table = {
         name: codes[rng.integers(2 if name[0] == "c" else 3, size=(TICKS, AGENTS))].tolist()

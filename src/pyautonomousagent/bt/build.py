@@ -53,7 +53,7 @@ def build(document: Document) -> Node:
     node = builder.convert(root)
     try:
         check_structure(node)
-    except TreeError as error:  # pragma: no cover - the steps above catch everything
+    except TreeError as error:  # what only the whole tree shows (BT.CPP's async rule)
         raise TreeFileError(document.file, root.line, str(error), "fix the tree") from None
     return node
 

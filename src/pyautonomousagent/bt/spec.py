@@ -144,6 +144,13 @@ def check_structure(root: Node) -> None:
         if count < record.least or (record.most is not None and count > record.most):
             raise TreeError(f"{node.type} {node.name!r} needs {_arity(record)}, has {count}")
         control_params(node)
+        if node.type == "Sequence" and node.params.get("memory") is False:
+            asynchronous = sum(child.type == "AsyncSequence" for child in node.children)
+            if asynchronous > 1:
+                raise TreeError(
+                    f"reactive sequence {node.name!r} has {asynchronous} AsyncSequence children; "
+                    "BehaviorTree.CPP allows one"
+                )
 
 
 def node_type(type_name: str) -> NodeType:
