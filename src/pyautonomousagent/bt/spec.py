@@ -24,7 +24,7 @@ from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType
 PARALLEL_POLICIES = ("SuccessOnAll", "SuccessOnOne")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class BlackboardRef:
     """A leaf port written ``{key}``: the agent's blackboard entry ``key``, read each tick."""
 
@@ -32,6 +32,8 @@ class BlackboardRef:
 
     def __str__(self) -> str:
         return "{" + self.key + "}"
+
+    __repr__ = __str__
 
 
 class TreeError(ValueError):
