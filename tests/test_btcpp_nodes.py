@@ -271,3 +271,30 @@ def test_tree_blackboard_keys_types_and_skips_known_keys():
         "flag": np.dtype(bool), "x": np.dtype(np.int64), "y": np.dtype(np.float64),
         "name": np.dtype(np.int64), "z": np.dtype(np.float64), "energy_copy": np.dtype(np.int64),
     }  # fmt: skip
+
+
+def test_every_node_type_is_drawn_and_written(tmp_path):
+    from pyautonomousagent.bt.build import build
+    from pyautonomousagent.bt.document import document_from_node
+    from pyautonomousagent.bt.draw import draw_tree, to_dot
+    from pyautonomousagent.bt.nodes import NODE_TYPES
+    from pyautonomousagent.bt.text import to_text
+    from pyautonomousagent.bt.xml_format import read_xml, write_xml
+
+    kids = []
+    for n, (name, record) in enumerate(NODE_TYPES.items()):
+        params = {p.name: p.default for p in record.params if p.default is not None}
+        params.update({"num_cycles": 2, "num_attempts": 2, "num_success": 2, "num_failures": 2,
+                       "if": "x > 1", "delay_msec": 10, "msec": 10, "memory": True,
+                       "then_skip": False})  # fmt: skip
+        params = {k: v for k, v in params.items() if k in record.defaults()}
+        count = max(record.least, 1) if record.most is None else record.most
+        children = tuple(leaf("AlwaysSuccess", f"k{n}_{i}") for i in range(count))
+        kids.append(Node(name, f"node{n}", children, params))
+    tree = Node("Sequence", "root", tuple(kids), {"memory": False})
+    text, dot = to_text(tree), to_dot(tree)
+    for record in NODE_TYPES.values():
+        symbol = record.tags[0].symbol or record.tags[0].tag
+        assert symbol in text and symbol in dot
+    assert draw_tree(tree, tmp_path / "all.png").stat().st_size > 0
+    assert build(read_xml(write_xml(document_from_node(tree)), "all.xml")) == tree

@@ -114,8 +114,10 @@ def file_params(node: Node) -> dict[str, Any]:
 
 
 def leaf_category(type_name: str) -> str:
-    """``"Condition"`` for condition leaves (``Condition_*``), else ``"Action"``."""
-    return "Condition" if type_name.startswith("Condition") else "Action"
+    """``"Condition"`` for condition leaves (``Condition_*``, ``ScriptCondition``), else
+    ``"Action"``."""
+    condition = type_name.startswith("Condition") or type_name == "ScriptCondition"
+    return "Condition" if condition else "Action"
 
 
 def closest(word: str, known: list[str]) -> str:
