@@ -158,6 +158,21 @@ class Leaf:
         """Called when the leaf is interrupted while RUNNING (BehaviorTree.CPP's
         ``onHalted``) for ``agents``; by default it does nothing."""
 
+    def broadcast(
+        self, agents: AgentView, world: World, kind: str, data: Mapping[str, Any]
+    ) -> None:
+        """Each agent of the view sends everyone a message of type ``kind`` from where it is.
+
+        Args:
+            agents: the senders (one agent or a group).
+            world: the world (its datalink).
+            kind: a message type of the mission (``MessageType.name``).
+            data: payload name -> a number, or a value per agent in view shape.
+        """
+        payload = {k: agents.compact(v) for k, v in data.items()}
+        position = (agents.compact(agents.x), agents.compact(agents.y))
+        world.datalink.send(agents.indices, kind, payload, position)
+
     def uniform(
         self, agents: AgentView, world: World, low: float = 0.0, high: float = 1.0, draw: int = 0
     ) -> Any:
