@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from pyautonomousagent.bt.spec import Node, TreeError, check_structure
+from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure
 from pyautonomousagent.bt.vocabulary import file_params, tag_of
 
 #: The tag of a reference to another behaviour tree of the same file.
@@ -106,4 +106,5 @@ def _raw(node: Node) -> RawNode:
     children = [_raw(child) for child in node.children]
     if node.is_control:
         return RawNode(tag_of(node).tag, 0, node.name, file_params(node), children)
-    return RawNode(node.type, 0, node.name, dict(node.params), children)
+    ports = {k: str(v) if isinstance(v, BlackboardRef) else v for k, v in node.params.items()}
+    return RawNode(node.type, 0, node.name, ports, children)

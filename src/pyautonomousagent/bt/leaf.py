@@ -14,7 +14,7 @@ from collections.abc import Container, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from pyautonomousagent.bt.spec import Node, TreeError, check_structure
+from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure
 from pyautonomousagent.inputs import shown
 from pyautonomousagent.randomness import stream_key
 from pyautonomousagent.registry import Registry, UnknownNameError
@@ -96,6 +96,8 @@ class Leaf:
 
     type_name: ClassVar[str]
     ports: ClassVar[tuple[Port, ...]] = ()
+    #: True for leaves whose ports are text they read themselves (``{key}`` included).
+    text_ports: ClassVar[bool] = False
     keys: ClassVar[tuple[str, ...]] = ()
     stream: int = 0
 
@@ -187,6 +189,49 @@ class Leaf:
         return f"{type(self).__name__}({params})"
 
 
+class BlackboardPorts(Leaf):
+    """A leaf with ports written ``{key}``: before each tick, each such port is set to the
+    agent's (or group's, per agent) blackboard entry, then the leaf runs."""
+
+    type_name = "BlackboardPorts"
+    inner: Leaf
+    refs: dict[str, str]
+
+    def __init__(self, inner: Leaf, refs: Mapping[str, str]) -> None:
+        super().__init__(inner=inner, refs=dict(refs))
+        self.keys = (*inner.keys, *refs.values())  # type: ignore[misc]
+
+    @classmethod
+    def around(
+        cls,
+        leaf_cls: type[Leaf],
+        params: Mapping[str, Any],
+        refs: Mapping[str, str],
+        defaults: Mapping[str, Any],
+        where: str,
+    ) -> BlackboardPorts:
+        """``leaf_cls`` made with placeholders for the ``{key}`` ports, wrapped."""
+        ports = {p.name: p for p in leaf_cls.ports}
+        values = dict(params)
+        for name in refs:
+            port = ports.get(name)
+            if port is None:
+                raise LeafError(f"{where}: unknown port {name!r}")
+            values[name] = defaults.get(port.default, port.minimum or port.type())
+        return cls(leaf_cls.create(values, defaults, where), refs)
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        for name, key in self.refs.items():
+            setattr(self.inner, name, getattr(agents.blackboard, key))
+        return self.inner.evaluate(agents, world)
+
+    def halt(self, agents: AgentView, world: World) -> None:
+        self.inner.halt(agents, world)
+
+    def __repr__(self) -> str:
+        return f"{self.inner!r} with {self.refs}"
+
+
 LEAF_TYPES: Registry[type[Leaf]] = Registry("leaf type")
 
 #: Leaf type names known to an engine only (hand-written py_trees behaviours): tree files
@@ -225,8 +270,16 @@ def make_leaf(node: Node, defaults: Mapping[str, Any]) -> Leaf:
         cls = leaf_type(node.type)
     except LeafError as error:
         raise TreeError(f"node {node.name!r}: {error}") from None
+    where = f"leaf {node.name!r} ({node.type})"
+    refs = {k: v.key for k, v in node.params.items() if isinstance(v, BlackboardRef)}
+    made: Leaf
     try:
-        made = cls.create(node.params, defaults, where=f"leaf {node.name!r} ({node.type})")
+        if refs and not cls.text_ports:
+            ported = BlackboardPorts.around(cls, node.params, refs, defaults, where)
+            ported.inner.stream = stream_key(node.name)
+            made = ported
+        else:
+            made = cls.create(node.params, defaults, where=where)
     except LeafError as error:
         raise TreeError(str(error)) from None
     made.stream = stream_key(node.name)

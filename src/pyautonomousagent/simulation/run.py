@@ -12,6 +12,7 @@ from typing import Any, Protocol
 import numpy as np
 import pyarrow as pa
 
+from pyautonomousagent.bt.blackboard import tree_blackboard_keys
 from pyautonomousagent.bt.files import is_tree_file, load_tree
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.trees import tree_by_name
@@ -198,7 +199,8 @@ class Simulation:
             objects=scenario.objects,
             random=CounterRandom(seed),
         )
-        swarm = phases.create_agents(mission, world, rng)
+        declared = tree_blackboard_keys(tree, mission.blackboard())  # scripts' entries
+        swarm = phases.create_agents(mission, world, rng, declared)
         world.agent_index = {name: i for i, name in enumerate(swarm.names)}
         model = build_model(scenario, swarm, engine, seed, implementation)
         decision = engine_type(tree, swarm, world, vars(p))
