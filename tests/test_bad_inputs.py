@@ -397,6 +397,14 @@ def test_bad_command_line(argv, named, tmp_path, monkeypatch, capsys):
     assert not (tmp_path / "runs").exists()  # nothing written
 
 
+def test_replay_into_a_missing_folder(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main([*RUN, "--iterations", "20", "--no-replay", "--out", str(out)]) == 0
+    capsys.readouterr()
+    line = refused(["replay", str(out), "--out", str(tmp_path / "missing" / "x.html")], capsys)
+    assert "No such file or directory" in line
+
+
 def test_output_folder_problems(tmp_path, capsys):
     (tmp_path / "file").write_text("x")
     assert "is a file" in refused([*RUN, "--out", str(tmp_path / "file")], capsys)

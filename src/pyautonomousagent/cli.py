@@ -896,6 +896,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SaveError as error:
         print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
         return 1
+    except OSError as error:  # a path given on the command line: one line, no traceback
+        where = f"{error.filename}: " if error.filename else ""
+        reason = error.strerror or type(error).__name__
+        print(f"pyaa: error: {clip(where + reason)}; check the path", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("pyaa: interrupted", file=sys.stderr)
         return 130
