@@ -22,7 +22,7 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed
-	$(BIN)/pyaa run gathering --out runs/gathering
+	$(BIN)/pyaa run gathering --out runs/gathering --overwrite
 
 # The replay's browser test drives Debian's chromium; install it when missing and we can (root).
 browser:

@@ -11,6 +11,7 @@ node name to the same script; leaves named ``c...`` never run and are conditions
 
 from __future__ import annotations
 
+import xml.etree.ElementTree as ET
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import replace
@@ -22,11 +23,15 @@ from pyautonomousagent.bt.document import document_from_node
 from pyautonomousagent.bt.leaf import LEAF_TYPES, Leaf
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
+from pyautonomousagent.bt.vocabulary import BTCPP_LEAVES
 from pyautonomousagent.bt.xml_format import write_xml
-from pyautonomousagent.state import AgentView
+from pyautonomousagent.engines.batched import BatchedEngine
+from pyautonomousagent.engines.pytrees import PyTreesEngine
+from pyautonomousagent.missions.drones import DroneMission
+from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
-from .conftest import make_harness
+from .conftest import BLACKBOARD_KEYS, Harness, default_parameters, make_world
 
 Logs = list[list[list[str]]]  # [agent][tick] -> leaf events in order
 
@@ -76,9 +81,18 @@ def ours(
     """Root statuses [tick][agent] and events [agent][tick] on one of our engines."""
     log: list[list[str]] = [[] for _ in range(agents)]
     with logged_leaf_type():
-        h = make_harness(with_logged_leaves(tree, table, log), agents, engine=engine)
+        logged = with_logged_leaves(tree, table, log)
+        swarm = Swarm.create(
+            [f"drone{i + 1}" for i in range(agents)],
+            {**BLACKBOARD_KEYS, "gate": np.int64},
+            DroneMission.columns,
+        )
+        world = make_world(swarm)
+        kind = PyTreesEngine if engine == "pytrees" else BatchedEngine
+        h = Harness(logged, swarm, world, kind(logged, swarm, world, default_parameters()))
         roots, events = [], [[] for _ in range(agents)]
-        for _ in range(ticks):
+        for t in range(ticks):
+            swarm.blackboard["gate"][:] = table["gate"][t]
             roots.append([int(s) for s in h.tick()[0]])
             for a in range(agents):
                 events[a].append(log[a][:])
@@ -128,10 +142,40 @@ def reference(
         factory.register_simple_stateful_action("Scripted", run, run, halted)
         factory.register_simple_condition("ScriptedCondition", run)
         bt_tree = factory.create_tree_from_text(xml)
+        board = bt_tree.root_blackboard()
         for t in range(ticks):
             tick[0] = t
+            board.set_int("gate", int(table["gate"][t][agent]))
             status = bt_tree.tick_exactly_once()
             roots[t][agent] = BT_STATUS[str(status).split(".")[-1]]
             events[agent].append(log[:])
             log.clear()
     return roots, events
+
+
+def btcpp_text(xml: str) -> str:
+    """A tree file as BT.CPP loads it with our leaf types registered there: our leaves' ports
+    left out (nodes registered from Python cannot declare ports), ``name`` and the ``_``
+    attributes kept; BT.CPP's own nodes unchanged."""
+    root = ET.fromstring(xml)
+    for tree in root.iter("BehaviorTree"):
+        for element in tree.iter():
+            if element.tag in LEAF_TYPES and element.tag not in BTCPP_LEAVES:
+                for key in list(element.attrib):
+                    if key != "name" and not key.startswith("_"):
+                        del element.attrib[key]
+    return ET.tostring(root, encoding="unicode")
+
+
+def btcpp_factory_with_our_leaves() -> Any:
+    """A BT.CPP factory with every registered leaf type of ours (that BT.CPP lacks) as a
+    stateful action returning SUCCESS."""
+    import behaviortreepy as btpy
+
+    factory = btpy.BehaviorTreeFactory()
+    for name in LEAF_TYPES.names():
+        if name not in BTCPP_LEAVES:
+            factory.register_simple_stateful_action(
+                name, lambda node: btpy.NodeStatus.SUCCESS, lambda node: btpy.NodeStatus.SUCCESS
+            )
+    return factory

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -17,6 +16,7 @@ from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.pytrees import PyTreesEngine
 from pyautonomousagent.missions.drones import DroneMission
 from pyautonomousagent.state import Swarm
+from pyautonomousagent.testing import Harness
 from pyautonomousagent.world import World
 
 #: The blackboard of the paper's Table 3 plus the patrol keys.
@@ -56,35 +56,11 @@ def make_world(swarm: Swarm, datalink_range: float = 1000.0) -> World:
     )
 
 
-@dataclass
-class Harness:
-    """A tree on the py_trees engine for N agents, ticked one iteration at a time."""
-
-    tree: Node
-    swarm: Swarm
-    world: World
-    engine: PyTreesEngine | BatchedEngine
-
-    def tick(self) -> np.ndarray:
-        """Advance the clock one iteration, tick every agent once; the node statuses."""
-        self.world.iteration += 1
-        self.engine.tick()
-        return self.engine.node_statuses()
-
-    def names(self) -> list[str]:
-        """The node names in the order of :meth:`node_statuses` rows."""
-        return [node.name for node in self.tree.walk()]
-
-    def statuses(self, agent: int = 0) -> dict[str, int]:
-        """Node name -> status code of one agent, after the last tick."""
-        column = self.engine.node_statuses()[:, agent]
-        return dict(zip(self.names(), (int(c) for c in column), strict=True))
-
-
 def make_harness(
     tree: Node, n: int = 1, defaults: Mapping[str, Any] | None = None, engine: str = "pytrees"
 ) -> Harness:
-    """Swarm + World + an engine ("pytrees" or "batched") for ``tree`` and ``n`` agents."""
+    """Swarm + World + an engine ("pytrees" or "batched") for ``tree`` and ``n`` drones with
+    the full blackboard (the shipped :class:`~pyautonomousagent.testing.Harness`)."""
     swarm = make_swarm(n)
     world = make_world(swarm)
     params = default_parameters() if defaults is None else defaults

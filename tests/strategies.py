@@ -9,7 +9,7 @@ from itertools import count
 from hypothesis import strategies as st
 
 from pyautonomousagent.bt.nodes import NODE_TYPES
-from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.bt.spec import Node, TreeError, check_structure
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 
 STATUSES = st.sampled_from([SUCCESS, FAILURE, RUNNING])
@@ -99,7 +99,26 @@ def btcpp_node(children: st.SearchStrategy[list[Node]]) -> st.SearchStrategy[Nod
             lambda m: Node("ParallelAll", "pa", tuple(kids), {"max_failures": m})
         )
     )
-    return st.one_of(with_memory, parallel, loops, flows, branches, parallel_all)
+    timed = st.builds(
+        lambda kind, msec, kids: Node(
+            kind, "t", tuple(kids), {"delay_msec" if kind == "Delay" else "msec": msec}
+        ),
+        st.sampled_from(["Delay", "Timeout"]),
+        st.sampled_from([0, 1000, 2500]),  # iterations of the default time step, 1 s
+        one_child,
+    )
+    guarded = st.builds(
+        lambda code, otherwise, kids: Node(
+            "Precondition", "g", tuple(kids), {"if": code, "else": otherwise}
+        ),
+        st.sampled_from(["number_ticks > 2", "number_ticks < 4 && number_ticks != 1"]),
+        st.sampled_from(["FAILURE", "SUCCESS", "RUNNING"]),
+        one_child,
+    )
+    once = one_child.map(lambda kids: Node("RunOnce", "o", tuple(kids), {"then_skip": False}))
+    return st.one_of(
+        with_memory, parallel, loops, flows, branches, parallel_all, timed, guarded, once
+    )
 
 
 def _threshold(children: int) -> st.SearchStrategy[int]:
@@ -126,4 +145,13 @@ def trees(ticks: int, agents: int, max_leaves: int = 12) -> st.SearchStrategy[No
         lambda inner: control_node(st.lists(inner, min_size=1, max_size=4)),
         max_leaves=max_leaves,
     )
-    return tree.filter(lambda node: node.is_control).map(_renamed)
+    return tree.filter(lambda node: node.is_control).map(_renamed).filter(_allowed)
+
+
+def _allowed(root: Node) -> bool:
+    """False for trees BehaviorTree.CPP refuses (two AsyncSequence under a ReactiveSequence)."""
+    try:
+        check_structure(root)
+    except TreeError:
+        return False
+    return True

@@ -103,3 +103,66 @@ def test_cli_prints_the_table_and_json(capsys: pytest.CaptureFixture[str]) -> No
 def test_cli_refuses_bad_input(args: list[str], capsys: pytest.CaptureFixture[str]) -> None:
     assert main(args) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_stress_probes_are_sized_for_the_full_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    seen: list[bench.Case] = []
+
+    def measure(
+        case: bench.Case, timeout: float | None = None, budget_mb: float | None = None
+    ) -> bench.Result:
+        seen.append(case)
+        return bench.Result(case, 1.0, 10.0 * case.agents)
+
+    monkeypatch.setattr(bench, "measure", measure)
+    bench.stress("patrol", "batched", 25.0, 5, 100, start=1, full_iterations=4000)
+    assert seen and all(case.full_iterations == 4000 for case in seen)
+
+
+@pytest.mark.parametrize(("ratio", "shown"), [(0.57, "0.57x"), (3.24, "3.2x"), (48.4, "48x")])
+def test_speedups_below_ten_keep_two_digits(ratio: float, shown: str) -> None:
+    assert bench.format_ratio(ratio) == shown
+
+
+def test_a_slower_engine_shows_its_fraction() -> None:
+    text = bench.table([fake("pytrees", 10, 1.0), fake("batched", 10, 1.75)], "pytrees")
+    assert "0.57x" in text.splitlines()[3]
+
+
+@pytest.mark.parametrize(
+    ("maxrss", "system", "mb"),
+    [(2048 * 1024, "linux", 2048.0), (2048 * 1024 * 1024, "darwin", 2048.0)],
+)
+def test_peak_memory_units_per_system(maxrss: int, system: str, mb: float) -> None:
+    assert bench.peak_rss_mb(maxrss, system) == mb
+
+
+@pytest.mark.parametrize("text", ["lots", "-5GB", "0", "nanMB", "inf", ""])
+def test_bad_sizes_are_refused(text: str) -> None:
+    with pytest.raises(ValueError, match="expected a positive size"):
+        bench.parse_size_mb(text)
+
+
+def test_gathering_runs_at_its_own_size_and_times_each_stage(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    argv = ["bench", "gathering", "--engines", "pytrees,batched", "--iterations", "20"]
+    assert main([*argv, "--save", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [(r["engine"], r["agents"], r["iterations"]) for r in rows] == [
+        ("pytrees", 4, 20),
+        ("batched", 4, 20),
+    ]
+    for row in rows:
+        assert row["setup_s"] > 0 and row["loop_s"] > 0 and row["write_s"] > 0
+        assert row["views_s"] > 0
+        assert row["seconds"] == pytest.approx(row["setup_s"] + row["loop_s"])
+
+
+def test_table_marks_stages_not_measured() -> None:
+    saved = bench.Result(bench.Case("patrol", "batched", 10, 4000, 1), 1.5, 80.0, setup=0.5,
+                         write=0.25, views=2.0)  # fmt: skip
+    lines = bench.table([fake("batched", 10, 1.0), saved], "pytrees").splitlines()
+    assert lines[0].split()[-4:] == ["set-up", "loop", "write", "views"]
+    assert lines[2].split()[-2:] == ["-", "-"]
+    assert lines[3].split()[-4:] == ["0.500", "1.000", "0.250", "2.000"]

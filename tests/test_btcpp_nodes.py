@@ -8,11 +8,19 @@ times within one tick.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from pyautonomousagent.bt import fallback, leaf, reactive_fallback, reactive_sequence, sequence
-from pyautonomousagent.bt.spec import Node, TreeError, check_structure, sequence_with_memory
+from pyautonomousagent.bt.spec import (
+    BlackboardRef,
+    Node,
+    TreeError,
+    check_structure,
+    sequence_with_memory,
+)
 
+from .conftest import default_parameters
 from .test_composites import letters, scripted
 
 ENGINES = ["pytrees", "batched"]
@@ -184,3 +192,109 @@ def test_every_node_type_record_has_both_engines_and_a_file_tag():
         assert name in PYTREES_NODES, name
         assert name in BATCHED_NODES or record.status_map is not None, name
         assert record.tags, name
+
+
+# -- time in simulated iterations: msec / (1000 x time_step), rounded up ------------------------
+
+
+def timed(kind: str, msec: int, child: Node) -> Node:
+    return Node(kind, "d", (child,), {"delay_msec" if kind == "Delay" else "msec": msec})
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize(("time_step", "waits"), [(1.0, 2), (0.5, 4), (0.3, 7)])
+def test_delay_waits_in_simulated_time(harness, engine, time_step, waits):
+    defaults = {**default_parameters(), "time_step": time_step}
+    h = harness(timed("Delay", 2000, scripted("a", "S" * (waits + 2))), defaults=defaults,
+                engine=engine)  # fmt: skip
+    run(h, ["R I"] * waits + ["S S", "R S"], [0] * waits + [1, 0])  # then a new delay
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_timeout_halts_a_child_that_runs_too_long(harness, engine):
+    h = harness(timed("Timeout", 3000, scripted("a", "RRRRRS")), engine=engine)
+    run(h, ["R R", "R R", "R R", "F I", "R R", "S S"], [1, 1, 1, 0, 1, 1])  # then anew
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_timeout_zero_never_fires(harness, engine):
+    h = harness(timed("Timeout", 0, scripted("a", "RRRS")), engine=engine)
+    run(h, ["R R", "R R", "R R", "S S"], [1, 1, 1, 1])
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_sleep_runs_then_succeeds(harness, engine):
+    tree = sequence("s", leaf("Sleep", "nap", msec="1500"), scripted("a", "SSSSS"))
+    run(harness(tree, engine=engine), ["R RI", "R RI", "S SS", "R RI"], [1, 1, 2, 1])
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_run_once_remembers_the_first_finish(harness, engine):
+    h = harness(Node("RunOnce", "o", (scripted("a", "RFSS"),), {"then_skip": False}),
+                engine=engine)  # fmt: skip
+    run(h, ["R R", "F F", "F F", "F F"], [1, 1, 0, 0])
+
+
+def test_script_precondition_and_ports_read_each_agents_blackboard():
+    from pyautonomousagent.testing import make_harness
+
+    tree = sequence(
+        "s",
+        leaf("Script", "count", code="n := n + 1; limit := n * 30"),
+        Node("Precondition", "p", (
+            leaf("Condition_Low_Energy_Level", "low", threshold=BlackboardRef("limit")),
+        ), {"if": "n != 2", "else": "RUNNING"}),
+        memory=False,
+    )  # fmt: skip
+    for engine in ENGINES:
+        h = make_harness(tree, agents=3, scenario="patrol", engine=engine)
+        h.swarm.columns["energy"][:] = [20.0, 50.0, 95.0]
+        assert h.swarm.blackboard["n"].dtype == np.int64
+        assert h.swarm.blackboard["limit"].dtype == np.int64
+        rows = [letters(h.tick()[0]) for _ in range(4)]  # limit 30, 60, 90, 120
+        assert rows == ["SFF", "RRR", "SSF", "SSS"], engine
+        assert list(h.swarm.blackboard["n"]) == [4, 4, 4]
+
+
+def test_tree_blackboard_keys_types_and_skips_known_keys():
+    from pyautonomousagent.bt.blackboard import tree_blackboard_keys
+
+    tree = sequence(
+        "s",
+        leaf("Script", "a", code="flag := x > 1; x := 2; y := x / 2; name := 'home'"),
+        leaf("SetBlackboard", "b", output_key="z", value="3.5"),
+        leaf("SetBlackboard", "c", output_key="energy_copy", value="{x}"),
+        leaf("Script", "d", code="known := 1"),
+    )
+    keys = tree_blackboard_keys(tree, {"known": np.float64})
+    assert keys == {
+        "flag": np.dtype(bool), "x": np.dtype(np.int64), "y": np.dtype(np.float64),
+        "name": np.dtype(np.int64), "z": np.dtype(np.float64), "energy_copy": np.dtype(np.int64),
+    }  # fmt: skip
+
+
+def test_every_node_type_is_drawn_and_written(tmp_path):
+    from pyautonomousagent.bt.build import build
+    from pyautonomousagent.bt.document import document_from_node
+    from pyautonomousagent.bt.draw import draw_tree, to_dot
+    from pyautonomousagent.bt.nodes import NODE_TYPES
+    from pyautonomousagent.bt.text import to_text
+    from pyautonomousagent.bt.xml_format import read_xml, write_xml
+
+    kids = []
+    for n, (name, record) in enumerate(NODE_TYPES.items()):
+        params = {p.name: p.default for p in record.params if p.default is not None}
+        params.update({"num_cycles": 2, "num_attempts": 2, "num_success": 2, "num_failures": 2,
+                       "if": "x > 1", "delay_msec": 10, "msec": 10, "memory": True,
+                       "then_skip": False})  # fmt: skip
+        params = {k: v for k, v in params.items() if k in record.defaults()}
+        count = max(record.least, 1) if record.most is None else record.most
+        children = tuple(leaf("AlwaysSuccess", f"k{n}_{i}") for i in range(count))
+        kids.append(Node(name, f"node{n}", children, params))
+    tree = Node("Sequence", "root", tuple(kids), {"memory": False})
+    text, dot = to_text(tree), to_dot(tree)
+    for record in NODE_TYPES.values():
+        symbol = record.tags[0].symbol or record.tags[0].tag
+        assert symbol in text and symbol in dot
+    assert draw_tree(tree, tmp_path / "all.png").stat().st_size > 0
+    assert build(read_xml(write_xml(document_from_node(tree)), "all.xml")) == tree

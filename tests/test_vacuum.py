@@ -11,6 +11,7 @@ from pyautonomousagent.bt import SUCCESS, fallback, leaf, sequence
 from pyautonomousagent.cli import main
 from pyautonomousagent.mission import ScenarioError
 from pyautonomousagent.missions.vacuum import Circle, Rectangle, Room, leaves
+from pyautonomousagent.render.animation import draw_frame
 from pyautonomousagent.testing import check_engines_agree, check_leaf, make_harness
 
 ITERATIONS = 1500
@@ -43,7 +44,8 @@ def test_no_robot_ever_enters_an_obstacle_though_they_come_close(vacuum_run):
     x, y = vacuum_run.recorder.column("x"), vacuum_run.recorder.column("y")
     assert not entered(vacuum_run.scenario, x, y).any()
     sonar = vacuum_run.recorder.column("sonar")
-    assert sonar.min() < 0.25  # the robots did drive up to walls and obstacles
+    assert sonar[0].min() > 1.0  # the first reading, at the start positions
+    assert sonar.min() < 0.2  # the robots did drive up to walls and obstacles
     avoiding = vacuum_run.recorder.column("vacuuming")[1:] == 0
     assert avoiding.any() and not avoiding.all()
 
@@ -67,6 +69,23 @@ def test_the_cleaned_area_grows_monotonically_and_substantially(vacuum_run):
     assert total[-1] == vacuum_run.mission.grid.cleaned.sum()
     assert vacuum_run.mission.coverage() == pytest.approx(total[-1] / free)
     assert vacuum_run.mission.coverage() > 0.6
+
+
+def test_the_animation_draws_the_area_cleaned_so_far(vacuum_run):
+    drawer = vacuum_run.scenario.create_mission()  # a fresh instance, as the animation has
+    counts = vacuum_run.recorder.column("cleaned_cells").sum(axis=1)
+    for row in (0, 1, 400, ITERATIONS):  # rows in order, as frames are drawn
+        cells = drawer.frame_marks(vacuum_run.recorder, row)
+        assert len(cells) == counts[row]  # the cells cleaned by then, exactly
+        assert {m.legend for m in cells} <= {"cleaned area"}
+    cell = vacuum_run.scenario.parameters.cell_size
+    drawn = {(round(m.x / cell), round(m.y / cell)) for m in cells}
+    rows, cols = np.nonzero(vacuum_run.mission.grid.cleaned)
+    assert drawn == set(zip(cols.tolist(), rows.tolist(), strict=True))
+    assert len(drawer.frame_marks(vacuum_run.recorder, 10)) == counts[10]  # backwards too
+    frame = np.asarray(draw_frame(vacuum_run.recorder, vacuum_run.scenario, ITERATIONS))
+    light_green = (frame[..., 0] == 0xC7) & (frame[..., 1] == 0xE9) & (frame[..., 2] == 0xC0)
+    assert light_green.sum() > 1000  # the cleaned cells are on the picture
 
 
 def test_the_sonar_reads_the_nearest_wall_or_obstacle_ahead():

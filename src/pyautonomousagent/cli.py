@@ -3,12 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import difflib
 import json
-import platform
 import sys
-import time
-from collections.abc import Sequence
-from importlib import metadata
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
@@ -19,14 +17,14 @@ from pyautonomousagent.bt.leaf import LeafError
 from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.bt.text import to_text
 from pyautonomousagent.bt.trees import tree_by_name
+from pyautonomousagent.inputs import InputError, clip, finite, shown
 from pyautonomousagent.recording import (
     DEFAULT_TRACED,
     Recorder,
-    node_list,
     read_table,
     recorder_from_tables,
-    write_table,
 )
+from pyautonomousagent.runs import SaveError, check_target, default_folder, save_run, simulate
 from pyautonomousagent.scenarios import load, names
 from pyautonomousagent.simulation import Scenario, ScenarioError, Simulation
 from pyautonomousagent.simulation.run import ENGINES
@@ -35,8 +33,9 @@ from pyautonomousagent.simulation.scenario import to_mapping
 if TYPE_CHECKING:
     from pyautonomousagent.render.views import Views
 
-#: Errors that mean bad input: shown as one line, no traceback (TreeFileError is a TreeError).
-USER_ERRORS = (ScenarioError, TreeError, LeafError)
+#: Errors that mean bad input: shown as one line, no traceback (TreeFileError is a TreeError;
+#: ScenarioError and the runs' RunError are InputErrors).
+USER_ERRORS = (InputError, TreeError, LeafError)
 TREE_FORMATS = ("text", "png", "svg", "dot", "xml", "yaml")
 
 
@@ -68,6 +67,12 @@ def _parser() -> argparse.ArgumentParser:
         help="decision engine (default auto: batched unless the tree has hand-written leaves)",
     )
     run.add_argument("--out", type=Path, help="output folder (default: runs/SCENARIO)")
+    run.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the earlier run in the output folder (by default it is kept and the "
+        "run refused)",
+    )
     run.add_argument("--format", choices=["parquet", "csv"], default="parquet", help="data format")
     run.add_argument(
         "--record-every",
@@ -172,10 +177,20 @@ def _add_bench(sub: Any) -> None:
     bench.add_argument(
         "--agents",
         type=_int_list,
-        default=[1, 10, 100, 1000],
-        help="agent counts, e.g. 1,10,100,1000",
+        help="agent counts, e.g. 1,10,100,1000 (default: those for the paper's tables, "
+        "else the scenario's own)",
     )
-    bench.add_argument("--iterations", type=int, default=4000, help="iterations per run")
+    bench.add_argument(
+        "--iterations",
+        type=int,
+        help="iterations per run (default: 4000 for the paper's tables, else the scenario's)",
+    )
+    bench.add_argument(
+        "--save",
+        action="store_true",
+        help="also write each run's data and views as pyaa run does (to a temporary folder) "
+        "and time the writing and the views",
+    )
     bench.add_argument(
         "--engines",
         help="engines, comma-separated; the first is the reference "
@@ -235,12 +250,16 @@ def bench_command(args: argparse.Namespace) -> int:
     """``pyaa bench``: measure each case in its own process, print the table (or JSON)."""
     from pyautonomousagent import bench
 
-    engines = _bench_engines(args, load(args.scenario))
+    scenario = load(args.scenario)
+    engines = _bench_engines(args, scenario)
+    _bench_defaults(args, scenario, bench.PAPER_TABLES)
     for option in ("iterations", "reference_iterations", "stress_iterations", "stress_start"):
         value = getattr(args, option)
         if value is not None and value < 1:
             flag = "--" + option.replace("_", "-")
             raise ScenarioError(f"{flag} must be a whole number >= 1, got {value}")
+    if args.timeout is not None and not (finite(args.timeout) and args.timeout > 0):
+        raise ScenarioError(f"--timeout must be a number of seconds > 0, got {args.timeout}")
     if args.stress:
         return _stress(args, engines, bench)
     short = args.reference_iterations
@@ -251,7 +270,7 @@ def bench_command(args: argparse.Namespace) -> int:
                 scaled = bool(short) and engine == engines[0] and short < args.iterations
                 its = short if scaled else args.iterations
                 case = bench.Case(
-                    args.scenario, engine, agents, its, every, args.iterations, scaled
+                    args.scenario, engine, agents, its, every, args.iterations, scaled, args.save
                 )
                 print(
                     f"measuring {engine} with {agents} agents x {its} iterations, record every "
@@ -268,6 +287,10 @@ def bench_command(args: argparse.Namespace) -> int:
                 "seconds": r.full_seconds,
                 "peak_mb": r.peak_mb,
                 "seconds_per_agent_iteration": r.per_agent_iteration,
+                "setup_s": r.setup,
+                "loop_s": r.loop,
+                "write_s": r.write,
+                "views_s": r.views,
                 f"speedup_vs_{engines[0]}": ratios.get(r.case),
                 "error": r.error,
             }
@@ -279,8 +302,21 @@ def bench_command(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bench_defaults(args: argparse.Namespace, scenario: Scenario, paper: Mapping[str, Any]) -> None:
+    """Fill in ``--agents`` and ``--iterations`` left out: the paper's table sizes (1, 10,
+    100, 1000 agents x 4000 iterations) for its scenarios, else the scenario's own."""
+    in_paper = scenario.name in paper
+    if args.agents is None:
+        args.agents = [1, 10, 100, 1000] if in_paper else [scenario.agents]
+    if args.iterations is None:
+        args.iterations = 4000 if in_paper else scenario.iterations
+
+
 def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
-    budget = bench.parse_size_mb(args.memory_budget)
+    try:
+        budget = bench.parse_size_mb(args.memory_budget)
+    except ValueError as error:
+        raise ScenarioError(f"--memory-budget: {error}") from None
 
     def show(result: Any) -> None:
         mb = result.error if result.error else f"{result.peak_mb:.0f} MB"
@@ -316,51 +352,68 @@ def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
     return 0
 
 
-def _parse_overrides(pairs: list[str]) -> dict[str, Any]:
-    """``["a=1", "b=x"]`` -> ``{"a": 1, "b": "x"}`` (numbers parsed as YAML scalars)."""
-    import yaml
+#: Scenario fields that have their own option: ``--set agents=5`` points there.
+OPTIONS = {"agents": "--agents", "iterations": "--iterations", "frame_every": "--frame-every",
+           "tree": "--tree"}  # fmt: skip
+
+
+def _parse_overrides(pairs: list[str], known: list[str] | None = None) -> dict[str, Any]:
+    """``["a=1", "b=x"]`` -> ``{"a": 1, "b": "x"}`` (values read as YAML scalars); names
+    are checked against ``known`` when given."""
+    from pyautonomousagent.inputs import load_yaml
 
     values = {}
     for pair in pairs:
         key, sep, text = pair.partition("=")
-        if not sep or not key:
-            raise ScenarioError(f"--set needs KEY=VALUE, got {pair!r}")
-        values[key.strip()] = yaml.safe_load(text)
+        key = key.strip()
+        if not sep or not key or not text.strip():
+            raise ScenarioError(f"--set needs KEY=VALUE with a value, got {shown(pair)}")
+        if known is None:
+            pass
+        elif key in OPTIONS:
+            raise ScenarioError(f"--set {key}: use the option {OPTIONS[key]} {text.strip()}")
+        elif key not in known:
+            close = difflib.get_close_matches(key, known, n=1)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            raise ScenarioError(
+                f"--set: unknown parameter {shown(key)}; {hint}parameters: {', '.join(known)}"
+            )
+        try:
+            values[key] = load_yaml(text, f"--set {key}")
+        except InputError as error:
+            raise ScenarioError(f"{error}") from None
     return values
 
 
 def _scenario(args: argparse.Namespace) -> Scenario:
     scenario = load(args.scenario)
-    overrides = _parse_overrides(args.set)
-    unknown = [k for k in overrides if k not in to_mapping(scenario)["parameters"]]
-    if unknown:
-        raise ScenarioError(f"--set: unknown parameter {unknown[0]!r}")
+    overrides = _parse_overrides(args.set, list(to_mapping(scenario)["parameters"]))
     return scenario.with_overrides(
         agents=args.agents, iterations=args.iterations, frame_every=args.frame_every, **overrides
     )
 
 
-def _versions() -> dict[str, str]:
-    packages = ["pyautonomousagent", "numpy", "py_trees", "pyarrow", "matplotlib", "pillow"]
-    found = {"python": platform.python_version()}
-    for name in packages:
-        try:
-            found[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            continue
-    return found
+def _check_run_options(args: argparse.Namespace) -> None:
+    if args.record_every < 1:
+        raise ScenarioError(f"--record-every must be a whole number >= 1, got {args.record_every}")
+    if args.seed < 0:
+        raise ScenarioError(f"--seed must be a whole number >= 0, got {args.seed}")
 
 
 def run(args: argparse.Namespace) -> int:
-    """``pyaa run``: simulate, write the data, ``run.json`` and the animation."""
-    if args.record_every < 1:
-        raise ScenarioError(f"--record-every must be a whole number >= 1, got {args.record_every}")
+    """``pyaa run``: simulate, then save the data, animation and ``run.json`` as one run
+    folder (see :mod:`pyautonomousagent.runs`)."""
+    _check_run_options(args)
     scenario = _scenario(args)
+    if args.record_every > scenario.iterations:
+        raise ScenarioError(
+            f"--record-every {args.record_every} is longer than the run "
+            f"({scenario.iterations} iterations): only the initial state would be recorded; "
+            f"use at most {scenario.iterations}"
+        )
     if args.tree is not None:
         file_format(args.tree)  # refuse other endings before anything runs
         scenario = scenario.with_overrides(tree=str(args.tree.resolve()))
-    out = args.out or Path("runs") / scenario.name
-    out.mkdir(parents=True, exist_ok=True)
     progress = None if not args.quiet else False
     sim = Simulation.create(
         scenario,
@@ -368,19 +421,29 @@ def run(args: argparse.Namespace) -> int:
         engine=args.engine,
         record_every=args.record_every,
         trace=_trace_spec(args),
-    ).run(progress=progress)
-    start = time.perf_counter()
-    data = write_table(sim.table(), out / f"states.{args.format}", args.format)
-    written = [data]
-    if sim.recorder.traced.size:
-        written.append(write_table(sim.trace_table(), out / f"traces.{args.format}", args.format))
-    sim.timings["write_data"] = time.perf_counter() - start
-    views = _write_views(sim.recorder, scenario, sim.events, out, args, progress)
-    sim.timings.update(views.timings)
-    written.extend(views.written)
-    written.append(_write_summary(sim, args, out / "run.json"))
+    )
+    out = check_target(args.out or default_folder(scenario.name), args.overwrite)
+    status = simulate(sim, progress)
+    saved = save_run(
+        sim,
+        out,
+        status=status,
+        fmt=args.format,
+        views=_views(args, progress),
+        overwrite=args.overwrite,
+        command=["pyaa", *sys.argv[1:]] if sys.argv else None,
+        overrides=_parse_overrides(args.set, list(to_mapping(scenario)["parameters"])),
+    )
+    if saved.status != "complete":
+        print(
+            f"pyaa: {saved.status} at iteration {sim.world.iteration} of "
+            f"{scenario.iterations}; saved a partial run marked {saved.status!r} in "
+            f"{saved.folder}{'; ' + saved.note if saved.note else ''}",
+            file=sys.stderr,
+        )
+        return 130 if saved.status == "interrupted" else 1
     if not args.quiet:
-        _print_summary(sim, written)
+        _print_summary(sim, saved.files)
     return 0
 
 
@@ -390,6 +453,20 @@ def _trace_spec(args: argparse.Namespace) -> str | None:
     if not needed:
         return args.trace
     return ",".join([args.trace or str(DEFAULT_TRACED), *needed])
+
+
+def _views(args: argparse.Namespace, progress: bool | None) -> Views:
+    """The views (animation, replay.html, Groot2 logs) ``args`` ask for."""
+    from pyautonomousagent.render.views import Views
+
+    return Views(
+        video=None if getattr(args, "no_gif", False) else getattr(args, "video", None),
+        replay=not getattr(args, "no_replay", False),
+        btlog=args.btlog,
+        follow=getattr(args, "follow", None) or 0,
+        inset=getattr(args, "inset", False),
+        progress=progress,
+    )
 
 
 def _write_views(
@@ -402,18 +479,10 @@ def _write_views(
 ) -> Views:
     """The animation, replay.html and Groot2 logs ``args`` ask for, written into ``out``."""
     from pyautonomousagent.render.video import VideoError
-    from pyautonomousagent.render.views import Views, write_views
+    from pyautonomousagent.render.views import write_views
 
-    views = Views(
-        video=None if getattr(args, "no_gif", False) else getattr(args, "video", None),
-        replay=not getattr(args, "no_replay", False),
-        btlog=args.btlog,
-        follow=getattr(args, "follow", None) or 0,
-        inset=getattr(args, "inset", False),
-        progress=progress,
-    )
     try:
-        return write_views(recorder, scenario, events, out, views)
+        return write_views(recorder, scenario, events, out, _views(args, progress))
     except (KeyError, ValueError, VideoError) as error:  # an agent not traced, no ffmpeg, ...
         message = error.args[0] if isinstance(error, KeyError) and error.args else str(error)
         raise ScenarioError(str(message)) from None
@@ -455,24 +524,6 @@ def _read_run_tables(folder: Path) -> tuple[Any, Any]:
     raise ScenarioError(f"{folder}: no states.parquet or states.csv; give a folder pyaa run wrote")
 
 
-def _write_summary(sim: Simulation, args: argparse.Namespace, path: Path) -> Path:
-    summary = {
-        "scenario": to_mapping(sim.scenario),
-        "seed": sim.seed,
-        "engine": sim.engine.name,
-        "record_every": sim.recorder.every,
-        "versions": _versions(),
-        "timings_s": {k: round(v, 4) for k, v in sim.timings.items()},
-        "events": sim.events,
-        "trace": {
-            "agents": [sim.swarm.names[i] for i in sim.recorder.traced],
-            "nodes": node_list(sim.recorder.nodes),
-        },
-    }
-    path.write_text(json.dumps(summary, indent=2) + "\n")
-    return path
-
-
 def _print_summary(sim: Simulation, written: list[Path]) -> None:
     alerts = sum(1 for e in sim.events if e["event"] == "alert")
     messages = sum(1 for e in sim.events if e["event"] == "message")
@@ -481,8 +532,24 @@ def _print_summary(sim: Simulation, written: list[Path]) -> None:
         f"{sim.scenario.name}: {n} agents x {its} iterations on {sim.engine.name} in "
         f"{sim.timings['simulate']:.2f} s; {messages} recorded message(s), {alerts} alert(s)"
     )
+    print(f"  time: {timings_line(sim.timings)}")
     for path in written:
         print(f"  wrote {path}")
+
+
+def timings_line(timings: Mapping[str, float]) -> str:
+    """``set-up 0.01 s, loop 2.10 s, writing 0.05 s, views 3.20 s (animation 3.10 s, replay
+    0.10 s)`` from ``Simulation.timings``; stages not done are left out."""
+    parts = [
+        f"{label} {timings[key]:.2f} s"
+        for key, label in (("setup", "set-up"), ("simulate", "loop"), ("write_data", "writing"))
+        if key in timings
+    ]
+    views = {k: timings[k] for k in ("animation", "replay") if k in timings}
+    if views:
+        each = ", ".join(f"{k} {v:.2f} s" for k, v in views.items())
+        parts.append(f"views {sum(views.values()):.2f} s ({each})")
+    return ", ".join(parts)
 
 
 def scenarios_command(name: str | None = None) -> int:
@@ -540,6 +607,12 @@ def _tree_source(source: str) -> tuple[Document, str, dict[str, Any]]:
     the parameters that give leaf ports their defaults (every mission's, for a bare file)."""
     if source not in names() and is_tree_file(source) and not _is_scenario_file(source):
         return read_document(source), Path(source).stem, _all_defaults()
+    looks_like_a_file = bool(Path(source).suffix) or "/" in source
+    if source not in names() and looks_like_a_file and not is_tree_file(source):
+        raise InputError(
+            f"{shown(source)} is neither a registered scenario ({', '.join(names())}) nor a "
+            "tree or scenario file; give a file ending in .xml, .yaml or .yml"
+        )
     scenario = load(source)
     defaults = vars(scenario.parameters)
     if is_tree_file(scenario.tree):
@@ -563,13 +636,13 @@ def _all_defaults() -> dict[str, Any]:
 
 def _is_scenario_file(path: str) -> bool:
     """Whether a .yaml file is a scenario (it has ``agents``) rather than a tree file."""
-    import yaml
-
     if not path.endswith((".yaml", ".yml")):
         return False
+    from pyautonomousagent.inputs import load_yaml, read_text
+
     try:
-        data = yaml.safe_load(Path(path).read_text())
-    except (OSError, yaml.YAMLError):
+        data = load_yaml(read_text(path, "file"), path)
+    except InputError:
         return False  # the tree reader reports it, with the line
     return isinstance(data, dict) and "agents" in data
 
@@ -596,7 +669,12 @@ def tree_command(args: argparse.Namespace) -> int:
     if fmt in ("png", "svg"):
         from pyautonomousagent.bt.draw import draw_tree
 
-        path = draw_tree(build(document), args.out or Path(f"{name}.{fmt}"), title=name)
+        target = args.out or Path(f"{name}.{fmt}")
+        try:
+            path = draw_tree(build(document), target, title=name)
+        except OSError as error:
+            reason = error.strerror or type(error).__name__
+            raise InputError(f"cannot write {target}: {reason}; check the folder exists") from None
         print(f"wrote {path}")
         return 0
     if fmt in ("xml", "yaml"):
@@ -612,9 +690,18 @@ def tree_command(args: argparse.Namespace) -> int:
     if args.out is None:
         print(text, end="")
         return 0
-    args.out.write_text(text, encoding="utf-8")
+    _write_output(args.out, text)
     print(f"wrote {args.out}")
     return 0
+
+
+def _write_output(path: Path, text: str) -> None:
+    """Write ``text`` to ``path``; an OSError becomes one line naming the path."""
+    try:
+        path.write_text(text, encoding="utf-8")
+    except OSError as error:
+        reason = error.strerror or type(error).__name__
+        raise InputError(f"cannot write {path}: {reason}; check the folder exists") from None
 
 
 # --- experiments: pyaa sweep, pyaa plot, pyaa measures (library: pyautonomousagent.experiments)
@@ -805,7 +892,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             return replay_command(args)
         return tree_command(args)
     except USER_ERRORS as error:
-        print(f"pyaa: error: {error}", file=sys.stderr)
+        print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
+        return 2
+    except SaveError as error:
+        print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
+        return 1
+    except OSError as error:  # a path given on the command line: one line, no traceback
+        where = f"{error.filename}: " if error.filename else ""
+        reason = error.strerror or type(error).__name__
+        print(f"pyaa: error: {clip(where + reason)}; check the path", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("pyaa: interrupted", file=sys.stderr)

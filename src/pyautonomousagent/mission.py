@@ -6,6 +6,7 @@ registered with :func:`~pyautonomousagent.bt.leaf.register_leaf`. See docs/missi
 """
 
 from pyautonomousagent.datalink import Delivery
+from pyautonomousagent.recording import Recorder
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation.mission import (
     MISSIONS,
@@ -30,6 +31,7 @@ __all__ = [
     "Param",
     "Point",
     "Reader",
+    "Recorder",
     "Scenario",
     "ScenarioError",
     "Simulation",

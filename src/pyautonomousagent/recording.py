@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import mmap
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -26,6 +27,7 @@ import pyarrow as pa
 
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.status import INVALID, NAMES, RUNNING
+from pyautonomousagent.inputs import InputError
 from pyautonomousagent.state import CONTROL_COLUMNS, MOTION_COLUMNS, Swarm
 
 #: Agents traced by default: all of a swarm this small, else the first this many.
@@ -465,3 +467,41 @@ def _plain_agent(schema: pa.Schema) -> pa.Schema:
         if pa.types.is_dictionary(field.type):
             schema = schema.set(i, field.with_type(pa.string()))
     return schema
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation (Linux ``MemAvailable``; elsewhere the
+    physical memory), or None if unknown."""
+    try:
+        with open("/proc/meminfo") as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def check_memory(agents: int, iterations: int, every: int, columns: int, per_agent: int = 0) -> int:
+    """Refuse a run whose records cannot fit in the available memory; return its estimate.
+
+    The estimate is a lower bound: ``agents x (iterations // every + 1) x columns x 8``
+    bytes of records, plus ``per_agent`` bytes of working state (tree, names) per agent.
+
+    Raises:
+        InputError: the estimate is above the available memory, with the figure and the fix.
+    """
+    records = iterations // every + 1
+    needed = agents * (records * columns * 8 + per_agent)
+    available = available_memory()
+    if available is not None and needed > available:
+        raise InputError(
+            f"the run needs at least {needed / 1e9:.3g} GB ({agents} agents x {records} "
+            f"records x {columns} columns x 8 bytes, plus the trees), more than the "
+            f"{available / 1e9:.3g} GB available; record less often (--record-every K, "
+            "record_every=K), or simulate fewer agents or iterations"
+        )
+    return needed

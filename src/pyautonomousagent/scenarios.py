@@ -11,9 +11,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import yaml
-
 from pyautonomousagent.bt.files import is_tree_file
+from pyautonomousagent.inputs import InputError, load_yaml, read_text
 from pyautonomousagent.registry import Registry
 from pyautonomousagent.simulation.scenario import Scenario, ScenarioError
 
@@ -43,15 +42,13 @@ def load(name_or_path: str | Path) -> Scenario:
         path = Path(key)
     else:
         raise ScenarioError(
-            SCENARIOS.unknown_message(key) + "; or give a scenario file (.yaml); "
-            "`pyaa scenarios` lists them"
+            SCENARIOS.unknown_message(key) + "; or give a scenario file "
+            "(.yaml); `pyaa scenarios` lists them"
         )
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except OSError as error:
-        raise ScenarioError(f"cannot read scenario file {path}: {error.strerror}") from None
-    except yaml.YAMLError as error:
-        raise ScenarioError(f"{path}: not valid YAML: {error}") from None
+        data = load_yaml(read_text(path, "scenario file"), str(path))
+    except InputError as error:
+        raise ScenarioError(str(error)) from None
     if isinstance(data, dict) and isinstance(data.get("tree"), str) and is_tree_file(data["tree"]):
         data["tree"] = str(tree_path(data["tree"], path.parent))
     return Scenario.from_mapping(data, source=str(path.name), folder=path.parent.resolve())

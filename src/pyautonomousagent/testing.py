@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from pyautonomousagent.bt.blackboard import tree_blackboard_keys
 from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf
 from pyautonomousagent.bt.spec import Node, leaf, reactive_sequence
 from pyautonomousagent.bt.status import FAILURE, SUCCESS
@@ -77,7 +78,8 @@ def make_harness(
     mission = scenario.create_mission()
     link = Datalink(scenario.parameters.datalink_range)
     world = World(*scenario.world, datalink=link, objects=scenario.objects)
-    swarm = phases.create_agents(mission, world, np.random.default_rng(0))
+    declared = tree_blackboard_keys(tree, mission.blackboard())
+    swarm = phases.create_agents(mission, world, np.random.default_rng(0), declared)
     world.agent_index = {name: i for i, name in enumerate(swarm.names)}
     decision = ENGINES.get(engine)(tree, swarm, world, vars(scenario.parameters))
     return Harness(tree, swarm, world, decision)

@@ -3,7 +3,10 @@
 (BehaviorTree.CPP XML, YAML: :func:`load_tree`, :func:`save_tree`). The paper's leaves belong
 to its missions (:mod:`pyautonomousagent.missions.drones.leaves`)."""
 
-from pyautonomousagent.bt import scripted  # noqa: F401  (registers the Scripted test leaf)
+from pyautonomousagent.bt import (
+    script_leaves,  # noqa: F401  (Script, SetBlackboard, ...)
+    scripted,  # noqa: F401  (registers the Scripted test leaf)
+)
 from pyautonomousagent.bt.files import load_tree, save_tree
 from pyautonomousagent.bt.leaf import Leaf, LeafError, Port, register_leaf
 from pyautonomousagent.bt.spec import (

@@ -18,8 +18,10 @@ from typing import Any
 
 from pyautonomousagent.bt.document import SUBTREE, Document, RawNode, TreeFileError
 from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf, LeafError
+from pyautonomousagent.bt.limits import check_document
 from pyautonomousagent.bt.nodes import DECORATOR
 from pyautonomousagent.bt.spec import (
+    BlackboardRef,
     Node,
     TreeError,
     check_structure,
@@ -44,13 +46,14 @@ def build(document: Document) -> Node:
     Raises:
         TreeFileError: naming the file, the line and the fix.
     """
+    check_document(document)  # size and depth, before inlining anything
     builder = _Builder(document)
     root = builder.inline(document.main, _Scope(), (document.main,), "")
     _assign_names(root, document.file)
     node = builder.convert(root)
     try:
         check_structure(node)
-    except TreeError as error:  # pragma: no cover - the steps above catch everything
+    except TreeError as error:  # what only the whole tree shows (BT.CPP's async rule)
         raise TreeFileError(document.file, root.line, str(error), "fix the tree") from None
     return node
 
@@ -176,12 +179,7 @@ class _Builder:
                     f'add {key}="..." or _autoremap="true" to that <SubTree>',
                 )
             scope = scope.parent
-        raise self.fail(
-            line,
-            f"port {port!r} reads blackboard entry {{{key}}}, which is not "
-            "supported (only a SubTree's ports can be referred to)",
-            f'write the value itself, e.g. {port}="40"',
-        )
+        return BlackboardRef(key)  # the main tree: the agent's blackboard entry
 
     # -- step 3: tags to spec nodes ------------------------------------------------------
 
@@ -238,12 +236,22 @@ class _Builder:
                 "the first child is the condition, then the then- and else-branch",
             )
         params = self._params(node, tag)
+        for key, value in params.items():
+            if isinstance(value, BlackboardRef):
+                raise self.fail(
+                    node.line_of(key),
+                    f"{tag.tag}: {key}={value} reads the blackboard, which control node "
+                    "parameters cannot",
+                    f'write the value itself, e.g. {key}="3"',
+                )
         spec = Node(tag.spec, node.name or "", children, {**tag.fixed, **params})
         try:
             control_params(spec)
         except TreeError as error:
             message = str(error).replace(tag.spec, tag.tag, 1)  # the word the file uses
-            raise self.fail(node.line, message, _param_fix(tag, len(children))) from None
+            at = [k for k in params if f": {k}" in message]  # the parameter's own line
+            line = node.line_of(at[0]) if at else node.line
+            raise self.fail(line, message, _param_fix(tag, len(children))) from None
         return spec
 
     def _params(self, node: RawNode, tag: Tag) -> dict[str, Any]:
@@ -307,6 +315,9 @@ class _Builder:
         names = cls.port_names()
         params: dict[str, Any] = {}
         for key, value in node.ports.items():
+            if isinstance(value, BlackboardRef) and key in names and not cls.text_ports:
+                params[key] = value  # read from the agent's blackboard on every tick
+                continue
             if key not in names:
                 ports = ", ".join(names) or "none"
                 hint = closest(key, names)
@@ -335,6 +346,12 @@ def _param_fix(tag: Tag, children: int) -> str:
         return "use policy SuccessOnAll or SuccessOnOne (synchronise only with SuccessOnAll)"
     if tag.spec in ("Repeat", "RetryUntilSuccessful"):
         return "use a whole number >= 1, or -1 for no limit"
+    if tag.spec == "Precondition":
+        return "write `if` in BehaviorTree.CPP's scripting language (docs/tree-files.md)"
+    if tag.spec == "RunOnce":
+        return 'write then_skip="false" (a skipped node is not supported)'
+    if tag.spec in ("Delay", "Timeout"):
+        return "use a whole number of milliseconds >= 0 (simulated time)"
     return "use a whole number >= 1"
 
 
@@ -352,11 +369,13 @@ def _assign_names(root: RawNode, file: str) -> None:
                 "give each node its own name, or leave name out",
             )
         lines[node.name] = node.line
+    suffix: dict[str, int] = {}  # base -> the next number to try (linear, not quadratic)
     for node in root.walk():
         if node.name is None:
             base = node.prefix + snake_case(node.tag)
-            name, n = base, 2
+            name, n = base, suffix.get(base, 2)
             while name in lines:
                 name, n = f"{base}_{n}", n + 1
+            suffix[base] = n
             node.name = name
             lines[name] = node.line

@@ -11,8 +11,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from pyautonomousagent.bt.spec import Node, TreeError, check_structure
+from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure
 from pyautonomousagent.bt.vocabulary import file_params, tag_of
+from pyautonomousagent.inputs import cut
 
 #: The tag of a reference to another behaviour tree of the same file.
 SUBTREE = "SubTree"
@@ -32,6 +33,7 @@ class TreeFileError(TreeError):
     """
 
     def __init__(self, file: str, line: int, message: str, fix: str) -> None:
+        message, fix = cut(message, 400), cut(fix, 200)  # a quoted value may be huge
         self.file, self.line, self.message, self.fix = file, line, message, fix
         where = f"{file}:{line}" if line > 0 else file
         super().__init__(f"{where}: {message}; {fix}")
@@ -106,4 +108,5 @@ def _raw(node: Node) -> RawNode:
     children = [_raw(child) for child in node.children]
     if node.is_control:
         return RawNode(tag_of(node).tag, 0, node.name, file_params(node), children)
-    return RawNode(node.type, 0, node.name, dict(node.params), children)
+    ports = {k: str(v) if isinstance(v, BlackboardRef) else v for k, v in node.params.items()}
+    return RawNode(node.type, 0, node.name, ports, children)

@@ -23,6 +23,7 @@ from pyautonomousagent.bt.document import (
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.xml_format import read_xml, write_xml
 from pyautonomousagent.bt.yaml_format import read_yaml, write_yaml
+from pyautonomousagent.inputs import InputError, read_text
 
 FORMATS = {".xml": "xml", ".yaml": "yaml", ".yml": "yaml"}
 
@@ -54,14 +55,11 @@ def read_document(path: str | Path) -> Document:
     """The tree file at ``path`` as written; TreeFileError if unreadable or malformed."""
     fmt = file_format(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        reason = getattr(error, "strerror", None) or str(error)
+        text = read_text(path, "tree file")  # bounded size, UTF-8
+    except InputError as error:
+        problem, _, fix = str(error).rpartition("; ")
         raise TreeFileError(
-            str(path),
-            0,
-            f"cannot read the file ({reason})",
-            "check the path and that it is a text file",
+            str(path), 0, f"cannot read the file ({problem})", fix or "check the path"
         ) from None
     return parse_document(text, fmt, str(path))
 

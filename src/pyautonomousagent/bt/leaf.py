@@ -9,11 +9,13 @@ method, so they cannot drift apart.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Container, Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from pyautonomousagent.bt.spec import Node, TreeError, check_structure
+from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure
+from pyautonomousagent.inputs import shown
 from pyautonomousagent.randomness import stream_key
 from pyautonomousagent.registry import Registry, UnknownNameError
 from pyautonomousagent.state import AgentView, Swarm
@@ -47,7 +49,7 @@ class Port:
             except ValueError:
                 kind = "a whole number" if self.type is int else "a number"
                 raise LeafError(
-                    f"{where}: port {self.name!r} must be {kind}, got {text!r}"
+                    f"{where}: port {self.name!r} must be {kind}, got {shown(text)}"
                 ) from None
             if value != value or value in (float("inf"), float("-inf")):
                 raise LeafError(
@@ -64,10 +66,14 @@ class Port:
         """``value`` as this port's type; LeafError naming ``where`` if it is not one."""
         if self.type is str:
             if not isinstance(value, str):
-                raise LeafError(f"{where}: port {self.name!r} must be a string, got {value!r}")
+                raise LeafError(f"{where}: port {self.name!r} must be a string, got {shown(value)}")
             return value
         if isinstance(value, bool) or not isinstance(value, int | float):
-            raise LeafError(f"{where}: port {self.name!r} must be a number, got {value!r}")
+            raise LeafError(f"{where}: port {self.name!r} must be a number, got {shown(value)}")
+        if not math.isfinite(value):
+            raise LeafError(
+                f"{where}: port {self.name!r} must be a finite number, got {shown(value)}"
+            )
         if self.type is int and float(value) != int(value):
             raise LeafError(f"{where}: port {self.name!r} must be a whole number, got {value!r}")
         converted = self.type(value)
@@ -90,6 +96,8 @@ class Leaf:
 
     type_name: ClassVar[str]
     ports: ClassVar[tuple[Port, ...]] = ()
+    #: True for leaves whose ports are text they read themselves (``{key}`` included).
+    text_ports: ClassVar[bool] = False
     keys: ClassVar[tuple[str, ...]] = ()
     stream: int = 0
 
@@ -150,6 +158,21 @@ class Leaf:
         """Called when the leaf is interrupted while RUNNING (BehaviorTree.CPP's
         ``onHalted``) for ``agents``; by default it does nothing."""
 
+    def broadcast(
+        self, agents: AgentView, world: World, kind: str, data: Mapping[str, Any]
+    ) -> None:
+        """Each agent of the view sends everyone a message of type ``kind`` from where it is.
+
+        Args:
+            agents: the senders (one agent or a group).
+            world: the world (its datalink).
+            kind: a message type of the mission (``MessageType.name``).
+            data: payload name -> a number, or a value per agent in view shape.
+        """
+        payload = {k: agents.compact(v) for k, v in data.items()}
+        position = (agents.compact(agents.x), agents.compact(agents.y))
+        world.datalink.send(agents.indices, kind, payload, position)
+
     def uniform(
         self, agents: AgentView, world: World, low: float = 0.0, high: float = 1.0, draw: int = 0
     ) -> Any:
@@ -164,6 +187,49 @@ class Leaf:
     def __repr__(self) -> str:
         params = ", ".join(f"{p.name}={getattr(self, p.name)!r}" for p in self.ports)
         return f"{type(self).__name__}({params})"
+
+
+class BlackboardPorts(Leaf):
+    """A leaf with ports written ``{key}``: before each tick, each such port is set to the
+    agent's (or group's, per agent) blackboard entry, then the leaf runs."""
+
+    type_name = "BlackboardPorts"
+    inner: Leaf
+    refs: dict[str, str]
+
+    def __init__(self, inner: Leaf, refs: Mapping[str, str]) -> None:
+        super().__init__(inner=inner, refs=dict(refs))
+        self.keys = (*inner.keys, *refs.values())  # type: ignore[misc]
+
+    @classmethod
+    def around(
+        cls,
+        leaf_cls: type[Leaf],
+        params: Mapping[str, Any],
+        refs: Mapping[str, str],
+        defaults: Mapping[str, Any],
+        where: str,
+    ) -> BlackboardPorts:
+        """``leaf_cls`` made with placeholders for the ``{key}`` ports, wrapped."""
+        ports = {p.name: p for p in leaf_cls.ports}
+        values = dict(params)
+        for name in refs:
+            port = ports.get(name)
+            if port is None:
+                raise LeafError(f"{where}: unknown port {name!r}")
+            values[name] = defaults.get(port.default, port.minimum or port.type())
+        return cls(leaf_cls.create(values, defaults, where), refs)
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        for name, key in self.refs.items():
+            setattr(self.inner, name, getattr(agents.blackboard, key))
+        return self.inner.evaluate(agents, world)
+
+    def halt(self, agents: AgentView, world: World) -> None:
+        self.inner.halt(agents, world)
+
+    def __repr__(self) -> str:
+        return f"{self.inner!r} with {self.refs}"
 
 
 LEAF_TYPES: Registry[type[Leaf]] = Registry("leaf type")
@@ -204,8 +270,16 @@ def make_leaf(node: Node, defaults: Mapping[str, Any]) -> Leaf:
         cls = leaf_type(node.type)
     except LeafError as error:
         raise TreeError(f"node {node.name!r}: {error}") from None
+    where = f"leaf {node.name!r} ({node.type})"
+    refs = {k: v.key for k, v in node.params.items() if isinstance(v, BlackboardRef)}
+    made: Leaf
     try:
-        made = cls.create(node.params, defaults, where=f"leaf {node.name!r} ({node.type})")
+        if refs and not cls.text_ports:
+            ported = BlackboardPorts.around(cls, node.params, refs, defaults, where)
+            ported.inner.stream = stream_key(node.name)
+            made = ported
+        else:
+            made = cls.create(node.params, defaults, where=where)
     except LeafError as error:
         raise TreeError(str(error)) from None
     made.stream = stream_key(node.name)

@@ -20,6 +20,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from pyautonomousagent.bt.script import ScriptError, parse
 from pyautonomousagent.registry import Registry
 
 CONTROL = "Control"
@@ -257,6 +258,64 @@ _decorator(
     "↺",
     "after a failure ticks the child again, num_attempts tries (-1: for ever)",
     params=(Param("num_attempts", int, None, loop_count),),
+)
+
+
+def script_text(value: Any, children: int) -> str:
+    """A script (BehaviorTree.CPP's scripting language)."""
+    try:
+        parse(value)
+    except ScriptError as error:
+        return f": {error}"
+    return ""
+
+
+def msec(value: Any, children: int) -> str:
+    """Milliseconds of simulated time: a whole number >= 0."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        return f"must be a whole number of milliseconds >= 0, got {value!r}"
+    return ""
+
+
+def _then_skip(value: Any, children: int) -> str:
+    if value is False:
+        return ""
+    return (
+        f"must be false, got {value!r}: a skipped node (BehaviorTree.CPP's SKIPPED) has no "
+        "equal on the py_trees engine"
+    )
+
+
+_decorator(
+    "Precondition",
+    "Precondition",
+    "pre",
+    "ticks the child if the script `if` holds (asked until the child runs), else `else`",
+    params=(
+        Param("if", str, None, script_text),
+        Param("else", str, "FAILURE", one_of("FAILURE", "SUCCESS", "RUNNING")),
+    ),
+)
+_decorator(
+    "Delay",
+    "Delay",
+    "delay",
+    "RUNNING for delay_msec of simulated time, then ticks the child",
+    params=(Param("delay_msec", int, None, msec),),
+)
+_decorator(
+    "Timeout",
+    "Timeout",
+    "timeout",
+    "halts the child and fails when it runs longer than msec of simulated time",
+    params=(Param("msec", int, None, msec),),
+)
+_decorator(
+    "RunOnce",
+    "RunOnce",
+    "once",
+    "ticks the child until it finishes once, then returns that status for ever",
+    params=(Param("then_skip", bool, True, _then_skip),),
 )
 
 # -- py_trees nodes BehaviorTree.CPP lacks ----------------------------------------------------

@@ -24,6 +24,18 @@ from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType
 PARALLEL_POLICIES = ("SuccessOnAll", "SuccessOnOne")
 
 
+@dataclass(frozen=True, repr=False)
+class BlackboardRef:
+    """A leaf port written ``{key}``: the agent's blackboard entry ``key``, read each tick."""
+
+    key: str
+
+    def __str__(self) -> str:
+        return "{" + self.key + "}"
+
+    __repr__ = __str__
+
+
 class TreeError(ValueError):
     """A tree description that cannot be built, with a message naming the node."""
 
@@ -134,6 +146,13 @@ def check_structure(root: Node) -> None:
         if count < record.least or (record.most is not None and count > record.most):
             raise TreeError(f"{node.type} {node.name!r} needs {_arity(record)}, has {count}")
         control_params(node)
+        if node.type == "Sequence" and node.params.get("memory") is False:
+            asynchronous = sum(child.type == "AsyncSequence" for child in node.children)
+            if asynchronous > 1:
+                raise TreeError(
+                    f"reactive sequence {node.name!r} has {asynchronous} AsyncSequence children; "
+                    "BehaviorTree.CPP allows one"
+                )
 
 
 def node_type(type_name: str) -> NodeType:
@@ -165,7 +184,7 @@ def control_params(node: Node) -> dict[str, Any]:
             raise TreeError(f"{where} needs parameter {param.name!r}")
         problem = param.check(value, len(node.children)) if param.check else ""
         if problem:
-            joint = "" if problem.startswith("=") else " "
+            joint = "" if problem[0] in "=:" else " "
             raise TreeError(f"{where}: {param.name}{joint}{problem}")
     if values.get("policy") == "SuccessOnOne":
         if node.params.get("synchronise"):

@@ -65,7 +65,9 @@ def by_tag() -> dict[str, Tag]:
 
 
 #: Leaf types that are BehaviorTree.CPP 4 built-ins (not declared in a TreeNodesModel).
-BTCPP_LEAVES = frozenset({"AlwaysSuccess", "AlwaysFailure"})
+BTCPP_LEAVES = frozenset(
+    {"AlwaysSuccess", "AlwaysFailure", "Script", "ScriptCondition", "SetBlackboard", "Sleep"}
+)
 
 #: BehaviorTree.CPP 4 built-ins that pyAutonomousAgent does not run, with the reason.
 UNSUPPORTED: dict[str, str] = {
@@ -112,8 +114,10 @@ def file_params(node: Node) -> dict[str, Any]:
 
 
 def leaf_category(type_name: str) -> str:
-    """``"Condition"`` for condition leaves (``Condition_*``), else ``"Action"``."""
-    return "Condition" if type_name.startswith("Condition") else "Action"
+    """``"Condition"`` for condition leaves (``Condition_*``, ``ScriptCondition``), else
+    ``"Action"``."""
+    condition = type_name.startswith("Condition") or type_name == "ScriptCondition"
+    return "Condition" if condition else "Action"
 
 
 def closest(word: str, known: list[str]) -> str:

@@ -24,6 +24,7 @@ from pyautonomousagent.bt.document import (
     TreeFileError,
 )
 from pyautonomousagent.bt.leaf import LEAF_TYPES
+from pyautonomousagent.bt.limits import MAX_TREE_DEPTH
 from pyautonomousagent.bt.vocabulary import (
     BTCPP_LEAVES,
     SCRIPT_ATTRIBUTES,
@@ -33,6 +34,8 @@ from pyautonomousagent.bt.vocabulary import (
 )
 
 EXPLICIT = ("Action", "Condition", "Control", "Decorator")
+#: Deepest element nesting read: <root>, <BehaviorTree>, then the tree's levels.
+MAX_XML_DEPTH = MAX_TREE_DEPTH + 2
 XML_TYPES = {float: "double", int: "int", str: "std::string", bool: "bool"}
 
 
@@ -58,6 +61,8 @@ def parse_elements(text: str, file: str) -> _Element:
     found: list[_Element] = []
 
     def start(tag: str, attrs: list[str]) -> None:
+        if len(stack) >= MAX_XML_DEPTH:
+            raise _RefusedError(parser.CurrentLineNumber, f"more than {MAX_TREE_DEPTH} levels")
         element = _Element(
             tag, dict(zip(attrs[::2], attrs[1::2], strict=True)), parser.CurrentLineNumber
         )
@@ -78,9 +83,11 @@ def parse_elements(text: str, file: str) -> _Element:
         raise TreeFileError(
             file,
             refused.line,
-            f"the file has {refused.what}, which tree files "
-            "may not have (it could expand entities)",
-            "delete the <!DOCTYPE ...> and <!ENTITY ...> lines",
+            f"the file has {refused.what}, which tree files may not have"
+            + ("" if "levels" in refused.what else " (it could expand entities)"),
+            "nest nodes less deeply: put parts in their own <BehaviorTree> and use SubTree"
+            if "levels" in refused.what
+            else "delete the <!DOCTYPE ...> and <!ENTITY ...> lines",
         ) from None
     except expat.ExpatError as error:
         message = expat.ErrorString(error.code)

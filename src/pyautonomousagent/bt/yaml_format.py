@@ -22,6 +22,7 @@ from pyautonomousagent.bt.document import (
     TreeFileError,
 )
 from pyautonomousagent.bt.vocabulary import SCRIPT_ATTRIBUTES, closest
+from pyautonomousagent.inputs import Loader, YamlLimitError, clip, yaml_error_line
 
 TOP_KEYS = ["main_tree_to_execute", "tree", "trees", "subtree_ports"]
 NODE_KEYS = ("type", "name", "children", "ID", "_autoremap", "_description")
@@ -35,14 +36,22 @@ def _line(node: yaml.Node) -> int:
 class _Reader:
     def __init__(self, text: str, file: str) -> None:
         self.file = file
-        self.loader = yaml.SafeLoader(text)
+        self.loader = Loader(text)  # safe, with limits on depth, aliases and repeated keys
 
     def fail(self, node: yaml.Node | int, message: str, fix: str) -> TreeFileError:
         line = node if isinstance(node, int) else _line(node)
         return TreeFileError(self.file, line, message, fix)
 
     def value(self, node: yaml.Node) -> Any:
-        return self.loader.construct_object(node, deep=True)
+        try:
+            return self.loader.construct_object(node, deep=True)
+        except (yaml.YAMLError, ValueError, OverflowError, TypeError) as error:
+            problem = error.problem if isinstance(error, yaml.MarkedYAMLError) else str(error)
+            raise self.fail(
+                node,
+                f"this value cannot be read ({clip(str(problem), 120)})",
+                "write a plain number, true/false or text (quote text that looks like a date)",
+            ) from None
 
     def mapping(self, node: yaml.Node, what: str, fix: str) -> dict[str, tuple[int, yaml.Node]]:
         """A YAML mapping's keys -> (line, value node); refuses repeated keys."""
@@ -69,12 +78,14 @@ class _Reader:
     def document(self) -> Document:
         try:
             top = self.loader.get_single_node()
-        except yaml.MarkedYAMLError as error:
-            mark = error.problem_mark or error.context_mark
-            line = mark.line + 1 if mark else 1
+        except YamlLimitError as error:
+            line, problem = yaml_error_line(error)
+            raise self.fail(line, problem, error.fix) from None
+        except yaml.YAMLError as error:
+            line, problem = yaml_error_line(error)
             raise self.fail(
-                line,
-                f"not valid YAML ({error.problem})",
+                line or 1,
+                f"not valid YAML ({problem})",
                 "check the indentation and the ': ' after each key near this line",
             ) from None
         if top is None:
@@ -203,7 +214,11 @@ class _Reader:
 
 def read_yaml(text: str, file: str) -> Document:
     """Read a YAML tree file into a :class:`Document`."""
-    reader = _Reader(text, file)
+    try:
+        reader = _Reader(text, file)
+    except yaml.YAMLError as error:  # the reader refuses some characters at once
+        line, problem = yaml_error_line(error)
+        raise TreeFileError(file, line, f"not valid YAML ({problem})", "remove it") from None
     try:
         return reader.document()
     finally:

@@ -27,6 +27,8 @@ import numpy as np
 
 from pyautonomousagent.allocator import reuse_freed_memory
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
+from pyautonomousagent.bt.script import Script, parse
+from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import (
     Node,
     TreeError,
@@ -129,7 +131,7 @@ class BatchedEngine:
         check_leaves(tree, swarm, defaults)
         reuse_freed_memory()
         self.program = program = compile_tree(tree)
-        self.swarm, self.world = swarm, world
+        self.swarm, self.world, self.defaults = swarm, world, defaults
         n = len(program.nodes)
         self.status = np.zeros((n, swarm.size), dtype=np.int8)
         kinds = [node.type for node in program.nodes]
@@ -157,6 +159,7 @@ class BatchedEngine:
             for i, node in enumerate(program.nodes)
             if node.is_control and node_type(node.type).status_map is not None
         }
+        self._scripts: dict[int, Script] = {}
         self._tickers = [self._ticker(i) for i in range(n)]
 
     def _ticker(self, i: int) -> Callable[[np.ndarray], None]:
@@ -524,6 +527,63 @@ class BatchedEngine:
         self._halt_children(i, 0, finished)
         done[kids] &= ~finished
 
+    def _precondition(self, i: int, mask: np.ndarray) -> None:
+        """Precondition; ``counter`` is 1 from a RUNNING child to its finishing, halts
+        included (BT.CPP 4.8): the script is not asked then."""
+        child, params = self.program.children[i][0], self.program.params[i]
+        running, status = self.counter[i], self.status[i]
+        asking = mask & (running == 0)
+        allowed = mask & (running == 1)
+        if _some(asking):
+            rows = np.flatnonzero(asking)
+            script = self._scripts.setdefault(i, parse(params["if"]))
+            truth = np.broadcast_to(script.truth(self.swarm.agents(rows).blackboard), rows.shape)
+            allowed[rows[truth]] = True
+        np.copyto(status, _CODES[params["else"]], where=mask & ~allowed)
+        if _some(allowed):
+            self._tickers[child](allowed)
+            result = self.status[child]
+            np.copyto(running, result == RUNNING, where=allowed)
+            np.copyto(status, result, where=allowed)
+
+    def _delay(self, i: int, mask: np.ndarray) -> None:
+        """Delay; ``counter`` holds the iteration from which the child is ticked."""
+        child = self.program.children[i][0]
+        deadline, status = self.counter[i], self.status[i]
+        wait = iterations(self.program.params[i]["delay_msec"], self.defaults)
+        np.copyto(deadline, self.world.iteration + wait, where=mask & (status != RUNNING))
+        going = mask & (deadline <= self.world.iteration)
+        np.copyto(status, RUNNING, where=mask & ~going)
+        if _some(going):
+            self._tickers[child](going)
+            np.copyto(status, self.status[child], where=going)
+
+    def _timeout(self, i: int, mask: np.ndarray) -> None:
+        """Timeout; ``counter`` holds the iteration at which the child is stopped."""
+        child, limit = self.program.children[i][0], self.program.params[i]["msec"]
+        deadline, status = self.counter[i], self.status[i]
+        fresh = mask & (status != RUNNING)
+        np.copyto(deadline, self.world.iteration + iterations(limit, self.defaults), where=fresh)
+        late = mask & ~fresh & (deadline <= self.world.iteration) if limit > 0 else mask & False
+        if _some(late):
+            self._halt(child, late)
+            np.copyto(status, FAILURE, where=late)
+        going = mask & ~late
+        if _some(going):
+            self._tickers[child](going)
+            np.copyto(status, self.status[child], where=going)
+
+    def _run_once(self, i: int, mask: np.ndarray) -> None:
+        """RunOnce then_skip=false; ``counter`` holds the remembered status (0: none yet)."""
+        child, result, status = self.program.children[i][0], self.counter[i], self.status[i]
+        going = mask & (result == 0)
+        np.copyto(status, result, where=mask & ~going)
+        if _some(going):
+            self._tickers[child](going)
+            outcome = self.status[child]
+            np.copyto(status, outcome, where=going)
+            np.copyto(result, outcome, where=going & (outcome != RUNNING))
+
 
 #: Node type -> the method that ticks it, called with (engine, node index, mask): one entry
 #: per record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES` (status-mapping decorators
@@ -543,4 +603,8 @@ BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
     "IfThenElse": BatchedEngine._if_then_else,
     "WhileDoElse": BatchedEngine._while_do_else,
     "ParallelAll": BatchedEngine._parallel_all,
+    "Precondition": BatchedEngine._precondition,
+    "Delay": BatchedEngine._delay,
+    "Timeout": BatchedEngine._timeout,
+    "RunOnce": BatchedEngine._run_once,
 }

@@ -16,13 +16,15 @@ The batched engine implements the same rules on arrays; docs/tree-files.md has t
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from pyautonomousagent.bt.script import parse
+from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import parallel_threshold
 
 
@@ -308,6 +310,107 @@ class ParallelAll(py_trees.composites.Composite):
         yield self
 
 
+class _Timed(py_trees.decorators.Decorator):
+    """A decorator that needs the agent, the clock or the scenario's time step: the engine
+    calls :meth:`bind` after building it."""
+
+    def bind(self, agent: Any, world: Any, defaults: Mapping[str, Any]) -> None:
+        self.agent, self.world, self.defaults = agent, world, defaults
+
+    def update(self) -> Status:  # pragma: no cover - tick() does the work
+        return self.decorated.status
+
+
+class Precondition(_Timed):
+    """BT.CPP ``Precondition``: ticks the child while the script ``if`` holds, asked only
+    until the child runs; otherwise returns ``else``. As in BT.CPP 4.8, only the child's
+    finishing makes it ask again: after a halt of the running child it is not asked once."""
+
+    def __init__(self, name: str, child: Behaviour, condition: str, otherwise: str) -> None:
+        super().__init__(name=name, child=child)
+        self.script = parse(condition)
+        self.otherwise = Status[otherwise]
+        self.running = False
+
+    def tick(self) -> Iterator[Behaviour]:
+        """Ask the condition unless the child runs; tick the child or return ``else``."""
+        if not self.running and not self.script.truth(self.agent.blackboard):
+            self.status = self.otherwise
+            yield self
+            return
+        yield from self.decorated.tick()
+        self.running = self.decorated.status == Status.RUNNING
+        self.status = self.decorated.status
+        yield self
+
+
+class Delay(_Timed):
+    """BT.CPP ``Delay``: RUNNING for ``delay_msec`` of simulated time, then ticks the child."""
+
+    def __init__(self, name: str, child: Behaviour, delay_msec: int) -> None:
+        super().__init__(name=name, child=child)
+        self.msec = delay_msec
+        self.deadline = 0
+
+    def tick(self) -> Iterator[Behaviour]:
+        """Start the delay on a fresh tick; tick the child once it has passed."""
+        if self.status != Status.RUNNING:
+            self.deadline = self.world.iteration + iterations(self.msec, self.defaults)
+        if self.world.iteration < self.deadline:
+            self.status = Status.RUNNING
+        else:
+            yield from self.decorated.tick()
+            self.status = self.decorated.status
+        yield self
+
+
+class Timeout(_Timed):
+    """BT.CPP ``Timeout``: ticks the child; halts it and fails once it has run ``msec`` of
+    simulated time (0: no limit)."""
+
+    def __init__(self, name: str, child: Behaviour, msec: int) -> None:
+        super().__init__(name=name, child=child)
+        self.msec = msec
+        self.deadline = 0
+
+    def tick(self) -> Iterator[Behaviour]:
+        """Start the clock on a fresh tick; fail (halting the child) when it has run out."""
+        if self.status != Status.RUNNING:
+            self.deadline = self.world.iteration + iterations(self.msec, self.defaults)
+        elif self.msec > 0 and self.world.iteration >= self.deadline:
+            if self.decorated.status != Status.INVALID:
+                self.decorated.stop(Status.INVALID)
+            self.status = Status.FAILURE
+            yield self
+            return
+        yield from self.decorated.tick()
+        self.status = self.decorated.status
+        yield self
+
+
+class RunOnce(py_trees.decorators.Decorator):
+    """BT.CPP ``RunOnce then_skip="false"``: ticks the child until it finishes once, then
+    returns that status without ticking it again."""
+
+    def __init__(self, name: str, child: Behaviour) -> None:
+        super().__init__(name=name, child=child)
+        self.result: Status | None = None
+
+    def tick(self) -> Iterator[Behaviour]:
+        """The remembered status, or the child's."""
+        if self.result is None:
+            yield from self.decorated.tick()
+            if self.decorated.status != Status.RUNNING:
+                self.result = self.decorated.status
+            self.status = self.decorated.status
+        else:
+            self.status = self.result
+        yield self
+
+    def update(self) -> Status:  # pragma: no cover - tick() does the work
+        return self.decorated.status
+
+
 #: Node type -> py_trees behaviour, called with (name, children, parameters).
 BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Behaviour]] = {
     "SequenceWithMemory": lambda name, kids, p: SequenceWithMemory(name, kids),
@@ -321,4 +424,8 @@ BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Beh
     "IfThenElse": lambda name, kids, p: IfThenElse(name, kids),
     "WhileDoElse": lambda name, kids, p: WhileDoElse(name, kids),
     "ParallelAll": lambda name, kids, p: ParallelAll(name, kids, p["max_failures"]),
+    "Precondition": lambda name, kids, p: Precondition(name, kids[0], p["if"], p["else"]),
+    "Delay": lambda name, kids, p: Delay(name, kids[0], p["delay_msec"]),
+    "Timeout": lambda name, kids, p: Timeout(name, kids[0], p["msec"]),
+    "RunOnce": lambda name, kids, p: RunOnce(name, kids[0]),
 }

@@ -105,7 +105,10 @@ def build_behaviour(
     """The py_trees tree of one agent for a (checked) tree description."""
     children = [build_behaviour(c, agent, world, defaults) for c in node.children]
     if node.is_control:
-        return _control_behaviour(node, children)
+        behaviour = _control_behaviour(node, children)
+        if hasattr(behaviour, "bind"):  # nodes that read the blackboard or the clock
+            behaviour.bind(agent, world, defaults)
+        return behaviour
     if node.type in BEHAVIOUR_TYPES:
         return BEHAVIOUR_TYPES[node.type](node.name, agent, world, **dict(node.params))
     return LeafBehaviour(node.name, make_leaf(node, defaults), agent, world)

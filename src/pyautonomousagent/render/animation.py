@@ -216,7 +216,9 @@ class FramePainter:
         self.follow = _agent_index(recorder, follow)
         self.trace = recorder.trace(self.follow) if inset else None
         self.radius = DRONE_RADIUS * max(scenario.world)
-        self.marks = list(scenario.create_mission().marks() if marks is None else marks)
+        self.mission = scenario.create_mission()
+        self.marks = list(self.mission.marks() if marks is None else marks)
+        self.changing = _MarkLayer(self.mission, recorder)
         self.events = placed_events(events, recorder)
         last = int(recorder.iterations[recorder.count - 1])
         self.event_window = max(1, round(EVENT_SHOWN * last))
@@ -238,6 +240,7 @@ class FramePainter:
             ha="left",
             va="baseline",
         )
+        self.changing.attach(self.axes)
         self._add_moving_artists(len(recorder.names))
         self._add_legend(width)
         self._add_panel_labels()
@@ -287,7 +290,7 @@ class FramePainter:
             return Line2D([], [], linestyle="none", label=label, **style)
 
         handles, seen = [], set()
-        for mark in self.marks:
+        for mark in [*self.marks, *self.changing.legend_marks]:
             if not mark.legend or mark.legend in seen:
                 continue
             seen.add(mark.legend)
@@ -441,6 +444,7 @@ class FramePainter:
             raise IndexError(f"row {row} is outside the {self.recorder.count} records")
         active = self._update(row)
         self.canvas.restore_region(self.background)
+        self.changing.draw(self.axes, row)
         for artist in (self.ring, self.bodies, self.dots, self.event_marks):
             self.axes.draw_artist(artist)
         pixels = np.asarray(self.canvas.buffer_rgba())
@@ -549,6 +553,46 @@ def _depths(nodes: Sequence[Any]) -> list[int]:
 def _marker(symbol: str) -> str:
     """A Mark's point symbol as a Matplotlib marker."""
     return {"x": "x", "o": "o", "+": "+", "*": "*", "^": "^", "s": "s"}.get(symbol, "x")
+
+
+class _MarkLayer:
+    """The mission's changing marks (:meth:`Mission.frame_marks`), drawn on every frame as one
+    polygon collection under the agents (circles as 24-gons; points are not drawn)."""
+
+    def __init__(self, mission: Any, recorder: Recorder) -> None:
+        self.mission, self.recorder = mission, recorder
+        last = mission.frame_marks(recorder, recorder.count - 1)
+        self.legend_marks = list({m.legend: m for m in last if m.legend}.values())
+        self.active = bool(last)
+        self.collection: Any = None
+
+    def attach(self, axes: Any) -> None:
+        """Add the (animated) collection to ``axes`` when the mission has changing marks."""
+        if not self.active:
+            return
+        from matplotlib.collections import PolyCollection
+
+        self.collection = PolyCollection([], animated=True, zorder=1.5, linewidths=0)
+        axes.add_collection(self.collection, autolim=False)
+
+    def draw(self, axes: Any, row: int) -> None:
+        """Draw record ``row``'s changing marks."""
+        if self.collection is None:
+            return
+        marks = [m for m in self.mission.frame_marks(self.recorder, row) if m.shape != "point"]
+        self.collection.set_verts([_outline(m) for m in marks])
+        self.collection.set_facecolor([m.colour if m.fill else "none" for m in marks] or "none")
+        self.collection.set_edgecolor([m.colour for m in marks] or "none")
+        axes.draw_artist(self.collection)
+
+
+def _outline(mark: Mark) -> np.ndarray:
+    """A rectangle's or a circle's outline as polygon vertices, world units, shape (K, 2)."""
+    if mark.shape == "rect":
+        x0, y0, x1, y1 = mark.x, mark.y, mark.x + mark.width, mark.y + mark.height
+        return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    angle = np.linspace(0.0, 2.0 * np.pi, 24, endpoint=False)
+    return np.column_stack([mark.x + mark.size * np.cos(angle), mark.y + mark.size * np.sin(angle)])
 
 
 def _draw_world(axes: Any, world: tuple[float, float], marks: Sequence[Mark]) -> None:

@@ -8,7 +8,8 @@ its methods are called by the generic loop:
   where the agents start;
 - Phase 2, :meth:`Mission.sense`: the sensors, over the swarm's arrays, and which agents can
   move; then the handlers of :meth:`Mission.message_types` act on last iteration's messages;
-- Phase 7 and the replay, :meth:`Mission.marks`: what is drawn besides the agents.
+- Phase 7 and the replay, :meth:`Mission.marks`: what is drawn besides the agents (and
+  :meth:`Mission.frame_marks`, what changes during the run, in the animation).
 
 The loop (:mod:`pyautonomousagent.simulation.phases`) knows no mission: gathering, patrol,
 vacuum and radiation-search (``pyautonomousagent.missions``) are written with this API only.
@@ -40,6 +41,7 @@ from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
 if TYPE_CHECKING:
+    from pyautonomousagent.recording import Recorder
     from pyautonomousagent.simulation.run import Simulation
     from pyautonomousagent.simulation.scenario import Scenario
 
@@ -144,6 +146,13 @@ class Mission:
 
     def marks(self) -> list[Mark]:
         """Static marks drawn on the world map (animation, replay), world units."""
+        return []
+
+    def frame_marks(self, recorder: Recorder, row: int) -> list[Mark]:
+        """Marks that change during the run (e.g. the area cleaned so far), for record
+        ``row`` of a recorded run, computed from the records (``recorder.columns[k][:row + 1]``,
+        shape (records, N)); the animation draws them under the agents on every frame.
+        Called on a fresh instance (no run state). None by default."""
         return []
 
 

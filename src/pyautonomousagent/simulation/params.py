@@ -16,8 +16,10 @@ from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any
 
+from pyautonomousagent.inputs import InputError
 
-class ScenarioError(ValueError):
+
+class ScenarioError(InputError):
     """Bad scenario input; the message names the field and what it must be."""
 
 

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
@@ -17,18 +18,82 @@ from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.datalink import Datalink, Delivery
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, PyTreesEngine
+from pyautonomousagent.inputs import shown
 from pyautonomousagent.progress import Progress
 from pyautonomousagent.randomness import CounterRandom
-from pyautonomousagent.recording import Recorder, to_table, trace_table, traced_agents
+from pyautonomousagent.recording import Recorder, check_memory, to_table, trace_table, traced_agents
 from pyautonomousagent.registry import Registry
 from pyautonomousagent.simulation import phases
 from pyautonomousagent.simulation.mission import MessageType, Mission
 from pyautonomousagent.simulation.motion import Model, build_model
-from pyautonomousagent.simulation.scenario import Scenario, ScenarioError
-from pyautonomousagent.state import Swarm
+from pyautonomousagent.simulation.scenario import Scenario, ScenarioError, to_mapping
+from pyautonomousagent.state import CONTROL_COLUMNS, MOTION_COLUMNS, Swarm
 from pyautonomousagent.world import World
 
 log = logging.getLogger("pyautonomousagent")
+
+
+def _walk(node: Node) -> Iterator[Node]:
+    stack = [node]
+    while stack:
+        current = stack.pop()
+        yield current
+        stack.extend(current.children)
+
+
+def _checked(
+    scenario: Any, seed: Any, engine: Any, record_every: Any, tree: Any
+) -> tuple[Scenario, Node | None]:
+    """The arguments of :meth:`Simulation.create`, checked: TypeError or ValueError naming
+    the argument. A scenario built directly is validated like a scenario file; a tree may
+    be given as a tree file's path."""
+    if not isinstance(scenario, Scenario):
+        raise TypeError(
+            f"scenario must be a Scenario, e.g. load({shown(scenario)}), got "
+            f"{type(scenario).__name__}"
+        )
+    scenario = Scenario.from_mapping(to_mapping(scenario), source=f"scenario {scenario.name!r}")
+    for name, value, least in (("seed", seed, 0), ("record_every", record_every, 1)):
+        if isinstance(value, bool) or not isinstance(value, int | np.integer):
+            raise TypeError(
+                f"{name} must be a whole number, got {type(value).__name__} {shown(value)}"
+            )
+        if value < least:
+            raise ValueError(f"{name} must be >= {least}, got {value}")
+    if not isinstance(engine, str):
+        raise TypeError(f"engine must be a name such as 'batched', got {shown(engine)}")
+    if engine != "auto" and engine not in ENGINES:
+        raise ValueError(f"engine: {ENGINES.unknown_message(engine)} (or 'auto')")
+    if isinstance(tree, str | Path):
+        return scenario, load_tree(tree)
+    if tree is not None and not isinstance(tree, Node):
+        raise TypeError(
+            "tree must be a tree description (pyautonomousagent.bt) or a tree file's path, "
+            f"got {type(tree).__name__}"
+        )
+    return scenario, tree
+
+
+def _check_fits(
+    scenario: Scenario, mission: Mission, tree: Node, engine: str, record_every: int
+) -> None:
+    """Refuse, before anything is allocated, a run whose records cannot fit in memory."""
+    columns = len(MOTION_COLUMNS) + len(CONTROL_COLUMNS) + len(mission.columns)
+    columns += 1 + len(mission.blackboard())  # number_ticks and the mission's keys
+    nodes = sum(1 for _ in _walk(tree))
+    per_agent = 100 + nodes * (2000 if engine == "pytrees" else 16)
+    check_memory(scenario.agents, scenario.iterations, record_every, columns, per_agent)
+
+
+def _world(scenario: Scenario, seed: int) -> World:
+    """The world of a run: its size, datalink, the mission's objects, the leaves' randomness."""
+    return World(
+        width=scenario.world[0],
+        height=scenario.world[1],
+        datalink=Datalink(scenario.parameters.datalink_range),
+        objects=scenario.objects,
+        random=CounterRandom(seed),
+    )
 
 
 class Engine(Protocol):
@@ -120,32 +185,40 @@ class Simulation:
             engine: name of the decision engine (see :data:`ENGINES`), or "auto": the
                 batched engine unless the tree has hand-written py_trees behaviours.
             record_every: record every K-th iteration (and the initial state).
-            tree: a tree description to use instead of the scenario's own.
+            tree: a tree description (or a tree file's path) to use instead of the
+                scenario's own.
             implementation: the X8's implementation, "pyfly" or "vectorised", instead of
                 the engine's default (see :mod:`pyautonomousagent.simulation.motion`).
             trace: the agents whose node statuses are recorded: None (every agent of a
                 small swarm, else the first :data:`~pyautonomousagent.recording.DEFAULT_TRACED`),
                 a count, "all", or names (see :func:`~pyautonomousagent.recording.traced_agents`).
+
+        Raises:
+            TypeError, ValueError: a bad argument, named in the message;
+            ScenarioError: a bad scenario field; InputError: a run that cannot fit in memory.
         """
+        scenario, tree = _checked(scenario, seed, engine, record_every, tree)
         tree = tree or scenario_tree(scenario)
         engine = choose_engine(tree) if engine == "auto" else engine
-        engine_type = ENGINES.get(engine)
+        mission = scenario.create_mission()
+        _check_fits(scenario, mission, tree, engine, record_every)
         start = time.perf_counter()
         rng = np.random.default_rng(seed)
-        mission = scenario.create_mission()
-        p = scenario.parameters
-        world = World(
-            width=scenario.world[0],
-            height=scenario.world[1],
-            datalink=Datalink(p.datalink_range),
-            objects=scenario.objects,
-            random=CounterRandom(seed),
-        )
+        world = _world(scenario, seed)
         swarm = phases.create_agents(mission, world, rng)
         world.agent_index = {name: i for i, name in enumerate(swarm.names)}
         model = build_model(scenario, swarm, engine, seed, implementation)
-        decision = engine_type(tree, swarm, world, vars(p))
+        decision = ENGINES.get(engine)(tree, swarm, world, vars(scenario.parameters))
         handlers = {kind.name: kind for kind in mission.message_types()}
+        recorder = Recorder(
+            swarm,
+            scenario.iterations,
+            record_every,
+            model.columns(),
+            tree=tree,
+            traced=_traced(swarm.names, trace),
+            docs=mission.meanings,
+        )
         sim = cls(
             scenario=scenario,
             seed=seed,
@@ -155,15 +228,7 @@ class Simulation:
             world=world,
             model=model,
             engine=decision,
-            recorder=Recorder(
-                swarm,
-                scenario.iterations,
-                record_every,
-                model.columns(),
-                tree=tree,
-                traced=_traced(swarm.names, trace),
-                docs=mission.meanings,
-            ),
+            recorder=recorder,
             handlers=handlers,
             everyone=np.ones(swarm.size, dtype=bool),
             recorded_types=tuple(name for name, kind in handlers.items() if kind.recorded),
@@ -173,7 +238,17 @@ class Simulation:
         return sim
 
     def step(self) -> None:
-        """One iteration: Phases 2 to 6."""
+        """One iteration: Phases 2 to 6.
+
+        Raises:
+            RuntimeError: the run has done all its iterations (nothing is changed).
+        """
+        if self.world.iteration >= self.scenario.iterations:
+            raise RuntimeError(
+                f"step(): the run has done all its {self.scenario.iterations} iterations; "
+                "create a Simulation of a longer scenario, e.g. "
+                "scenario.with_overrides(iterations=...)"
+            )
         self.world.iteration += 1
         phases.estimate_state(self)
         phases.decide(self)

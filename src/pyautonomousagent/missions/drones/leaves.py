@@ -186,14 +186,6 @@ class ActionSetDestinationEqualToCurrentSurveillanceS(Leaf):
         return _go_to_patrol_position(agents, agents.blackboard.index_current_surveillance_position)
 
 
-def _send_to_all(agents: AgentView, world: World, kind: str, data: dict[str, Any]) -> int:
-    """Each agent of the view sends ``data`` (its own entry of each value) to everyone."""
-    payload = {k: agents.compact(v) for k, v in data.items()}
-    position = (agents.compact(agents.x), agents.compact(agents.y))
-    world.datalink.send(agents.indices, kind, payload, position)
-    return SUCCESS
-
-
 @register_leaf
 class ActionTransmitGatheringMessageS(Leaf):
     """Send everyone a "gathering" message carrying this agent's surveillance position; SUCCESS."""
@@ -204,7 +196,8 @@ class ActionTransmitGatheringMessageS(Leaf):
     def evaluate(self, agents: AgentView, world: World) -> Any:
         bb = agents.blackboard
         data = {"x": bb.x_surveillance_position, "y": bb.y_surveillance_position}
-        return _send_to_all(agents, world, GATHERING, data)
+        self.broadcast(agents, world, GATHERING, data)
+        return SUCCESS
 
 
 @register_leaf
@@ -216,7 +209,8 @@ class ActionTransmitSharedDataS(Leaf):
     def evaluate(self, agents: AgentView, world: World) -> Any:
         names = ("x", "y", "speed", "heading", "damage", "energy")
         data = {name: getattr(agents, name) for name in names}
-        return _send_to_all(agents, world, SHARING_DATA, data)
+        self.broadcast(agents, world, SHARING_DATA, data)
+        return SUCCESS
 
 
 def _hold_still_until(agents: AgentView, done: Any, speed: float) -> Any:

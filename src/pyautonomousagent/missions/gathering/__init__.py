@@ -45,12 +45,12 @@ class GatheringMission(DroneMission):
     @classmethod
     def check(cls, scenario: Scenario, reader: Reader) -> None:
         """The sender is one of the drones; positions lie in the world."""
-        names = [f"{cls.agent_prefix}{i + 1}" for i in range(scenario.agents)]
         sender = scenario.parameters.gathering_sender
-        if sender not in names:
+        number = sender.removeprefix(cls.agent_prefix)  # no list of names: agents may be 10**12
+        if not (number.isdigit() and number[0] != "0" and int(number) <= scenario.agents):
             raise reader.fail(
                 "parameters.gathering_sender",
-                f"one of the drones (drone1..drone{len(names)})",
+                f"one of the drones (drone1..drone{scenario.agents})",
                 sender,
             )
         for key in ("refueling_positions", "surveillance_positions"):

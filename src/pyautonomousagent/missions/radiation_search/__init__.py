@@ -135,10 +135,13 @@ class RadiationSearchMission(Mission):
         }
 
     def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
-        """Drones on their start positions, at rest, knowing no source."""
+        """Drones on their start positions, at rest, knowing no source, with a first radiation
+        reading."""
         points = self.scenario.objects.start_positions
         start = np.asarray([points[i % len(points)] for i in range(swarm.size)], dtype=np.float64)
-        swarm.columns["x"][:], swarm.columns["y"][:] = start[:, 0], start[:, 1]
+        s = swarm.columns
+        s["x"][:], s["y"][:] = start[:, 0], start[:, 1]
+        s["radiation"][:] = radiation_level(s["x"], s["y"], self.scenario.objects.radiation_source)
 
     def sense(self, sim: Simulation) -> None:
         """Every drone reads the radiation level at its position; all of them move."""

@@ -67,8 +67,7 @@ class ActionReportSourceS(Leaf):
     keys = REPORTED
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
-        x, y = agents.compact(agents.x), agents.compact(agents.y)
-        world.datalink.send(agents.indices, FOUND, {"x": x, "y": y}, (x, y))
+        self.broadcast(agents, world, FOUND, {"x": agents.x, "y": agents.y})
         bb = agents.blackboard
         bb.source_reported = 1
         bb.x_reported_position = agents.x

@@ -26,9 +26,9 @@ Written only with the public API (:mod:`pyautonomousagent.mission`,
   whose next step (the drone2d equations) would leave the room or touch an obstacle does not
   move this iteration (it stops; the tree then turns it away). So no robot ever enters an
   obstacle, whatever the tree does;
-- marks: the obstacles (grey) and the start positions. The cleaned area is not drawn: a
-  mission's marks are static (computed from the scenario before the run), and the animation
-  has no per-frame hook for a mission's run state.
+- marks: the obstacles (grey) and the start positions; in the animation, the area cleaned
+  so far (light green cells, :meth:`VacuumMission.frame_marks`), rebuilt from the recorded
+  positions and brush states (exact when every iteration is recorded).
 """
 
 from __future__ import annotations
@@ -43,6 +43,7 @@ from pyautonomousagent.mission import (
     Param,
     Point,
     Reader,
+    Recorder,
     Scenario,
     Simulation,
     Swarm,
@@ -66,6 +67,8 @@ OBSTACLE_COLOUR = "#969696"
 """Grey of the obstacles."""
 START_COLOUR = "#31a354"
 """Green of the start positions."""
+CLEANED_COLOUR = "#c7e9c0"
+"""Light green of the cleaned cells."""
 STOP_MARGIN = 1e-6
 """World units kept between a robot's predicted next position and any obstacle or wall, so
 that a motion step a rounding error away from the prediction still stays out."""
@@ -169,7 +172,8 @@ class VacuumMission(Mission):
 
     def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
         """Robots on their start positions, headings rounded to whole degrees (so turns of
-        whole turn steps land exactly), cruising on them; the room and an uncleaned grid."""
+        whole turn steps land exactly), cruising on them, with a first sonar reading; the room
+        and an uncleaned grid."""
         self.room = Room(world.width, world.height, self.scenario.objects.obstacles)
         self.grid = CleaningGrid(self.room, self.params.cell_size)
         points = self.scenario.objects.start_positions
@@ -178,6 +182,7 @@ class VacuumMission(Mission):
         s["x"][:], s["y"][:] = start[:, 0], start[:, 1]
         s["heading"][:] = np.round(s["heading"]) % 360.0
         swarm.blackboard["cruise_heading"][:] = s["heading"]
+        s["sonar"][:] = self.room.sonar(s["x"], s["y"], s["heading"], self.params.sonar_range)
 
     def sense(self, sim: Simulation) -> np.ndarray:
         """Clean under the brushes that ran, read the sonar, stop robots about to collide.
@@ -197,6 +202,32 @@ class VacuumMission(Mission):
     def coverage(self) -> float:
         """The fraction of the room's free cells cleaned so far, in [0, 1]."""
         return self.grid.coverage()
+
+    def frame_marks(self, recorder: Recorder, row: int) -> list[Mark]:
+        """The cells cleaned before record ``row``: a cell is cleaned in Phase 2 under a robot
+        whose brush ran in the tick before, i.e. at a recorded position with ``vacuuming``."""
+        grid = self._replayed_grid(recorder, row)
+        cell = grid.cell
+        rows, cols = np.nonzero(grid.cleaned)
+        return [
+            Mark("rect", c * cell, r * cell, width=cell, height=cell, colour=CLEANED_COLOUR,
+                 fill=True, legend="cleaned area")
+            for r, c in zip(rows.tolist(), cols.tolist(), strict=True)
+        ]  # fmt: skip
+
+    def _replayed_grid(self, recorder: Recorder, row: int) -> CleaningGrid:
+        """The cleaning grid replayed from the records up to ``row`` (incrementally, as the
+        animation asks for rows in order)."""
+        done = getattr(self, "_replayed_to", None)
+        if done is None or done > row:
+            room = Room(*self.scenario.world, self.scenario.objects.obstacles)
+            self._replay = CleaningGrid(room, self.params.cell_size)
+            done = 0
+        c = recorder.columns
+        for r in range(done, row):
+            self._replay.clean(c["x"][r], c["y"][r], c["vacuuming"][r] == 1)
+        self._replayed_to = row
+        return self._replay
 
     def marks(self) -> list[Mark]:
         """The obstacles (grey) and the start positions (green squares)."""
