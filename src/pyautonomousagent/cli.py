@@ -24,7 +24,14 @@ from pyautonomousagent.recording import (
     read_table,
     recorder_from_tables,
 )
-from pyautonomousagent.runs import SaveError, check_target, default_folder, save_run, simulate
+from pyautonomousagent.runs import (
+    SaveError,
+    add_files,
+    check_target,
+    default_folder,
+    save_run,
+    simulate,
+)
 from pyautonomousagent.scenarios import load, names
 from pyautonomousagent.simulation import Scenario, ScenarioError, Simulation
 from pyautonomousagent.simulation.run import ENGINES
@@ -509,6 +516,7 @@ def replay_command(args: argparse.Namespace) -> int:
     )
     if args.out and views.written:
         views.written[0] = views.written[0].replace(args.out)
+    add_files(folder, views.written)  # run.json lists them: the folder still verifies
     for path in views.written:
         print(f"wrote {path}")
     return 0
