@@ -167,12 +167,9 @@ class Datalink:
         m = senders.size
         order = np.arange(self._sent, self._sent + m)
         self._sent += m
-        x = np.broadcast_to(np.asarray(sender_position[0], dtype=np.float64), (m,)).copy()
-        y = np.broadcast_to(np.asarray(sender_position[1], dtype=np.float64), (m,)).copy()
-        payload = {
-            k: np.broadcast_to(np.asarray(v, dtype=np.float64), (m,)).copy()
-            for k, v in data.items()
-        }
+        x = _one_each(sender_position[0], m)
+        y = _one_each(sender_position[1], m)
+        payload = {k: _one_each(v, m) for k, v in data.items()}
         lists = [] if receivers is None else [np.asarray(receivers, dtype=np.int64)]
         which = np.full(m, -1 if receivers is None else 0, dtype=np.int64)
         self._queue.append(Messages(type, senders, order, x, y, payload, which, lists))
@@ -213,6 +210,12 @@ class Datalink:
         xs = np.concatenate([x, messages.x])
         ys = np.concatenate([y, messages.y])
         return bool(np.hypot(xs.max() - xs.min(), ys.max() - ys.min()) <= self.range)
+
+
+def _one_each(value: Any, m: int) -> np.ndarray:
+    """``value`` (a number, or one per message) as a new float array of shape (m,)."""
+    values = np.array(value, dtype=np.float64)  # a copy: the sender's arrays may change
+    return values if values.shape == (m,) else np.broadcast_to(values, (m,)).copy()
 
 
 def _numbers(data: Mapping[str, Any], position: tuple[Any, Any]) -> bool:

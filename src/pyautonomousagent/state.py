@@ -218,10 +218,26 @@ class AgentView:
         return _read(values, self.index, self.masked)
 
     def compact(self, values: Any) -> np.ndarray:
-        """Values in view shape (or a scalar) as one entry per agent of :attr:`indices`."""
+        """Values in view shape (or a scalar) as one entry per agent of :attr:`indices`
+        (read-only: maybe a view of ``values``)."""
         if self.masked and np.ndim(values):
             return np.asarray(values)[self.index]
-        return np.broadcast_to(values, self.indices.shape)
+        shape = (self.count,)
+        if isinstance(values, np.ndarray) and values.shape == shape:
+            return values  # a group's values in view shape: one per agent already
+        return np.broadcast_to(values, shape)
+
+    @property
+    def count(self) -> int:
+        """The number of agents in the view."""
+        index = self.index
+        if self.one:
+            return 1
+        if isinstance(index, slice):
+            return len(range(*index.indices(self.swarm.size)))
+        if self.masked:
+            return int(np.count_nonzero(index))
+        return int(np.size(index))
 
     @property
     def name(self) -> Any:
