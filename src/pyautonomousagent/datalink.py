@@ -250,17 +250,12 @@ def _packed(channel: list[Messages | OneMessage]) -> list[Messages]:
 
 def _pack(run: list[OneMessage]) -> Messages:
     """One-agent messages of one type (and payload names) as one :class:`Messages`."""
-    m = len(run)
-    return Messages(
-        run[0].type,
-        np.fromiter((r.sender for r in run), dtype=np.int64, count=m),
-        np.fromiter((r.order for r in run), dtype=np.int64, count=m),
-        np.fromiter((r.x for r in run), dtype=np.float64, count=m),
-        np.fromiter((r.y for r in run), dtype=np.float64, count=m),
-        {k: np.fromiter((r.data[k] for r in run), np.float64, m) for k in run[0].data},
-        np.full(m, -1, dtype=np.int64),
-        [],
-    )
+    ids = np.array([(r.sender, r.order, -1) for r in run], dtype=np.int64).T
+    names = tuple(run[0].data)
+    rows = [(r.x, r.y, *(r.data[k] for k in names)) for r in run]
+    values = np.array(rows, dtype=np.float64).T
+    data = dict(zip(names, values[2:], strict=True))
+    return Messages(run[0].type, ids[0], ids[1], values[0], values[1], data, ids[2], [])
 
 
 def _merge_by_type(channel: list[Messages]) -> list[Messages]:
@@ -303,9 +298,15 @@ def _canonical(messages: Messages) -> Messages:
     senders, order = messages.senders, messages.order
     if senders.size < 2:
         return messages
-    step = (senders[1:] > senders[:-1]) | ((senders[1:] == senders[:-1]) & (order[1:] > order[:-1]))
-    if step.all():
-        return messages
+    if senders.size <= 32:  # a few messages: compared in Python, cheaper than NumPy's calls
+        keys = list(zip(senders.tolist(), order.tolist(), strict=True))
+        if all(a < b for a, b in zip(keys, keys[1:], strict=False)):
+            return messages
+    else:
+        later = order[1:] > order[:-1]
+        step = (senders[1:] > senders[:-1]) | ((senders[1:] == senders[:-1]) & later)
+        if step.all():
+            return messages
     return messages.take(np.lexsort((order, senders)))
 
 
