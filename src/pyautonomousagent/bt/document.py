@@ -52,6 +52,7 @@ class RawNode:
         autoremap: for ``SubTree``: the ``_autoremap`` flag.
         prefix: set when a SubTree is inlined: the start of the names of its nodes.
         port_lines: port -> its own line, where the file has one (YAML keys).
+        scripts: scripting attributes (``_successIf``, ``_onSuccess``, ...) -> code.
     """
 
     tag: str
@@ -64,6 +65,7 @@ class RawNode:
     autoremap: bool = False
     prefix: str = ""
     port_lines: dict[str, int] = field(default_factory=dict)
+    scripts: dict[str, str] = field(default_factory=dict)
 
     def line_of(self, port: str) -> int:
         """The line of ``port`` (the node's line if the port has none of its own)."""
@@ -105,6 +107,9 @@ def document_from_node(root: Node, tree_id: str = DEFAULT_TREE_ID, file: str = "
 def _raw(node: Node) -> RawNode:
     children = [_raw(child) for child in node.children]
     if node.is_control:
-        return RawNode(tag_of(node).tag, 0, node.name, file_params(node), children)
-    ports = {k: str(v) if isinstance(v, BlackboardRef) else v for k, v in node.params.items()}
-    return RawNode(node.type, 0, node.name, ports, children)
+        raw = RawNode(tag_of(node).tag, 0, node.name, file_params(node), children)
+    else:
+        ports = {k: str(v) if isinstance(v, BlackboardRef) else v for k, v in node.params.items()}
+        raw = RawNode(node.type, 0, node.name, ports, children)
+    raw.scripts = dict(node.scripts)
+    return raw
