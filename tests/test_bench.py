@@ -141,3 +141,28 @@ def test_peak_memory_units_per_system(maxrss: int, system: str, mb: float) -> No
 def test_bad_sizes_are_refused(text: str) -> None:
     with pytest.raises(ValueError, match="expected a positive size"):
         bench.parse_size_mb(text)
+
+
+def test_gathering_runs_at_its_own_size_and_times_each_stage(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    argv = ["bench", "gathering", "--engines", "pytrees,batched", "--iterations", "20"]
+    assert main([*argv, "--save", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [(r["engine"], r["agents"], r["iterations"]) for r in rows] == [
+        ("pytrees", 4, 20),
+        ("batched", 4, 20),
+    ]
+    for row in rows:
+        assert row["setup_s"] > 0 and row["loop_s"] > 0 and row["write_s"] > 0
+        assert row["views_s"] > 0
+        assert row["seconds"] == pytest.approx(row["setup_s"] + row["loop_s"])
+
+
+def test_table_marks_stages_not_measured() -> None:
+    saved = bench.Result(bench.Case("patrol", "batched", 10, 4000, 1), 1.5, 80.0, setup=0.5,
+                         write=0.25, views=2.0)  # fmt: skip
+    lines = bench.table([fake("batched", 10, 1.0), saved], "pytrees").splitlines()
+    assert lines[0].split()[-4:] == ["set-up", "loop", "write", "views"]
+    assert lines[2].split()[-2:] == ["-", "-"]
+    assert lines[3].split()[-4:] == ["0.500", "1.000", "0.250", "2.000"]

@@ -245,3 +245,13 @@ def test_ctrl_c_during_the_animation_keeps_the_data_marked(tmp_path):
     assert summary["status"] == "interrupted" and summary["iterations_done"] == 3000
     assert sorted(p.name for p in out.iterdir()) == ["run.json", "states.parquet", "traces.parquet"]
     assert leftovers(tmp_path) == []
+
+
+def test_the_summary_splits_the_time_by_stage() -> None:
+    from pyautonomousagent.cli import timings_line
+
+    timings = {"setup": 0.01, "simulate": 2.1, "write_data": 0.05, "animation": 3.1,
+               "replay": 0.1}  # fmt: skip
+    views = "views 3.20 s (animation 3.10 s, replay 0.10 s)"
+    assert timings_line(timings) == f"set-up 0.01 s, loop 2.10 s, writing 0.05 s, {views}"
+    assert timings_line({"setup": 0.5, "simulate": 1.0}) == "set-up 0.50 s, loop 1.00 s"

@@ -3,8 +3,11 @@
 Each case (scenario, engine, agents, iterations, recording) runs in a fresh Python process,
 so its peak memory (maximum resident set size) is its own. The simulation is timed: set-up
 (Phase 1, building the engine, preallocating the records) and the loop (Phases 2-6), not
-Phase 7, as in the paper. The table's speed-up is the first engine's time per
-agent-iteration over each other engine's, for the same agents, measured in the same run.
+Phase 7, as in the paper; each is also shown on its own. A case with ``save`` then writes
+the run folder as ``pyaa run`` does (into a temporary folder) and times writing the data
+and the views (animation, replay) separately. The table's speed-up is the first engine's
+time per agent-iteration over each other engine's, for the same agents, measured in the
+same run.
 """
 
 from __future__ import annotations
@@ -14,9 +17,15 @@ import math
 import resource
 import subprocess
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from pyautonomousagent.simulation import Simulation
 
 #: The paper's tables (4000 iterations, its 2 GHz machine): scenario -> {agents: seconds}.
 PAPER_TABLES = {
@@ -41,6 +50,9 @@ BENCH_ENGINES: dict[str, tuple[str, str | None]] = {
     "pyfly": ("pytrees", "pyfly"),
 }
 
+#: ``Simulation.timings`` keys of the views (seconds per view written).
+VIEW_TIMINGS = ("animation", "replay")
+
 
 @dataclass(frozen=True)
 class Case:
@@ -58,18 +70,27 @@ class Case:
     record_every: int
     full_iterations: int | None = None
     scaled: bool = False
+    save: bool = False
 
 
 @dataclass(frozen=True)
 class Result:
     """What a case measured: seconds (set-up and loop) and peak resident memory (MB), or why
-    it failed. ``setup`` is the part of ``seconds`` spent before the loop."""
+    it failed. ``setup`` is the part of ``seconds`` spent before the loop; ``write`` and
+    ``views`` are the seconds spent writing the data and the views (``case.save`` only)."""
 
     case: Case
     seconds: float | None
     peak_mb: float | None
     error: str = ""
     setup: float = 0.0
+    write: float | None = None
+    views: float | None = None
+
+    @property
+    def loop(self) -> float | None:
+        """Seconds of the loop (Phases 2-6) as measured (not scaled)."""
+        return None if self.seconds is None else self.seconds - self.setup
 
     @property
     def per_agent_iteration(self) -> float | None:
@@ -90,7 +111,7 @@ class Result:
 
 def run_case_here(case: Case) -> dict[str, float]:
     """Run ``case`` in this process; its seconds (set-up and loop), set-up seconds, and peak
-    memory (MB)."""
+    memory (MB); with ``case.save`` also the seconds of writing the data and the views."""
     from pyautonomousagent.scenarios import load
     from pyautonomousagent.simulation import Simulation
 
@@ -109,7 +130,22 @@ def run_case_here(case: Case) -> dict[str, float]:
     for _ in range(case.iterations):
         sim.step()
     seconds = time.perf_counter() - start
-    return {"seconds": seconds, "setup": setup, "peak_mb": peak_rss_mb()}
+    figures = {"seconds": seconds, "setup": setup, "peak_mb": peak_rss_mb()}
+    if case.save:
+        figures.update(save_timings(sim))
+    return figures
+
+
+def save_timings(sim: Simulation) -> dict[str, float]:
+    """Save ``sim`` as ``pyaa run`` does (data, animation, replay) into a temporary folder,
+    removed afterwards; the seconds spent writing the data ("write") and the views
+    ("views")."""
+    from pyautonomousagent.runs import save_run
+
+    with tempfile.TemporaryDirectory(prefix="pyaa-bench-") as folder:
+        save_run(sim, Path(folder) / "run", progress=False, command=["pyaa", "bench"])
+    views = sum(sim.timings.get(k, 0.0) for k in VIEW_TIMINGS)
+    return {"write": sim.timings.get("write_data", 0.0), "views": views}
 
 
 def peak_rss_mb(maxrss: int | None = None, system: str = sys.platform) -> float:
@@ -146,7 +182,14 @@ def measure(case: Case, timeout: float | None = None, budget_mb: float | None = 
         lines = err.strip().splitlines()
         return Result(case, None, None, lines[-1] if lines else f"exit code {child.returncode}")
     figures = json.loads(out.strip().splitlines()[-1])
-    return Result(case, figures["seconds"], figures["peak_mb"], setup=figures["setup"])
+    return Result(
+        case,
+        figures["seconds"],
+        figures["peak_mb"],
+        setup=figures["setup"],
+        write=figures.get("write"),
+        views=figures.get("views"),
+    )
 
 
 def _peak_mb(pid: int) -> float | None:
@@ -180,12 +223,15 @@ def table(results: Sequence[Result], reference: str) -> str:
     """The results as a text table like the paper's Tables 4 and 5.
 
     Speed-ups are per agent-iteration against ``reference``; a time marked ``~`` was
-    scaled from a shorter run of the same case.
+    scaled from a shorter run of the same case. The last columns split the time: set-up,
+    loop (as measured, not scaled), and writing the data and the views (``-`` when the case
+    did not save).
     """
     ratios = speedups(results, reference)
     head = (
         f"{'agents':>8} {'engine':>8} {'record':>7} {'seconds':>10} {'s/agent-it':>11} "
-        f"{'peak MB':>8} {'speed-up':>9} {'paper s':>8}"
+        f"{'peak MB':>8} {'speed-up':>9} {'paper s':>8} {'set-up':>7} {'loop':>8} "
+        f"{'write':>7} {'views':>7}"
     )
     lines = [head, "-" * len(head)]
     for r in results:
@@ -200,9 +246,15 @@ def table(results: Sequence[Result], reference: str) -> str:
         lines.append(
             f"{c.agents:>8} {c.engine:>8} {c.record_every:>7} {seconds:>10} "
             f"{r.per_agent_iteration:>11.2e} {r.peak_mb:>8.0f} {ratio:>9} "
-            f"{'' if paper is None else f'{paper:.2f}':>8}"
+            f"{'' if paper is None else f'{paper:.2f}':>8} {r.setup:>7.3f} {r.loop or 0.0:>8.3f} "
+            f"{_seconds(r.write):>7} {_seconds(r.views):>7}"
         )
     return "\n".join(lines)
+
+
+def _seconds(value: float | None) -> str:
+    """Seconds as the table shows them, ``-`` for a figure not measured."""
+    return "-" if value is None else f"{value:.3f}"
 
 
 def format_ratio(ratio: float) -> str:

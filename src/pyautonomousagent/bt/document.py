@@ -13,6 +13,7 @@ from typing import Any
 
 from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure
 from pyautonomousagent.bt.vocabulary import file_params, tag_of
+from pyautonomousagent.inputs import cut
 
 #: The tag of a reference to another behaviour tree of the same file.
 SUBTREE = "SubTree"
@@ -32,6 +33,7 @@ class TreeFileError(TreeError):
     """
 
     def __init__(self, file: str, line: int, message: str, fix: str) -> None:
+        message, fix = cut(message, 400), cut(fix, 200)  # a quoted value may be huge
         self.file, self.line, self.message, self.fix = file, line, message, fix
         where = f"{file}:{line}" if line > 0 else file
         super().__init__(f"{where}: {message}; {fix}")
