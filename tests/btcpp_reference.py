@@ -71,7 +71,7 @@ def with_logged_leaves(root: Node, table: dict[str, list[list[int]]], log: list)
     """``root`` with each leaf replaced by a Logged leaf of its name."""
     if root.type == "Scripted":
         params = {"statuses": table[root.name], "log": log, "name": root.name}
-        return Node("Logged", root.name, (), params)
+        return replace(root, type="Logged", params=params)  # scripting attributes kept
     return replace(root, children=tuple(with_logged_leaves(c, table, log) for c in root.children))
 
 

@@ -317,10 +317,10 @@ def test_many_unnamed_leaves_are_named_in_linear_time():
 
 
 def test_the_largest_tree_allowed_is_built():
-    text = subtree_bomb(16)  # 2**16 - 1 + 2**15 ... within the limit of 100,000 nodes
+    text = subtree_bomb(14)  # 2**14 - 1 nodes once inlined: within the limit of 100,000
     with deadline():
         tree = from_text_format(text, "xml")
-    assert len(tree.leaves()) == 2**15
+    assert len(tree.leaves()) == 2**13
 
 
 # ------------------------------------------------------------------------ command lines
@@ -397,6 +397,14 @@ def test_bad_command_line(argv, named, tmp_path, monkeypatch, capsys):
     assert not (tmp_path / "runs").exists()  # nothing written
 
 
+def test_replay_into_a_missing_folder(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main([*RUN, "--iterations", "20", "--no-replay", "--out", str(out)]) == 0
+    capsys.readouterr()
+    line = refused(["replay", str(out), "--out", str(tmp_path / "missing" / "x.html")], capsys)
+    assert "No such file or directory" in line
+
+
 def test_output_folder_problems(tmp_path, capsys):
     (tmp_path / "file").write_text("x")
     assert "is a file" in refused([*RUN, "--out", str(tmp_path / "file")], capsys)
@@ -406,6 +414,11 @@ def test_output_folder_problems(tmp_path, capsys):
 # ---------------------------------------------------------------------------- Python API
 
 SHORT = load("patrol").with_overrides(agents=2, iterations=5)
+HUGE_REPEAT = (
+    '<root BTCPP_format="4"><BehaviorTree><Repeat num_cycles="'
+    + "x" * 1_000_000
+    + '"><Action_Refuel_A/></Repeat></BehaviorTree></root>'
+)
 RAW = dataclasses.replace(SHORT, agents=-1)  # built directly, not validated yet
 RAW_WORLD = dataclasses.replace(SHORT, world=(NAN, 100.0))
 
@@ -431,6 +444,7 @@ API_CASES: list[tuple[str, Callable[[], Any], type[Exception], str]] = [
     ("load_missing", lambda: load("missing.yaml"), ScenarioError, "cannot read"),
     ("tree_text_empty", lambda: from_text_format("", "xml"), TreeFileError, "XML"),
     ("tree_text_bomb", lambda: from_text_format(subtree_bomb(), "xml"), TreeFileError, "nodes"),
+    ("tree_huge_parameter", lambda: from_text_format(HUGE_REPEAT, "xml"), TreeFileError, "..."),
     ("huge_run", lambda: Simulation.create(SHORT.with_overrides(agents=10**12)), InputError, "GB"),
 ]
 

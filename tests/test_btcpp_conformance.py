@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import re
 import secrets
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -71,11 +72,34 @@ def random_tree(rng: np.random.Generator, leaves: list[str], depth: int = 0) -> 
     return Node(tag.spec, f"n{depth}_{rng.integers(1 << 30)}", kids, params)
 
 
+#: Scripting attributes drawn for some nodes: they read and write the entry ``gate``.
+ATTRIBUTES = {
+    "_failureIf": ["gate > 0", "gate == 0"],
+    "_successIf": ["gate > 0", "gate == 0"],
+    "_onSuccess": ["gate := 1", "gate := 0"],
+    "_onFailure": ["gate := 1 - gate"],
+    "_post": ["gate := gate", "gate := 0"],
+    "_onHalted": ["gate := 1"],
+}
+
+
+def with_attributes(rng: np.random.Generator, root: Node) -> Node:
+    """``root`` with random scripting attributes on about one node in eight."""
+    kids = tuple(with_attributes(rng, child) for child in root.children)
+    scripts = {}
+    if rng.random() < 0.125:
+        for key in rng.choice(sorted(ATTRIBUTES), size=int(rng.integers(1, 3)), replace=False):
+            scripts[str(key)] = str(rng.choice(ATTRIBUTES[str(key)]))
+    if root.name.startswith("c"):  # BT.CPP may leave it un-reset: see test_btcpp_nodes.py
+        scripts = {k: v for k, v in scripts.items() if k not in ("_failureIf", "_successIf")}
+    return replace(root, children=kids, scripts=scripts)
+
+
 def draw(rng: np.random.Generator) -> tuple[Node, dict[str, list[list[int]]]]:
     """A random tree and its leaves' scripts {name: [tick][agent] status codes}."""
     while True:
         leaves: list[str] = []
-        tree = random_tree(rng, leaves)
+        tree = with_attributes(rng, random_tree(rng, leaves))
         try:
             check_structure(tree)  # e.g. BT.CPP's one AsyncSequence per ReactiveSequence
             break

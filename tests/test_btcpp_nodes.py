@@ -8,6 +8,8 @@ times within one tick.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -19,6 +21,7 @@ from pyautonomousagent.bt.spec import (
     check_structure,
     sequence_with_memory,
 )
+from pyautonomousagent.bt.status import FAILURE, SUCCESS
 
 from .conftest import default_parameters
 from .test_composites import letters, scripted
@@ -298,3 +301,53 @@ def test_every_node_type_is_drawn_and_written(tmp_path):
         assert symbol in text and symbol in dot
     assert draw_tree(tree, tmp_path / "all.png").stat().st_size > 0
     assert build(read_xml(write_xml(document_from_node(tree)), "all.xml")) == tree
+
+
+def test_scripting_attributes_on_both_engines():
+    from pyautonomousagent.testing import make_harness
+
+    a = replace(scripted("a", "RRRSS", "RRRSS"), scripts={
+        "_failureIf": "tick == 4", "_onSuccess": "ok += 1", "_onFailure": "bad += 1",
+        "_post": "done += 1", "_onHalted": "halts += 1",
+    })  # fmt: skip
+    tree = reactive_sequence(
+        "r",
+        leaf("Script", "count", code="tick := tick + 1; ok := ok; bad := bad"),
+        reactive_fallback("f", leaf("ScriptCondition", "third", code="tick == 3"), a),
+    )
+    for engine in ENGINES:
+        h = make_harness(tree, agents=2, scenario="patrol", engine=engine)
+        statuses = [letters(h.tick()[4, :1]) for _ in range(5)]
+        assert statuses == ["R", "R", "I", "F", "S"], engine  # halted at 3, decided at 4
+        board = {k: int(h.swarm.blackboard[k][1]) for k in ("ok", "bad", "done", "halts")}
+        assert board == {"ok": 1, "bad": 1, "done": 2, "halts": 1}, engine
+
+
+def test_scripting_attributes_round_trip_through_files():
+    from pyautonomousagent.bt.files import from_text_format, to_text_format
+
+    xml = """<root BTCPP_format="4"><BehaviorTree ID="M">
+      <Sequence _onSuccess="laps += 1">
+        <AlwaysSuccess _failureIf="laps &gt; 2" _post="seen := true"/>
+      </Sequence></BehaviorTree></root>"""
+    tree = from_text_format(xml, "xml")
+    assert tree.scripts == {"_onSuccess": "laps += 1"}
+    assert tree.children[0].scripts == {"_failureIf": "laps > 2", "_post": "seen := true"}
+    for fmt in ("xml", "yaml"):
+        assert from_text_format(to_text_format(tree, fmt), fmt) == tree
+
+
+def test_a_stale_condition_is_not_asked_its_preconditions_in_btcpp_but_is_here():
+    """Documented difference: a two-child IfThenElse whose condition failed leaves it un-reset
+    in BT.CPP 4.8, so at the next tick BT.CPP runs it without asking its _successIf; we ask
+    _successIf whenever the node is not RUNNING (docs/tree-files.md)."""
+    from .btcpp_reference import ours, reference
+
+    condition = replace(leaf("Scripted", "c0", statuses=[[2]]), scripts={"_successIf": "gate > 0"})
+    tree = Node("IfThenElse", "ite", (condition, leaf("AlwaysSuccess", "yes")))
+    table = {"c0": [[FAILURE], [FAILURE]], "gate": [[0], [1]]}
+    bt_roots, bt_events = reference(tree, table, 1, 2)
+    for engine in ENGINES:
+        roots, events = ours(tree, table, 1, 2, engine)
+        assert bt_events == [[["c0"], ["c0"]]] and bt_roots == [[FAILURE], [FAILURE]]
+        assert events == [[["c0"], []]] and roots == [[FAILURE], [SUCCESS]]

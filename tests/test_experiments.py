@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -337,6 +338,9 @@ def test_sweep_refuses_another_sweeps_folder_and_a_changed_experiment(tmp_path) 
         sweep(changed, tmp_path / "s", "serial", resume=True)
     again = sweep(small, tmp_path / "s", "serial", resume=True)
     assert again.counts == {"ok": 0, "failed": 0, "skipped": 4}
+    manifest = json.loads((tmp_path / "s" / "experiment.json").read_text())
+    assert manifest["results"] == {"ok": 4, "failed": 0} and manifest["status"] == "finished"
+    assert manifest["runs"] == 4 and manifest["experiment"] == small.to_mapping()
 
 
 def test_a_measure_the_pool_cannot_receive_is_refused_before_running(tmp_path) -> None:

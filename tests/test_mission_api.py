@@ -153,3 +153,11 @@ def test_a_mission_named_by_module_and_class_and_by_entry_point(monkeypatch):
     assert resolve_mission("from-entry-point") is Mine
     with pytest.raises(ScenarioError, match="unknown mission 'gatherin'; did you mean"):
         resolve_mission("gatherin")
+
+
+@pytest.mark.parametrize("name", ["gathering", "patrol", "vacuum", "radiation-search"])
+def test_every_recorded_column_of_the_shipped_missions_has_a_unit_and_meaning(name):
+    sim = Simulation.create(load(name).with_overrides(agents=2, iterations=3)).run(progress=False)
+    for field in sim.table().schema:
+        assert field.metadata[b"description"], (name, field.name)
+        assert b"unit" in field.metadata

@@ -13,6 +13,7 @@ import pytest
 from pyautonomousagent.cli import main
 from pyautonomousagent.render.animation import frame_rows
 from pyautonomousagent.render.replay import MAX_AGENT_FRAMES, replay_data, replay_rows
+from pyautonomousagent.runs import RunError, verify
 from pyautonomousagent.scenarios import load
 from pyautonomousagent.simulation import Simulation
 
@@ -105,6 +106,18 @@ def test_pyaa_replay_rewrites_the_same_page_from_the_files(cli_run, tmp_path, ca
     assert page_data(page) == before
     assert main(["replay", str(tmp_path)]) == 2
     assert "no run.json" in capsys.readouterr().err
+
+
+def test_pyaa_replay_into_the_run_folder_keeps_it_verifiable(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert main(["run", "patrol", "--agents", "3", "--iterations", "60", "--no-gif",
+                 "--no-replay", "--out", str(out), "--quiet"]) == 0  # fmt: skip
+    assert main(["replay", str(out), "--btlog", "drone2"]) == 0
+    summary = verify(out)  # every file listed, with its hash: the new ones too
+    assert {"replay.html", "drone2.btlog"} <= {f["name"] for f in summary["files"]}
+    (out / "replay.html").write_text("changed")
+    with pytest.raises(RunError, match="replay.html differs"):
+        verify(out)
 
 
 def test_video_mp4_has_the_expected_frame_count(tmp_path):

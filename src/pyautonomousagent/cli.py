@@ -24,7 +24,14 @@ from pyautonomousagent.recording import (
     read_table,
     recorder_from_tables,
 )
-from pyautonomousagent.runs import SaveError, check_target, default_folder, save_run, simulate
+from pyautonomousagent.runs import (
+    SaveError,
+    add_files,
+    check_target,
+    default_folder,
+    save_run,
+    simulate,
+)
 from pyautonomousagent.scenarios import load, names
 from pyautonomousagent.simulation import Scenario, ScenarioError, Simulation
 from pyautonomousagent.simulation.run import ENGINES
@@ -509,6 +516,7 @@ def replay_command(args: argparse.Namespace) -> int:
     )
     if args.out and views.written:
         views.written[0] = views.written[0].replace(args.out)
+    add_files(folder, views.written)  # run.json lists them: the folder still verifies
     for path in views.written:
         print(f"wrote {path}")
     return 0
@@ -740,12 +748,13 @@ def _add_experiments(sub: Any) -> None:
     sweep.add_argument("--record-every", type=int, metavar="K", help="record every K-th iteration")
     sweep.add_argument("--out", type=Path, help="sweep folder (default: runs/sweeps/NAME)")
     sweep.add_argument("--workers", type=int, help="local processes (default: all cores)")
-    sweep.add_argument(
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument(
         "--dask",
         metavar="ADDRESS|local",
         help="run on a Dask cluster (scheduler address) or a local Dask cluster",
     )
-    sweep.add_argument("--serial", action="store_true", help="run in this process, one by one")
+    where.add_argument("--serial", action="store_true", help="run in this process, one by one")
     sweep.add_argument("--resume", action="store_true", help="continue the sweep in --out")
     sweep.add_argument(
         "--save-runs",
@@ -896,6 +905,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SaveError as error:
         print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
         return 1
+    except OSError as error:  # a path given on the command line: one line, no traceback
+        where = f"{error.filename}: " if error.filename else ""
+        reason = error.strerror or type(error).__name__
+        print(f"pyaa: error: {clip(where + reason)}; check the path", file=sys.stderr)
+        return 2
     except KeyboardInterrupt:
         print("pyaa: interrupted", file=sys.stderr)
         return 130

@@ -54,13 +54,18 @@ def shown(value: Any, limit: int = MAX_SHOWN) -> str:
     return text
 
 
+def cut(text: str, limit: int = MAX_MESSAGE) -> str:
+    """``text`` if it has at most ``limit`` characters, else its start and end around
+    ``...`` (so a message quoting a huge value stays readable)."""
+    if len(text) <= limit:
+        return text
+    keep = (limit - 5) // 2
+    return f"{text[:keep]} ... {text[-keep:]}"
+
+
 def clip(message: str, limit: int = MAX_MESSAGE) -> str:
     """``message`` on one line and at most ``limit`` characters (the middle is cut)."""
-    line = " ".join(message.split())
-    if len(line) <= limit:
-        return line
-    keep = (limit - 5) // 2
-    return f"{line[:keep]} ... {line[-keep:]}"
+    return cut(" ".join(message.split()), limit)
 
 
 def finite(value: Any) -> bool:

@@ -319,6 +319,22 @@ def verify(folder: str | Path) -> dict[str, Any]:
     return dict(summary)
 
 
+def add_files(folder: str | Path, paths: Sequence[Path]) -> None:
+    """List files written into a finished run folder afterwards (``pyaa replay``) in its
+    ``run.json``, with their sizes and hashes, so :func:`verify` still holds; ``run.json`` is
+    replaced in one rename. Paths outside ``folder`` are left out."""
+    folder = Path(folder)
+    summary = json.loads((folder / SUMMARY).read_text(encoding="utf-8"))
+    records = {entry["name"]: entry for entry in summary["files"]}
+    for path in paths:
+        if path.resolve().parent == folder.resolve():
+            records[path.name] = file_record(path)
+    summary["files"] = list(records.values())
+    temp = folder / f".{SUMMARY}.tmp"
+    _write_json(temp, summary)
+    os.replace(temp, folder / SUMMARY)
+
+
 def versions() -> dict[str, str]:
     """Python's and the main packages' versions."""
     packages = ["pyautonomousagent", "numpy", "py_trees", "pyarrow", "matplotlib", "pillow"]

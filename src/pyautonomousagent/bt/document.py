@@ -13,6 +13,7 @@ from typing import Any
 
 from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure
 from pyautonomousagent.bt.vocabulary import file_params, tag_of
+from pyautonomousagent.inputs import cut
 
 #: The tag of a reference to another behaviour tree of the same file.
 SUBTREE = "SubTree"
@@ -32,6 +33,7 @@ class TreeFileError(TreeError):
     """
 
     def __init__(self, file: str, line: int, message: str, fix: str) -> None:
+        message, fix = cut(message, 400), cut(fix, 200)  # a quoted value may be huge
         self.file, self.line, self.message, self.fix = file, line, message, fix
         where = f"{file}:{line}" if line > 0 else file
         super().__init__(f"{where}: {message}; {fix}")
@@ -52,6 +54,7 @@ class RawNode:
         autoremap: for ``SubTree``: the ``_autoremap`` flag.
         prefix: set when a SubTree is inlined: the start of the names of its nodes.
         port_lines: port -> its own line, where the file has one (YAML keys).
+        scripts: scripting attributes (``_successIf``, ``_onSuccess``, ...) -> code.
     """
 
     tag: str
@@ -64,6 +67,7 @@ class RawNode:
     autoremap: bool = False
     prefix: str = ""
     port_lines: dict[str, int] = field(default_factory=dict)
+    scripts: dict[str, str] = field(default_factory=dict)
 
     def line_of(self, port: str) -> int:
         """The line of ``port`` (the node's line if the port has none of its own)."""
@@ -105,6 +109,9 @@ def document_from_node(root: Node, tree_id: str = DEFAULT_TREE_ID, file: str = "
 def _raw(node: Node) -> RawNode:
     children = [_raw(child) for child in node.children]
     if node.is_control:
-        return RawNode(tag_of(node).tag, 0, node.name, file_params(node), children)
-    ports = {k: str(v) if isinstance(v, BlackboardRef) else v for k, v in node.params.items()}
-    return RawNode(node.type, 0, node.name, ports, children)
+        raw = RawNode(tag_of(node).tag, 0, node.name, file_params(node), children)
+    else:
+        ports = {k: str(v) if isinstance(v, BlackboardRef) else v for k, v in node.params.items()}
+        raw = RawNode(node.type, 0, node.name, ports, children)
+    raw.scripts = dict(node.scripts)
+    return raw

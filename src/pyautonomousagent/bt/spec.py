@@ -50,12 +50,16 @@ class Node:
         name: the instance name (e.g. ``"action_navigate_to_destination_a_1"``).
         children: child nodes, left (highest priority) first.
         params: parameters: ``memory`` for composites, ports for leaves.
+        scripts: BehaviorTree.CPP's scripting attributes: ``_successIf``, ``_failureIf``
+            (asked before a tick that does not resume the node), ``_onSuccess``,
+            ``_onFailure``, ``_post`` (after a tick that finishes it), ``_onHalted`` -> code.
     """
 
     type: str
     name: str
     children: tuple[Node, ...] = ()
     params: Mapping[str, Any] = field(default_factory=dict)
+    scripts: Mapping[str, str] = field(default_factory=dict)
 
     @property
     def is_control(self) -> bool:

@@ -37,7 +37,8 @@ from pyautonomousagent.bt.spec import (
     parallel_threshold,
 )
 from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
-from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES
+from pyautonomousagent.engines.btcpp import PRE_CONDITIONS
+from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, FROM_PYTREES
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -161,7 +162,18 @@ class BatchedEngine:
             if node.is_control and node_type(node.type).status_map is not None
         }
         self._scripts: dict[int, Script] = {}
+        self._attributes = {
+            i: {key: parse(code) for key, code in node.scripts.items()}
+            for i, node in enumerate(program.nodes)
+            if node.scripts
+        }
+        watch = set(self._halting) | {i for i, a in self._attributes.items() if "_onHalted" in a}
+        self._watched = {
+            i for i in range(n) if any(i <= j < program.end[i] for j in watch)
+        }  # nodes whose subtree has something to tell when halted
         self._tickers = [self._ticker(i) for i in range(n)]
+        for i in self._attributes:
+            self._tickers[i] = self._with_scripts(i, self._tickers[i])
 
     def _ticker(self, i: int) -> Callable[[np.ndarray], None]:
         node = self.program.nodes[i]
@@ -193,13 +205,53 @@ class BatchedEngine:
             self._tell_halted(child, need)
             np.copyto(self.status[child : self.program.end[child]], INVALID, where=need)
 
-    def _tell_halted(self, child: int, need: np.ndarray) -> None:
-        """Call ``Leaf.halt`` of the RUNNING leaves of ``child``'s subtree, in tick order."""
-        for i in self._halting:
-            if child <= i < self.program.end[child]:
-                rows = np.flatnonzero(need & (self.status[i] == RUNNING))
-                if rows.size:
-                    self.leaves[i].halt(self.swarm.agents(rows), self.world)
+    def _tell_halted(self, node: int, need: np.ndarray) -> None:
+        """For the agents of ``need``, the RUNNING nodes of ``node``'s subtree are halted:
+        call their leaves' ``Leaf.halt`` and run their ``_onHalted`` scripts, children first
+        (BT.CPP's order)."""
+        if node not in self._watched:
+            return
+        for child in self.program.children[node]:
+            self._tell_halted(child, need)
+        rows = np.flatnonzero(need & (self.status[node] == RUNNING))
+        if rows.size:
+            if node in self.leaves and node in self._halting:
+                self.leaves[node].halt(self.swarm.agents(rows), self.world)
+            if "_onHalted" in self._attributes.get(node, {}):
+                self._attributes[node]["_onHalted"].run(self.swarm.agents(rows).blackboard)
+
+    def _with_scripts(self, i: int, ticker: Callable[[np.ndarray], None]) -> Callable:
+        """``ticker`` with node ``i``'s scripting attributes (see engines/btcpp.py's
+        ``with_scripts``): pre-conditions for the agents it does not resume, then its tick
+        for the others, then the post scripts by status."""
+        scripts, status = self._attributes[i], self.status[i]
+
+        def tick(mask: np.ndarray) -> None:
+            going = mask.copy()
+            for key, result in PRE_CONDITIONS:
+                asked = going & (status != RUNNING)
+                if key in scripts and _some(asked):
+                    decided = self._truth(scripts[key], asked)
+                    np.copyto(status, FROM_PYTREES[result], where=decided)
+                    going &= ~decided
+            if _some(going):
+                ticker(going)
+            for key, code in (("_onSuccess", SUCCESS), ("_onFailure", FAILURE)):
+                ran = mask & (status == code)
+                if key in scripts and _some(ran):
+                    scripts[key].run(self.swarm.agents(np.flatnonzero(ran)).blackboard)
+            finished = mask & ((status == SUCCESS) | (status == FAILURE))
+            if "_post" in scripts and _some(finished):
+                scripts["_post"].run(self.swarm.agents(np.flatnonzero(finished)).blackboard)
+
+        return tick
+
+    def _truth(self, script: Script, mask: np.ndarray) -> np.ndarray:
+        """Where ``script`` holds, for the agents of ``mask``: shape (N,), bool."""
+        rows = np.flatnonzero(mask)
+        out = np.zeros(mask.size, dtype=bool)
+        out[rows] = np.broadcast_to(script.truth(self.swarm.agents(rows).blackboard), rows.shape)
+        return out
 
     def _halt_children(self, i: int, first: int, mask: np.ndarray) -> None:
         """Halt the children of node ``i`` from position ``first`` on, for ``mask``."""
@@ -536,10 +588,8 @@ class BatchedEngine:
         asking = mask & (running == 0)
         allowed = mask & (running == 1)
         if _some(asking):
-            rows = np.flatnonzero(asking)
             script = self._scripts.setdefault(i, parse(params["if"]))
-            truth = np.broadcast_to(script.truth(self.swarm.agents(rows).blackboard), rows.shape)
-            allowed[rows[truth]] = True
+            allowed |= self._truth(script, asking)
         np.copyto(status, _CODES[params["else"]], where=mask & ~allowed)
         if _some(allowed):
             self._tickers[child](allowed)

@@ -411,6 +411,52 @@ class RunOnce(py_trees.decorators.Decorator):
         return self.decorated.status
 
 
+#: Pre-conditions in BT.CPP's order: attribute -> the status it returns when its script holds.
+PRE_CONDITIONS = (("_failureIf", Status.FAILURE), ("_successIf", Status.SUCCESS))
+
+
+def with_scripts(behaviour: Behaviour, scripts: Mapping[str, str], agent: Any) -> Behaviour:
+    """Give ``behaviour`` BehaviorTree.CPP's scripting attributes, run on ``agent``'s
+    blackboard: ``_failureIf``/``_successIf`` decide without a tick when the node does not
+    resume (it is not RUNNING); after a tick that finishes the node, ``_onSuccess`` or
+    ``_onFailure``, then ``_post`` (as BT.CPP 4.8: not after RUNNING); ``_onHalted`` when a
+    RUNNING node is halted, after its children's."""
+    parsed = {key: parse(code) for key, code in scripts.items()}
+    board = agent.blackboard
+    tick, stop = behaviour.tick, behaviour.stop
+
+    def post() -> None:
+        if behaviour.status == Status.SUCCESS and "_onSuccess" in parsed:
+            parsed["_onSuccess"].run(board)
+        elif behaviour.status == Status.FAILURE and "_onFailure" in parsed:
+            parsed["_onFailure"].run(board)
+        if "_post" in parsed and behaviour.status in (Status.SUCCESS, Status.FAILURE):
+            parsed["_post"].run(board)
+
+    def scripted_tick() -> Iterator[Behaviour]:
+        if behaviour.status != Status.RUNNING:
+            for key, status in PRE_CONDITIONS:
+                if key in parsed and parsed[key].truth(board):
+                    behaviour.status = status
+                    post()
+                    yield behaviour
+                    return
+        for node in tick():
+            if node is behaviour:  # its last step: parents decide on seeing it
+                post()
+            yield node
+
+    def scripted_stop(new_status: Status = Status.INVALID) -> None:
+        halted = new_status == Status.INVALID and behaviour.status == Status.RUNNING
+        stop(new_status)
+        if halted and "_onHalted" in parsed:
+            parsed["_onHalted"].run(board)
+
+    behaviour.tick = scripted_tick  # type: ignore[method-assign]
+    behaviour.stop = scripted_stop  # type: ignore[method-assign]
+    return behaviour
+
+
 #: Node type -> py_trees behaviour, called with (name, children, parameters).
 BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Behaviour]] = {
     "SequenceWithMemory": lambda name, kids, p: SequenceWithMemory(name, kids),

@@ -18,7 +18,7 @@ from py_trees.common import Status
 from pyautonomousagent.bt import status as codes
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
 from pyautonomousagent.bt.spec import Node, control_params
-from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS
+from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, with_scripts
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -110,10 +110,11 @@ def build_behaviour(
         behaviour = _control_behaviour(node, children)
         if hasattr(behaviour, "bind"):  # nodes that read the blackboard or the clock
             behaviour.bind(agent, world, defaults)
-        return behaviour
-    if node.type in BEHAVIOUR_TYPES:
-        return BEHAVIOUR_TYPES[node.type](node.name, agent, world, **dict(node.params))
-    return LeafBehaviour(node.name, make_leaf(node, defaults), agent, world)
+    elif node.type in BEHAVIOUR_TYPES:
+        behaviour = BEHAVIOUR_TYPES[node.type](node.name, agent, world, **dict(node.params))
+    else:
+        behaviour = LeafBehaviour(node.name, make_leaf(node, defaults), agent, world)
+    return with_scripts(behaviour, node.scripts, agent) if node.scripts else behaviour
 
 
 def _control_behaviour(

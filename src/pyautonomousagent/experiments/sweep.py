@@ -253,7 +253,13 @@ def sweep(
         if owned:
             chosen.close()
         table = write_results(journal, out)
-        manifest.update(counts=counts, finished_at=_now(), seconds=time.perf_counter() - start)
+        statuses = table["status"].to_pylist()
+        manifest.update(
+            counts=counts,  # this session's
+            results={state: statuses.count(state) for state in ("ok", "failed")},
+            finished_at=_now(),
+            seconds=time.perf_counter() - start,
+        )
         write_manifest(out, manifest)
     workers_text = f"{chosen.name} x {manifest['backend']['workers']}"
     return SweepResult(out, table, counts, time.perf_counter() - start, workers_text)

@@ -75,6 +75,29 @@ def _checked(
     return scenario, tree
 
 
+def _check_fits(
+    scenario: Scenario, mission: Mission, tree: Node, engine: str, record_every: int
+) -> None:
+    """Refuse, before anything is allocated, a run whose records cannot fit in memory."""
+    columns = len(MOTION_COLUMNS) + len(CONTROL_COLUMNS) + len(mission.columns)
+    columns += 1 + len(mission.blackboard())  # number_ticks and the mission's keys
+    columns += len(tree_blackboard_keys(tree, mission.blackboard()))  # and the tree's
+    nodes = sum(1 for _ in _walk(tree))
+    per_agent = 100 + nodes * (2000 if engine == "pytrees" else 16)
+    check_memory(scenario.agents, scenario.iterations, record_every, columns, per_agent)
+
+
+def _world(scenario: Scenario, seed: int) -> World:
+    """The world of a run: its size, datalink, the mission's objects, the leaves' randomness."""
+    return World(
+        width=scenario.world[0],
+        height=scenario.world[1],
+        datalink=Datalink(scenario.parameters.datalink_range),
+        objects=scenario.objects,
+        random=CounterRandom(seed),
+    )
+
+
 class Engine(Protocol):
     """What the loop needs of a decision engine (Phase 3)."""
 
@@ -179,32 +202,26 @@ class Simulation:
         scenario, tree = _checked(scenario, seed, engine, record_every, tree)
         tree = tree or scenario_tree(scenario)
         engine = choose_engine(tree) if engine == "auto" else engine
-        engine_type = ENGINES.get(engine)
-        nodes = sum(1 for _ in _walk(tree))
-        check_memory(
-            scenario.agents,
-            scenario.iterations,
-            record_every,
-            len(MOTION_COLUMNS) + len(CONTROL_COLUMNS),
-            per_agent=100 + nodes * (2000 if engine == "pytrees" else 16),
-        )
+        mission = scenario.create_mission()
+        _check_fits(scenario, mission, tree, engine, record_every)
         start = time.perf_counter()
         rng = np.random.default_rng(seed)
-        mission = scenario.create_mission()
-        p = scenario.parameters
-        world = World(
-            width=scenario.world[0],
-            height=scenario.world[1],
-            datalink=Datalink(p.datalink_range),
-            objects=scenario.objects,
-            random=CounterRandom(seed),
-        )
+        world = _world(scenario, seed)
         declared = tree_blackboard_keys(tree, mission.blackboard())  # scripts' entries
         swarm = phases.create_agents(mission, world, rng, declared)
         world.agent_index = {name: i for i, name in enumerate(swarm.names)}
         model = build_model(scenario, swarm, engine, seed, implementation)
-        decision = engine_type(tree, swarm, world, vars(p))
+        decision = ENGINES.get(engine)(tree, swarm, world, vars(scenario.parameters))
         handlers = {kind.name: kind for kind in mission.message_types()}
+        recorder = Recorder(
+            swarm,
+            scenario.iterations,
+            record_every,
+            model.columns(),
+            tree=tree,
+            traced=_traced(swarm.names, trace),
+            docs=mission.meanings,
+        )
         sim = cls(
             scenario=scenario,
             seed=seed,
@@ -214,15 +231,7 @@ class Simulation:
             world=world,
             model=model,
             engine=decision,
-            recorder=Recorder(
-                swarm,
-                scenario.iterations,
-                record_every,
-                model.columns(),
-                tree=tree,
-                traced=_traced(swarm.names, trace),
-                docs=mission.meanings,
-            ),
+            recorder=recorder,
             handlers=handlers,
             everyone=np.ones(swarm.size, dtype=bool),
             recorded_types=tuple(name for name, kind in handlers.items() if kind.recorded),

@@ -117,6 +117,12 @@ class RadiationSearchMission(Mission):
                     doc="start positions [x, y], used in turn by drones 1, 2, ... (cycled)"),
     )  # fmt: skip
     columns: ClassVar[dict[str, Any]] = {"radiation": np.float64}  # percent, [0, 100]
+    meanings: ClassVar[dict[str, tuple[str, str]]] = {
+        "radiation": ("percent", "last radiation sensor reading, 0 to 100"),
+        "source_reported": ("", "blackboard: 1 once a source position is known"),
+        "x_reported_position": ("world unit", "blackboard: reported source position, east"),
+        "y_reported_position": ("world unit", "blackboard: reported source position, north"),
+    }
 
     @classmethod
     def check(cls, scenario: Scenario, reader: Reader) -> None:

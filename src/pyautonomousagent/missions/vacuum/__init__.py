@@ -127,6 +127,12 @@ class VacuumMission(Mission):
         "vacuuming": np.int64,  # 1 if the brush ran in this iteration's tick
         "cleaned_cells": np.int64,  # cells this robot cleaned first, cumulative
     }
+    meanings: ClassVar[dict[str, tuple[str, str]]] = {
+        "sonar": ("world unit", "distance to the nearest wall or obstacle ahead (at most range)"),
+        "vacuuming": ("", "1 when the brush ran in this iteration's tick"),
+        "cleaned_cells": ("", "free cells this robot cleaned first, cumulative"),
+        "cruise_heading": ("degree", "blackboard: the heading the robot cruises on"),
+    }
 
     @classmethod
     def check(cls, scenario: Scenario, reader: Reader) -> None:
