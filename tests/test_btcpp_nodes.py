@@ -291,6 +291,11 @@ def test_every_node_type_is_drawn_and_written(tmp_path):
                        "if": "x > 1", "delay_msec": 10, "msec": 10, "memory": True,
                        "then_skip": False})  # fmt: skip
         params = {k: v for k, v in params.items() if k in record.defaults()}
+        for param in record.params:
+            if param.entry:
+                params[param.name] = BlackboardRef("mode")
+            elif param.name.startswith("case_"):
+                params[param.name] = param.name[5:]
         count = max(record.least, 1) if record.most is None else record.most
         children = tuple(leaf("AlwaysSuccess", f"k{n}_{i}") for i in range(count))
         kids.append(Node(name, f"node{n}", children, params))
