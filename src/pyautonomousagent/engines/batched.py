@@ -157,6 +157,7 @@ class BatchedEngine:
         self._halting = [i for i, leaf in self.leaves.items() if type(leaf).halt is not Leaf.halt]
         self._ticks = swarm.blackboard["number_ticks"]
         self._everyone = np.ones(swarm.size, dtype=bool)
+        self._all = swarm.agents(slice(None))  # the view of every agent, made once
         self._tables = {
             i: _status_table(node.type)
             for i, node in enumerate(program.nodes)
@@ -266,7 +267,7 @@ class BatchedEngine:
         masked view of all N when many (no gathering of values)."""
         reached = np.count_nonzero(mask)
         if reached == mask.size:
-            result = self._evaluate(i, self.swarm.agents(slice(None)))
+            result = self._evaluate(i, self._all)
             self.status[i] = result
             self._ticks += 1
         elif 4 * reached >= mask.size:

@@ -29,6 +29,8 @@ TO_PYTREES = {
     codes.RUNNING: Status.RUNNING,
 }
 FROM_PYTREES = {v: k for k, v in TO_PYTREES.items()}
+#: id(py_trees status) -> status code: an int key hashes in C, an Enum member in Python.
+_CODE_BY_ID = {id(v): k for k, v in TO_PYTREES.items()}
 
 
 class AgentBehaviour(py_trees.behaviour.Behaviour):
@@ -188,8 +190,9 @@ class PyTreesEngine:
         """Status codes after the last tick, shape (nodes in tick order, N), int8."""
         if getattr(self, "_flat", None) is None:  # the trees never change: flatten them once
             self._flat = [b for root in self.roots for b in _preorder(root)]
-        codes, flat = FROM_PYTREES, self._flat
-        table = np.fromiter((codes[b.status] for b in flat), dtype=np.int8, count=len(flat))
+        flat = self._flat
+        statuses = map(id, [b.status for b in flat])
+        table = np.fromiter(map(_CODE_BY_ID.__getitem__, statuses), np.int8, len(flat))
         return table.reshape(len(self.roots), -1).T
 
 
