@@ -20,7 +20,7 @@ import pytest
 
 from pyautonomousagent.bt.document import document_from_node
 from pyautonomousagent.bt.files import read_document, to_text_format
-from pyautonomousagent.bt.spec import Node, TreeError, check_structure, node_type
+from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure, node_type
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.bt.vocabulary import tags
 from pyautonomousagent.bt.xml_format import write_xml
@@ -67,6 +67,10 @@ def random_tree(rng: np.random.Generator, leaves: list[str], depth: int = 0) -> 
             params[key] = False
         elif key == "if":
             params[key] = str(rng.choice(["gate > 0", "gate == 0", "!(gate > 0) || false"]))
+        elif key == "variable":
+            params[key] = BlackboardRef("mode")  # a string entry in BT.CPP (the port's type)
+        elif key.startswith("case_"):
+            params[key] = str(rng.choice(["0", "1", "2"]))
         elif key == "else":
             params[key] = str(rng.choice(["FAILURE", "SUCCESS", "RUNNING"]))
     return Node(tag.spec, f"n{depth}_{rng.integers(1 << 30)}", kids, params)
@@ -111,6 +115,7 @@ def draw(rng: np.random.Generator) -> tuple[Node, dict[str, list[list[int]]]]:
         for name in leaves
     }
     table["gate"] = rng.integers(2, size=(TICKS, AGENTS)).tolist()  # read by scripts
+    table["mode"] = rng.integers(3, size=(TICKS, AGENTS)).tolist()  # read by Switch nodes
     return tree, table
 
 

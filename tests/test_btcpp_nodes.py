@@ -21,7 +21,7 @@ from pyautonomousagent.bt.spec import (
     check_structure,
     sequence_with_memory,
 )
-from pyautonomousagent.bt.status import FAILURE, SUCCESS
+from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 
 from .conftest import default_parameters
 from .test_composites import letters, scripted
@@ -291,6 +291,11 @@ def test_every_node_type_is_drawn_and_written(tmp_path):
                        "if": "x > 1", "delay_msec": 10, "msec": 10, "memory": True,
                        "then_skip": False})  # fmt: skip
         params = {k: v for k, v in params.items() if k in record.defaults()}
+        for param in record.params:
+            if param.entry:
+                params[param.name] = BlackboardRef("mode")
+            elif param.name.startswith("case_"):
+                params[param.name] = param.name[5:]
         count = max(record.least, 1) if record.most is None else record.most
         children = tuple(leaf("AlwaysSuccess", f"k{n}_{i}") for i in range(count))
         kids.append(Node(name, f"node{n}", children, params))
@@ -351,3 +356,32 @@ def test_a_stale_condition_is_not_asked_its_preconditions_in_btcpp_but_is_here()
         roots, events = ours(tree, table, 1, 2, engine)
         assert bt_events == [[["c0"], ["c0"]]] and bt_roots == [[FAILURE], [FAILURE]]
         assert events == [[["c0"], []]] and roots == [[FAILURE], [SUCCESS]]
+
+
+def test_one_iteration_is_tick_exactly_once_not_tick_once():
+    """The documented decision: where BT.CPP asks for a wake-up, its tickOnce() ticks the
+    tree again at once (the condition above runs twice); tickExactlyOnce() and we do not."""
+    btpy = pytest.importorskip("behaviortreepy")
+    from .btcpp_reference import btcpp_xml, ours
+
+    tree = reactive_sequence(
+        "r", leaf("Scripted", "l0", statuses=[[1]]),
+        Node("Repeat", "again", (leaf("Scripted", "l1", statuses=[[1]]),), {"num_cycles": 2}),
+    )  # fmt: skip
+    table = {"l0": [[SUCCESS]], "l1": [[SUCCESS]], "gate": [[0]]}
+    runs = {}
+    for how in ("tick_once", "tick_exactly_once"):
+        log: list[str] = []
+
+        def run(node, log=log):
+            log.append(node.name())
+            return btpy.NodeStatus.SUCCESS
+
+        factory = btpy.BehaviorTreeFactory()
+        factory.register_simple_stateful_action("Scripted", run, run)
+        status = getattr(factory.create_tree_from_text(btcpp_xml(tree)), how)()
+        runs[how] = (str(status).split(".")[-1], log)
+    assert runs["tick_once"] == ("SUCCESS", ["l0", "l1", "l0", "l1"])
+    assert runs["tick_exactly_once"] == ("RUNNING", ["l0", "l1"])
+    for engine in ENGINES:
+        assert ours(tree, table, 1, 1, engine) == ([[RUNNING]], [[["l0", "l1"]]])

@@ -252,8 +252,9 @@ class _Builder:
                 "the first child is the condition, then the then- and else-branch",
             )
         params = self._params(node, tag)
+        entries = {p.name for p in node_type(tag.spec).params if p.entry}
         for key, value in params.items():
-            if isinstance(value, BlackboardRef):
+            if isinstance(value, BlackboardRef) and key not in entries:
                 raise self.fail(
                     node.line_of(key),
                     f"{tag.tag}: {key}={value} reads the blackboard, which control node "

@@ -8,6 +8,7 @@ into a checked :class:`~pyautonomousagent.bt.spec.Node`, the only thing the engi
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -109,9 +110,13 @@ def document_from_node(root: Node, tree_id: str = DEFAULT_TREE_ID, file: str = "
 def _raw(node: Node) -> RawNode:
     children = [_raw(child) for child in node.children]
     if node.is_control:
-        raw = RawNode(tag_of(node).tag, 0, node.name, file_params(node), children)
+        raw = RawNode(tag_of(node).tag, 0, node.name, _text(file_params(node)), children)
     else:
-        ports = {k: str(v) if isinstance(v, BlackboardRef) else v for k, v in node.params.items()}
-        raw = RawNode(node.type, 0, node.name, ports, children)
+        raw = RawNode(node.type, 0, node.name, _text(node.params), children)
     raw.scripts = dict(node.scripts)
     return raw
+
+
+def _text(params: Mapping[str, Any]) -> dict[str, Any]:
+    """Parameters as files write them: a blackboard reference as ``{key}``."""
+    return {k: str(v) if isinstance(v, BlackboardRef) else v for k, v in params.items()}

@@ -15,25 +15,14 @@ Build one with the helpers, which read like the paper's figures::
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Container, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType
+from pyautonomousagent.bt.nodes import BlackboardRef as BlackboardRef
 
 PARALLEL_POLICIES = ("SuccessOnAll", "SuccessOnOne")
-
-
-@dataclass(frozen=True, repr=False)
-class BlackboardRef:
-    """A leaf port written ``{key}``: the agent's blackboard entry ``key``, read each tick."""
-
-    key: str
-
-    def __str__(self) -> str:
-        return "{" + self.key + "}"
-
-    __repr__ = __str__
 
 
 class TreeError(ValueError):
@@ -157,6 +146,26 @@ def check_structure(root: Node) -> None:
                     f"reactive sequence {node.name!r} has {asynchronous} AsyncSequence children; "
                     "BehaviorTree.CPP allows one"
                 )
+
+
+def entries_read(root: Node) -> dict[str, str]:
+    """Blackboard key -> the name of the first control node whose parameters read it
+    (``Switch2 variable="{mode}"``); the swarm must have these keys."""
+    found: dict[str, str] = {}
+    for node in root.walk():
+        if node.is_control:
+            for param in node_type(node.type).params:
+                value = node.params.get(param.name)
+                if param.entry and isinstance(value, BlackboardRef):
+                    found.setdefault(value.key, node.name)
+    return found
+
+
+def check_entries(root: Node, keys: Container[str]) -> None:
+    """TreeError naming the node if a control node reads a blackboard key not in ``keys``."""
+    for key, name in entries_read(root).items():
+        if key not in keys:
+            raise TreeError(f"node {name!r} reads blackboard entry {key!r}, which no agent has")
 
 
 def node_type(type_name: str) -> NodeType:

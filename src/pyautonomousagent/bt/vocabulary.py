@@ -72,10 +72,6 @@ BTCPP_LEAVES = frozenset(
 #: BehaviorTree.CPP 4 built-ins that pyAutonomousAgent does not run, with the reason.
 UNSUPPORTED: dict[str, str] = {
     **dict.fromkeys(
-        ["Switch2", "Switch3", "Switch4", "Switch5", "Switch6"],
-        "it reads a blackboard variable; blackboard ports are not supported yet",
-    ),
-    **dict.fromkeys(
         ["ManualSelector", "TryCatch", "AlwaysRunning"],
         "it is not a built-in of BehaviorTree.CPP 4.8 (the version held against)",
     ),

@@ -32,12 +32,13 @@ from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import (
     Node,
     TreeError,
+    check_entries,
     control_params,
     node_type,
     parallel_threshold,
 )
 from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
-from pyautonomousagent.engines.btcpp import PRE_CONDITIONS
+from pyautonomousagent.engines.btcpp import PRE_CONDITIONS, case_values
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, FROM_PYTREES
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
@@ -130,6 +131,7 @@ class BatchedEngine:
                     "no batched form; run this tree with the pytrees engine"
                 )
         check_leaves(tree, swarm, defaults)
+        check_entries(tree, swarm.blackboard)
         reuse_freed_memory()
         self.program = program = compile_tree(tree)
         self.swarm, self.world, self.defaults = swarm, world, defaults
@@ -624,6 +626,30 @@ class BatchedEngine:
             self._tickers[child](going)
             np.copyto(status, self.status[child], where=going)
 
+    def _switch(self, i: int, mask: np.ndarray) -> None:
+        """Switch2..6; ``counter`` holds the running child + 1 (0: none)."""
+        kids, params = self.program.children[i], self.program.params[i]
+        running, status = self.counter[i], self.status[i]
+        cases = case_values(params)
+        np.copyto(running, 0, where=mask & (status != RUNNING))
+        value = self.swarm.blackboard[params["variable"].key]
+        match = np.full(mask.size, len(cases))
+        for k in reversed(range(len(cases))):  # the first equal case wins
+            match[value == cases[k]] = k
+        other = mask & (running > 0) & (running - 1 != match)
+        for k, child in enumerate(kids):
+            self._halt(child, other & (running - 1 == k))
+        for k, child in enumerate(kids):
+            going = mask & (match == k)
+            if _some(going):
+                self._tickers[child](going)
+                result = self.status[child]
+                np.copyto(status, result, where=going)
+                finished = going & (result != RUNNING)
+                np.copyto(running, k + 1, where=going & (result == RUNNING))
+                np.copyto(running, 0, where=finished)
+                self._halt_children(i, 0, finished)
+
     def _run_once(self, i: int, mask: np.ndarray) -> None:
         """RunOnce then_skip=false; ``counter`` holds the remembered status (0: none yet)."""
         child, result, status = self.program.children[i][0], self.counter[i], self.status[i]
@@ -658,4 +684,5 @@ BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
     "Delay": BatchedEngine._delay,
     "Timeout": BatchedEngine._timeout,
     "RunOnce": BatchedEngine._run_once,
+    **{f"Switch{n}": BatchedEngine._switch for n in range(2, 7)},
 }

@@ -24,7 +24,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from pyautonomousagent.bt.script import parse
-from pyautonomousagent.bt.script_leaves import iterations
+from pyautonomousagent.bt.script_leaves import iterations, literal
 from pyautonomousagent.bt.spec import parallel_threshold
 
 
@@ -411,6 +411,46 @@ class RunOnce(py_trees.decorators.Decorator):
         return self.decorated.status
 
 
+def case_values(params: Mapping[str, Any]) -> list[Any]:
+    """A Switch's cases as the numbers they compare with (words: enum values)."""
+    cases = sorted((int(k[5:]), v) for k, v in params.items() if k.startswith("case_"))
+    return [literal(str(value).lower() if isinstance(value, bool) else str(value))[0]
+            for _, value in cases]  # fmt: skip
+
+
+class Switch(py_trees.composites.Composite):
+    """BT.CPP ``Switch2``...``Switch6``: ticks the child of the first case equal to the
+    agent's entry ``variable`` (else the last child); a running child of another case is
+    halted first; when the child finishes, all are reset."""
+
+    def __init__(self, name: str, children: Sequence[Behaviour], key: str, cases: list) -> None:
+        super().__init__(name, list(children))
+        self.key, self.cases = key, cases
+        self.running = -1
+
+    def bind(self, agent: Any, world: Any, defaults: Mapping[str, Any]) -> None:
+        self.board = agent.blackboard
+
+    def tick(self) -> Iterator[Behaviour]:
+        """Match the entry, halt a running other case, tick the matched child."""
+        if self.status != Status.RUNNING:
+            self.running = -1
+            self.initialise()
+        value = getattr(self.board, self.key)
+        match = next((k for k, c in enumerate(self.cases) if value == c), len(self.cases))
+        if self.running not in (-1, match):
+            _halt_all(self.children[self.running : self.running + 1])
+        child = self.children[match]
+        yield from child.tick()
+        self.status = child.status
+        if child.status == Status.RUNNING:
+            self.running = match
+        else:
+            _halt_all(self.children)
+            self.running = -1
+        yield self
+
+
 #: Pre-conditions in BT.CPP's order: attribute -> the status it returns when its script holds.
 PRE_CONDITIONS = (("_failureIf", Status.FAILURE), ("_successIf", Status.SUCCESS))
 
@@ -474,4 +514,8 @@ BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Beh
     "Delay": lambda name, kids, p: Delay(name, kids[0], p["delay_msec"]),
     "Timeout": lambda name, kids, p: Timeout(name, kids[0], p["msec"]),
     "RunOnce": lambda name, kids, p: RunOnce(name, kids[0]),
+    **{
+        f"Switch{n}": lambda name, kids, p: Switch(name, kids, p["variable"].key, case_values(p))
+        for n in range(2, 7)
+    },
 }

@@ -17,7 +17,7 @@ from py_trees.common import Status
 
 from pyautonomousagent.bt import status as codes
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
-from pyautonomousagent.bt.spec import Node, control_params
+from pyautonomousagent.bt.spec import Node, check_entries, control_params
 from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, with_scripts
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
@@ -195,6 +195,7 @@ class PyTreesEngine:
 
     def __init__(self, tree: Node, swarm: Swarm, world: World, defaults: Mapping[str, Any]) -> None:
         check_leaves(tree, swarm, defaults, skip=BEHAVIOUR_TYPES)
+        check_entries(tree, swarm.blackboard)
         self.tree = tree
         self.roots = [
             build_behaviour(tree, swarm.agent(i), world, defaults) for i in range(swarm.size)
