@@ -71,7 +71,7 @@ def with_logged_leaves(root: Node, table: dict[str, list[list[int]]], log: list)
     """``root`` with each leaf replaced by a Logged leaf of its name."""
     if root.type == "Scripted":
         params = {"statuses": table[root.name], "log": log, "name": root.name}
-        return Node("Logged", root.name, (), params)
+        return replace(root, type="Logged", params=params)  # scripting attributes kept
     return replace(root, children=tuple(with_logged_leaves(c, table, log) for c in root.children))
 
 
@@ -84,7 +84,7 @@ def ours(
         logged = with_logged_leaves(tree, table, log)
         swarm = Swarm.create(
             [f"drone{i + 1}" for i in range(agents)],
-            {**BLACKBOARD_KEYS, "gate": np.int64},
+            {**BLACKBOARD_KEYS, "gate": np.int64, "mode": np.int64},
             DroneMission.columns,
         )
         world = make_world(swarm)
@@ -93,6 +93,8 @@ def ours(
         roots, events = [], [[] for _ in range(agents)]
         for t in range(ticks):
             swarm.blackboard["gate"][:] = table["gate"][t]
+            if "mode" in table:
+                swarm.blackboard["mode"][:] = table["mode"][t]
             roots.append([int(s) for s in h.tick()[0]])
             for a in range(agents):
                 events[a].append(log[a][:])
@@ -146,6 +148,8 @@ def reference(
         for t in range(ticks):
             tick[0] = t
             board.set_int("gate", int(table["gate"][t][agent]))
+            if "mode" in table:
+                board.set_string("mode", str(table["mode"][t][agent]))
             status = bt_tree.tick_exactly_once()
             roots[t][agent] = BT_STATUS[str(status).split(".")[-1]]
             events[agent].append(log[:])

@@ -9,7 +9,7 @@ from itertools import count
 from hypothesis import strategies as st
 
 from pyautonomousagent.bt.nodes import NODE_TYPES
-from pyautonomousagent.bt.spec import Node, TreeError, check_structure
+from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 
 STATUSES = st.sampled_from([SUCCESS, FAILURE, RUNNING])
@@ -115,10 +115,17 @@ def btcpp_node(children: st.SearchStrategy[list[Node]]) -> st.SearchStrategy[Nod
         st.sampled_from(["FAILURE", "SUCCESS", "RUNNING"]),
         one_child,
     )
+    switch = children.filter(lambda kids: len(kids) >= 3).map(
+        lambda kids: Node(
+            "Switch2", "w", tuple(kids[:3]),
+            {"variable": BlackboardRef("number_ticks"), "case_1": "1", "case_2": "3"},
+        )
+    )  # fmt: skip
     once = one_child.map(lambda kids: Node("RunOnce", "o", tuple(kids), {"then_skip": False}))
     return st.one_of(
-        with_memory, parallel, loops, flows, branches, parallel_all, timed, guarded, once
-    )
+        with_memory, parallel, loops, flows, branches, parallel_all, timed, guarded, once,
+        switch,
+    )  # fmt: skip
 
 
 def _threshold(children: int) -> st.SearchStrategy[int]:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import re
 import secrets
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,7 @@ import pytest
 
 from pyautonomousagent.bt.document import document_from_node
 from pyautonomousagent.bt.files import read_document, to_text_format
-from pyautonomousagent.bt.spec import Node, TreeError, check_structure, node_type
+from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure, node_type
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.bt.vocabulary import tags
 from pyautonomousagent.bt.xml_format import write_xml
@@ -66,16 +67,43 @@ def random_tree(rng: np.random.Generator, leaves: list[str], depth: int = 0) -> 
             params[key] = False
         elif key == "if":
             params[key] = str(rng.choice(["gate > 0", "gate == 0", "!(gate > 0) || false"]))
+        elif key == "variable":
+            params[key] = BlackboardRef("mode")  # a string entry in BT.CPP (the port's type)
+        elif key.startswith("case_"):
+            params[key] = str(rng.choice(["0", "1", "2"]))
         elif key == "else":
             params[key] = str(rng.choice(["FAILURE", "SUCCESS", "RUNNING"]))
     return Node(tag.spec, f"n{depth}_{rng.integers(1 << 30)}", kids, params)
+
+
+#: Scripting attributes drawn for some nodes: they read and write the entry ``gate``.
+ATTRIBUTES = {
+    "_failureIf": ["gate > 0", "gate == 0"],
+    "_successIf": ["gate > 0", "gate == 0"],
+    "_onSuccess": ["gate := 1", "gate := 0"],
+    "_onFailure": ["gate := 1 - gate"],
+    "_post": ["gate := gate", "gate := 0"],
+    "_onHalted": ["gate := 1"],
+}
+
+
+def with_attributes(rng: np.random.Generator, root: Node) -> Node:
+    """``root`` with random scripting attributes on about one node in eight."""
+    kids = tuple(with_attributes(rng, child) for child in root.children)
+    scripts = {}
+    if rng.random() < 0.125:
+        for key in rng.choice(sorted(ATTRIBUTES), size=int(rng.integers(1, 3)), replace=False):
+            scripts[str(key)] = str(rng.choice(ATTRIBUTES[str(key)]))
+    if root.name.startswith("c"):  # BT.CPP may leave it un-reset: see test_btcpp_nodes.py
+        scripts = {k: v for k, v in scripts.items() if k not in ("_failureIf", "_successIf")}
+    return replace(root, children=kids, scripts=scripts)
 
 
 def draw(rng: np.random.Generator) -> tuple[Node, dict[str, list[list[int]]]]:
     """A random tree and its leaves' scripts {name: [tick][agent] status codes}."""
     while True:
         leaves: list[str] = []
-        tree = random_tree(rng, leaves)
+        tree = with_attributes(rng, random_tree(rng, leaves))
         try:
             check_structure(tree)  # e.g. BT.CPP's one AsyncSequence per ReactiveSequence
             break
@@ -87,6 +115,7 @@ def draw(rng: np.random.Generator) -> tuple[Node, dict[str, list[list[int]]]]:
         for name in leaves
     }
     table["gate"] = rng.integers(2, size=(TICKS, AGENTS)).tolist()  # read by scripts
+    table["mode"] = rng.integers(3, size=(TICKS, AGENTS)).tolist()  # read by Switch nodes
     return tree, table
 
 

@@ -265,3 +265,32 @@ def test_shared_data_has_no_entries_for_agents_that_do_not_exist():
             sim.mission.shared[receiver]
     # iterating over it must end (at most one entry per agent), not run on forever
     assert len(list(itertools.islice(iter(sim.mission.shared), 10))) <= 4
+
+
+def test_one_agent_messages_deliver_as_the_array_path_does():
+    """Plain-number sends (kept as Python numbers until delivery) give the same deliveries,
+    in the same canonical order, as the same messages sent as arrays."""
+    x, y = np.array([0.0, 3.0, 50.0, 4.0]), np.array([0.0, 4.0, 0.0, 1.0])
+
+    def sends(link: Datalink, plain: bool) -> list:
+        one = int if plain else np.int64  # np.int64 senders take the array path
+        link.send(one(3), "a", {"v": 1.5, "w": 2.0}, (1.0, 2.0))
+        link.send(one(1), "a", {"w": 4.0, "v": 3.5}, (0.0, 0.0))  # other key order
+        link.send(np.array([2, 0]), "b", {"v": np.array([5.0, 6.0])}, (x[[2, 0]], y[[2, 0]]))
+        link.send(one(0), "a", {"v": 7.5, "w": 8.0}, (60.0, 0.0))
+        link.send(one(1), "a", {"v": 9.5, "w": 1.0}, (0.0, 1.0))
+        return link.deliver(x, y)
+
+    plain, arrays = sends(Datalink(range=10.0), True), sends(Datalink(range=10.0), False)
+    assert [d.messages.type for d in plain] == ["a", "b"]
+    for got, want in zip(plain, arrays, strict=True):
+        assert (
+            got.messages.senders.tolist()
+            == want.messages.senders.tolist()
+            == ([0, 1, 1, 3] if got.messages.type == "a" else [0, 2])
+        )
+        assert {k: v.tolist() for k, v in got.messages.data.items()} == {
+            k: v.tolist() for k, v in want.messages.data.items()
+        }
+        assert got.receivers.tolist() == want.receivers.tolist()
+        assert got.rows.tolist() == want.rows.tolist()

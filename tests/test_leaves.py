@@ -763,3 +763,19 @@ def test_numpy_integer_index_is_one_agent(swarm_world, type_name):
         state = {k: v.tolist() for k, v in {**columns, **board}.items()}
         outcomes.append((int(status), state, on_channel(world.datalink)))
     assert outcomes[0] == outcomes[1]
+
+
+@pytest.mark.parametrize("n", [1, 3, 8, 9, 40])
+def test_bearing_of_a_few_agents_has_the_bits_of_one_agent_at_a_time(n: int) -> None:
+    """Small arrays take the scalar path element by element; the bits are those of the array
+    path and of one agent at a time (what keeps the engines identical)."""
+    from pyautonomousagent import arrays
+
+    rng = np.random.default_rng(n)
+    x, y, to_x, to_y = (rng.normal(size=n) * 10.0 ** rng.integers(-3, 4, n) for _ in range(4))
+    to_x[::3] = x[::3]  # due north or south
+    one_by_one = [arrays.bearing(*(float(v[i]) for v in (x, y, to_x, to_y))) for i in range(n)]
+    assert arrays.bearing(x, y, to_x, to_y).tolist() == one_by_one
+    assert arrays.bearing(x, y, to_x[0], to_y[0]).tolist() == [
+        arrays.bearing(float(x[i]), float(y[i]), float(to_x[0]), float(to_y[0])) for i in range(n)
+    ]

@@ -8,7 +8,8 @@ Phase 2 of the next iteration: the mission's handler of each message type
 (:func:`pyautonomousagent.simulation.phases.process_messages`).
 
 One call of :meth:`Datalink.send` may carry the messages of many senders at once (the
-batched engine); the py_trees engine sends one at a time. Delivery puts the messages of a
+batched engine); the py_trees engine sends one at a time, kept as plain numbers until
+delivery packs them into arrays. Delivery puts the messages of a
 type in a canonical order (by sender, then in the order each sender sent them), so both
 engines deliver the same messages in the same order.
 
@@ -22,7 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -101,18 +102,42 @@ class Delivery:
         return receivers[keep], rows[keep]
 
 
+class OneMessage(NamedTuple):
+    """A broadcast by one agent, kept as plain Python numbers until delivery (the py_trees
+    engine sends one message per tick: packing it into arrays then would cost more than
+    the message). :meth:`Datalink.deliver` packs runs of them into :class:`Messages`.
+
+    Attributes:
+        type: message type; sender: agent index; order: the global sending counter;
+        x, y: the sender's position; data: payload name -> number.
+    """
+
+    type: str
+    sender: int
+    order: int
+    x: float
+    y: float
+    data: dict[str, float]
+
+
 @dataclass
 class Datalink:
     """The broadcast channel shared by the swarm.
 
     Attributes:
         range: largest sender-receiver distance that a message crosses (world units).
-        channel: messages sent this iteration, not yet delivered (one entry per send call).
+        channel: messages sent this iteration, not yet delivered (one entry per send call,
+            each run of one-agent broadcasts packed into one entry).
     """
 
     range: float
-    channel: list[Messages] = field(default_factory=list)
+    _queue: list[Messages | OneMessage] = field(default_factory=list)
     _sent: int = 0
+
+    @property
+    def channel(self) -> list[Messages]:
+        """Messages sent this iteration, not yet delivered (a packed copy of the queue)."""
+        return _packed(self._queue)
 
     def send(
         self,
@@ -131,19 +156,22 @@ class Datalink:
             sender_position: (x, y) of the sender(s), numbers or arrays.
             receivers: intended receivers (agent indices), or None for everyone.
         """
-        senders = np.atleast_1d(np.asarray(sender, dtype=np.int64))
+        if receivers is None and isinstance(sender, int):
+            one = _one_message(type, sender, self._sent, data, sender_position)
+            if one is not None:
+                self._queue.append(one)
+                self._sent += 1
+                return
+        senders = np.array(sender, dtype=np.int64, ndmin=1)  # a copy: the caller's may change
         m = senders.size
         order = np.arange(self._sent, self._sent + m)
         self._sent += m
-        x = np.broadcast_to(np.asarray(sender_position[0], dtype=np.float64), (m,)).copy()
-        y = np.broadcast_to(np.asarray(sender_position[1], dtype=np.float64), (m,)).copy()
-        payload = {
-            k: np.broadcast_to(np.asarray(v, dtype=np.float64), (m,)).copy()
-            for k, v in data.items()
-        }
+        x = _one_each(sender_position[0], m)
+        y = _one_each(sender_position[1], m)
+        payload = {k: _one_each(v, m) for k, v in data.items()}
         lists = [] if receivers is None else [np.asarray(receivers, dtype=np.int64)]
         which = np.full(m, -1 if receivers is None else 0, dtype=np.int64)
-        self.channel.append(Messages(type, senders, order, x, y, payload, which, lists))
+        self._queue.append(Messages(type, senders, order, x, y, payload, which, lists))
 
     def deliver(self, x: np.ndarray, y: np.ndarray) -> list[Delivery]:
         """Phase 5: hand every message to its receivers within range; clear the channel.
@@ -155,7 +183,7 @@ class Datalink:
             One :class:`Delivery` per message type, in order of first sending.
         """
         deliveries = [self._deliver_type(merged, x, y) for merged in _merge_by_type(self.channel)]
-        self.channel.clear()
+        self._queue.clear()
         return deliveries
 
     def _deliver_type(self, messages: Messages, x: np.ndarray, y: np.ndarray) -> Delivery:
@@ -183,12 +211,73 @@ class Datalink:
         return bool(np.hypot(xs.max() - xs.min(), ys.max() - ys.min()) <= self.range)
 
 
+def _one_each(value: Any, m: int) -> np.ndarray:
+    """``value`` (a number, or one per message) as a new float array of shape (m,)."""
+    values = np.array(value, dtype=np.float64)  # a copy: the sender's arrays may change
+    return values if values.shape == (m,) else np.broadcast_to(values, (m,)).copy()
+
+
+_NUMBER = (float, int, np.number)
+
+
+def _one_message(
+    type: str, sender: int, order: int, data: Mapping[str, Any], position: tuple[Any, Any]
+) -> OneMessage | None:
+    """One agent's broadcast as plain numbers; None if a value is no number (an array)."""
+    x, y = position
+    if not (isinstance(x, _NUMBER) and isinstance(y, _NUMBER)):
+        return None
+    plain = {}
+    for key, value in data.items():
+        if not isinstance(value, _NUMBER):
+            return None
+        plain[key] = float(value)
+    return OneMessage(type, sender, order, float(x), float(y), plain)
+
+
+def _packed(channel: list[Messages | OneMessage]) -> list[Messages]:
+    """The channel with each run of one-agent messages of the same type and payload names
+    packed into one :class:`Messages` (same rows, same order)."""
+    packed: list[Messages] = []
+    run: list[OneMessage] = []
+    for entry in channel:
+        if run and not (
+            isinstance(entry, OneMessage)
+            and entry.type == run[0].type
+            and entry.data.keys() == run[0].data.keys()
+        ):
+            packed.append(_pack(run))
+            run = []
+        if isinstance(entry, OneMessage):
+            run.append(entry)
+        else:
+            packed.append(entry)
+    if run:
+        packed.append(_pack(run))
+    return packed
+
+
+def _pack(run: list[OneMessage]) -> Messages:
+    """One-agent messages of one type (and payload names) as one :class:`Messages`."""
+    ids = np.array([(r.sender, r.order, -1) for r in run], dtype=np.int64).T
+    names = tuple(run[0].data)
+    rows = [(r.x, r.y, *(r.data[k] for k in names)) for r in run]
+    values = np.array(rows, dtype=np.float64).T
+    data = dict(zip(names, values[2:], strict=True))
+    return Messages(run[0].type, ids[0], ids[1], values[0], values[1], data, ids[2], [])
+
+
 def _merge_by_type(channel: list[Messages]) -> list[Messages]:
     """The channel's messages grouped by type, each group in canonical order."""
     types = list(dict.fromkeys(m.type for m in channel))
     merged = []
     for kind in types:
         parts = [m for m in channel if m.type == kind]
+        if len(parts) == 1:  # nothing to merge: only the payload's names sorted, as below
+            one = parts[0]
+            one.data = {k: one.data[k] for k in sorted(one.data)}
+            merged.append(_canonical(one))
+            continue
         keys = sorted(set().union(*(m.data for m in parts)))
         offsets = np.cumsum([0] + [len(m.receiver_lists) for m in parts])
         messages = Messages(
@@ -209,8 +298,25 @@ def _merge_by_type(channel: list[Messages]) -> list[Messages]:
             ),
             [r for m in parts for r in m.receiver_lists],
         )
-        merged.append(messages.take(np.lexsort((messages.order, messages.senders))))
+        merged.append(_canonical(messages))
     return merged
+
+
+def _canonical(messages: Messages) -> Messages:
+    """``messages`` in canonical order: by sender, then sending order (unchanged if so)."""
+    senders, order = messages.senders, messages.order
+    if senders.size < 2:
+        return messages
+    if senders.size <= 32:  # a few messages: compared in Python, cheaper than NumPy's calls
+        keys = list(zip(senders.tolist(), order.tolist(), strict=True))
+        if all(a < b for a, b in zip(keys, keys[1:], strict=False)):
+            return messages
+    else:
+        later = order[1:] > order[:-1]
+        step = (senders[1:] > senders[:-1]) | ((senders[1:] == senders[:-1]) & later)
+        if step.all():
+            return messages
+    return messages.take(np.lexsort((order, senders)))
 
 
 def grid_pairs(

@@ -117,6 +117,8 @@ class _Column:
         self.name = name
 
     def __get__(self, view: AgentView, owner: type | None = None) -> Any:
+        if view.one:  # the hot path of the py_trees engine: a Python number in one call
+            return view.swarm.columns[self.name].item(view.index)
         return _read(view.swarm.columns[self.name], view.index, view.masked)
 
     def __set__(self, view: AgentView, value: Any) -> None:
@@ -130,12 +132,13 @@ class BlackboardView:
     AttributeError naming the key and the keys that exist.
     """
 
-    __slots__ = ("_board", "_index", "_masked")
+    __slots__ = ("_board", "_index", "_masked", "_one")
 
     def __init__(self, board: dict[str, np.ndarray], index: Any, masked: bool = False) -> None:
         object.__setattr__(self, "_board", board)
         object.__setattr__(self, "_index", index)
         object.__setattr__(self, "_masked", masked)
+        object.__setattr__(self, "_one", isinstance(index, int | np.integer))
 
     def _column(self, key: str) -> np.ndarray:
         try:
@@ -145,6 +148,8 @@ class BlackboardView:
             raise AttributeError(f"no blackboard key {key!r} (keys: {known})") from None
 
     def __getattr__(self, key: str) -> Any:
+        if self._one:  # one agent: a Python number in one call
+            return self._column(key).item(self._index)
         return _read(self._column(key), self._index, self._masked)
 
     def __setattr__(self, key: str, value: Any) -> None:
@@ -173,7 +178,7 @@ class AgentView:
     Each swarm makes its own subclass with the mission's columns (:func:`view_type`).
     """
 
-    __slots__ = ("swarm", "index", "blackboard", "masked")
+    __slots__ = ("swarm", "index", "blackboard", "masked", "one")
 
     x = _Column()
     y = _Column()
@@ -186,12 +191,13 @@ class AgentView:
         self.swarm = swarm
         self.index = index
         self.masked = isinstance(index, np.ndarray) and index.dtype == np.bool_
+        self.one = isinstance(index, int | np.integer)
         self.blackboard = BlackboardView(swarm.blackboard, index, self.masked)
 
     @property
     def is_one(self) -> bool:
         """True for a single agent (an integer index), False for a group."""
-        return isinstance(self.index, int | np.integer)
+        return self.one
 
     @property
     def indices(self) -> np.ndarray:
@@ -212,10 +218,26 @@ class AgentView:
         return _read(values, self.index, self.masked)
 
     def compact(self, values: Any) -> np.ndarray:
-        """Values in view shape (or a scalar) as one entry per agent of :attr:`indices`."""
+        """Values in view shape (or a scalar) as one entry per agent of :attr:`indices`
+        (read-only: maybe a view of ``values``)."""
         if self.masked and np.ndim(values):
             return np.asarray(values)[self.index]
-        return np.broadcast_to(values, self.indices.shape)
+        shape = (self.count,)
+        if isinstance(values, np.ndarray) and values.shape == shape:
+            return values  # a group's values in view shape: one per agent already
+        return np.broadcast_to(values, shape)
+
+    @property
+    def count(self) -> int:
+        """The number of agents in the view."""
+        index = self.index
+        if self.one:
+            return 1
+        if isinstance(index, slice):
+            return len(range(*index.indices(self.swarm.size)))
+        if self.masked:
+            return int(np.count_nonzero(index))
+        return int(np.size(index))
 
     @property
     def name(self) -> Any:

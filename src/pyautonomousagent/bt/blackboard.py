@@ -1,4 +1,5 @@
-"""The blackboard entries a tree declares: keys its scripts and ``SetBlackboard`` nodes write.
+"""The blackboard entries a tree declares: keys its scripts (``Script`` nodes and scripting
+attributes such as ``_onSuccess``) and ``SetBlackboard`` nodes write.
 
 The swarm's blackboard is numeric, one row per agent, so every entry has a dtype: a key
 assigned only booleans (``done := true``, comparisons) is ``bool``, one assigned whole numbers
@@ -15,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from pyautonomousagent.bt.leaf import LEAF_TYPES
-from pyautonomousagent.bt.script import DTYPES, widest
+from pyautonomousagent.bt.script import DTYPES, parse, widest
 from pyautonomousagent.bt.script_leaves import declared_keys
 from pyautonomousagent.bt.spec import Node
 
@@ -31,10 +32,15 @@ def tree_blackboard_keys(root: Node, known: Mapping[str, Any] | None = None) -> 
     mission's blackboard) does not have, in the order the tree first writes them."""
     types = {key: type_name(dtype) for key, dtype in (known or {}).items()}
     declared: dict[str, str] = {}
-    writers = [n for n in root.leaves() if n.type in LEAF_TYPES]
     for _ in range(3):  # a key read before the node that assigns it: widen, then settle
-        for node in writers:
-            found = declared_keys(LEAF_TYPES.get(node.type), node.params, {**types, **declared})
+        for node in root.walk():
+            known_now = {**types, **declared}
+            found: dict[str, str] = {}
+            if not node.is_control and node.type in LEAF_TYPES:
+                found.update(declared_keys(LEAF_TYPES.get(node.type), node.params, known_now))
+            for code in node.scripts.values():  # _onSuccess="laps += 1", ...
+                for key, kind in parse(code).assigned({**known_now, **found}).items():
+                    found[key] = widest(kind, found.get(key, kind))
             for key, kind in found.items():
                 declared[key] = widest(kind, declared.get(key, kind))
     return {key: DTYPES[kind] for key, kind in declared.items() if key not in types}

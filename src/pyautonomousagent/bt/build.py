@@ -20,6 +20,7 @@ from pyautonomousagent.bt.document import SUBTREE, Document, RawNode, TreeFileEr
 from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf, LeafError
 from pyautonomousagent.bt.limits import check_document
 from pyautonomousagent.bt.nodes import DECORATOR
+from pyautonomousagent.bt.script import ScriptError, parse
 from pyautonomousagent.bt.spec import (
     BlackboardRef,
     Node,
@@ -184,7 +185,22 @@ class _Builder:
     # -- step 3: tags to spec nodes ------------------------------------------------------
 
     def convert(self, node: RawNode) -> Node:
-        """The spec node for an inlined, named raw node."""
+        """The spec node for an inlined, named raw node (with its scripting attributes)."""
+        made = self._convert(node)
+        if not node.scripts:
+            return made
+        for key, code in node.scripts.items():
+            try:
+                parse(code)
+            except ScriptError as error:
+                raise self.fail(
+                    node.line_of(key),
+                    f"{key}: {error}",
+                    "write it in BehaviorTree.CPP's scripting language (docs/tree-files.md)",
+                ) from None
+        return replace(made, scripts=dict(node.scripts))
+
+    def _convert(self, node: RawNode) -> Node:
         children = tuple(self.convert(child) for child in node.children)
         tags = by_tag()
         tag = tags.get(node.tag)
@@ -236,8 +252,9 @@ class _Builder:
                 "the first child is the condition, then the then- and else-branch",
             )
         params = self._params(node, tag)
+        entries = {p.name for p in node_type(tag.spec).params if p.entry}
         for key, value in params.items():
-            if isinstance(value, BlackboardRef):
+            if isinstance(value, BlackboardRef) and key not in entries:
                 raise self.fail(
                     node.line_of(key),
                     f"{tag.tag}: {key}={value} reads the blackboard, which control node "

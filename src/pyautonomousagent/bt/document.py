@@ -8,6 +8,7 @@ into a checked :class:`~pyautonomousagent.bt.spec.Node`, the only thing the engi
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -54,6 +55,7 @@ class RawNode:
         autoremap: for ``SubTree``: the ``_autoremap`` flag.
         prefix: set when a SubTree is inlined: the start of the names of its nodes.
         port_lines: port -> its own line, where the file has one (YAML keys).
+        scripts: scripting attributes (``_successIf``, ``_onSuccess``, ...) -> code.
     """
 
     tag: str
@@ -66,6 +68,7 @@ class RawNode:
     autoremap: bool = False
     prefix: str = ""
     port_lines: dict[str, int] = field(default_factory=dict)
+    scripts: dict[str, str] = field(default_factory=dict)
 
     def line_of(self, port: str) -> int:
         """The line of ``port`` (the node's line if the port has none of its own)."""
@@ -107,6 +110,13 @@ def document_from_node(root: Node, tree_id: str = DEFAULT_TREE_ID, file: str = "
 def _raw(node: Node) -> RawNode:
     children = [_raw(child) for child in node.children]
     if node.is_control:
-        return RawNode(tag_of(node).tag, 0, node.name, file_params(node), children)
-    ports = {k: str(v) if isinstance(v, BlackboardRef) else v for k, v in node.params.items()}
-    return RawNode(node.type, 0, node.name, ports, children)
+        raw = RawNode(tag_of(node).tag, 0, node.name, _text(file_params(node)), children)
+    else:
+        raw = RawNode(node.type, 0, node.name, _text(node.params), children)
+    raw.scripts = dict(node.scripts)
+    return raw
+
+
+def _text(params: Mapping[str, Any]) -> dict[str, Any]:
+    """Parameters as files write them: a blackboard reference as ``{key}``."""
+    return {k: str(v) if isinstance(v, BlackboardRef) else v for k, v in params.items()}

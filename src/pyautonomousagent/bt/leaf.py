@@ -169,6 +169,10 @@ class Leaf:
             kind: a message type of the mission (``MessageType.name``).
             data: payload name -> a number, or a value per agent in view shape.
         """
+        if agents.is_one:  # plain numbers: one message costs no arrays until delivery
+            position = (agents.x, agents.y)
+            world.datalink.send(int(agents.index), kind, dict(data), position)
+            return
         payload = {k: agents.compact(v) for k, v in data.items()}
         position = (agents.compact(agents.x), agents.compact(agents.y))
         world.datalink.send(agents.indices, kind, payload, position)

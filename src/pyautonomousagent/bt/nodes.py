@@ -26,6 +26,19 @@ from pyautonomousagent.registry import Registry
 CONTROL = "Control"
 DECORATOR = "Decorator"
 
+
+@dataclass(frozen=True, repr=False)
+class BlackboardRef:
+    """A port written ``{key}``: the agent's blackboard entry ``key``, read each tick."""
+
+    key: str
+
+    def __str__(self) -> str:
+        return "{" + self.key + "}"
+
+    __repr__ = __str__
+
+
 #: A parameter check: (value, number of children) -> what is wrong, or "" when nothing is.
 Check = Callable[[Any, int], str]
 
@@ -78,6 +91,7 @@ class Param:
         default: the value when not given; None marks a required parameter.
         check: what a good value is (see :data:`Check`).
         in_files: False for parameters only a tag sets (``memory``).
+        entry: True for a parameter that names a blackboard entry (``variable="{mode}"``).
     """
 
     name: str
@@ -85,6 +99,7 @@ class Param:
     default: Any = None
     check: Check | None = None
     in_files: bool = True
+    entry: bool = False
 
 
 @dataclass(frozen=True)
@@ -317,6 +332,30 @@ _decorator(
     "ticks the child until it finishes once, then returns that status for ever",
     params=(Param("then_skip", bool, True, _then_skip),),
 )
+
+
+def entry(value: Any, children: int) -> str:
+    """A blackboard entry, written ``{key}``."""
+    if isinstance(value, BlackboardRef):
+        return ""
+    return f"must name a blackboard entry, written {{key}}, got {value!r}"
+
+
+def case(value: Any, children: int) -> str:
+    """A Switch case: a number, true/false, or a word (an enum value)."""
+    return "" if isinstance(value, str | int | float) else f"must be text, got {value!r}"
+
+
+for _cases in range(2, 7):
+    _decorator_or_control = NodeType(
+        f"Switch{_cases}", CONTROL, _cases + 1, _cases + 1,
+        (Param("variable", str, None, entry, entry=True),
+         *(Param(f"case_{k}", str, None, case) for k in range(1, _cases + 1))),
+        _tag(f"Switch{_cases}", f"switch{_cases}",
+             "ticks the child of the first case equal to the entry `variable`, else the "
+             "last; a running child of another case is halted"),
+    )  # fmt: skip
+    add(_decorator_or_control)
 
 # -- py_trees nodes BehaviorTree.CPP lacks ----------------------------------------------------
 _decorator(

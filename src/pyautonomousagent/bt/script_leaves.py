@@ -254,7 +254,9 @@ class Sleep(_PortsByName):
         self._deadlines(agents)[agents.indices] = 0
 
 
-def declared_keys(leaf_type: type[Leaf], params: Mapping[str, Any], known: dict[str, str]) -> dict:
+def declared_keys(
+    leaf_type: type[Leaf], params: Mapping[str, Any], known: dict[str, str]
+) -> dict[str, str]:
     """The entries a leaf of ``leaf_type`` with ``params`` writes: key -> type name."""
     if issubclass(leaf_type, _PortsByName):
         return leaf_type.declared(params, known)

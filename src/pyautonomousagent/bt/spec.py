@@ -15,25 +15,14 @@ Build one with the helpers, which read like the paper's figures::
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator, Mapping
+from collections.abc import Container, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType
+from pyautonomousagent.bt.nodes import BlackboardRef as BlackboardRef
 
 PARALLEL_POLICIES = ("SuccessOnAll", "SuccessOnOne")
-
-
-@dataclass(frozen=True, repr=False)
-class BlackboardRef:
-    """A leaf port written ``{key}``: the agent's blackboard entry ``key``, read each tick."""
-
-    key: str
-
-    def __str__(self) -> str:
-        return "{" + self.key + "}"
-
-    __repr__ = __str__
 
 
 class TreeError(ValueError):
@@ -50,12 +39,16 @@ class Node:
         name: the instance name (e.g. ``"action_navigate_to_destination_a_1"``).
         children: child nodes, left (highest priority) first.
         params: parameters: ``memory`` for composites, ports for leaves.
+        scripts: BehaviorTree.CPP's scripting attributes: ``_successIf``, ``_failureIf``
+            (asked before a tick that does not resume the node), ``_onSuccess``,
+            ``_onFailure``, ``_post`` (after a tick that finishes it), ``_onHalted`` -> code.
     """
 
     type: str
     name: str
     children: tuple[Node, ...] = ()
     params: Mapping[str, Any] = field(default_factory=dict)
+    scripts: Mapping[str, str] = field(default_factory=dict)
 
     @property
     def is_control(self) -> bool:
@@ -153,6 +146,26 @@ def check_structure(root: Node) -> None:
                     f"reactive sequence {node.name!r} has {asynchronous} AsyncSequence children; "
                     "BehaviorTree.CPP allows one"
                 )
+
+
+def entries_read(root: Node) -> dict[str, str]:
+    """Blackboard key -> the name of the first control node whose parameters read it
+    (``Switch2 variable="{mode}"``); the swarm must have these keys."""
+    found: dict[str, str] = {}
+    for node in root.walk():
+        if node.is_control:
+            for param in node_type(node.type).params:
+                value = node.params.get(param.name)
+                if param.entry and isinstance(value, BlackboardRef):
+                    found.setdefault(value.key, node.name)
+    return found
+
+
+def check_entries(root: Node, keys: Container[str]) -> None:
+    """TreeError naming the node if a control node reads a blackboard key not in ``keys``."""
+    for key, name in entries_read(root).items():
+        if key not in keys:
+            raise TreeError(f"node {name!r} reads blackboard entry {key!r}, which no agent has")
 
 
 def node_type(type_name: str) -> NodeType:

@@ -72,10 +72,6 @@ BTCPP_LEAVES = frozenset(
 #: BehaviorTree.CPP 4 built-ins that pyAutonomousAgent does not run, with the reason.
 UNSUPPORTED: dict[str, str] = {
     **dict.fromkeys(
-        ["Switch2", "Switch3", "Switch4", "Switch5", "Switch6"],
-        "it reads a blackboard variable; blackboard ports are not supported yet",
-    ),
-    **dict.fromkeys(
         ["ManualSelector", "TryCatch", "AlwaysRunning"],
         "it is not a built-in of BehaviorTree.CPP 4.8 (the version held against)",
     ),
@@ -90,11 +86,14 @@ UNSUPPORTED: dict[str, str] = {
     ),
 }  # fmt: skip
 
-#: Attributes BehaviorTree.CPP uses for its scripting; refused with a clear message.
-SCRIPT_ATTRIBUTES = (
-    "_skipIf", "_successIf", "_failureIf", "_while",
-    "_onSuccess", "_onFailure", "_onHalted", "_post",
-)  # fmt: skip
+#: BehaviorTree.CPP's scripting attributes, any node may have them (see Node.scripts).
+SCRIPT_ATTRIBUTES = ("_failureIf", "_successIf", "_onSuccess", "_onFailure", "_post", "_onHalted")
+
+#: Scripting attributes refused, with the reason.
+REFUSED_ATTRIBUTES = {
+    "_skipIf": "it makes the node SKIPPED, a status py_trees does not have",
+    "_while": "it makes the node SKIPPED, a status py_trees does not have",
+}
 
 
 def tag_of(node: Node) -> Tag:

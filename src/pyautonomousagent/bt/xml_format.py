@@ -27,6 +27,7 @@ from pyautonomousagent.bt.leaf import LEAF_TYPES
 from pyautonomousagent.bt.limits import MAX_TREE_DEPTH
 from pyautonomousagent.bt.vocabulary import (
     BTCPP_LEAVES,
+    REFUSED_ATTRIBUTES,
     SCRIPT_ATTRIBUTES,
     by_tag,
     closest,
@@ -239,15 +240,16 @@ def _node(element: _Element, file: str) -> RawNode:
             f'or write <{category} ID="{element.tag}">',
         )
     for key, value in attrs.items():
-        if key in SCRIPT_ATTRIBUTES:
+        if key in REFUSED_ATTRIBUTES:
             raise TreeFileError(
                 file,
                 element.line,
-                f"scripting attribute {key} is not supported",
-                "remove it; test conditions with Condition "
-                "leaves under a Sequence or Fallback instead",
+                f"scripting attribute {key} is not supported: {REFUSED_ATTRIBUTES[key]}",
+                "remove it; use a Precondition node or _failureIf / _successIf instead",
             )
-        if not key.startswith("_"):
+        if key in SCRIPT_ATTRIBUTES:
+            node.scripts[key] = value
+        elif not key.startswith("_"):
             node.ports[key] = value
     node.children = [_node(child, file) for child in element.children]
     return node
@@ -322,6 +324,7 @@ def _write_node(node: RawNode, depth: int, out: list[str]) -> None:
     if node.autoremap:
         attrs.append(("_autoremap", "true"))
     attrs.extend((k, format_value(v)) for k, v in node.ports.items())
+    attrs.extend(node.scripts.items())
     text = "".join(f" {k}={quoteattr(v)}" for k, v in attrs)
     pad = "  " * depth
     if not node.children:

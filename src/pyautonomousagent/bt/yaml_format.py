@@ -21,7 +21,7 @@ from pyautonomousagent.bt.document import (
     RawNode,
     TreeFileError,
 )
-from pyautonomousagent.bt.vocabulary import SCRIPT_ATTRIBUTES, closest
+from pyautonomousagent.bt.vocabulary import REFUSED_ATTRIBUTES, SCRIPT_ATTRIBUTES, closest
 from pyautonomousagent.inputs import Loader, YamlLimitError, clip, yaml_error_line
 
 TOP_KEYS = ["main_tree_to_execute", "tree", "trees", "subtree_ports"]
@@ -191,12 +191,15 @@ class _Reader:
                     "write '_autoremap: true' or leave it out",
                 )
             raw.autoremap = flag
-        elif key in SCRIPT_ATTRIBUTES:
+        elif key in REFUSED_ATTRIBUTES:
             raise self.fail(
                 line,
-                f"scripting key {key} is not supported",
-                "remove it; test conditions with Condition leaves under a Sequence or Fallback",
+                f"scripting key {key} is not supported: {REFUSED_ATTRIBUTES[key]}",
+                "remove it; use a Precondition node or _failureIf / _successIf instead",
             )
+        elif key in SCRIPT_ATTRIBUTES:
+            raw.scripts[key] = self.text(value, key, "write the script as text")
+            raw.port_lines[key] = line
         elif key != "type" and not key.startswith("_"):
             raw.ports[key] = self.port(key, line, value)
             raw.port_lines[key] = line
@@ -261,6 +264,7 @@ def _plain(node: RawNode) -> dict[str, Any]:
         data["_autoremap"] = True
     for key, value in node.ports.items():
         data[key] = _Flow(value) if isinstance(value, list | tuple) else value
+    data.update(node.scripts)
     if node.children:
         data["children"] = [_plain(child) for child in node.children]
     return data

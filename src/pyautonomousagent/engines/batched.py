@@ -32,12 +32,14 @@ from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import (
     Node,
     TreeError,
+    check_entries,
     control_params,
     node_type,
     parallel_threshold,
 )
 from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
-from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES
+from pyautonomousagent.engines.btcpp import PRE_CONDITIONS, case_values
+from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, FROM_PYTREES
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -129,6 +131,7 @@ class BatchedEngine:
                     "no batched form; run this tree with the pytrees engine"
                 )
         check_leaves(tree, swarm, defaults)
+        check_entries(tree, swarm.blackboard)
         reuse_freed_memory()
         self.program = program = compile_tree(tree)
         self.swarm, self.world, self.defaults = swarm, world, defaults
@@ -154,13 +157,25 @@ class BatchedEngine:
         self._halting = [i for i, leaf in self.leaves.items() if type(leaf).halt is not Leaf.halt]
         self._ticks = swarm.blackboard["number_ticks"]
         self._everyone = np.ones(swarm.size, dtype=bool)
+        self._all = swarm.agents(slice(None))  # the view of every agent, made once
         self._tables = {
             i: _status_table(node.type)
             for i, node in enumerate(program.nodes)
             if node.is_control and node_type(node.type).status_map is not None
         }
         self._scripts: dict[int, Script] = {}
+        self._attributes = {
+            i: {key: parse(code) for key, code in node.scripts.items()}
+            for i, node in enumerate(program.nodes)
+            if node.scripts
+        }
+        watch = set(self._halting) | {i for i, a in self._attributes.items() if "_onHalted" in a}
+        self._watched = {
+            i for i in range(n) if any(i <= j < program.end[i] for j in watch)
+        }  # nodes whose subtree has something to tell when halted
         self._tickers = [self._ticker(i) for i in range(n)]
+        for i in self._attributes:
+            self._tickers[i] = self._with_scripts(i, self._tickers[i])
 
     def _ticker(self, i: int) -> Callable[[np.ndarray], None]:
         node = self.program.nodes[i]
@@ -192,13 +207,53 @@ class BatchedEngine:
             self._tell_halted(child, need)
             np.copyto(self.status[child : self.program.end[child]], INVALID, where=need)
 
-    def _tell_halted(self, child: int, need: np.ndarray) -> None:
-        """Call ``Leaf.halt`` of the RUNNING leaves of ``child``'s subtree, in tick order."""
-        for i in self._halting:
-            if child <= i < self.program.end[child]:
-                rows = np.flatnonzero(need & (self.status[i] == RUNNING))
-                if rows.size:
-                    self.leaves[i].halt(self.swarm.agents(rows), self.world)
+    def _tell_halted(self, node: int, need: np.ndarray) -> None:
+        """For the agents of ``need``, the RUNNING nodes of ``node``'s subtree are halted:
+        call their leaves' ``Leaf.halt`` and run their ``_onHalted`` scripts, children first
+        (BT.CPP's order)."""
+        if node not in self._watched:
+            return
+        for child in self.program.children[node]:
+            self._tell_halted(child, need)
+        rows = np.flatnonzero(need & (self.status[node] == RUNNING))
+        if rows.size:
+            if node in self.leaves and node in self._halting:
+                self.leaves[node].halt(self.swarm.agents(rows), self.world)
+            if "_onHalted" in self._attributes.get(node, {}):
+                self._attributes[node]["_onHalted"].run(self.swarm.agents(rows).blackboard)
+
+    def _with_scripts(self, i: int, ticker: Callable[[np.ndarray], None]) -> Callable:
+        """``ticker`` with node ``i``'s scripting attributes (see engines/btcpp.py's
+        ``with_scripts``): pre-conditions for the agents it does not resume, then its tick
+        for the others, then the post scripts by status."""
+        scripts, status = self._attributes[i], self.status[i]
+
+        def tick(mask: np.ndarray) -> None:
+            going = mask.copy()
+            for key, result in PRE_CONDITIONS:
+                asked = going & (status != RUNNING)
+                if key in scripts and _some(asked):
+                    decided = self._truth(scripts[key], asked)
+                    np.copyto(status, FROM_PYTREES[result], where=decided)
+                    going &= ~decided
+            if _some(going):
+                ticker(going)
+            for key, code in (("_onSuccess", SUCCESS), ("_onFailure", FAILURE)):
+                ran = mask & (status == code)
+                if key in scripts and _some(ran):
+                    scripts[key].run(self.swarm.agents(np.flatnonzero(ran)).blackboard)
+            finished = mask & ((status == SUCCESS) | (status == FAILURE))
+            if "_post" in scripts and _some(finished):
+                scripts["_post"].run(self.swarm.agents(np.flatnonzero(finished)).blackboard)
+
+        return tick
+
+    def _truth(self, script: Script, mask: np.ndarray) -> np.ndarray:
+        """Where ``script`` holds, for the agents of ``mask``: shape (N,), bool."""
+        rows = np.flatnonzero(mask)
+        out = np.zeros(mask.size, dtype=bool)
+        out[rows] = np.broadcast_to(script.truth(self.swarm.agents(rows).blackboard), rows.shape)
+        return out
 
     def _halt_children(self, i: int, first: int, mask: np.ndarray) -> None:
         """Halt the children of node ``i`` from position ``first`` on, for ``mask``."""
@@ -212,7 +267,7 @@ class BatchedEngine:
         masked view of all N when many (no gathering of values)."""
         reached = np.count_nonzero(mask)
         if reached == mask.size:
-            result = self._evaluate(i, self.swarm.agents(slice(None)))
+            result = self._evaluate(i, self._all)
             self.status[i] = result
             self._ticks += 1
         elif 4 * reached >= mask.size:
@@ -535,10 +590,8 @@ class BatchedEngine:
         asking = mask & (running == 0)
         allowed = mask & (running == 1)
         if _some(asking):
-            rows = np.flatnonzero(asking)
             script = self._scripts.setdefault(i, parse(params["if"]))
-            truth = np.broadcast_to(script.truth(self.swarm.agents(rows).blackboard), rows.shape)
-            allowed[rows[truth]] = True
+            allowed |= self._truth(script, asking)
         np.copyto(status, _CODES[params["else"]], where=mask & ~allowed)
         if _some(allowed):
             self._tickers[child](allowed)
@@ -572,6 +625,30 @@ class BatchedEngine:
         if _some(going):
             self._tickers[child](going)
             np.copyto(status, self.status[child], where=going)
+
+    def _switch(self, i: int, mask: np.ndarray) -> None:
+        """Switch2..6; ``counter`` holds the running child + 1 (0: none)."""
+        kids, params = self.program.children[i], self.program.params[i]
+        running, status = self.counter[i], self.status[i]
+        cases = case_values(params)
+        np.copyto(running, 0, where=mask & (status != RUNNING))
+        value = self.swarm.blackboard[params["variable"].key]
+        match = np.full(mask.size, len(cases))
+        for k in reversed(range(len(cases))):  # the first equal case wins
+            match[value == cases[k]] = k
+        other = mask & (running > 0) & (running - 1 != match)
+        for k, child in enumerate(kids):
+            self._halt(child, other & (running - 1 == k))
+        for k, child in enumerate(kids):
+            going = mask & (match == k)
+            if _some(going):
+                self._tickers[child](going)
+                result = self.status[child]
+                np.copyto(status, result, where=going)
+                finished = going & (result != RUNNING)
+                np.copyto(running, k + 1, where=going & (result == RUNNING))
+                np.copyto(running, 0, where=finished)
+                self._halt_children(i, 0, finished)
 
     def _run_once(self, i: int, mask: np.ndarray) -> None:
         """RunOnce then_skip=false; ``counter`` holds the remembered status (0: none yet)."""
@@ -607,4 +684,5 @@ BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
     "Delay": BatchedEngine._delay,
     "Timeout": BatchedEngine._timeout,
     "RunOnce": BatchedEngine._run_once,
+    **{f"Switch{n}": BatchedEngine._switch for n in range(2, 7)},
 }

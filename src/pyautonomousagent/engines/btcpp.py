@@ -24,7 +24,7 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from pyautonomousagent.bt.script import parse
-from pyautonomousagent.bt.script_leaves import iterations
+from pyautonomousagent.bt.script_leaves import iterations, literal
 from pyautonomousagent.bt.spec import parallel_threshold
 
 
@@ -411,6 +411,92 @@ class RunOnce(py_trees.decorators.Decorator):
         return self.decorated.status
 
 
+def case_values(params: Mapping[str, Any]) -> list[Any]:
+    """A Switch's cases as the numbers they compare with (words: enum values)."""
+    cases = sorted((int(k[5:]), v) for k, v in params.items() if k.startswith("case_"))
+    return [literal(str(value).lower() if isinstance(value, bool) else str(value))[0]
+            for _, value in cases]  # fmt: skip
+
+
+class Switch(py_trees.composites.Composite):
+    """BT.CPP ``Switch2``...``Switch6``: ticks the child of the first case equal to the
+    agent's entry ``variable`` (else the last child); a running child of another case is
+    halted first; when the child finishes, all are reset."""
+
+    def __init__(self, name: str, children: Sequence[Behaviour], key: str, cases: list) -> None:
+        super().__init__(name, list(children))
+        self.key, self.cases = key, cases
+        self.running = -1
+
+    def bind(self, agent: Any, world: Any, defaults: Mapping[str, Any]) -> None:
+        self.board = agent.blackboard
+
+    def tick(self) -> Iterator[Behaviour]:
+        """Match the entry, halt a running other case, tick the matched child."""
+        if self.status != Status.RUNNING:
+            self.running = -1
+            self.initialise()
+        value = getattr(self.board, self.key)
+        match = next((k for k, c in enumerate(self.cases) if value == c), len(self.cases))
+        if self.running not in (-1, match):
+            _halt_all(self.children[self.running : self.running + 1])
+        child = self.children[match]
+        yield from child.tick()
+        self.status = child.status
+        if child.status == Status.RUNNING:
+            self.running = match
+        else:
+            _halt_all(self.children)
+            self.running = -1
+        yield self
+
+
+#: Pre-conditions in BT.CPP's order: attribute -> the status it returns when its script holds.
+PRE_CONDITIONS = (("_failureIf", Status.FAILURE), ("_successIf", Status.SUCCESS))
+
+
+def with_scripts(behaviour: Behaviour, scripts: Mapping[str, str], agent: Any) -> Behaviour:
+    """Give ``behaviour`` BehaviorTree.CPP's scripting attributes, run on ``agent``'s
+    blackboard: ``_failureIf``/``_successIf`` decide without a tick when the node does not
+    resume (it is not RUNNING); after a tick that finishes the node, ``_onSuccess`` or
+    ``_onFailure``, then ``_post`` (as BT.CPP 4.8: not after RUNNING); ``_onHalted`` when a
+    RUNNING node is halted, after its children's."""
+    parsed = {key: parse(code) for key, code in scripts.items()}
+    board = agent.blackboard
+    tick, stop = behaviour.tick, behaviour.stop
+
+    def post() -> None:
+        if behaviour.status == Status.SUCCESS and "_onSuccess" in parsed:
+            parsed["_onSuccess"].run(board)
+        elif behaviour.status == Status.FAILURE and "_onFailure" in parsed:
+            parsed["_onFailure"].run(board)
+        if "_post" in parsed and behaviour.status in (Status.SUCCESS, Status.FAILURE):
+            parsed["_post"].run(board)
+
+    def scripted_tick() -> Iterator[Behaviour]:
+        if behaviour.status != Status.RUNNING:
+            for key, status in PRE_CONDITIONS:
+                if key in parsed and parsed[key].truth(board):
+                    behaviour.status = status
+                    post()
+                    yield behaviour
+                    return
+        for node in tick():
+            if node is behaviour:  # its last step: parents decide on seeing it
+                post()
+            yield node
+
+    def scripted_stop(new_status: Status = Status.INVALID) -> None:
+        halted = new_status == Status.INVALID and behaviour.status == Status.RUNNING
+        stop(new_status)
+        if halted and "_onHalted" in parsed:
+            parsed["_onHalted"].run(board)
+
+    behaviour.tick = scripted_tick  # type: ignore[method-assign]
+    behaviour.stop = scripted_stop  # type: ignore[method-assign]
+    return behaviour
+
+
 #: Node type -> py_trees behaviour, called with (name, children, parameters).
 BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Behaviour]] = {
     "SequenceWithMemory": lambda name, kids, p: SequenceWithMemory(name, kids),
@@ -428,4 +514,8 @@ BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Beh
     "Delay": lambda name, kids, p: Delay(name, kids[0], p["delay_msec"]),
     "Timeout": lambda name, kids, p: Timeout(name, kids[0], p["msec"]),
     "RunOnce": lambda name, kids, p: RunOnce(name, kids[0]),
+    **{
+        f"Switch{n}": lambda name, kids, p: Switch(name, kids, p["variable"].key, case_values(p))
+        for n in range(2, 7)
+    },
 }

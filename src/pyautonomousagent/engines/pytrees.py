@@ -17,8 +17,8 @@ from py_trees.common import Status
 
 from pyautonomousagent.bt import status as codes
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
-from pyautonomousagent.bt.spec import Node, control_params
-from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS
+from pyautonomousagent.bt.spec import Node, check_entries, control_params
+from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, with_scripts
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -29,6 +29,8 @@ TO_PYTREES = {
     codes.RUNNING: Status.RUNNING,
 }
 FROM_PYTREES = {v: k for k, v in TO_PYTREES.items()}
+#: id(py_trees status) -> status code: an int key hashes in C, an Enum member in Python.
+_CODE_BY_ID = {id(v): k for k, v in TO_PYTREES.items()}
 
 
 class AgentBehaviour(py_trees.behaviour.Behaviour):
@@ -58,7 +60,10 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
     """A library leaf (engine-independent :class:`Leaf`) run for one agent by py_trees.
 
     It counts its ticks in ``update()``, which py_trees calls once per tick, sparing the
-    extra generator of :meth:`AgentBehaviour.tick` on this hot path.
+    extra generator of :meth:`AgentBehaviour.tick` on this hot path. ``tick`` and ``stop``
+    do what py_trees' own do, without their debug-log lines (whose text py_trees builds on
+    every call, logging on or not) and without checking the status ``update`` returns
+    (always one of :data:`TO_PYTREES`).
     """
 
     def __init__(self, name: str, leaf: Leaf, agent: AgentView, world: World) -> None:
@@ -68,6 +73,23 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
         self.world = world
         self._ticks = agent.swarm.blackboard["number_ticks"]
         self._row = agent.index
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """py_trees' ``Behaviour.tick``: initialise unless RUNNING, update, stop unless
+        RUNNING, then yield itself."""
+        if self.status != Status.RUNNING:
+            self.initialise()
+        new_status = self.update()
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
+
+    def stop(self, new_status: Status) -> None:
+        """py_trees' ``Behaviour.stop``: terminate, take the status, reset the iterator."""
+        self.terminate(new_status)
+        self.status = new_status
+        self.iterator = self.tick()
 
     def update(self) -> Status:
         """Count the tick, then evaluate the leaf for this agent."""
@@ -108,10 +130,11 @@ def build_behaviour(
         behaviour = _control_behaviour(node, children)
         if hasattr(behaviour, "bind"):  # nodes that read the blackboard or the clock
             behaviour.bind(agent, world, defaults)
-        return behaviour
-    if node.type in BEHAVIOUR_TYPES:
-        return BEHAVIOUR_TYPES[node.type](node.name, agent, world, **dict(node.params))
-    return LeafBehaviour(node.name, make_leaf(node, defaults), agent, world)
+    elif node.type in BEHAVIOUR_TYPES:
+        behaviour = BEHAVIOUR_TYPES[node.type](node.name, agent, world, **dict(node.params))
+    else:
+        behaviour = LeafBehaviour(node.name, make_leaf(node, defaults), agent, world)
+    return with_scripts(behaviour, node.scripts, agent) if node.scripts else behaviour
 
 
 def _control_behaviour(
@@ -172,6 +195,7 @@ class PyTreesEngine:
 
     def __init__(self, tree: Node, swarm: Swarm, world: World, defaults: Mapping[str, Any]) -> None:
         check_leaves(tree, swarm, defaults, skip=BEHAVIOUR_TYPES)
+        check_entries(tree, swarm.blackboard)
         self.tree = tree
         self.roots = [
             build_behaviour(tree, swarm.agent(i), world, defaults) for i in range(swarm.size)
@@ -186,8 +210,9 @@ class PyTreesEngine:
         """Status codes after the last tick, shape (nodes in tick order, N), int8."""
         if getattr(self, "_flat", None) is None:  # the trees never change: flatten them once
             self._flat = [b for root in self.roots for b in _preorder(root)]
-        codes, flat = FROM_PYTREES, self._flat
-        table = np.fromiter((codes[b.status] for b in flat), dtype=np.int8, count=len(flat))
+        flat = self._flat
+        statuses = map(id, [b.status for b in flat])
+        table = np.fromiter(map(_CODE_BY_ID.__getitem__, statuses), np.int8, len(flat))
         return table.reshape(len(self.roots), -1).T
 
 

@@ -12,6 +12,7 @@ from typing import Any, Protocol
 import numpy as np
 import pyarrow as pa
 
+from pyautonomousagent.bt.blackboard import tree_blackboard_keys
 from pyautonomousagent.bt.files import is_tree_file, load_tree
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.trees import tree_by_name
@@ -80,6 +81,7 @@ def _check_fits(
     """Refuse, before anything is allocated, a run whose records cannot fit in memory."""
     columns = len(MOTION_COLUMNS) + len(CONTROL_COLUMNS) + len(mission.columns)
     columns += 1 + len(mission.blackboard())  # number_ticks and the mission's keys
+    columns += len(tree_blackboard_keys(tree, mission.blackboard()))  # and the tree's
     nodes = sum(1 for _ in _walk(tree))
     per_agent = 100 + nodes * (2000 if engine == "pytrees" else 16)
     check_memory(scenario.agents, scenario.iterations, record_every, columns, per_agent)
@@ -205,7 +207,8 @@ class Simulation:
         start = time.perf_counter()
         rng = np.random.default_rng(seed)
         world = _world(scenario, seed)
-        swarm = phases.create_agents(mission, world, rng)
+        declared = tree_blackboard_keys(tree, mission.blackboard())  # scripts' entries
+        swarm = phases.create_agents(mission, world, rng, declared)
         world.agent_index = {name: i for i, name in enumerate(swarm.names)}
         model = build_model(scenario, swarm, engine, seed, implementation)
         decision = ENGINES.get(engine)(tree, swarm, world, vars(scenario.parameters))

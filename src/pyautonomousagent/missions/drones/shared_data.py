@@ -94,6 +94,8 @@ class SharedData:
 
 
 def _last_per_key(keys: np.ndarray) -> np.ndarray:
-    """Positions of the last occurrence of each distinct key."""
+    """Positions of the last occurrence of each distinct key (ascending by key)."""
+    if keys.size < 2 or bool((keys[1:] > keys[:-1]).all()):  # distinct, ascending already
+        return np.arange(keys.size)
     reversed_first = np.unique(keys[::-1], return_index=True)[1]
     return keys.size - 1 - reversed_first
