@@ -166,9 +166,12 @@ class Datalink:
         m = senders.size
         order = np.arange(self._sent, self._sent + m)
         self._sent += m
-        x = _one_each(sender_position[0], m)
-        y = _one_each(sender_position[1], m)
-        payload = {k: _one_each(v, m) for k, v in data.items()}
+        columns = [sender_position[0], sender_position[1], *data.values()]
+        if all(isinstance(c, np.ndarray) and c.shape == (m,) for c in columns):
+            x, y, *rest = np.array(columns, dtype=np.float64)  # one copy for all
+        else:
+            x, y, *rest = (_one_each(c, m) for c in columns)
+        payload = dict(zip(data, rest, strict=True))
         lists = [] if receivers is None else [np.asarray(receivers, dtype=np.int64)]
         which = np.full(m, -1 if receivers is None else 0, dtype=np.int64)
         self._queue.append(Messages(type, senders, order, x, y, payload, which, lists))
