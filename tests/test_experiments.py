@@ -336,6 +336,10 @@ def test_sweep_refuses_another_sweeps_folder_and_a_changed_experiment(tmp_path) 
     changed = Experiment.from_mapping({**TINY, "iterations": 30, "measures": ["minimum_energy"]})
     with pytest.raises(ExperimentError, match=r"different experiment \(iterations changed\)"):
         sweep(changed, tmp_path / "s", "serial", resume=True)
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "notes.txt").write_text("mine")
+    with pytest.raises(ExperimentError, match="is not empty and holds no sweep"):
+        sweep(small, tmp_path / "other", "serial")
     again = sweep(small, tmp_path / "s", "serial", resume=True)
     assert again.counts == {"ok": 0, "failed": 0, "skipped": 4}
     manifest = json.loads((tmp_path / "s" / "experiment.json").read_text())

@@ -165,3 +165,22 @@ def test_cli_trace_option_and_its_errors(tmp_path, capsys):
     assert main([*args, "--out", str(tmp_path / "bad"), "--trace", "drone9"]) == 2
     error = capsys.readouterr().err.strip()
     assert error.startswith("pyaa: error: trace: no agent named 'drone9'") and "\n" not in error
+
+
+@pytest.mark.parametrize("agents", [1, 5, 16, 17, 200])
+def test_active_leaf_agent_by_agent_agrees_with_the_array_form(agents: int) -> None:
+    """A few agents take the Python path of active_leaf; it finds the same leaves."""
+    from pyautonomousagent import recording
+
+    rng = np.random.default_rng(agents)
+    statuses = rng.choice(np.array([INVALID, SUCCESS, FAILURE, RUNNING], dtype=np.int8),
+                          size=(9, agents), p=[0.4, 0.25, 0.25, 0.1])  # fmt: skip
+    leaves = np.array([1, 2, 4, 5, 8], dtype=np.int16)
+    each = recording._active_leaf_each(statuses, leaves)
+    assert each.dtype == active_leaf(statuses, leaves).dtype == np.int16
+    if agents > recording.FEW_AGENTS:  # the array form ran: compare it with the Python form
+        assert active_leaf(statuses, leaves).tolist() == each.tolist()
+    else:  # enough copies of each agent force the array form
+        copies = recording.FEW_AGENTS + 1
+        wide = np.repeat(statuses, copies, axis=1)
+        assert active_leaf(wide, leaves)[::copies].tolist() == each.tolist()

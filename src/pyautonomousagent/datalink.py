@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -102,8 +102,7 @@ class Delivery:
         return receivers[keep], rows[keep]
 
 
-@dataclass(frozen=True)
-class OneMessage:
+class OneMessage(NamedTuple):
     """A broadcast by one agent, kept as plain Python numbers until delivery (the py_trees
     engine sends one message per tick: packing it into arrays then would cost more than
     the message). :meth:`Datalink.deliver` packs runs of them into :class:`Messages`.
@@ -157,12 +156,12 @@ class Datalink:
             sender_position: (x, y) of the sender(s), numbers or arrays.
             receivers: intended receivers (agent indices), or None for everyone.
         """
-        if receivers is None and isinstance(sender, int) and _numbers(data, sender_position):
-            x, y = sender_position
-            plain = {k: float(v) for k, v in data.items()}
-            self._queue.append(OneMessage(type, sender, self._sent, float(x), float(y), plain))
-            self._sent += 1
-            return
+        if receivers is None and isinstance(sender, int):
+            one = _one_message(type, sender, self._sent, data, sender_position)
+            if one is not None:
+                self._queue.append(one)
+                self._sent += 1
+                return
         senders = np.array(sender, dtype=np.int64, ndmin=1)  # a copy: the caller's may change
         m = senders.size
         order = np.arange(self._sent, self._sent + m)
@@ -218,12 +217,22 @@ def _one_each(value: Any, m: int) -> np.ndarray:
     return values if values.shape == (m,) else np.broadcast_to(values, (m,)).copy()
 
 
-def _numbers(data: Mapping[str, Any], position: tuple[Any, Any]) -> bool:
-    """True if the payload and the position are plain numbers (one message's)."""
-    number = (int, float, np.number)
-    return all(isinstance(v, number) for v in data.values()) and all(
-        isinstance(v, number) for v in position
-    )
+_NUMBER = (float, int, np.number)
+
+
+def _one_message(
+    type: str, sender: int, order: int, data: Mapping[str, Any], position: tuple[Any, Any]
+) -> OneMessage | None:
+    """One agent's broadcast as plain numbers; None if a value is no number (an array)."""
+    x, y = position
+    if not (isinstance(x, _NUMBER) and isinstance(y, _NUMBER)):
+        return None
+    plain = {}
+    for key, value in data.items():
+        if not isinstance(value, _NUMBER):
+            return None
+        plain[key] = float(value)
+    return OneMessage(type, sender, order, float(x), float(y), plain)
 
 
 def _packed(channel: list[Messages | OneMessage]) -> list[Messages]:

@@ -61,7 +61,10 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
     """A library leaf (engine-independent :class:`Leaf`) run for one agent by py_trees.
 
     It counts its ticks in ``update()``, which py_trees calls once per tick, sparing the
-    extra generator of :meth:`AgentBehaviour.tick` on this hot path.
+    extra generator of :meth:`AgentBehaviour.tick` on this hot path. ``tick`` and ``stop``
+    do what py_trees' own do, without their debug-log lines (whose text py_trees builds on
+    every call, logging on or not) and without checking the status ``update`` returns
+    (always one of :data:`TO_PYTREES`).
     """
 
     def __init__(self, name: str, leaf: Leaf, agent: AgentView, world: World) -> None:
@@ -71,6 +74,23 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
         self.world = world
         self._ticks = agent.swarm.blackboard["number_ticks"]
         self._row = agent.index
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """py_trees' ``Behaviour.tick``: initialise unless RUNNING, update, stop unless
+        RUNNING, then yield itself."""
+        if self.status != Status.RUNNING:
+            self.initialise()
+        new_status = self.update()
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
+
+    def stop(self, new_status: Status) -> None:
+        """py_trees' ``Behaviour.stop``: terminate, take the status, reset the iterator."""
+        self.terminate(new_status)
+        self.status = new_status
+        self.iterator = self.tick()
 
     def update(self) -> Status:
         """Count the tick, then evaluate the leaf for this agent."""

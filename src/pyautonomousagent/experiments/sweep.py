@@ -342,6 +342,11 @@ def failed_row(task: RunTask, error: BaseException) -> dict[str, Any]:
 def _previous_manifest(out: Path, experiment: Experiment, resume: bool) -> dict[str, Any] | None:
     previous = read_manifest(out)
     if previous is None:
+        if out.is_dir() and any(out.iterdir()):
+            raise ExperimentError(
+                f"{out} is not empty and holds no sweep; choose another --out (an empty or new "
+                "folder)"
+            )
         return None
     if not resume:
         raise ExperimentError(
