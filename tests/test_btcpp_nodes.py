@@ -385,3 +385,19 @@ def test_one_iteration_is_tick_exactly_once_not_tick_once():
     assert runs["tick_exactly_once"] == ("RUNNING", ["l0", "l1"])
     for engine in ENGINES:
         assert ours(tree, table, 1, 1, engine) == ([[RUNNING]], [[["l0", "l1"]]])
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_leaf_returning_invalid_is_refused_on_both_engines(harness, engine):
+    from pyautonomousagent.bt.leaf import LEAF_TYPES, Leaf
+
+    class Confused(Leaf):
+        type_name = "Confused"
+
+        def evaluate(self, agents, world):
+            return 0
+
+    with LEAF_TYPES.override("Confused", Confused):
+        h = harness(fallback("f", leaf("Confused", "c"), scripted("b", "S")), engine=engine)
+        with pytest.raises(TreeError, match=r"'c' \(Confused\) returned INVALID \(0\)"):
+            h.tick()

@@ -166,9 +166,12 @@ class Datalink:
         m = senders.size
         order = np.arange(self._sent, self._sent + m)
         self._sent += m
-        x = _one_each(sender_position[0], m)
-        y = _one_each(sender_position[1], m)
-        payload = {k: _one_each(v, m) for k, v in data.items()}
+        columns = [sender_position[0], sender_position[1], *data.values()]
+        if all(isinstance(c, np.ndarray) and c.shape == (m,) for c in columns):
+            x, y, *rest = np.array(columns, dtype=np.float64)  # one copy for all
+        else:
+            x, y, *rest = (_one_each(c, m) for c in columns)
+        payload = dict(zip(data, rest, strict=True))
         lists = [] if receivers is None else [np.asarray(receivers, dtype=np.int64)]
         which = np.full(m, -1 if receivers is None else 0, dtype=np.int64)
         self._queue.append(Messages(type, senders, order, x, y, payload, which, lists))
@@ -206,9 +209,9 @@ class Datalink:
 
     def _all_in_range(self, messages: Messages, x: np.ndarray, y: np.ndarray) -> bool:
         """True if every sender position is within range of every agent (bounding-box test)."""
-        xs = np.concatenate([x, messages.x])
-        ys = np.concatenate([y, messages.y])
-        return bool(np.hypot(xs.max() - xs.min(), ys.max() - ys.min()) <= self.range)
+        points = np.concatenate((x, messages.x, y, messages.y)).reshape(2, -1)  # xs; ys
+        extent = points.max(axis=1) - points.min(axis=1)
+        return bool(np.hypot(extent[0], extent[1]) <= self.range)
 
 
 def _one_each(value: Any, m: int) -> np.ndarray:
@@ -261,7 +264,10 @@ def _pack(run: list[OneMessage]) -> Messages:
     """One-agent messages of one type (and payload names) as one :class:`Messages`."""
     ids = np.array([(r.sender, r.order, -1) for r in run], dtype=np.int64).T
     names = tuple(run[0].data)
-    rows = [(r.x, r.y, *(r.data[k] for k in names)) for r in run]
+    if all(tuple(r.data) == names for r in run):  # the usual case: the same order of names
+        rows = [(r.x, r.y, *r.data.values()) for r in run]
+    else:
+        rows = [(r.x, r.y, *(r.data[k] for k in names)) for r in run]
     values = np.array(rows, dtype=np.float64).T
     data = dict(zip(names, values[2:], strict=True))
     return Messages(run[0].type, ids[0], ids[1], values[0], values[1], data, ids[2], [])

@@ -171,7 +171,7 @@ class Leaf:
         """
         if agents.is_one:  # plain numbers: one message costs no arrays until delivery
             position = (agents.x, agents.y)
-            world.datalink.send(int(agents.index), kind, dict(data), position)
+            world.datalink.send(int(agents.index), kind, data, position)
             return
         payload = {k: agents.compact(v) for k, v in data.items()}
         position = (agents.compact(agents.x), agents.compact(agents.y))

@@ -27,3 +27,12 @@ def status_if(condition: Any, if_true: int, if_false: int) -> Any:
 def success_if(condition: Any) -> Any:
     """SUCCESS where ``condition`` holds, FAILURE elsewhere."""
     return status_if(condition, SUCCESS, FAILURE)
+
+
+def invalid_status(name: str, type_name: str) -> str:
+    """The message for a leaf that returned INVALID (0), which both engines refuse: py_trees
+    and BehaviorTree.CPP treat such a leaf differently, so no engine guesses."""
+    return (
+        f"leaf {name!r} ({type_name}) returned INVALID (0); a leaf returns SUCCESS (1), "
+        "FAILURE (2) or RUNNING (3)"
+    )

@@ -37,7 +37,14 @@ from pyautonomousagent.bt.spec import (
     node_type,
     parallel_threshold,
 )
-from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
+from pyautonomousagent.bt.status import (
+    FAILURE,
+    INVALID,
+    NAMES,
+    RUNNING,
+    SUCCESS,
+    invalid_status,
+)
 from pyautonomousagent.engines.btcpp import PRE_CONDITIONS, case_values
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, FROM_PYTREES
 from pyautonomousagent.state import AgentView, Swarm
@@ -283,7 +290,11 @@ class BatchedEngine:
         """Leaf ``i``'s statuses for a group of agents; a leaf written for one agent only
         (``if agents.energy < 40:`` on an array) gets a message naming the node and the fix."""
         try:
-            return self.leaves[i].evaluate(agents, self.world)
+            result = self.leaves[i].evaluate(agents, self.world)
+            if not np.all(result):  # a status code 0
+                node = self.program.nodes[i]
+                raise TreeError(invalid_status(node.name, node.type))
+            return result
         except ValueError as error:
             if "truth value of an array" not in str(error):
                 raise

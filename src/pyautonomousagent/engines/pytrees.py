@@ -17,7 +17,8 @@ from py_trees.common import Status
 
 from pyautonomousagent.bt import status as codes
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
-from pyautonomousagent.bt.spec import Node, check_entries, control_params
+from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params
+from pyautonomousagent.bt.status import invalid_status
 from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, with_scripts
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
@@ -94,7 +95,10 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
     def update(self) -> Status:
         """Count the tick, then evaluate the leaf for this agent."""
         self._ticks[self._row] += 1
-        return TO_PYTREES[self.leaf.evaluate(self.agent, self.world)]
+        code = self.leaf.evaluate(self.agent, self.world)
+        if not code:
+            raise TreeError(invalid_status(self.name, self.leaf.type_name))
+        return TO_PYTREES[code]
 
     def terminate(self, new_status: Status) -> None:
         """A RUNNING leaf stopped from outside (halted) tells its leaf."""

@@ -43,9 +43,12 @@ class SharedData:
         messages = delivery.messages
         values = np.stack([messages.data[k] for k in self.fields], axis=1)
         if delivery.to_all:
-            last = _last_per_key(messages.senders)
-            self._everyone_iteration[messages.senders[last]] = iteration
-            self._everyone_data[messages.senders[last]] = values[last]
+            senders = messages.senders
+            if not _distinct_ascending(senders):  # keep each sender's last message only
+                last = _last_per_key(senders)
+                senders, values = senders[last], values[last]
+            self._everyone_iteration[senders] = iteration
+            self._everyone_data[senders] = values
             return
         keys = delivery.receivers * self.n_agents + messages.senders[delivery.rows]
         last = _last_per_key(keys)
@@ -95,7 +98,15 @@ class SharedData:
 
 def _last_per_key(keys: np.ndarray) -> np.ndarray:
     """Positions of the last occurrence of each distinct key (ascending by key)."""
-    if keys.size < 2 or bool((keys[1:] > keys[:-1]).all()):  # distinct, ascending already
+    if _distinct_ascending(keys):
         return np.arange(keys.size)
     reversed_first = np.unique(keys[::-1], return_index=True)[1]
     return keys.size - 1 - reversed_first
+
+
+def _distinct_ascending(keys: np.ndarray) -> bool:
+    """Whether ``keys`` (shape (M,)) are distinct and ascending: each is its own last."""
+    if keys.size <= 32:  # a few: compared in Python, cheaper than NumPy's calls
+        listed = keys.tolist()
+        return all(a < b for a, b in zip(listed, listed[1:], strict=False))
+    return bool((keys[1:] > keys[:-1]).all())
