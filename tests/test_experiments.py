@@ -29,6 +29,8 @@ from pyautonomousagent.experiments import measures as m
 from pyautonomousagent.experiments.plot import summarize, t95
 from pyautonomousagent.experiments.spec import inclusive_range, parse_vary
 from pyautonomousagent.experiments.sweep import base_scenario, check
+from pyautonomousagent.missions.drones import measures as drone_measures
+from pyautonomousagent.missions.gathering import measures as gathering_measures
 
 #: A tiny patrol sweep: 5 drones x 400 iterations, thresholds high enough to refuel.
 TINY = {
@@ -124,29 +126,31 @@ def test_builtin_measures_on_known_data() -> None:
     x = [[0, 0], [3, 0], [3, 0], [3, 0], [3, 0], [3, 0], [3, 0]]
     y = [[0, 0], [4, 0], [4, 0], [4, 0], [4, 0], [4, 0], [4, 1]]
     run = run_data(energy, x, y, events=[{"event": "alert", "agent": "drone2"}], every=10)
-    assert m.refuels(run) == 2
-    assert m.time_to_first_refuel(run) == 30  # the record at iteration 30 is the first rise
-    assert m.minimum_energy(run) == 94
+    assert drone_measures.refuels(run) == 2
+    # the record at iteration 30 is the first rise
+    assert drone_measures.time_to_first_refuel(run) == 30
+    assert drone_measures.minimum_energy(run) == 94
     assert m.distance_flown(run) == 5 + 1
     assert m.alerts(run) == 1
-    assert m.fraction_refuelling(run) == pytest.approx(3 / 12)
-    assert math.isnan(m.gathering_time(run))  # no gathering order
+    assert drone_measures.fraction_refuelling(run) == pytest.approx(3 / 12)
+    assert math.isnan(gathering_measures.gathering_time(run))  # no gathering order
     flat = run_data([[100, 100], [99, 99]])
-    assert m.refuels(flat) == 0 and math.isnan(m.time_to_first_refuel(flat))
+    assert drone_measures.refuels(flat) == 0
+    assert math.isnan(drone_measures.time_to_first_refuel(flat))
 
 
 def test_gathering_time_is_when_the_last_agent_arrives() -> None:
     order = {"event": "message", "type": "gathering", "iteration": 2, "data": {"x": 5.0, "y": 5.0}}
     x = [[5, 0], [5, 0], [0, 0], [5, 1], [0, 5]]  # agent 0 is near before the order: ignored
     run = run_data([[100, 100]] * 5, x, [[5, 0], [5, 0], [0, 0], [5, 0], [5, 5]], [order])
-    assert m.gathering_time(run) == 4 - 2  # agent 0 at iteration 3, agent 1 at 4
+    assert gathering_measures.gathering_time(run) == 4 - 2  # agent 0 at iteration 3, agent 1 at 4
     never = run_data([[100, 100]] * 3, events=[order])
-    assert math.isnan(m.gathering_time(never))
+    assert math.isnan(gathering_measures.gathering_time(never))
 
 
 def test_gathering_time_of_the_gathering_scenario(gathering_run: Simulation) -> None:
     run = RunData.from_simulation(gathering_run)
-    arrived = 5000 + m.gathering_time(run)  # the order is given at iteration 5000
+    arrived = 5000 + gathering_measures.gathering_time(run)  # the order is given at iteration 5000
     assert 5000 < arrived < 8000
     row = int(np.flatnonzero(run.iterations == arrived)[0])
     x, y = run.columns["x"], run.columns["y"]
@@ -160,8 +164,8 @@ def test_measures_of_a_real_run_agree_with_its_events_and_table() -> None:
     run = RunData.from_simulation(sim)
     table = sim.table()
     assert m.alerts(run) == 5  # every drone runs dry at 1 % per iteration
-    assert m.minimum_energy(run) == 0.0 == pa.compute.min(table["energy"]).as_py()
-    assert math.isnan(m.time_to_first_refuel(run))
+    assert drone_measures.minimum_energy(run) == 0.0 == pa.compute.min(table["energy"]).as_py()
+    assert math.isnan(drone_measures.time_to_first_refuel(run))
     expected = Expression("mean(energy == 0)").evaluate(run.expression_values())
     zero = pa.compute.equal(table["energy"], 0.0)
     assert expected == pa.compute.sum(zero).as_py() / table.num_rows

@@ -93,10 +93,10 @@ class ActionShout(Leaf):
     type_name = "Action_Test_Shout_S"
 
     def evaluate(self, agents: Any, world: Any) -> Any:
-        world.datalink.send(agents.indices, "shout", {}, (agents.compact(agents.x),
-                                                           agents.compact(agents.y)))
+        world.datalink.send(
+            agents.indices, "shout", {}, (agents.compact(agents.x), agents.compact(agents.y))
+        )
         return SUCCESS
-
 
 
 def talker_scenario(**changes: Any):

@@ -39,6 +39,8 @@ MISSIONS = ROOT / "src" / "pyautonomousagent" / "missions"
 def packaged(file: str) -> Path:
     """A packaged scenario or tree file: ``gathering.xml`` is in ``missions/gathering/``."""
     return MISSIONS / file.split(".")[0].removeprefix("x8-") / file
+
+
 BUILDERS = {"gathering": gathering_tree, "patrol": patrol_tree}
 FORMATS = ["xml", "yaml"]
 

@@ -177,32 +177,6 @@ def behaviour_fractions(run: RunData) -> dict[str, float]:
     }
 
 
-def refuel_starts(run: RunData) -> np.ndarray:
-    """Where a refuel begins: energy rises now but did not at the record before,
-    shape (records - 1, N), boolean. Exact when every iteration is recorded."""
-    energy = run.columns["energy"]
-    rising = np.diff(energy, axis=0) > 0.0
-    before = np.zeros_like(rising)
-    before[1:] = rising[:-1]
-    return rising & ~before
-
-
-def refuels(run: RunData) -> float:
-    """Refuels started by all agents together."""
-    return float(np.count_nonzero(refuel_starts(run)))
-
-
-def time_to_first_refuel(run: RunData) -> float:
-    """The iteration at which the first agent starts refuelling (NaN if none does)."""
-    rows = np.flatnonzero(refuel_starts(run).any(axis=1))
-    return float(run.iterations[rows[0] + 1]) if rows.size else float("nan")
-
-
-def minimum_energy(run: RunData) -> float:
-    """The lowest energy level of any agent at any recorded iteration."""
-    return float(run.columns["energy"].min())
-
-
 def distance_flown(run: RunData) -> float:
     """The path length of all agents together, summed over the recorded positions
     (a lower bound when not every iteration is recorded)."""
@@ -215,39 +189,11 @@ def alerts(run: RunData) -> float:
     return float(sum(1 for event in run.events if event.get("event") == "alert"))
 
 
-def fraction_refuelling(run: RunData) -> float:
-    """The share of agent-records during which energy rises (the agent is refuelling)."""
-    energy = run.columns["energy"]
-    if energy.shape[0] < 2:
-        return float("nan")
-    return float(np.mean(np.diff(energy, axis=0) > 0.0))
+def register_documented(fn: Callable[[RunData], float], unit: str) -> Measure:
+    """Register ``fn`` under its own name, its docstring's first lines as the doc."""
+    return register_measure(fn.__name__, fn, " ".join((fn.__doc__ or "").split()).rstrip("."), unit)
 
 
-def gathering_time(run: RunData) -> float:
-    """Iterations from the first gathering order until every agent has come within the
-    destination tolerance of the gathering point (NaN: no order, or not all arrived)."""
-    orders = [e for e in run.events if e.get("event") == "message" and e.get("type") == "gathering"]
-    if not orders:
-        return float("nan")
-    order = orders[0]
-    gx, gy = order["data"]["x"], order["data"]["y"]
-    tolerance = run.parameter("destination_tolerance", 0.5)
-    after = run.iterations >= order["iteration"]
-    near = np.hypot(run.columns["x"] - gx, run.columns["y"] - gy) <= tolerance
-    near &= after[:, None]
-    if not near.any(axis=0).all():
-        return float("nan")
-    arrival = run.iterations[near.argmax(axis=0)]
-    return float(arrival.max() - order["iteration"])
-
-
-for _name, _fn, _unit in (
-    ("refuels", refuels, "refuels"),
-    ("time_to_first_refuel", time_to_first_refuel, "iterations"),
-    ("minimum_energy", minimum_energy, "%"),
-    ("distance_flown", distance_flown, "world units"),
-    ("alerts", alerts, "agents"),
-    ("fraction_refuelling", fraction_refuelling, "fraction"),
-    ("gathering_time", gathering_time, "iterations"),
-):
-    register_measure(_name, _fn, " ".join((_fn.__doc__ or "").split()).rstrip("."), _unit)
+# Measures of any run; missions register their own (missions/drones/measures.py).
+register_documented(distance_flown, "world units")
+register_documented(alerts, "agents")

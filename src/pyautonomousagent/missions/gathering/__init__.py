@@ -10,6 +10,7 @@ import numpy as np
 from pyautonomousagent.datalink import Delivery
 from pyautonomousagent.missions.drones.leaves import GATHERING
 from pyautonomousagent.missions.drones.mission import DroneMission, cycled, read_points
+from pyautonomousagent.missions.gathering import measures  # noqa: F401  (registers them)
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation import (
     MessageType,
