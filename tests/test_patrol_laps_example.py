@@ -53,11 +53,7 @@ def test_runs_unchanged_on_both_engines_with_identical_data():
         b.step()
         assert np.array_equal(a.engine.node_statuses(), b.engine.node_statuses()), t
     for key in a.recorder.columns:
-        left, right = a.recorder.column(key), b.recorder.column(key)
-        if key == "requested_heading":  # arctan2 in SIMD or not: last bits (issue 9)
-            assert np.allclose(left, right, rtol=0, atol=1e-9)
-        else:
-            assert np.array_equal(left, right), key
+        assert np.array_equal(a.recorder.column(key), b.recorder.column(key)), key
 
 
 # -- the same leaf executions in BehaviorTree.CPP -------------------------------------------------

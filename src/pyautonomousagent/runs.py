@@ -38,7 +38,7 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from importlib import metadata
@@ -335,9 +335,17 @@ def add_files(folder: str | Path, paths: Sequence[Path]) -> None:
     os.replace(temp, folder / SUMMARY)
 
 
-def versions() -> dict[str, str]:
-    """Python's and the main packages' versions."""
-    packages = ["pyautonomousagent", "numpy", "py_trees", "pyarrow", "matplotlib", "pillow"]
+def versions(
+    packages: Iterable[str] = (
+        "pyautonomousagent",
+        "numpy",
+        "py_trees",
+        "pyarrow",
+        "matplotlib",
+        "pillow",
+    ),
+) -> dict[str, str]:
+    """Python's and the given installed packages' versions (those not installed left out)."""
     found = {"python": platform.python_version()}
     for name in packages:
         try:

@@ -17,10 +17,8 @@ from __future__ import annotations
 
 import json
 import os
-import platform
 import uuid
-from collections.abc import Iterable, Mapping, Sequence
-from importlib import metadata
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -168,23 +166,3 @@ def write_manifest(out: Path, manifest: Mapping[str, Any]) -> Path:
     path = out / MANIFEST
     atomic_write_bytes(path, (json.dumps(manifest, indent=2, default=str) + "\n").encode())
     return path
-
-
-def versions(
-    packages: Iterable[str] = (
-        "pyautonomousagent",
-        "numpy",
-        "pyarrow",
-        "py_trees",
-        "dask",
-        "distributed",
-    ),
-) -> dict[str, str]:
-    """Python's and the installed packages' versions."""
-    found = {"python": platform.python_version()}
-    for name in packages:
-        try:
-            found[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            continue
-    return found

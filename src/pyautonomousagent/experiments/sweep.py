@@ -39,11 +39,11 @@ from pyautonomousagent.experiments.store import (
     Journal,
     read_manifest,
     results_schema,
-    versions,
     write_manifest,
     write_results,
 )
 from pyautonomousagent.progress import Progress
+from pyautonomousagent.runs import versions
 from pyautonomousagent.simulation.run import scenario_tree
 
 #: Freed memory a worker process may keep: the trim threshold set by ``allocator.py``
@@ -384,7 +384,9 @@ def _manifest(
         "runs": len(runs),
         "results": RESULTS,
         "backend": {"name": backend.name, "workers": backend.workers()},
-        "versions": versions(),
+        "versions": versions(
+            ("pyautonomousagent", "numpy", "pyarrow", "py_trees", "dask", "distributed")
+        ),
         "started_at": (previous or {}).get("started_at", _now()),
         "resumed_at": _now() if previous else None,
         "status": "running",
