@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 from pyautonomousagent import Simulation, load
 from pyautonomousagent.bt import leaf, sequence
 from pyautonomousagent.bt.spec import Node, TreeError
-from pyautonomousagent.engines.pytrees import AgentBehaviour, register_behaviour
+from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, AgentBehaviour, register_behaviour
+from pyautonomousagent.testing import scoped_registrations
 
 from .conftest import make_harness
 from .strategies import trees
@@ -92,12 +93,16 @@ def test_cli_runs_give_identical_parquet(tmp_path) -> None:
 
 
 def test_hand_written_behaviour_is_refused_by_the_batched_engine() -> None:
-    @register_behaviour("Test_Hand_Written")
     class HandWritten(AgentBehaviour):
         def update(self):  # pragma: no cover - never ticked here
             raise AssertionError
 
-    tree = sequence("root", leaf("Condition_Low_Energy_Level"), leaf("Test_Hand_Written", "mine"))
-    make_harness(tree, 2, engine="pytrees")  # the py_trees engine accepts it
-    with pytest.raises(TreeError, match="'mine'.*no batched form"):
-        make_harness(tree, 2, engine="batched")
+    with scoped_registrations():
+        register_behaviour("Test_Hand_Written")(HandWritten)
+        tree = sequence(
+            "root", leaf("Condition_Low_Energy_Level"), leaf("Test_Hand_Written", "mine")
+        )
+        make_harness(tree, 2, engine="pytrees")  # the py_trees engine accepts it
+        with pytest.raises(TreeError, match="'mine'.*no batched form"):
+            make_harness(tree, 2, engine="batched")
+    assert "Test_Hand_Written" not in BEHAVIOUR_TYPES

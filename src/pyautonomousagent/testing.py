@@ -24,7 +24,9 @@ from pyautonomousagent.bt.blackboard import tree_blackboard_keys
 from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf
 from pyautonomousagent.bt.spec import Node, leaf, reactive_sequence
 from pyautonomousagent.bt.status import FAILURE, SUCCESS
+from pyautonomousagent.bt.trees import TREES
 from pyautonomousagent.datalink import Datalink
+from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES
 from pyautonomousagent.scenarios import SCENARIOS, load
 from pyautonomousagent.simulation import phases
 from pyautonomousagent.simulation.mission import MISSIONS
@@ -157,13 +159,15 @@ def check_leaf(
 
 @contextmanager
 def scoped_registrations() -> Iterator[None]:
-    """Within the block, register freely; afterwards every registry (leaf types, missions,
-    scenarios, motion models, engines) is as before and mission files imported in the block
-    are forgotten."""
+    """Within the block, register freely; afterwards every registry (leaf types, hand-written
+    behaviours, missions, scenarios, motion models, engines, named trees) is as before and
+    mission files imported in the block are forgotten."""
     modules = set(sys.modules)
     engine_leaves = set(ENGINE_LEAF_TYPES)
     with ExitStack() as stack:
-        for registry in (LEAF_TYPES, MISSIONS, SCENARIOS, MOTION_MODELS, ENGINES):
+        for registry in (
+            LEAF_TYPES, BEHAVIOUR_TYPES, MISSIONS, SCENARIOS, MOTION_MODELS, ENGINES, TREES,
+        ):  # fmt: skip
             stack.enter_context(registry.scoped())
         try:
             yield

@@ -6,7 +6,6 @@ the paper's Table 2.
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Callable
 
 from pyautonomousagent.bt.spec import (
@@ -19,6 +18,7 @@ from pyautonomousagent.bt.spec import (
     reactive_sequence,
     sequence,
 )
+from pyautonomousagent.registry import Registry, UnknownNameError
 
 
 def go_refuel(refueled: Node, reached: str = "condition_destination_reached") -> Node:
@@ -79,14 +79,15 @@ def patrol_tree() -> Node:
     )
 
 
-TREES: dict[str, Callable[[], Node]] = {"gathering": gathering_tree, "patrol": patrol_tree}
+#: Trees a scenario can name instead of a tree file (``tree: patrol``): name -> builder.
+TREES: Registry[Callable[[], Node]] = Registry("tree")
+TREES.register("gathering", gathering_tree)
+TREES.register("patrol", patrol_tree)
 
 
 def tree_by_name(name: str) -> Node:
-    """The named tree; TreeError with the known names if there is none."""
+    """The named tree; TreeError with the closest known names if there is none."""
     try:
-        return TREES[name]()
-    except KeyError:
-        close = difflib.get_close_matches(name, list(TREES), n=1)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
-        raise TreeError(f"unknown tree {name!r}{hint}; known: {', '.join(TREES)}") from None
+        return TREES.get(name)()
+    except UnknownNameError as error:
+        raise TreeError(f"{error}; or name a tree file (.xml, .yaml)") from None

@@ -20,6 +20,7 @@ from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, mak
 from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params
 from pyautonomousagent.bt.status import invalid_status
 from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, with_scripts
+from pyautonomousagent.registry import Registry
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -108,7 +109,7 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
 
 BehaviourFactory = Callable[..., AgentBehaviour]
 #: Hand-written py_trees behaviours: type name -> class taking (name, agent, world, **params).
-BEHAVIOUR_TYPES: dict[str, BehaviourFactory] = {}
+BEHAVIOUR_TYPES: Registry[BehaviourFactory] = Registry("hand-written behaviour")
 
 
 def register_behaviour(type_name: str) -> Callable[[type[AgentBehaviour]], type[AgentBehaviour]]:
@@ -118,7 +119,7 @@ def register_behaviour(type_name: str) -> Callable[[type[AgentBehaviour]], type[
     """
 
     def register(cls: type[AgentBehaviour]) -> type[AgentBehaviour]:
-        BEHAVIOUR_TYPES[type_name] = cls
+        BEHAVIOUR_TYPES.register(type_name, cls)
         declare_leaf_type(type_name)
         return cls
 
