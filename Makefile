@@ -1,6 +1,6 @@
 # Two commands do all the set-up from a fresh clone:
 #   make demo   installs into .venv and runs the gathering scenario into runs/gathering/
-#   make test   installs the test dependencies (and the [x8], [dask] and [video] extras, and
+#   make test   installs the test dependencies (and the [x8], [dask], [video] and [fast] extras, and
 #               chromium when missing) into .venv and runs the suite
 PYTHON ?= python3
 VENV ?= .venv
@@ -18,7 +18,7 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[test,x8,dask,video]"
+	$(BIN)/python -m pip install --quiet -e ".[test,x8,dask,video,fast]"
 	touch $@ $(VENV)/.installed
 
 demo: $(VENV)/.installed
