@@ -296,10 +296,38 @@ def test_the_worked_example_file_is_valid() -> None:
 def test_experiment_file_errors(tmp_path) -> None:
     path = tmp_path / "bad.yaml"
     path.write_text("scenario: patrol\nvary: [1, 2\n")
-    with pytest.raises(ExperimentError, match="bad.yaml: not valid YAML"):
+    with pytest.raises(ExperimentError, match=r"bad.yaml:\d+: not valid YAML"):
         Experiment.from_file(path)
     with pytest.raises(ExperimentError, match="cannot read experiment file"):
         Experiment.from_file(tmp_path / "missing.yaml")
+
+
+#: 2**40 values from 40 lines of YAML aliases.
+ALIAS_BOMB = "a0: &a0 [1, 1]\n" + "".join(
+    f"a{i}: &a{i} [*a{i - 1}, *a{i - 1}]\n" for i in range(1, 40)
+)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("scenario: patrol\nscenario: gathering\n", "'scenario' is given twice"),
+        (ALIAS_BOMB, "aliases .* expand the document"),
+        (b"scenario: p\xe9trol\n", "not UTF-8"),
+    ],
+)
+def test_experiment_files_are_read_with_the_input_limits(tmp_path, text, message) -> None:
+    """Experiment files go through the same guarded YAML reader as scenarios (issue 9)."""
+    path = tmp_path / "bad.yaml"
+    path.write_bytes(text if isinstance(text, bytes) else text.encode())
+    with pytest.raises(ExperimentError, match=message):
+        Experiment.from_file(path)
+
+
+def test_vary_values_are_read_with_the_input_limits() -> None:
+    assert parse_vary(["x=1,2.5,a"]) == {"x": [1, 2.5, "a"]}
+    with pytest.raises(ExperimentError, match="--vary"):
+        parse_vary(["x=[1,"])
 
 
 # --- sweeps in this process --------------------------------------------------------------

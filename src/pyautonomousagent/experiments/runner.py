@@ -12,9 +12,7 @@ from __future__ import annotations
 
 import logging
 import math
-import os
 import time
-import uuid
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -117,15 +115,10 @@ def partition_dir(root: Path, run: Run) -> Path:
 
 def write_run_data(sim: Any, root: Path, run: Run) -> Path:
     """Write the run's recorded table as ``data.parquet`` in its partition folder."""
-    import pyarrow.parquet as pq
+    from pyautonomousagent.experiments.store import atomic_write_table
 
     folder = partition_dir(root, run)
     folder.mkdir(parents=True, exist_ok=True)
     target = folder / "data.parquet"
-    temporary = folder / f".{uuid.uuid4().hex}.tmp"
-    try:
-        pq.write_table(sim.table(), temporary)
-        os.replace(temporary, target)
-    finally:
-        temporary.unlink(missing_ok=True)
+    atomic_write_table(sim.table(), target)
     return target

@@ -38,10 +38,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from pyautonomousagent.experiments.expression import ExpressionError
 from pyautonomousagent.experiments.measures import MEASURES, Measure, expression_measure
+from pyautonomousagent.inputs import InputError, load_yaml, read_text
 from pyautonomousagent.registry import UnknownNameError
 
 #: The most runs one experiment may hold.
@@ -127,12 +127,9 @@ class Experiment:
         """Read and validate an experiment YAML file."""
         path = Path(path)
         try:
-            data = yaml.safe_load(path.read_text())
-        except OSError as error:
-            raise ExperimentError(f"cannot read experiment file {path}: {error.strerror}") from None
-        except yaml.YAMLError as error:
-            first = str(error).replace("\n", " ")
-            raise ExperimentError(f"{path}: not valid YAML: {first}") from None
+            data = load_yaml(read_text(path, "experiment file"), str(path))
+        except InputError as error:
+            raise ExperimentError(str(error)) from None
         return cls.from_mapping(data, source=str(path))
 
     @property
@@ -429,8 +426,16 @@ def parse_vary(items: Sequence[str]) -> dict[str, Any]:
             raise ExperimentError(f"--vary needs NAME=V1,V2,... or NAME=FROM:TO:STEP, got {item!r}")
         parts = text.split(":")
         if len(parts) == 3:
-            start, stop, step = (yaml.safe_load(p) for p in parts)
+            start, stop, step = (_vary_value(p) for p in parts)
             vary[name.strip()] = {"from": start, "to": stop, "step": step}
         else:
-            vary[name.strip()] = [yaml.safe_load(v) for v in text.split(",") if v.strip()]
+            vary[name.strip()] = [_vary_value(v) for v in text.split(",") if v.strip()]
     return vary
+
+
+def _vary_value(text: str) -> Any:
+    """One value of a ``--vary`` option, read as YAML (``20`` is a number, ``a`` a string)."""
+    try:
+        return load_yaml(text, "--vary")
+    except InputError as error:
+        raise ExperimentError(str(error)) from None
