@@ -377,6 +377,7 @@ CLI_CASES: list[tuple[list[str], str]] = [
     (["bench", "patrol", "--stress", "--memory-budget", "lots"], "--memory-budget"),
     (["bench", "patrol", "--stress", "--memory-budget", "-5GB"], "--memory-budget"),
     (["bench", "patrol", "--stress", "--memory-budget", "0"], "--memory-budget"),
+    (["bench", "patrol", "--memory-budget", "lots"], "--memory-budget"),
     (["bench", "patrol", "--timeout", "-1"], "--timeout"),
     (["bench", "patrol", "--timeout", "nan"], "--timeout"),
     (["bench", "patrol", "--agents", "0"], "--agents"),

@@ -267,6 +267,10 @@ def bench_command(args: argparse.Namespace) -> int:
             raise ScenarioError(f"{flag} must be a whole number >= 1, got {value}")
     if args.timeout is not None and not (finite(args.timeout) and args.timeout > 0):
         raise ScenarioError(f"--timeout must be a number of seconds > 0, got {args.timeout}")
+    try:  # checked whether or not --stress uses it, so a typo is never ignored
+        args.memory_budget_mb = bench.parse_size_mb(args.memory_budget)
+    except ValueError as error:
+        raise ScenarioError(f"--memory-budget: {error}") from None
     if args.stress:
         return _stress(args, engines, bench)
     short = args.reference_iterations
@@ -320,10 +324,7 @@ def _bench_defaults(args: argparse.Namespace, scenario: Scenario, paper: Mapping
 
 
 def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
-    try:
-        budget = bench.parse_size_mb(args.memory_budget)
-    except ValueError as error:
-        raise ScenarioError(f"--memory-budget: {error}") from None
+    budget = args.memory_budget_mb
 
     def show(result: Any) -> None:
         mb = result.error if result.error else f"{result.peak_mb:.0f} MB"
