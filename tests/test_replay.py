@@ -130,3 +130,31 @@ def test_video_mp4_has_the_expected_frame_count(tmp_path):
     frames = sum(1 for _ in reader)
     assert frames == 16  # iterations 0, 10, ..., 150
     assert tuple(meta["size"]) == (800, 480) and meta["fps"] == 20
+
+
+def test_vacuum_replay_shows_the_cleaned_area_as_it_grows():
+    """The mission's changing marks (vacuum's cleaned cells) are in the page once each, with
+    the frames where they show; at every frame they are the mission's marks of that record."""
+    sim = Simulation.create(load("vacuum").with_overrides(iterations=400), seed=2).run(
+        progress=False
+    )
+    mission = sim.scenario.create_mission()
+    rec = sim.recorder
+    data = replay_data(
+        rec, sim.scenario.world, "vacuum", frame_marks=lambda row: mission.frame_marks(rec, row)
+    )
+    rows = np.searchsorted(rec.iterations[: rec.count], data["iterations"])
+    check = sim.scenario.create_mission()  # a second instance: no shared replay state
+    counts = []
+    for frame, row in enumerate(rows.tolist()):
+        shown = {
+            (m["x"], m["y"])
+            for m in data["changing_marks"]
+            if any(a <= frame <= b for a, b in m["frames"])
+        }
+        expected = {(m.x, m.y) for m in check.frame_marks(rec, row)}
+        assert shown == expected, frame
+        counts.append(len(shown))
+    assert counts[0] == 0 and counts[-1] > 10
+    assert counts == sorted(counts)  # the cleaned area only grows
+    assert len(data["changing_marks"]) == counts[-1]  # each cell once: one interval

@@ -148,3 +148,30 @@ def test_replay_offline_shows_the_recorded_statuses_and_blackboard(browser, run_
     assert loads == [] and "XMLHttpRequest" not in text
     errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
     assert errors == []
+
+
+def test_vacuum_replay_draws_the_cleaned_area_of_each_frame(browser, tmp_path):
+    """The cleaned cells (the mission's changing marks) show up as the robot cleans."""
+    out = tmp_path / "vacuum"
+    args = ["run", "vacuum", "--iterations", "600", "--no-gif", "--out", str(out), "--quiet"]
+    assert main(args) == 0
+    browser.get((out / "replay.html").resolve().as_uri())
+    count_shown = (
+        "return [...document.querySelectorAll('#changing-marks > g')]"
+        ".filter((g) => g.getAttribute('visibility') === 'visible').length"
+    )
+    scrub = (
+        "const s = document.getElementById('scrub'); s.value = arguments[0];"
+        "s.dispatchEvent(new Event('input'));"
+    )
+    data = browser.execute_script(
+        "return JSON.parse(document.getElementById('replay-data').textContent)"
+    )
+    last = len(data["iterations"]) - 1
+    browser.execute_script(scrub, 0)
+    assert browser.execute_script(count_shown) == 0
+    browser.execute_script(scrub, last)
+    expected = sum(any(a <= last <= b for a, b in m["frames"]) for m in data["changing_marks"])
+    assert expected > 10
+    assert browser.execute_script(count_shown) == expected
+    browser.save_screenshot(str(shots_dir(tmp_path) / "replay-4-vacuum-cleaned.png"))

@@ -14,7 +14,10 @@ large arrays base64-encoded:
 - ``statuses``: int8 node statuses per frame, traced agent and node (codes of
   :mod:`pyautonomousagent.bt.status`);
 - ``values``: float64 state, blackboard and model values per frame, traced agent and column
-  (exact), with the active behaviour as a node index.
+  (exact), with the active behaviour as a node index;
+- ``changing_marks``: the mission's marks that change during the run
+  (:meth:`Mission.frame_marks`, e.g. vacuum's cleaned area), each once with the frame
+  intervals where it shows.
 
 The size is kept in check by decimation: at most ``max_frames`` frames, and at most
 :data:`MAX_AGENT_FRAMES` agent positions in all; the frames of each event's iteration and the
@@ -27,7 +30,7 @@ import base64
 import json
 import math
 import time
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from importlib import resources
 from pathlib import Path
@@ -86,6 +89,7 @@ def replay_data(
     marks: Sequence[Mark] = (),
     events: Iterable[Mapping[str, Any]] = (),
     max_frames: int = MAX_FRAMES,
+    frame_marks: Callable[[int], Sequence[Mark]] | None = None,
 ) -> dict[str, Any]:
     """The replay's data as plain JSON values (see the module docstring for the arrays).
 
@@ -96,6 +100,8 @@ def replay_data(
         marks: the mission's static marks.
         events: the run's events (``sim.events``).
         max_frames: most frames (before events are added).
+        frame_marks: the marks of record ``row`` that change during the run
+            (:meth:`Mission.frame_marks`), e.g. the area cleaned so far.
     """
     if recorder.count == 0:
         raise ValueError("the recorder holds no records to replay")
@@ -124,8 +130,27 @@ def replay_data(
         "descriptions": {c: recorder.docs.get(c, ("", ""))[1] for c in columns},
         "values": _b64(np.ascontiguousarray(values, dtype=np.float64)),
         "marks": [asdict(m) for m in marks],
+        "changing_marks": changing_marks(frame_marks, rows) if frame_marks else [],
         "events": [e.as_dict() for e in placed],
     }
+
+
+def changing_marks(
+    frame_marks: Callable[[int], Sequence[Mark]], rows: np.ndarray
+) -> list[dict[str, Any]]:
+    """Each mark that ``frame_marks`` gives at some of ``rows``, once, with the frames where it
+    is shown: ``frames`` = [[first, last], ...] (frame indices, inclusive), so a mark that
+    stays (a cleaned cell) costs one interval, not one copy per frame."""
+    shown: dict[Mark, list[list[int]]] = {}
+    previous: set[Mark] = set()
+    for frame, row in enumerate(rows.tolist()):
+        now = set(frame_marks(int(row)))
+        for mark in now - previous:
+            shown.setdefault(mark, []).append([frame, frame])
+        for mark in now:
+            shown[mark][-1][1] = frame
+        previous = now
+    return [{**asdict(mark), "frames": frames} for mark, frames in shown.items()]
 
 
 def _short_unit(unit: str) -> str:
@@ -177,10 +202,11 @@ def write_replay(
     marks: Sequence[Mark] = (),
     events: Iterable[Mapping[str, Any]] = (),
     max_frames: int = MAX_FRAMES,
+    frame_marks: Callable[[int], Sequence[Mark]] | None = None,
 ) -> ReplayStats:
     """Write ``replay.html`` for a recorded run at ``path`` (see :func:`replay_data`)."""
     start = time.perf_counter()
-    data = replay_data(recorder, world, title, marks, events, max_frames)
+    data = replay_data(recorder, world, title, marks, events, max_frames, frame_marks)
     path = Path(path)
     path.write_text(render_page(data), encoding="utf-8")
     return ReplayStats(

@@ -72,8 +72,15 @@ def write_views(
     if views.replay:
         from pyautonomousagent.render.replay import write_replay
 
+        mission = scenario.create_mission()
         replay = write_replay(
-            recorder, out / "replay.html", scenario.world, scenario.name, marks, events
+            recorder,
+            out / "replay.html",
+            scenario.world,
+            scenario.name,
+            marks,
+            events,
+            frame_marks=lambda row: mission.frame_marks(recorder, row),
         )
         views.timings["replay"] = replay.seconds
         views.written.append(replay.path)
