@@ -148,9 +148,13 @@ class BlackboardView:
             raise AttributeError(f"no blackboard key {key!r} (keys: {known})") from None
 
     def __getattr__(self, key: str) -> Any:
+        try:
+            column = self._board[key]
+        except KeyError:
+            column = self._column(key)  # raises AttributeError naming the keys
         if self._one:  # one agent: a Python number in one call
-            return self._column(key).item(self._index)
-        return _read(self._column(key), self._index, self._masked)
+            return column.item(self._index)
+        return _read(column, self._index, self._masked)
 
     def __setattr__(self, key: str, value: Any) -> None:
         _write(self._column(key), self._index, self._masked, value)

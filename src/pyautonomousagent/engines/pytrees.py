@@ -8,6 +8,7 @@ registered under a type name with :func:`register_behaviour` and used in any tre
 
 from __future__ import annotations
 
+import operator
 from collections.abc import Callable, Iterator, Mapping
 from typing import Any
 
@@ -33,6 +34,7 @@ TO_PYTREES = {
 FROM_PYTREES = {v: k for k, v in TO_PYTREES.items()}
 #: id(py_trees status) -> status code: an int key hashes in C, an Enum member in Python.
 _CODE_BY_ID = {id(v): k for k, v in TO_PYTREES.items()}
+_STATUS = operator.attrgetter("status")
 
 
 class AgentBehaviour(py_trees.behaviour.Behaviour):
@@ -77,21 +79,20 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
         self._row = agent.index
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
-        """py_trees' ``Behaviour.tick``: initialise unless RUNNING, update, stop unless
-        RUNNING, then yield itself."""
-        if self.status != Status.RUNNING:
-            self.initialise()
-        new_status = self.update()
-        if new_status != Status.RUNNING:
-            self.stop(new_status)
-        self.status = new_status
+        """py_trees' ``Behaviour.tick`` for a leaf: update, take the status, yield itself.
+
+        py_trees would also call ``initialise()`` (a no-op here) unless RUNNING, and
+        ``stop(new_status)`` unless RUNNING, which only takes the status: ``terminate`` acts
+        on INVALID alone, and ``update`` never returns it.
+        """
+        self.status = self.update()
         yield self
 
     def stop(self, new_status: Status) -> None:
-        """py_trees' ``Behaviour.stop``: terminate, take the status, reset the iterator."""
+        """py_trees' ``Behaviour.stop``: terminate, then take the status (its ``iterator``,
+        which py_trees never reads, is left as it is)."""
         self.terminate(new_status)
         self.status = new_status
-        self.iterator = self.tick()
 
     def update(self) -> Status:
         """Count the tick, then evaluate the leaf for this agent."""
@@ -105,6 +106,23 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
         """A RUNNING leaf stopped from outside (halted) tells its leaf."""
         if new_status == Status.INVALID and self.status == Status.RUNNING:
             self.leaf.halt(self.agent, self.world)
+
+
+class Sequence(py_trees.composites.Sequence):
+    """py_trees' ``Sequence``; ``stop`` skips its debug line (whose text py_trees formats on
+    every call, logging on or not) and does the rest: ``Composite.stop``."""
+
+    def stop(self, new_status: Status = Status.INVALID) -> None:
+        """Stop dangling children and take ``new_status`` (py_trees' ``Composite.stop``)."""
+        py_trees.composites.Composite.stop(self, new_status)
+
+
+class Selector(py_trees.composites.Selector):
+    """py_trees' ``Selector``; ``stop`` skips its debug line, as :class:`Sequence`'s."""
+
+    def stop(self, new_status: Status = Status.INVALID) -> None:
+        """Stop dangling children and take ``new_status`` (py_trees' ``Composite.stop``)."""
+        py_trees.composites.Composite.stop(self, new_status)
 
 
 BehaviourFactory = Callable[..., AgentBehaviour]
@@ -169,8 +187,8 @@ _decorators = py_trees.decorators
 #: Node type -> py_trees behaviour, called with (name, children, parameters): one entry per
 #: record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES`.
 PYTREES_NODES: dict[str, Callable[[str, list[Any], dict[str, Any]], Any]] = {
-    "Sequence": lambda name, kids, p: py_trees.composites.Sequence(name, p["memory"], kids),
-    "Fallback": lambda name, kids, p: py_trees.composites.Selector(name, p["memory"], kids),
+    "Sequence": lambda name, kids, p: Sequence(name, p["memory"], kids),
+    "Fallback": lambda name, kids, p: Selector(name, p["memory"], kids),
     "PyTreesParallel": _parallel,
     "PyTreesRepeat": lambda name, kids, p: _decorators.Repeat(name, kids[0], p["num_success"]),
     "PyTreesRetry": lambda name, kids, p: _decorators.Retry(name, kids[0], p["num_failures"]),
@@ -216,7 +234,7 @@ class PyTreesEngine:
         if getattr(self, "_flat", None) is None:  # the trees never change: flatten them once
             self._flat = [b for root in self.roots for b in _preorder(root)]
         flat = self._flat
-        statuses = map(id, [b.status for b in flat])
+        statuses = map(id, map(_STATUS, flat))  # C-level maps: no Python frame per node
         table = np.fromiter(map(_CODE_BY_ID.__getitem__, statuses), np.int8, len(flat))
         return table.reshape(len(self.roots), -1).T
 
