@@ -122,6 +122,9 @@ class _Column:
         return _read(view.swarm.columns[self.name], view.index, view.masked)
 
     def __set__(self, view: AgentView, value: Any) -> None:
+        if view.one:  # the py_trees engine's hot path: one element, no helper call
+            view.swarm.columns[self.name][view.index] = value
+            return
         _write(view.swarm.columns[self.name], view.index, view.masked, value)
 
 
