@@ -10,6 +10,7 @@ import pytest
 from pyautonomousagent import datalink
 from pyautonomousagent.arrays import arctan2
 from pyautonomousagent.datalink import Datalink
+from pyautonomousagent.state import Swarm
 
 
 def _bits(value: float) -> tuple[float, float]:
@@ -51,3 +52,19 @@ def test_all_in_range_with_a_nan_position_takes_the_numpy_path():
     messages = datalink._packed(link._queue)[0]
     x, y = np.array([0.0, np.nan]), np.array([0.0, 1.0])
     assert link._all_in_range(messages, x, y) is False
+
+
+def test_blackboard_attributes_for_one_agent_and_for_a_group():
+    swarm = Swarm.create(["a", "b", "c"], {"level": np.float64, "keys": np.int64})
+    swarm.blackboard["level"][:] = [1.0, 2.0, 3.0]
+    one, group = swarm.agent(1).blackboard, swarm.agents(np.array([0, 2])).blackboard
+    assert one.level == 2.0 and type(one.level) is float
+    assert group.level.tolist() == [1.0, 3.0]
+    one.level = 5.0
+    assert swarm.blackboard["level"].tolist() == [1.0, 5.0, 3.0]
+    assert callable(one.keys)  # a key named like a method leaves the method alone
+    swarm.blackboard["later"] = np.array([7, 8, 9])  # a key added after the views' class
+    assert one.later == 8
+    del swarm.blackboard["level"]
+    with pytest.raises(AttributeError, match="no blackboard key 'level'"):
+        _ = one.level
