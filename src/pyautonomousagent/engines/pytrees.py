@@ -126,6 +126,38 @@ class Selector(py_trees.composites.Selector):
         py_trees.composites.Composite.stop(self, new_status)
 
 
+class _QuietDecorator(py_trees.decorators.Decorator):
+    """py_trees' ``Decorator.tick`` and ``stop`` without their debug lines (text built on
+    every call) and without the check that ``update`` returned a status, which the
+    status-mapping decorators always do (``list(Status)`` built on every tick)."""
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """Initialise unless RUNNING, tick the child, update, stop unless RUNNING, yield."""
+        if self.status != Status.RUNNING:
+            self.initialise()
+        yield from self.decorated.tick()
+        new_status = self.update()
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
+
+    def stop(self, new_status: Status) -> None:
+        """Terminate; stop the child when halted, or when it still runs; take the status."""
+        self.terminate(new_status)
+        if new_status == Status.INVALID:
+            self.decorated.stop(new_status)
+        if self.decorated.status == Status.RUNNING:
+            self.decorated.stop(Status.INVALID)
+        self.status = new_status
+
+
+def _quiet(cls: type) -> type:
+    """The py_trees decorator class ``cls`` (same name) with :class:`_QuietDecorator`'s
+    ``tick`` and ``stop``."""
+    return type(cls.__name__, (_QuietDecorator, cls), {"__doc__": cls.__doc__})
+
+
 BehaviourFactory = Callable[..., AgentBehaviour]
 #: Hand-written py_trees behaviours: type name -> class taking (name, agent, world, **params).
 BEHAVIOUR_TYPES: Registry[BehaviourFactory] = Registry("hand-written behaviour")
@@ -181,7 +213,8 @@ def _parallel(
 
 
 def _decorator(cls: type) -> Callable[[str, list[Any], dict[str, Any]], Any]:
-    return lambda name, kids, params: cls(name, kids[0])
+    quiet = _quiet(cls)
+    return lambda name, kids, params: quiet(name, kids[0])
 
 
 _decorators = py_trees.decorators
