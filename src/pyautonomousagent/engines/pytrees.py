@@ -110,8 +110,41 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
 
 
 class Sequence(py_trees.composites.Sequence):
-    """py_trees' ``Sequence``; ``stop`` skips its debug line (whose text py_trees formats on
-    every call, logging on or not) and does the rest: ``Composite.stop``."""
+    """py_trees' ``Sequence`` (as in py_trees 2.6), ticked and stopped without its debug
+    lines, whose text py_trees builds on every call, logging on or not."""
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """Tick the children in order from the first (or, with memory, the RUNNING one);
+        stop at the first that does not succeed, halting the later ones (without memory)."""
+        children = self.children
+        start = 0
+        if self.status != Status.RUNNING:
+            self.current_child = children[0] if children else None
+            for child in children:
+                if child.status != Status.INVALID:
+                    child.stop(Status.INVALID)
+            self.initialise()
+        elif self.memory and self.current_child is not None:
+            start = children.index(self.current_child)
+        else:
+            self.current_child = children[0] if children else None
+        for k in range(start, len(children)):
+            child = self.current_child = children[k]
+            for node in child.tick():
+                yield node
+                if node is child and node.status != Status.SUCCESS:
+                    if not self.memory:
+                        _halt(children[k + 1 :])
+                    if node.status != Status.RUNNING:
+                        self.stop(node.status)
+                    else:
+                        self.status = node.status
+                    yield self
+                    return
+        if not children:
+            self.current_child = None
+        self.stop(Status.SUCCESS)
+        yield self
 
     def stop(self, new_status: Status = Status.INVALID) -> None:
         """Stop dangling children and take ``new_status`` (py_trees' ``Composite.stop``)."""
@@ -119,11 +152,53 @@ class Sequence(py_trees.composites.Sequence):
 
 
 class Selector(py_trees.composites.Selector):
-    """py_trees' ``Selector``; ``stop`` skips its debug line, as :class:`Sequence`'s."""
+    """py_trees' ``Selector`` (as in py_trees 2.6), ticked and stopped without its debug
+    lines, as :class:`Sequence`."""
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """Tick the children in order from the first (or, with memory, the remembered one)
+        until one runs or succeeds; a newly chosen child halts the ones after it."""
+        children = self.children
+        if self.status != Status.RUNNING:
+            self.current_child = children[0] if children else None
+            self.initialise()
+        if not children:
+            self.current_child = None
+            self.stop(Status.FAILURE)
+            yield self
+            return
+        start = 0
+        if self.memory and self.current_child is not None:  # set above unless RUNNING
+            start = children.index(self.current_child)
+            _halt(children[:start])
+        previous = self.current_child
+        for child in children[start:]:
+            for node in child.tick():
+                yield node
+                if node is child and node.status in (Status.RUNNING, Status.SUCCESS):
+                    self.current_child = child
+                    if previous is not child:
+                        _halt(children[children.index(child) + 1 :])
+                    if node.status == Status.SUCCESS:
+                        self.stop(node.status)
+                    else:
+                        self.status = node.status
+                    yield self
+                    return
+        self.stop(Status.FAILURE)
+        self.current_child = children[-1]
+        yield self
 
     def stop(self, new_status: Status = Status.INVALID) -> None:
         """Stop dangling children and take ``new_status`` (py_trees' ``Composite.stop``)."""
         py_trees.composites.Composite.stop(self, new_status)
+
+
+def _halt(behaviours: list[py_trees.behaviour.Behaviour]) -> None:
+    """Stop (INVALID) each of ``behaviours`` that is not INVALID already."""
+    for behaviour in behaviours:
+        if behaviour.status != Status.INVALID:
+            behaviour.stop(Status.INVALID)
 
 
 class _QuietDecorator(py_trees.decorators.Decorator):
