@@ -147,8 +147,8 @@ class Sequence(py_trees.composites.Sequence):
         yield self
 
     def stop(self, new_status: Status = Status.INVALID) -> None:
-        """Stop dangling children and take ``new_status`` (py_trees' ``Composite.stop``)."""
-        py_trees.composites.Composite.stop(self, new_status)
+        """py_trees' ``Composite.stop``: see :func:`_stop_composite`."""
+        _stop_composite(self, new_status)
 
 
 class Selector(py_trees.composites.Selector):
@@ -190,8 +190,19 @@ class Selector(py_trees.composites.Selector):
         yield self
 
     def stop(self, new_status: Status = Status.INVALID) -> None:
-        """Stop dangling children and take ``new_status`` (py_trees' ``Composite.stop``)."""
-        py_trees.composites.Composite.stop(self, new_status)
+        """py_trees' ``Composite.stop``: see :func:`_stop_composite`."""
+        _stop_composite(self, new_status)
+
+
+def _stop_composite(composite: py_trees.composites.Composite, new_status: Status) -> None:
+    """py_trees' ``Composite.stop``: when halted (INVALID), forget the current child and halt
+    the children; terminate; take the status. Its ``iterator``, which py_trees never reads,
+    is left as it is (py_trees makes a new generator on every stop)."""
+    if new_status == Status.INVALID:
+        composite.current_child = None
+        _halt(composite.children)
+    composite.terminate(new_status)
+    composite.status = new_status
 
 
 def _halt(behaviours: list[py_trees.behaviour.Behaviour]) -> None:
