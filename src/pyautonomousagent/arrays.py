@@ -86,6 +86,33 @@ def _atan_unit(t: Any) -> Any:
     return (math.pi / 6.0) * big + u * total
 
 
+def _atan_float(t: float) -> float:
+    """:func:`_atan_unit` for one Python float: the same operations in the same order (the
+    series' loop written out), so the same bits, without the loop's cost."""
+    big = t > _TAN_PI_12
+    u = big * ((t * _SQRT3 - 1.0) / (t + _SQRT3)) + (1.0 - big) * t
+    z = u * u
+    c = _SERIES  # Horner's rule, innermost first, exactly as the loop of _atan_unit
+    total = (((((((((((((((z * c[15] + c[14]) * z + c[13]) * z + c[12]) * z + c[11]) * z
+        + c[10]) * z + c[9]) * z + c[8]) * z + c[7]) * z + c[6]) * z + c[5]) * z + c[4]) * z
+        + c[3]) * z + c[2]) * z + c[1]) * z + c[0])  # fmt: skip
+    return (math.pi / 6.0) * big + u * total
+
+
+def _arctan2_float(y: float, x: float) -> float:
+    """:func:`arctan2` for two Python floats: the same operations (:func:`minimum`,
+    :func:`maximum` and :func:`copysign` written in place), so the same bits."""
+    ay, ax = abs(y), abs(x)
+    steep = ay > ax
+    high = ay if ay >= ax else ax
+    low = ay if ay <= ax else ax
+    angle = _atan_float(low / (high + (high == 0.0)))
+    angle = (math.pi / 2.0) * steep + (1.0 - 2.0 * steep) * angle
+    west = 1.0 - math.copysign(1.0, x)
+    angle = (math.pi / 2.0) * west + (1.0 - west) * angle
+    return math.copysign(angle, y)
+
+
 def arctan2(y: Any, x: Any) -> Any:
     """The angle of the vector (x, y) from the +x axis, radians in [-pi, pi].
 
@@ -93,6 +120,8 @@ def arctan2(y: Any, x: Any) -> Any:
     bits for scalars and for arrays on every CPU (see the module's docstring): the octant
     is applied with exact steps (a sign flip, adding 0, pi/2 or pi, ``copysign``).
     """
+    if type(y) is float and type(x) is float:  # one agent's numbers: the loop-free path
+        return _arctan2_float(y, x)
     ay, ax = abs(y), abs(x)
     steep = ay > ax  # the angle is pi/2 - atan(ax / ay)
     high = maximum(ay, ax)

@@ -191,7 +191,7 @@ class Datalink:
 
     def _deliver_type(self, messages: Messages, x: np.ndarray, y: np.ndarray) -> Delivery:
         broadcast = messages.lists < 0
-        if broadcast.all() and self._all_in_range(messages, x, y):
+        if _all_true(broadcast) and self._all_in_range(messages, x, y):
             empty = np.zeros(0, dtype=np.int64)
             return Delivery(messages, empty, empty, to_all=True)
         parts = [grid_pairs(messages.x, messages.y, np.flatnonzero(broadcast), x, y, self.range)]
@@ -209,9 +209,27 @@ class Datalink:
 
     def _all_in_range(self, messages: Messages, x: np.ndarray, y: np.ndarray) -> bool:
         """True if every sender position is within range of every agent (bounding-box test)."""
+        if x.size + messages.x.size <= FEW:  # a few: extents in Python, then the same hypot
+            xs, ys = x.tolist() + messages.x.tolist(), y.tolist() + messages.y.tolist()
+            total = sum(xs) + sum(ys)
+            if total == total:  # no NaN (NumPy's max and min propagate it, Python's not)
+                extent_x, extent_y = max(xs) - min(xs), max(ys) - min(ys)
+                return bool(np.hypot(extent_x, extent_y) <= self.range)
         points = np.concatenate((x, messages.x, y, messages.y)).reshape(2, -1)  # xs; ys
         extent = points.max(axis=1) - points.min(axis=1)
         return bool(np.hypot(extent[0], extent[1]) <= self.range)
+
+
+#: Up to this many agents and messages, delivery checks them in Python: cheaper than NumPy's
+#: cost per call (about a microsecond) for a few values.
+FEW = 32
+
+
+def _all_true(flags: np.ndarray) -> bool:
+    """``flags.all()`` for a boolean array of shape (M,) (in Python for a few)."""
+    if flags.size <= FEW:
+        return all(flags.tolist())
+    return bool(flags.all())
 
 
 def _one_each(value: Any, m: int) -> np.ndarray:
@@ -224,18 +242,19 @@ _NUMBER = (float, int, np.number)
 
 
 def _one_message(
-    type: str, sender: int, order: int, data: Mapping[str, Any], position: tuple[Any, Any]
+    kind: str, sender: int, order: int, data: Mapping[str, Any], position: tuple[Any, Any]
 ) -> OneMessage | None:
     """One agent's broadcast as plain numbers; None if a value is no number (an array)."""
     x, y = position
     if not (isinstance(x, _NUMBER) and isinstance(y, _NUMBER)):
         return None
-    plain = {}
-    for key, value in data.items():
-        if not isinstance(value, _NUMBER):
-            return None
-        plain[key] = float(value)
-    return OneMessage(type, sender, order, float(x), float(y), plain)
+    plain = dict(data)
+    for key, value in plain.items():
+        if type(value) is not float:  # a float (the usual case: AgentView reads) is kept
+            if not isinstance(value, _NUMBER):
+                return None
+            plain[key] = float(value)
+    return OneMessage(kind, sender, order, float(x), float(y), plain)
 
 
 def _packed(channel: list[Messages | OneMessage]) -> list[Messages]:
@@ -313,7 +332,7 @@ def _canonical(messages: Messages) -> Messages:
     senders, order = messages.senders, messages.order
     if senders.size < 2:
         return messages
-    if senders.size <= 32:  # a few messages: compared in Python, cheaper than NumPy's calls
+    if senders.size <= FEW:  # a few messages: compared in Python, cheaper than NumPy's calls
         keys = list(zip(senders.tolist(), order.tolist(), strict=True))
         if all(a < b for a, b in zip(keys, keys[1:], strict=False)):
             return messages

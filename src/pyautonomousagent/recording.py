@@ -201,11 +201,11 @@ def _active_leaf_each(statuses: np.ndarray, leaf_rows: np.ndarray) -> np.ndarray
     rows = leaf_rows.tolist()
     found = []
     for agent in statuses[leaf_rows].T.tolist():
+        if RUNNING in agent:  # the usual case, found by list methods in C
+            found.append(rows[agent.index(RUNNING)])
+            continue
         best = -1
         for row, status in zip(rows, agent, strict=True):
-            if status == RUNNING:
-                best = row
-                break
             if status != INVALID:
                 best = row
         found.append(best)

@@ -40,15 +40,19 @@ class Swarm:
             (:data:`CONTROL_COLUMNS`).
         blackboard: blackboard arrays, each of shape ``(N,)``: key -> values per agent.
         view_type: the :class:`AgentView` class of this swarm, with one attribute per column.
+        board_type: the :class:`BlackboardView` class of this swarm, with one attribute per
+            blackboard key it was made with (keys added later are found too, more slowly).
     """
 
     names: list[str]
     columns: dict[str, np.ndarray] = field(default_factory=dict)
     blackboard: dict[str, np.ndarray] = field(default_factory=dict)
     view_type: type[AgentView] = field(init=False, repr=False)
+    board_type: type[BlackboardView] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         self.view_type = view_type(self.columns)
+        self.board_type = board_type(self.blackboard)
 
     @classmethod
     def create(
@@ -122,7 +126,26 @@ class _Column:
         return _read(view.swarm.columns[self.name], view.index, view.masked)
 
     def __set__(self, view: AgentView, value: Any) -> None:
+        if view.one:  # the py_trees engine's hot path: one element, no helper call
+            view.swarm.columns[self.name][view.index] = value
+            return
         _write(view.swarm.columns[self.name], view.index, view.masked, value)
+
+
+class _Key:
+    """Descriptor: ``board.<key>`` reads ``blackboard[key][board's index]`` (a Python number
+    for one agent), without the failed attribute lookup that reaches ``__getattr__``."""
+
+    def __init__(self, key: str) -> None:
+        self.key = key
+
+    def __get__(self, view: BlackboardView | None, owner: type | None = None) -> Any:
+        if view is None:
+            return self
+        board = view._board
+        if view._one and self.key in board:  # one agent: a Python number in one call
+            return board[self.key].item(view._index)
+        return view.__getattr__(self.key)
 
 
 class BlackboardView:
@@ -148,11 +171,18 @@ class BlackboardView:
             raise AttributeError(f"no blackboard key {key!r} (keys: {known})") from None
 
     def __getattr__(self, key: str) -> Any:
+        """A key without its own attribute (see :func:`board_type`), or AttributeError."""
+        column = self._column(key)
         if self._one:  # one agent: a Python number in one call
-            return self._column(key).item(self._index)
-        return _read(self._column(key), self._index, self._masked)
+            return column.item(self._index)
+        return _read(column, self._index, self._masked)
 
     def __setattr__(self, key: str, value: Any) -> None:
+        if self._one:  # the py_trees engine's hot path: one element, no helper call
+            board = self._board
+            if key in board:
+                board[key][self._index] = value
+                return
         _write(self._column(key), self._index, self._masked, value)
 
     def keys(self) -> list[str]:
@@ -192,7 +222,7 @@ class AgentView:
         self.index = index
         self.masked = isinstance(index, np.ndarray) and index.dtype == np.bool_
         self.one = isinstance(index, int | np.integer)
-        self.blackboard = BlackboardView(swarm.blackboard, index, self.masked)
+        self.blackboard = swarm.board_type(swarm.blackboard, index, self.masked)
 
     @property
     def is_one(self) -> bool:
@@ -259,6 +289,15 @@ class AgentView:
 
     def __repr__(self) -> str:
         return f"AgentView({self.name!r})"
+
+
+def board_type(keys: Iterable[str]) -> type[BlackboardView]:
+    """The :class:`BlackboardView` subclass with an attribute per key (a descriptor: no
+    failed lookup before ``__getattr__``); keys that name a method (``keys``) are left to
+    ``__getattr__`` as before."""
+    own = [k for k in keys if not hasattr(BlackboardView, k)]
+    attributes: dict[str, Any] = {"__slots__": (), **{k: _Key(k) for k in own}}
+    return type("BlackboardView", (BlackboardView,), attributes)
 
 
 def view_type(columns: Iterable[str]) -> type[AgentView]:

@@ -169,9 +169,8 @@ class Leaf:
             kind: a message type of the mission (``MessageType.name``).
             data: payload name -> a number, or a value per agent in view shape.
         """
-        if agents.is_one:  # plain numbers: one message costs no arrays until delivery
-            position = (agents.x, agents.y)
-            world.datalink.send(int(agents.index), kind, data, position)
+        if agents.one:  # plain numbers: one message costs no arrays until delivery
+            world.datalink.send(int(agents.index), kind, data, (agents.x, agents.y))
             return
         payload = {k: agents.compact(v) for k, v in data.items()}
         position = (agents.compact(agents.x), agents.compact(agents.y))

@@ -25,8 +25,11 @@ def status_if(condition: Any, if_true: int, if_false: int) -> Any:
 
 
 def success_if(condition: Any) -> Any:
-    """SUCCESS where ``condition`` holds, FAILURE elsewhere."""
-    return status_if(condition, SUCCESS, FAILURE)
+    """SUCCESS where ``condition`` holds, FAILURE elsewhere (:func:`status_if`, written out:
+    conditions call it once per agent-tick on the py_trees engine)."""
+    if isinstance(condition, np.ndarray):
+        return np.where(condition, np.int8(SUCCESS), np.int8(FAILURE))
+    return SUCCESS if condition else FAILURE
 
 
 def invalid_status(name: str, type_name: str) -> str:

@@ -8,7 +8,9 @@ registered under a type name with :func:`register_behaviour` and used in any tre
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
+import operator
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from typing import Any
 
 import numpy as np
@@ -33,6 +35,7 @@ TO_PYTREES = {
 FROM_PYTREES = {v: k for k, v in TO_PYTREES.items()}
 #: id(py_trees status) -> status code: an int key hashes in C, an Enum member in Python.
 _CODE_BY_ID = {id(v): k for k, v in TO_PYTREES.items()}
+_STATUS = operator.attrgetter("status")
 
 
 class AgentBehaviour(py_trees.behaviour.Behaviour):
@@ -77,21 +80,20 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
         self._row = agent.index
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
-        """py_trees' ``Behaviour.tick``: initialise unless RUNNING, update, stop unless
-        RUNNING, then yield itself."""
-        if self.status != Status.RUNNING:
-            self.initialise()
-        new_status = self.update()
-        if new_status != Status.RUNNING:
-            self.stop(new_status)
-        self.status = new_status
+        """py_trees' ``Behaviour.tick`` for a leaf: update, take the status, yield itself.
+
+        py_trees would also call ``initialise()`` (a no-op here) unless RUNNING, and
+        ``stop(new_status)`` unless RUNNING, which only takes the status: ``terminate`` acts
+        on INVALID alone, and ``update`` never returns it.
+        """
+        self.status = self.update()
         yield self
 
     def stop(self, new_status: Status) -> None:
-        """py_trees' ``Behaviour.stop``: terminate, take the status, reset the iterator."""
+        """py_trees' ``Behaviour.stop``: terminate, then take the status (its ``iterator``,
+        which py_trees never reads, is left as it is)."""
         self.terminate(new_status)
         self.status = new_status
-        self.iterator = self.tick()
 
     def update(self) -> Status:
         """Count the tick, then evaluate the leaf for this agent."""
@@ -105,6 +107,141 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
         """A RUNNING leaf stopped from outside (halted) tells its leaf."""
         if new_status == Status.INVALID and self.status == Status.RUNNING:
             self.leaf.halt(self.agent, self.world)
+
+
+class Sequence(py_trees.composites.Sequence):
+    """py_trees' ``Sequence`` (as in py_trees 2.6), ticked and stopped without its debug
+    lines, whose text py_trees builds on every call, logging on or not."""
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """Tick the children in order from the first (or, with memory, the RUNNING one);
+        stop at the first that does not succeed, halting the later ones (without memory)."""
+        children = self.children
+        start = 0
+        if self.status != Status.RUNNING:
+            self.current_child = children[0] if children else None
+            for child in children:
+                if child.status != Status.INVALID:
+                    child.stop(Status.INVALID)
+            self.initialise()
+        elif self.memory and self.current_child is not None:
+            start = children.index(self.current_child)
+        else:
+            self.current_child = children[0] if children else None
+        for k in range(start, len(children)):
+            child = self.current_child = children[k]
+            for node in child.tick():
+                yield node
+                if node is child and node.status != Status.SUCCESS:
+                    if not self.memory:
+                        _halt(children[k + 1 :])
+                    if node.status != Status.RUNNING:
+                        self.stop(node.status)
+                    else:
+                        self.status = node.status
+                    yield self
+                    return
+        if not children:
+            self.current_child = None
+        self.stop(Status.SUCCESS)
+        yield self
+
+    def stop(self, new_status: Status = Status.INVALID) -> None:
+        """py_trees' ``Composite.stop``: see :func:`_stop_composite`."""
+        _stop_composite(self, new_status)
+
+
+class Selector(py_trees.composites.Selector):
+    """py_trees' ``Selector`` (as in py_trees 2.6), ticked and stopped without its debug
+    lines, as :class:`Sequence`."""
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """Tick the children in order from the first (or, with memory, the remembered one)
+        until one runs or succeeds; a newly chosen child halts the ones after it."""
+        children = self.children
+        if self.status != Status.RUNNING:
+            self.current_child = children[0] if children else None
+            self.initialise()
+        if not children:
+            self.current_child = None
+            self.stop(Status.FAILURE)
+            yield self
+            return
+        start = 0
+        if self.memory and self.current_child is not None:  # set above unless RUNNING
+            start = children.index(self.current_child)
+            _halt(children[:start])
+        previous = self.current_child
+        for child in children[start:]:
+            for node in child.tick():
+                yield node
+                if node is child and node.status in (Status.RUNNING, Status.SUCCESS):
+                    self.current_child = child
+                    if previous is not child:
+                        _halt(children[children.index(child) + 1 :])
+                    if node.status == Status.SUCCESS:
+                        self.stop(node.status)
+                    else:
+                        self.status = node.status
+                    yield self
+                    return
+        self.stop(Status.FAILURE)
+        self.current_child = children[-1]
+        yield self
+
+    def stop(self, new_status: Status = Status.INVALID) -> None:
+        """py_trees' ``Composite.stop``: see :func:`_stop_composite`."""
+        _stop_composite(self, new_status)
+
+
+def _stop_composite(composite: py_trees.composites.Composite, new_status: Status) -> None:
+    """py_trees' ``Composite.stop``: when halted (INVALID), forget the current child and halt
+    the children; terminate; take the status. Its ``iterator``, which py_trees never reads,
+    is left as it is (py_trees makes a new generator on every stop)."""
+    if new_status == Status.INVALID:
+        composite.current_child = None
+        _halt(composite.children)
+    composite.terminate(new_status)
+    composite.status = new_status
+
+
+def _halt(behaviours: list[py_trees.behaviour.Behaviour]) -> None:
+    """Stop (INVALID) each of ``behaviours`` that is not INVALID already."""
+    for behaviour in behaviours:
+        if behaviour.status != Status.INVALID:
+            behaviour.stop(Status.INVALID)
+
+
+class _QuietDecorator(py_trees.decorators.Decorator):
+    """py_trees' ``Decorator.tick`` and ``stop`` without their debug lines (text built on
+    every call) and without the check that ``update`` returned a status, which the
+    status-mapping decorators always do (``list(Status)`` built on every tick)."""
+
+    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
+        """Initialise unless RUNNING, tick the child, update, stop unless RUNNING, yield."""
+        if self.status != Status.RUNNING:
+            self.initialise()
+        yield from self.decorated.tick()
+        new_status = self.update()
+        if new_status != Status.RUNNING:
+            self.stop(new_status)
+        self.status = new_status
+        yield self
+
+    def stop(self, new_status: Status) -> None:
+        """Terminate; stop the child when halted, or when it still runs; take the status."""
+        self.terminate(new_status)
+        if new_status == Status.INVALID:
+            self.decorated.stop(new_status)
+        if self.decorated.status == Status.RUNNING:
+            self.decorated.stop(Status.INVALID)
+        self.status = new_status
+
+
+def _quiet(cls: type) -> type:
+    """The py_trees decorator class ``cls`` (same name) with :class:`_QuietDecorator`'s
+    ``tick`` and ``stop``."""
+    return type(cls.__name__, (_QuietDecorator, cls), {"__doc__": cls.__doc__})
 
 
 BehaviourFactory = Callable[..., AgentBehaviour]
@@ -162,15 +299,16 @@ def _parallel(
 
 
 def _decorator(cls: type) -> Callable[[str, list[Any], dict[str, Any]], Any]:
-    return lambda name, kids, params: cls(name, kids[0])
+    quiet = _quiet(cls)
+    return lambda name, kids, params: quiet(name, kids[0])
 
 
 _decorators = py_trees.decorators
 #: Node type -> py_trees behaviour, called with (name, children, parameters): one entry per
 #: record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES`.
 PYTREES_NODES: dict[str, Callable[[str, list[Any], dict[str, Any]], Any]] = {
-    "Sequence": lambda name, kids, p: py_trees.composites.Sequence(name, p["memory"], kids),
-    "Fallback": lambda name, kids, p: py_trees.composites.Selector(name, p["memory"], kids),
+    "Sequence": lambda name, kids, p: Sequence(name, p["memory"], kids),
+    "Fallback": lambda name, kids, p: Selector(name, p["memory"], kids),
     "PyTreesParallel": _parallel,
     "PyTreesRepeat": lambda name, kids, p: _decorators.Repeat(name, kids[0], p["num_success"]),
     "PyTreesRetry": lambda name, kids, p: _decorators.Retry(name, kids[0], p["num_failures"]),
@@ -205,18 +343,21 @@ class PyTreesEngine:
         self.roots = [
             build_behaviour(tree, swarm.agent(i), world, defaults) for i in range(swarm.size)
         ]
+        self._run: Callable[[Iterable[Any]], None] = deque(maxlen=0).extend
 
     def tick(self) -> None:
-        """Tick every agent's tree once, in agent order."""
+        """Tick every agent's tree once, in agent order (py_trees' ``tick_once``, with the
+        root's generator run to its end by a zero-length deque, in C)."""
+        run = self._run
         for root in self.roots:
-            root.tick_once()
+            run(root.tick())
 
     def node_statuses(self) -> np.ndarray:
         """Status codes after the last tick, shape (nodes in tick order, N), int8."""
         if getattr(self, "_flat", None) is None:  # the trees never change: flatten them once
             self._flat = [b for root in self.roots for b in _preorder(root)]
         flat = self._flat
-        statuses = map(id, [b.status for b in flat])
+        statuses = map(id, map(_STATUS, flat))  # C-level maps: no Python frame per node
         table = np.fromiter(map(_CODE_BY_ID.__getitem__, statuses), np.int8, len(flat))
         return table.reshape(len(self.roots), -1).T
 

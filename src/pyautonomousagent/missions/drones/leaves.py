@@ -207,8 +207,9 @@ class ActionTransmitSharedDataS(Leaf):
     type_name = "Action_Transmit_Shared_Data_S"
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
-        names = ("x", "y", "speed", "heading", "damage", "energy")
-        data = {name: getattr(agents, name) for name in names}
+        a = agents
+        data = {"x": a.x, "y": a.y, "speed": a.speed, "heading": a.heading,
+                "damage": a.damage, "energy": a.energy}  # fmt: skip
         self.broadcast(agents, world, SHARING_DATA, data)
         return SUCCESS
 

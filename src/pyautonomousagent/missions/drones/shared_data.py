@@ -41,7 +41,7 @@ class SharedData:
     def store(self, delivery: Delivery, iteration: int) -> None:
         """Remember the latest message per sender (and per receiver) of ``delivery``."""
         messages = delivery.messages
-        values = np.stack([messages.data[k] for k in self.fields], axis=1)
+        values = np.array([messages.data[k] for k in self.fields]).T  # (M, fields)
         if delivery.to_all:
             senders = messages.senders
             if not _distinct_ascending(senders):  # keep each sender's last message only
