@@ -18,7 +18,7 @@ from __future__ import annotations
 import json
 import mmap
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -79,6 +79,8 @@ class Recorder:
         traces: node statuses of the traced agents, shape (records, nodes, K), int8.
         behaviour: active leaf per agent as a node index, shape (records, N), int16; -1 when
             none was ticked; None without a tree.
+        listeners: called with the number of records after each record is written whole
+            (e.g. :class:`~pyautonomousagent.streaming.StatesStream`).
     """
 
     def __init__(
@@ -115,6 +117,7 @@ class Recorder:
         self.traces = preallocated((records, len(self.nodes), self.traced.size), np.dtype(np.int8))
         self.behaviour = preallocated((records, swarm.size), np.dtype(np.int16)) if tree else None
         self.count = 0
+        self.listeners: list[Callable[[int], None]] = []
 
     @property
     def wants_statuses(self) -> bool:
@@ -148,6 +151,8 @@ class Recorder:
             self.traces[row] = statuses[:, self.traced]
             self.behaviour[row] = active_leaf(statuses, self._leaf_rows)
         self.count += 1
+        for listener in self.listeners:
+            listener(self.count)
 
     def trace(self, agent: int | str) -> np.ndarray:
         """The node statuses of one traced agent (index or name), shape (records so far, nodes)."""
@@ -264,21 +269,25 @@ def preallocated(shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
     return np.frombuffer(mmap.mmap(-1, nbytes, flags=flags), dtype=dtype).reshape(shape)
 
 
-def to_table(recorder: Recorder) -> pa.Table:
-    """The records as a long table: ``iteration, agent``, the state, ``behaviour`` (when the
-    recorder has a tree), the blackboard and model columns.
+def to_table(recorder: Recorder, start: int = 0, stop: int | None = None) -> pa.Table:
+    """The records ``start`` to ``stop`` (record numbers; default: all recorded so far) as a
+    long table: ``iteration, agent``, the state, ``behaviour`` (when the recorder has a
+    tree), the blackboard and model columns; ``(stop - start) x N`` rows.
 
-    Each field's metadata holds its ``unit`` and ``description`` (:data:`COLUMN_DOCS`).
+    The numeric columns share the recorder's memory (no copy). Each field's metadata holds
+    its ``unit`` and ``description`` (:data:`COLUMN_DOCS`).
     """
-    records, n = recorder.count, len(recorder.names)
+    stop = recorder.count if stop is None else stop
+    records, n = stop - start, len(recorder.names)
     data: dict[str, pa.Array] = {
-        "iteration": pa.array(np.repeat(recorder.iterations[:records], n)),
+        "iteration": pa.array(np.repeat(recorder.iterations[start:stop], n)),
         "agent": _agent_column(recorder.names, records),
     }
-    for key in recorder.columns:
-        data[key] = pa.array(recorder.column(key).reshape(-1))
+    for key, values in recorder.columns.items():
+        data[key] = pa.array(values[start:stop].reshape(-1))
     if recorder.behaviour is not None:
-        data = _insert_after(data, "requested_heading", "behaviour", _behaviour_column(recorder))
+        behaviour = _behaviour_column(recorder, start, stop)
+        data = _insert_after(data, "requested_heading", "behaviour", behaviour)
     groups = {key: group for group, keys in recorder.groups.items() for key in keys}
     return _documented(pa.table(data), docs=recorder.docs, groups=groups)
 
@@ -299,6 +308,7 @@ def recorder_from_tables(
     recorder = Recorder.__new__(Recorder)
     recorder.every = int(np.diff(iteration[::n]).min()) if records > 1 else 1
     recorder.count = records
+    recorder.listeners = []
     recorder.iterations = iteration[::n].astype(np.int64)
     recorder.names = [str(a) for a in states.column("agent").to_pylist()[:n]]
     skip = {"iteration", "agent", "behaviour"}
@@ -421,10 +431,11 @@ def _agent_column(names: Sequence[str], records: int) -> pa.DictionaryArray:
     return pa.DictionaryArray.from_arrays(pa.array(indices), pa.array(list(names), pa.string()))
 
 
-def _behaviour_column(recorder: Recorder) -> pa.DictionaryArray:
-    """The active leaf's name per record and agent; null where none was ticked."""
+def _behaviour_column(recorder: Recorder, start: int, stop: int) -> pa.DictionaryArray:
+    """The active leaf's name per record ``start`` to ``stop`` and agent; null where none
+    was ticked."""
     assert recorder.behaviour is not None
-    codes = recorder.behaviour[: recorder.count].reshape(-1).astype(np.int32)
+    codes = recorder.behaviour[start:stop].reshape(-1).astype(np.int32)
     indices = pa.array(codes, mask=codes < 0)
     dictionary = pa.array([node.name for node in recorder.nodes], pa.string())
     return pa.DictionaryArray.from_arrays(indices, dictionary)
@@ -463,7 +474,7 @@ def write_table(table: pa.Table, path: Path, fmt: str = "parquet") -> Path:
     if fmt == "parquet":
         import pyarrow.parquet as pq
 
-        pq.write_table(table, path)
+        pq.write_table(table, path, **parquet_options(table.schema))
     elif fmt == "csv":
         import pyarrow.csv as pcsv
 
@@ -471,6 +482,20 @@ def write_table(table: pa.Table, path: Path, fmt: str = "parquet") -> Path:
     else:
         raise ValueError(f"unknown format {fmt!r}; use 'parquet' or 'csv'")
     return path
+
+
+def parquet_options(schema: pa.Schema) -> dict[str, Any]:
+    """How the records are written to Parquet (``pyarrow.parquet.write_table`` options).
+
+    Dictionary encoding only for the dictionary-typed columns (agent, behaviour): on the
+    float columns pyarrow first tries a dictionary, gives up after 1 MiB of distinct values
+    and falls back to plain encoding, which doubled the time of writing. Statistics (min, max)
+    for the other columns only: for a dictionary column they cost a look-up per row.
+    Snappy compression, as pyarrow's default. Measured: docs/performance.md.
+    """
+    dictionary = [f.name for f in schema if pa.types.is_dictionary(f.type)]
+    others = [f.name for f in schema if f.name not in dictionary]
+    return {"use_dictionary": dictionary, "write_statistics": others, "compression": "snappy"}
 
 
 def read_table(path: Path) -> pa.Table:
