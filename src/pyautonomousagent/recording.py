@@ -18,7 +18,7 @@ from __future__ import annotations
 import json
 import mmap
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +28,7 @@ import pyarrow as pa
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.status import INVALID, NAMES, RUNNING
 from pyautonomousagent.inputs import InputError
+from pyautonomousagent.names import AgentNames
 from pyautonomousagent.state import CONTROL_COLUMNS, MOTION_COLUMNS, Swarm
 
 #: Agents traced by default: all of a swarm this small, else the first this many.
@@ -97,11 +98,12 @@ class Recorder:
             raise ValueError(f"record_every must be >= 1, got {every}")
         self.every = every
         self.docs = {**COLUMN_DOCS, **(docs or {})}
-        self.names = list(swarm.names)
+        self.names = swarm.names if isinstance(swarm.names, AgentNames) else list(swarm.names)
         records = iterations // every + 1
         self.iterations = np.zeros(records, dtype=np.int64)
         sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
-        self.columns = {k: preallocated((records, swarm.size), v.dtype) for k, v in sources.items()}
+        dtypes = {k: v.dtype for k, v in sources.items()}
+        self.columns = RecordedColumns(dtypes, records, swarm.size)
         self.groups = {
             "state": list(swarm.columns),
             "blackboard": list(swarm.blackboard),
@@ -143,8 +145,8 @@ class Recorder:
         row = self.count
         self.iterations[row] = iteration
         sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
-        for key, values in self.columns.items():
-            values[row] = sources[key]
+        for key in self.columns:
+            self.columns.store(row, key, sources[key])
         if self.behaviour is not None:
             if statuses is None:
                 raise ValueError("this recorder keeps traces: pass the engine's node statuses")
@@ -252,6 +254,87 @@ def traced_agents(names: Sequence[str], trace: int | str | Sequence[str] | None)
     return sorted(chosen)
 
 
+class RecordedColumns(Mapping[str, np.ndarray]):
+    """The recorded columns, name -> values of shape (records, N), stored when they differ.
+
+    Until a column's values differ between agents in a record, only one value per record
+    is kept, shape (records,); the first record in which they differ allocates the whole
+    column (:func:`preallocated`) and fills the earlier records in. A column that is the
+    same for every agent throughout (a shared patrol point) is never stored in full, nor is
+    the initial state of agents that all start alike: recording only the initial state of
+    20 million drones keeps their one varying column, not all of them. Values are compared
+    bit by bit, so NaNs and -0.0 come back as they were recorded.
+
+    Reading a column (``columns[key]``) stores it in full; :meth:`block` does not.
+    """
+
+    def __init__(self, dtypes: Mapping[str, np.dtype], records: int, agents: int) -> None:
+        self.records, self.agents = records, agents
+        self.dtypes = {k: np.dtype(v) for k, v in dtypes.items()}
+        self._same = {k: np.zeros(records, dtype) for k, dtype in self.dtypes.items()}
+        self._full: dict[str, np.ndarray] = {}
+
+    @classmethod
+    def of(cls, arrays: Mapping[str, np.ndarray]) -> RecordedColumns:
+        """Columns already recorded in full, each of shape (records, N)."""
+        shapes = {v.shape for v in arrays.values()} or {(0, 0)}
+        records, agents = shapes.pop()
+        columns = cls({k: v.dtype for k, v in arrays.items()}, records, agents)
+        columns._full.update(arrays)
+        return columns
+
+    def store(self, row: int, key: str, values: np.ndarray) -> None:
+        """Record ``values`` (shape (N,)) as record ``row`` of column ``key``."""
+        full = self._full.get(key)
+        if full is None:
+            if self.agents == 0:
+                return
+            if same_everywhere(values):
+                self._same[key][row] = values[0]
+                return
+            full = self._stored(key, row)
+        full[row] = values
+
+    @property
+    def stored(self) -> list[str]:
+        """The columns stored in full so far."""
+        return list(self._full)
+
+    def block(self, key: str, start: int, stop: int) -> np.ndarray:
+        """Records ``start`` to ``stop`` of ``key``, shape (stop - start, N), not stored in
+        full for it (a column stored in full is returned as a view)."""
+        full = self._full.get(key)
+        if full is not None:
+            return full[start:stop]
+        return np.repeat(self._same[key][start:stop], self.agents).reshape(-1, self.agents)
+
+    def _stored(self, key: str, rows: int) -> np.ndarray:
+        """Store ``key`` in full, its first ``rows`` records filled in; the array."""
+        full = preallocated((self.records, self.agents), self.dtypes[key])
+        full[:rows] = self._same[key][:rows, None]
+        self._full[key] = full  # published once filled in (a writing thread may read)
+        return full
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        full = self._full.get(key)
+        return full if full is not None else self._stored(key, self.records)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.dtypes)
+
+    def __len__(self) -> int:
+        return len(self.dtypes)
+
+
+def same_everywhere(values: np.ndarray) -> bool:
+    """Whether every element of ``values`` (shape (N,), N >= 1) has the same bits."""
+    size = values.dtype.itemsize
+    if not values.flags.c_contiguous or size not in (1, 2, 4, 8) or values.dtype.hasobject:
+        return False
+    bits = values.view(f"u{size}")
+    return bool(bits[-1] == bits[0]) and bool((bits == bits[0]).all())
+
+
 def preallocated(shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
     """A zero-filled array whose memory is committed at once (Linux: ``MAP_POPULATE``).
 
@@ -283,8 +366,8 @@ def to_table(recorder: Recorder, start: int = 0, stop: int | None = None) -> pa.
         "iteration": pa.array(np.repeat(recorder.iterations[start:stop], n)),
         "agent": _agent_column(recorder.names, records),
     }
-    for key, values in recorder.columns.items():
-        data[key] = pa.array(values[start:stop].reshape(-1))
+    for key in recorder.columns:
+        data[key] = pa.array(recorder.columns.block(key, start, stop).reshape(-1))
     if recorder.behaviour is not None:
         behaviour = _behaviour_column(recorder, start, stop)
         data = _insert_after(data, "requested_heading", "behaviour", behaviour)
@@ -312,11 +395,13 @@ def recorder_from_tables(
     recorder.iterations = iteration[::n].astype(np.int64)
     recorder.names = [str(a) for a in states.column("agent").to_pylist()[:n]]
     skip = {"iteration", "agent", "behaviour"}
-    recorder.columns = {
-        f.name: states.column(f.name).to_numpy().reshape(records, n)
-        for f in states.schema
-        if f.name not in skip
-    }
+    recorder.columns = RecordedColumns.of(
+        {
+            f.name: states.column(f.name).to_numpy().reshape(records, n)
+            for f in states.schema
+            if f.name not in skip
+        }
+    )
     recorder.groups = {"state": [], "blackboard": [], "model": []}
     recorder.docs = dict(COLUMN_DOCS)
     for name in recorder.columns:
