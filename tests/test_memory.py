@@ -58,7 +58,7 @@ def test_the_initial_state_of_agents_alike_is_not_stored_in_full():
         load("patrol").with_overrides(agents=50, iterations=100), record_every=101
     )
     stored = set(sim.recorder.columns.stored)
-    assert stored == {"heading", "requested_heading"}  # the drones start alike but for these
+    assert stored == {"heading"}  # the drones start alike but for it (requested: its twin)
     sim.run(progress=False)
     assert len(to_table(sim.recorder)) == 50
 
@@ -74,3 +74,24 @@ def test_a_long_bearing_in_pieces_has_the_bits_of_one_piece():
     pieces = arrays.bearing(x, y, 0.0, 5.0)
     assert pieces.tobytes() == whole.tobytes()
     assert pieces[7] == arrays.bearing(float(x[7]), float(y[7]), 0.0, 5.0)
+
+
+def test_a_record_equal_to_another_column_is_kept_as_a_reference():
+    columns = RecordedColumns({"a": np.dtype(float), "b": np.dtype(float)}, 2, 3)
+    first = np.array([1.0, -0.0, 3.0])
+    columns.store(0, "a", first)
+    columns.store(0, "b", first.copy())
+    assert columns.stored == ["a"]
+    assert columns.block("b", 0, 1).tobytes() == first.tobytes()
+    columns.store(1, "a", np.zeros(3))
+    columns.store(1, "b", np.array([0.0, 0.0, 0.0 + 1e-300]))
+    assert columns.stored == ["a", "b"]
+    assert columns["b"][0].tobytes() == first.tobytes() and columns["b"][1, 2] == 1e-300
+
+
+def test_behaviours_alike_are_not_stored_in_full():
+    sim = Simulation.create(load("patrol").with_overrides(agents=20, iterations=3))
+    assert sim.recorder.behaviour_block(0, 1).tolist() == [[-1] * 20]
+    assert sim.recorder._codes is not None and sim.recorder._codes.stored == []
+    sim.run(progress=False)
+    assert sim.recorder.behaviour is not None and sim.recorder.behaviour.shape == (4, 20)

@@ -2,9 +2,11 @@
 
 A :class:`Recorder` keeps one array of shape ``(records, N)`` per recorded column, where
 ``records = iterations // every + 1`` (the initial state, then every ``every``-th
-iteration). Nothing grows during a run. :func:`to_table` turns the arrays into a long
-table (one row per recorded iteration and agent) for Parquet, CSV or pandas, with each
-column's unit and meaning in its Parquet field metadata (:data:`COLUMN_DOCS`).
+iteration), allocated whole the first time the column's values differ between agents
+(:class:`RecordedColumns`: until then one value per record). Nothing grows record by
+record. :func:`to_table` turns the arrays into a long table (one row per recorded iteration
+and agent) for Parquet, CSV or pandas, with each column's unit and meaning in its Parquet
+field metadata (:data:`COLUMN_DOCS`).
 
 Given the tree, a recorder also keeps the tree's **node statuses** (the engine's
 ``node_statuses()``, int8 codes of :mod:`pyautonomousagent.bt.status`) of the traced agents,
@@ -117,14 +119,31 @@ class Recorder:
         )
         self.traced = np.asarray(traced if tree is not None else (), dtype=np.intp)
         self.traces = preallocated((records, len(self.nodes), self.traced.size), np.dtype(np.int8))
-        self.behaviour = preallocated((records, swarm.size), np.dtype(np.int16)) if tree else None
+        codes = {"behaviour": np.dtype(np.int16)}
+        self._codes = RecordedColumns(codes, records, swarm.size) if tree else None
         self.count = 0
         self.listeners: list[Callable[[int], None]] = []
 
     @property
     def wants_statuses(self) -> bool:
         """Whether :meth:`record` needs the engine's node statuses (a tree was given)."""
-        return self.behaviour is not None
+        return self._codes is not None
+
+    @property
+    def behaviour(self) -> np.ndarray | None:
+        """Active leaf per agent as a node index, shape (records, N), int16 (see the class)."""
+        return None if self._codes is None else self._codes["behaviour"]
+
+    @behaviour.setter
+    def behaviour(self, codes: np.ndarray | None) -> None:
+        self._codes = None if codes is None else RecordedColumns.of({"behaviour": codes})
+
+    def behaviour_block(self, start: int, stop: int) -> np.ndarray:
+        """Records ``start`` to ``stop`` of :attr:`behaviour`, shape (stop - start, N), without
+        storing them all (:meth:`RecordedColumns.block`); requires a tree."""
+        if self._codes is None:
+            raise ValueError("this recorder has no tree, so no active behaviours")
+        return self._codes.block("behaviour", start, stop)
 
     def due(self, iteration: int) -> bool:
         """Whether ``iteration`` is recorded."""
@@ -147,11 +166,11 @@ class Recorder:
         sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
         for key in self.columns:
             self.columns.store(row, key, sources[key])
-        if self.behaviour is not None:
+        if self._codes is not None:
             if statuses is None:
                 raise ValueError("this recorder keeps traces: pass the engine's node statuses")
             self.traces[row] = statuses[:, self.traced]
-            self.behaviour[row] = active_leaf(statuses, self._leaf_rows)
+            self._codes.store(row, "behaviour", active_leaf(statuses, self._leaf_rows))
         self.count += 1
         for listener in self.listeners:
             listener(self.count)
@@ -262,8 +281,10 @@ class RecordedColumns(Mapping[str, np.ndarray]):
     column (:func:`preallocated`) and fills the earlier records in. A column that is the
     same for every agent throughout (a shared patrol point) is never stored in full, nor is
     the initial state of agents that all start alike: recording only the initial state of
-    20 million drones keeps their one varying column, not all of them. Values are compared
-    bit by bit, so NaNs and -0.0 come back as they were recorded.
+    20 million drones keeps their one varying column, not all of them. Likewise a record of
+    a column equal to the same record of a column stored in full (the requested heading is
+    the heading at the start) is kept as a reference to it. Values are compared bit by bit,
+    so NaNs and -0.0 come back as they were recorded.
 
     Reading a column (``columns[key]``) stores it in full; :meth:`block` does not.
     """
@@ -273,6 +294,7 @@ class RecordedColumns(Mapping[str, np.ndarray]):
         self.dtypes = {k: np.dtype(v) for k, v in dtypes.items()}
         self._same = {k: np.zeros(records, dtype) for k, dtype in self.dtypes.items()}
         self._full: dict[str, np.ndarray] = {}
+        self._twins: dict[str, dict[int, str]] = {k: {} for k in self.dtypes}
 
     @classmethod
     def of(cls, arrays: Mapping[str, np.ndarray]) -> RecordedColumns:
@@ -292,8 +314,19 @@ class RecordedColumns(Mapping[str, np.ndarray]):
             if same_everywhere(values):
                 self._same[key][row] = values[0]
                 return
+            twin = self._twin(row, values)
+            if twin is not None:
+                self._twins[key][row] = twin
+                return
             full = self._stored(key, row)
         full[row] = values
+
+    def _twin(self, row: int, values: np.ndarray) -> str | None:
+        """A column stored in full whose record ``row`` has the bits of ``values``, or None."""
+        for key, full in list(self._full.items()):
+            if full.dtype == values.dtype and same_bits(full[row], values):
+                return key
+        return None
 
     @property
     def stored(self) -> list[str]:
@@ -306,14 +339,23 @@ class RecordedColumns(Mapping[str, np.ndarray]):
         full = self._full.get(key)
         if full is not None:
             return full[start:stop]
-        return np.repeat(self._same[key][start:stop], self.agents).reshape(-1, self.agents)
+        block = np.repeat(self._same[key][start:stop], self.agents).reshape(-1, self.agents)
+        self._fill_twins(key, block, start)
+        return block
 
     def _stored(self, key: str, rows: int) -> np.ndarray:
         """Store ``key`` in full, its first ``rows`` records filled in; the array."""
         full = preallocated((self.records, self.agents), self.dtypes[key])
         full[:rows] = self._same[key][:rows, None]
+        self._fill_twins(key, full[:rows], 0)
         self._full[key] = full  # published once filled in (a writing thread may read)
         return full
+
+    def _fill_twins(self, key: str, block: np.ndarray, start: int) -> None:
+        """Copy into ``block`` (records ``start``.. of ``key``) the records kept as twins."""
+        for row, twin in list(self._twins[key].items()):
+            if start <= row < start + len(block):
+                block[row - start] = self._full[twin][row]
 
     def __getitem__(self, key: str) -> np.ndarray:
         full = self._full.get(key)
@@ -324,6 +366,15 @@ class RecordedColumns(Mapping[str, np.ndarray]):
 
     def __len__(self) -> int:
         return len(self.dtypes)
+
+
+def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether arrays ``a`` and ``b`` of one dtype and shape (N,) hold the same bits."""
+    size = a.dtype.itemsize
+    if a.shape != b.shape or size not in (1, 2, 4, 8) or a.dtype.hasobject:
+        return False
+    x, y = np.ascontiguousarray(a).view(f"u{size}"), np.ascontiguousarray(b).view(f"u{size}")
+    return x.size == 0 or (bool(x[0] == y[0]) and bool(np.array_equal(x, y)))
 
 
 def same_everywhere(values: np.ndarray) -> bool:
@@ -368,7 +419,7 @@ def to_table(recorder: Recorder, start: int = 0, stop: int | None = None) -> pa.
     }
     for key in recorder.columns:
         data[key] = pa.array(recorder.columns.block(key, start, stop).reshape(-1))
-    if recorder.behaviour is not None:
+    if recorder.wants_statuses:
         behaviour = _behaviour_column(recorder, start, stop)
         data = _insert_after(data, "requested_heading", "behaviour", behaviour)
     groups = {key: group for group, keys in recorder.groups.items() for key in keys}
@@ -519,8 +570,7 @@ def _agent_column(names: Sequence[str], records: int) -> pa.DictionaryArray:
 def _behaviour_column(recorder: Recorder, start: int, stop: int) -> pa.DictionaryArray:
     """The active leaf's name per record ``start`` to ``stop`` and agent; null where none
     was ticked."""
-    assert recorder.behaviour is not None
-    codes = recorder.behaviour[start:stop].reshape(-1).astype(np.int32)
+    codes = recorder.behaviour_block(start, stop).reshape(-1).astype(np.int32)
     indices = pa.array(codes, mask=codes < 0)
     dictionary = pa.array([node.name for node in recorder.nodes], pa.string())
     return pa.DictionaryArray.from_arrays(indices, dictionary)
