@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pyautonomousagent import Simulation, load
+from pyautonomousagent import Simulation, load, recording
 from pyautonomousagent.names import AgentIndex, AgentNames, agent_index
 from pyautonomousagent.recording import RecordedColumns, same_everywhere, to_table
 
@@ -53,7 +53,8 @@ def test_records_alike_are_kept_as_one_value_with_their_bits():
     assert not same_everywhere(np.array([0.0, -0.0])) and same_everywhere(np.ones(3))
 
 
-def test_the_initial_state_of_agents_alike_is_not_stored_in_full():
+def test_the_initial_state_of_agents_alike_is_not_stored_in_full(monkeypatch):
+    monkeypatch.setattr(recording, "COMPACT_AGENTS", 1)
     sim = Simulation.create(
         load("patrol").with_overrides(agents=50, iterations=100), record_every=101
     )
@@ -89,9 +90,24 @@ def test_a_record_equal_to_another_column_is_kept_as_a_reference():
     assert columns["b"][0].tobytes() == first.tobytes() and columns["b"][1, 2] == 1e-300
 
 
-def test_behaviours_alike_are_not_stored_in_full():
+def test_behaviours_alike_are_not_stored_in_full(monkeypatch):
+    monkeypatch.setattr(recording, "COMPACT_AGENTS", 1)
     sim = Simulation.create(load("patrol").with_overrides(agents=20, iterations=3))
     assert sim.recorder.behaviour_block(0, 1).tolist() == [[-1] * 20]
     assert sim.recorder._codes is not None and sim.recorder._codes.stored == []
     sim.run(progress=False)
     assert sim.recorder.behaviour is not None and sim.recorder.behaviour.shape == (4, 20)
+
+
+def test_small_swarms_store_every_column_at_set_up():
+    sim = Simulation.create(load("patrol").with_overrides(agents=20, iterations=3))
+    assert sorted(sim.recorder.columns.stored) == sorted(sim.recorder.columns)
+
+
+@pytest.mark.parametrize("compact", [1, 1 << 30])
+def test_compact_and_full_records_give_the_same_table(monkeypatch, compact):
+    scenario = load("patrol").with_overrides(agents=30, iterations=25)
+    full = to_table(Simulation.create(scenario).run(progress=False).recorder)
+    monkeypatch.setattr(recording, "COMPACT_AGENTS", compact)
+    again = to_table(Simulation.create(scenario).run(progress=False).recorder)
+    assert again.equals(full, check_metadata=True)

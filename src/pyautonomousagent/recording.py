@@ -61,6 +61,12 @@ COLUMN_DOCS: dict[str, tuple[str, str]] = {
 }
 
 
+#: Swarms of at least this many agents keep records compact (:class:`RecordedColumns`):
+#: columns stored in full only once agents differ. Smaller swarms preallocate every column at
+#: set-up, as comparing each record would cost more than the memory it saves.
+COMPACT_AGENTS = 1 << 16
+
+
 class Recorder:
     """Preallocated columnar storage of the swarm's state and blackboard.
 
@@ -105,7 +111,8 @@ class Recorder:
         self.iterations = np.zeros(records, dtype=np.int64)
         sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
         dtypes = {k: v.dtype for k, v in sources.items()}
-        self.columns = RecordedColumns(dtypes, records, swarm.size)
+        compact = swarm.size >= COMPACT_AGENTS
+        self.columns = RecordedColumns(dtypes, records, swarm.size, compact)
         self.groups = {
             "state": list(swarm.columns),
             "blackboard": list(swarm.blackboard),
@@ -120,7 +127,7 @@ class Recorder:
         self.traced = np.asarray(traced if tree is not None else (), dtype=np.intp)
         self.traces = preallocated((records, len(self.nodes), self.traced.size), np.dtype(np.int8))
         codes = {"behaviour": np.dtype(np.int16)}
-        self._codes = RecordedColumns(codes, records, swarm.size) if tree else None
+        self._codes = RecordedColumns(codes, records, swarm.size, compact) if tree else None
         self.count = 0
         self.listeners: list[Callable[[int], None]] = []
 
@@ -286,15 +293,21 @@ class RecordedColumns(Mapping[str, np.ndarray]):
     the heading at the start) is kept as a reference to it. Values are compared bit by bit,
     so NaNs and -0.0 come back as they were recorded.
 
-    Reading a column (``columns[key]``) stores it in full; :meth:`block` does not.
+    Reading a column (``columns[key]``) stores it in full; :meth:`block` does not. With
+    ``compact=False`` every column is stored in full at once (no comparisons per record).
     """
 
-    def __init__(self, dtypes: Mapping[str, np.dtype], records: int, agents: int) -> None:
+    def __init__(
+        self, dtypes: Mapping[str, np.dtype], records: int, agents: int, compact: bool = True
+    ) -> None:
         self.records, self.agents = records, agents
         self.dtypes = {k: np.dtype(v) for k, v in dtypes.items()}
         self._same = {k: np.zeros(records, dtype) for k, dtype in self.dtypes.items()}
         self._full: dict[str, np.ndarray] = {}
         self._twins: dict[str, dict[int, str]] = {k: {} for k in self.dtypes}
+        if not compact:
+            for key in self.dtypes:
+                self._stored(key, 0)
 
     @classmethod
     def of(cls, arrays: Mapping[str, np.ndarray]) -> RecordedColumns:

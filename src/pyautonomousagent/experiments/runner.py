@@ -119,12 +119,15 @@ def write_run_data(sim: Any, root: Path, run: Run) -> Path:
     """Write the run's recorded table as ``data.parquet`` in its partition folder."""
     import pyarrow.parquet as pq
 
+    from pyautonomousagent.recording import parquet_options
+
     folder = partition_dir(root, run)
     folder.mkdir(parents=True, exist_ok=True)
     target = folder / "data.parquet"
     temporary = folder / f".{uuid.uuid4().hex}.tmp"
     try:
-        pq.write_table(sim.table(), temporary)
+        table = sim.table()
+        pq.write_table(table, temporary, **parquet_options(table.schema))
         os.replace(temporary, target)
     finally:
         temporary.unlink(missing_ok=True)
