@@ -3,6 +3,10 @@ behind by a run that is not saved."""
 
 from __future__ import annotations
 
+import os
+import sys
+import threading
+
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
@@ -10,7 +14,7 @@ import pytest
 from pyautonomousagent import Simulation, load
 from pyautonomousagent.recording import parquet_options, to_table
 from pyautonomousagent.runs import save_run, streaming, verify
-from pyautonomousagent.streaming import StatesStream
+from pyautonomousagent.streaming import NICER, StatesStream
 
 
 def patrol(agents: int = 5, iterations: int = 40) -> Simulation:
@@ -80,3 +84,23 @@ def test_csv_is_written_at_the_end(tmp_path):
         sim.run(progress=False)
         save_run(sim, tmp_path / "run", fmt="csv", animation=False, stream=stream)
     assert verify(tmp_path / "run")["files"][0]["name"] == "states.csv"
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="threads have their own priority on Linux")
+def test_the_writing_thread_gives_way_to_the_loop():
+    from pyautonomousagent.streaming import _lower_priority
+
+    seen: list[int] = []
+
+    def probe() -> None:
+        thread = threading.get_native_id()
+        before = os.getpriority(os.PRIO_PROCESS, thread)
+        _lower_priority()
+        seen.append(os.getpriority(os.PRIO_PROCESS, thread) - before)
+
+    main = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+    worker = threading.Thread(target=probe)
+    worker.start()
+    worker.join()
+    assert seen == [min(NICER, 19 - main)]
+    assert os.getpriority(os.PRIO_PROCESS, threading.get_native_id()) == main  # the loop's
