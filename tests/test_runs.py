@@ -261,5 +261,5 @@ def test_the_summary_shows_the_writing_beside_the_loop() -> None:
     from pyautonomousagent.cli import timings_line
 
     timings = {"setup": 0.5, "simulate": 1.0, "write_data": 0.05, "write_data_thread": 0.9}
-    expected = "set-up 0.50 s, loop 1.00 s, writing 0.05 s after the loop (thread 0.90 s)"
+    expected = "set-up 0.50 s, loop 1.00 s, writing 0.05 s after the loop (thread 0.90 s CPU)"
     assert timings_line(timings) == expected

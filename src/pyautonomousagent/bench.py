@@ -78,7 +78,7 @@ class Result:
     """What a case measured: seconds (set-up and loop) and peak resident memory (MB), or why
     it failed. ``setup`` is the part of ``seconds`` spent before the loop; ``write`` and
     ``views`` are the seconds spent writing the data (after the loop) and the views, and
-    ``write_thread`` the seconds the thread writing the data while the loop ran worked
+    ``write_thread`` the CPU seconds of the thread writing the data while the loop ran
     (``case.save`` only)."""
 
     case: Case
@@ -142,7 +142,7 @@ def saved_timings(sim: Simulation, iterations: int, start: float) -> dict[str, f
     while the loop runs, then the animation and replay) into a temporary folder, removed
     afterwards. Seconds from ``start`` to the loop's end ("seconds"), peak memory (MB) at
     the loop's end, and the seconds of writing the data after the loop ("write"), of the
-    writing thread ("write_thread") and of the views ("views")."""
+    writing thread (CPU seconds, "write_thread") and of the views ("views")."""
     from pyautonomousagent.runs import save_run, streaming
 
     with tempfile.TemporaryDirectory(prefix="pyaa-bench-") as folder:

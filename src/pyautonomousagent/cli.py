@@ -552,14 +552,14 @@ def _print_summary(sim: Simulation, written: list[Path]) -> None:
 def timings_line(timings: Mapping[str, float]) -> str:
     """``set-up 0.01 s, loop 2.10 s, writing 0.05 s, views 3.20 s (animation 3.10 s, replay
     0.10 s)`` from ``Simulation.timings``; stages not done are left out. Data written while
-    the loop ran: ``writing 0.05 s after the loop (thread 1.20 s)``."""
+    the loop ran: ``writing 0.05 s after the loop (thread 1.20 s)``, the thread's CPU time."""
     parts = [
         f"{label} {timings[key]:.2f} s"
         for key, label in (("setup", "set-up"), ("simulate", "loop"), ("write_data", "writing"))
         if key in timings
     ]
     if "write_data" in timings and "write_data_thread" in timings:
-        parts[-1] += f" after the loop (thread {timings['write_data_thread']:.2f} s)"
+        parts[-1] += f" after the loop (thread {timings['write_data_thread']:.2f} s CPU)"
     views = {k: timings[k] for k in ("animation", "replay") if k in timings}
     if views:
         each = ", ".join(f"{k} {v:.2f} s" for k, v in views.items())

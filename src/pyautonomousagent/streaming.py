@@ -39,7 +39,8 @@ class StatesStream:
     Attributes:
         block: records per row group.
         written: records handed to the writing thread so far.
-        busy: seconds the writing thread has spent building and writing row groups.
+        busy: CPU seconds the writing thread has spent building and writing row groups
+            (its own processor time: on a busy machine its wall time is longer).
     """
 
     def __init__(self, recorder: Recorder, path: Path, rows: int = ROW_GROUP_ROWS) -> None:
@@ -105,13 +106,13 @@ class StatesStream:
 
     def _write(self, start: int, stop: int) -> None:
         """Write records ``start`` to ``stop`` as one row group."""
-        began = time.perf_counter()
+        began = time.thread_time()
         table = to_table(self.recorder, start, stop)
         if self._writer is None:
             options = parquet_options(table.schema)
             self._writer = pq.ParquetWriter(self.path, table.schema, **options)
         self._writer.write_table(table, row_group_size=max(1, table.num_rows))
-        self.busy += time.perf_counter() - began
+        self.busy += time.thread_time() - began
 
 
 #: How much lower the writing thread's scheduling priority is than the loop's (Linux ``nice``).
