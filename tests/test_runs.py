@@ -255,3 +255,11 @@ def test_the_summary_splits_the_time_by_stage() -> None:
     views = "views 3.20 s (animation 3.10 s, replay 0.10 s)"
     assert timings_line(timings) == f"set-up 0.01 s, loop 2.10 s, writing 0.05 s, {views}"
     assert timings_line({"setup": 0.5, "simulate": 1.0}) == "set-up 0.50 s, loop 1.00 s"
+
+
+def test_the_summary_shows_the_writing_beside_the_loop() -> None:
+    from pyautonomousagent.cli import timings_line
+
+    timings = {"setup": 0.5, "simulate": 1.0, "write_data": 0.05, "write_data_thread": 0.9}
+    expected = "set-up 0.50 s, loop 1.00 s, writing 0.05 s after the loop (thread 0.90 s CPU)"
+    assert timings_line(timings) == expected

@@ -137,12 +137,22 @@ def arctan2(y: Any, x: Any) -> Any:
 SMALL = 8
 
 
+#: Arrays longer than this are computed by :func:`bearing` in pieces of this many agents:
+#: its ~10 temporaries then take 5 MB, not 80 bytes per agent (1.6 GB at 20 million agents).
+CHUNK = 1 << 16
+
+
 def bearing(x: Any, y: Any, to_x: Any, to_y: Any) -> Any:
     """Heading (degrees clockwise from north, [0, 360)) pointing from (x, y) to (to_x, to_y).
 
     One body for one agent and for arrays of agents, so both engines get the same bits
-    (a small array is computed element by element on the scalar path: the same bits too).
+    (a small array is computed element by element on the scalar path, a long one in pieces
+    of :data:`CHUNK` agents: every step is element-wise, so the same bits too).
     """
+    if any(
+        isinstance(v, np.ndarray) and v.ndim == 1 and v.size > CHUNK for v in (x, y, to_x, to_y)
+    ):
+        return _bearing_in_pieces(*np.broadcast_arrays(x, y, to_x, to_y))
     dx, dy = to_x - x, to_y - y
     if isinstance(dx, np.ndarray) or isinstance(dy, np.ndarray):
         ex, ey = np.broadcast_arrays(dx, dy)
@@ -150,6 +160,15 @@ def bearing(x: Any, y: Any, to_x: Any, to_y: Any) -> Any:
             pairs = zip(ex.tolist(), ey.tolist(), strict=True)
             return np.array([_bearing(a, b) for a, b in pairs], dtype=np.float64)
     return _bearing(dx, dy)
+
+
+def _bearing_in_pieces(x: np.ndarray, y: np.ndarray, tx: np.ndarray, ty: np.ndarray) -> np.ndarray:
+    """:func:`bearing` of arrays of shape (N,), :data:`CHUNK` agents at a time."""
+    out = np.empty(x.shape, dtype=np.result_type(x, y, tx, ty, 1.0))
+    for start in range(0, x.size, CHUNK):
+        piece = slice(start, start + CHUNK)
+        out[piece] = _bearing(tx[piece] - x[piece], ty[piece] - y[piece])
+    return out
 
 
 def _bearing(dx: Any, dy: Any) -> Any:

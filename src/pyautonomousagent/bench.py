@@ -77,7 +77,9 @@ class Case:
 class Result:
     """What a case measured: seconds (set-up and loop) and peak resident memory (MB), or why
     it failed. ``setup`` is the part of ``seconds`` spent before the loop; ``write`` and
-    ``views`` are the seconds spent writing the data and the views (``case.save`` only)."""
+    ``views`` are the seconds spent writing the data (after the loop) and the views, and
+    ``write_thread`` the CPU seconds of the thread writing the data while the loop ran
+    (``case.save`` only)."""
 
     case: Case
     seconds: float | None
@@ -86,6 +88,7 @@ class Result:
     setup: float = 0.0
     write: float | None = None
     views: float | None = None
+    write_thread: float | None = None
 
     @property
     def loop(self) -> float | None:
@@ -127,25 +130,35 @@ def run_case_here(case: Case) -> dict[str, float]:
         implementation=implementation,
     )
     setup = time.perf_counter() - start
-    for _ in range(case.iterations):
-        sim.step()
-    seconds = time.perf_counter() - start
-    figures = {"seconds": seconds, "setup": setup, "peak_mb": peak_rss_mb()}
-    if case.save:
-        figures.update(save_timings(sim))
-    return figures
+    if not case.save:
+        for _ in range(case.iterations):
+            sim.step()
+        return {"seconds": time.perf_counter() - start, "setup": setup, "peak_mb": peak_rss_mb()}
+    return {"setup": setup, **saved_timings(sim, case.iterations, start)}
 
 
-def save_timings(sim: Simulation) -> dict[str, float]:
-    """Save ``sim`` as ``pyaa run`` does (data, animation, replay) into a temporary folder,
-    removed afterwards; the seconds spent writing the data ("write") and the views
-    ("views")."""
-    from pyautonomousagent.runs import save_run
+def saved_timings(sim: Simulation, iterations: int, start: float) -> dict[str, float]:
+    """Run ``iterations`` of ``sim`` and save it as ``pyaa run`` does (the data written
+    while the loop runs, then the animation and replay) into a temporary folder, removed
+    afterwards. Seconds from ``start`` to the loop's end ("seconds"), peak memory (MB) at
+    the loop's end, and the seconds of writing the data after the loop ("write"), of the
+    writing thread (CPU seconds, "write_thread") and of the views ("views")."""
+    from pyautonomousagent.runs import save_run, streaming
 
     with tempfile.TemporaryDirectory(prefix="pyaa-bench-") as folder:
-        save_run(sim, Path(folder) / "run", progress=False, command=["pyaa", "bench"])
-    views = sum(sim.timings.get(k, 0.0) for k in VIEW_TIMINGS)
-    return {"write": sim.timings.get("write_data", 0.0), "views": views}
+        out = Path(folder) / "run"
+        with streaming(sim, out) as stream:
+            for _ in range(iterations):
+                sim.step()
+            seconds, peak = time.perf_counter() - start, peak_rss_mb()
+            save_run(sim, out, progress=False, command=["pyaa", "bench"], stream=stream)
+    return {
+        "seconds": seconds,
+        "peak_mb": peak,
+        "write": sim.timings.get("write_data", 0.0),
+        "write_thread": sim.timings.get("write_data_thread", 0.0),
+        "views": sum(sim.timings.get(k, 0.0) for k in VIEW_TIMINGS),
+    }
 
 
 def peak_rss_mb(maxrss: int | None = None, system: str = sys.platform) -> float:
@@ -189,6 +202,7 @@ def measure(case: Case, timeout: float | None = None, budget_mb: float | None = 
         setup=figures["setup"],
         write=figures.get("write"),
         views=figures.get("views"),
+        write_thread=figures.get("write_thread"),
     )
 
 

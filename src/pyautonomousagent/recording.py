@@ -2,9 +2,11 @@
 
 A :class:`Recorder` keeps one array of shape ``(records, N)`` per recorded column, where
 ``records = iterations // every + 1`` (the initial state, then every ``every``-th
-iteration). Nothing grows during a run. :func:`to_table` turns the arrays into a long
-table (one row per recorded iteration and agent) for Parquet, CSV or pandas, with each
-column's unit and meaning in its Parquet field metadata (:data:`COLUMN_DOCS`).
+iteration), allocated whole the first time the column's values differ between agents
+(:class:`RecordedColumns`: until then one value per record). Nothing grows record by
+record. :func:`to_table` turns the arrays into a long table (one row per recorded iteration
+and agent) for Parquet, CSV or pandas, with each column's unit and meaning in its Parquet
+field metadata (:data:`COLUMN_DOCS`).
 
 Given the tree, a recorder also keeps the tree's **node statuses** (the engine's
 ``node_statuses()``, int8 codes of :mod:`pyautonomousagent.bt.status`) of the traced agents,
@@ -18,7 +20,7 @@ from __future__ import annotations
 import json
 import mmap
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +30,7 @@ import pyarrow as pa
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.status import INVALID, NAMES, RUNNING
 from pyautonomousagent.inputs import InputError
+from pyautonomousagent.names import AgentNames
 from pyautonomousagent.state import CONTROL_COLUMNS, MOTION_COLUMNS, Swarm
 
 #: Agents traced by default: all of a swarm this small, else the first this many.
@@ -58,6 +61,12 @@ COLUMN_DOCS: dict[str, tuple[str, str]] = {
 }
 
 
+#: Swarms of at least this many agents keep records compact (:class:`RecordedColumns`):
+#: columns stored in full only once agents differ. Smaller swarms preallocate every column at
+#: set-up, as comparing each record would cost more than the memory it saves.
+COMPACT_AGENTS = 1 << 16
+
+
 class Recorder:
     """Preallocated columnar storage of the swarm's state and blackboard.
 
@@ -79,6 +88,8 @@ class Recorder:
         traces: node statuses of the traced agents, shape (records, nodes, K), int8.
         behaviour: active leaf per agent as a node index, shape (records, N), int16; -1 when
             none was ticked; None without a tree.
+        listeners: called with the number of records after each record is written whole
+            (e.g. :class:`~pyautonomousagent.streaming.StatesStream`).
     """
 
     def __init__(
@@ -95,11 +106,13 @@ class Recorder:
             raise ValueError(f"record_every must be >= 1, got {every}")
         self.every = every
         self.docs = {**COLUMN_DOCS, **(docs or {})}
-        self.names = list(swarm.names)
+        self.names = swarm.names if isinstance(swarm.names, AgentNames) else list(swarm.names)
         records = iterations // every + 1
         self.iterations = np.zeros(records, dtype=np.int64)
         sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
-        self.columns = {k: preallocated((records, swarm.size), v.dtype) for k, v in sources.items()}
+        dtypes = {k: v.dtype for k, v in sources.items()}
+        compact = swarm.size >= COMPACT_AGENTS
+        self.columns = RecordedColumns(dtypes, records, swarm.size, compact)
         self.groups = {
             "state": list(swarm.columns),
             "blackboard": list(swarm.blackboard),
@@ -113,13 +126,31 @@ class Recorder:
         )
         self.traced = np.asarray(traced if tree is not None else (), dtype=np.intp)
         self.traces = preallocated((records, len(self.nodes), self.traced.size), np.dtype(np.int8))
-        self.behaviour = preallocated((records, swarm.size), np.dtype(np.int16)) if tree else None
+        codes = {"behaviour": np.dtype(np.int16)}
+        self._codes = RecordedColumns(codes, records, swarm.size, compact) if tree else None
         self.count = 0
+        self.listeners: list[Callable[[int], None]] = []
 
     @property
     def wants_statuses(self) -> bool:
         """Whether :meth:`record` needs the engine's node statuses (a tree was given)."""
-        return self.behaviour is not None
+        return self._codes is not None
+
+    @property
+    def behaviour(self) -> np.ndarray | None:
+        """Active leaf per agent as a node index, shape (records, N), int16 (see the class)."""
+        return None if self._codes is None else self._codes["behaviour"]
+
+    @behaviour.setter
+    def behaviour(self, codes: np.ndarray | None) -> None:
+        self._codes = None if codes is None else RecordedColumns.of({"behaviour": codes})
+
+    def behaviour_block(self, start: int, stop: int) -> np.ndarray:
+        """Records ``start`` to ``stop`` of :attr:`behaviour`, shape (stop - start, N), without
+        storing them all (:meth:`RecordedColumns.block`); requires a tree."""
+        if self._codes is None:
+            raise ValueError("this recorder has no tree, so no active behaviours")
+        return self._codes.block("behaviour", start, stop)
 
     def due(self, iteration: int) -> bool:
         """Whether ``iteration`` is recorded."""
@@ -140,14 +171,16 @@ class Recorder:
         row = self.count
         self.iterations[row] = iteration
         sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
-        for key, values in self.columns.items():
-            values[row] = sources[key]
-        if self.behaviour is not None:
+        for key in self.columns:
+            self.columns.store(row, key, sources[key])
+        if self._codes is not None:
             if statuses is None:
                 raise ValueError("this recorder keeps traces: pass the engine's node statuses")
             self.traces[row] = statuses[:, self.traced]
-            self.behaviour[row] = active_leaf(statuses, self._leaf_rows)
+            self._codes.store(row, "behaviour", active_leaf(statuses, self._leaf_rows))
         self.count += 1
+        for listener in self.listeners:
+            listener(self.count)
 
     def trace(self, agent: int | str) -> np.ndarray:
         """The node statuses of one traced agent (index or name), shape (records so far, nodes)."""
@@ -247,6 +280,125 @@ def traced_agents(names: Sequence[str], trace: int | str | Sequence[str] | None)
     return sorted(chosen)
 
 
+class RecordedColumns(Mapping[str, np.ndarray]):
+    """The recorded columns, name -> values of shape (records, N), stored when they differ.
+
+    Until a column's values differ between agents in a record, only one value per record
+    is kept, shape (records,); the first record in which they differ allocates the whole
+    column (:func:`preallocated`) and fills the earlier records in. A column that is the
+    same for every agent throughout (a shared patrol point) is never stored in full, nor is
+    the initial state of agents that all start alike: recording only the initial state of
+    20 million drones keeps their one varying column, not all of them. Likewise a record of
+    a column equal to the same record of a column stored in full (the requested heading is
+    the heading at the start) is kept as a reference to it. Values are compared bit by bit,
+    so NaNs and -0.0 come back as they were recorded.
+
+    Reading a column (``columns[key]``) stores it in full; :meth:`block` does not. With
+    ``compact=False`` every column is stored in full at once (no comparisons per record).
+    """
+
+    def __init__(
+        self, dtypes: Mapping[str, np.dtype], records: int, agents: int, compact: bool = True
+    ) -> None:
+        self.records, self.agents = records, agents
+        self.dtypes = {k: np.dtype(v) for k, v in dtypes.items()}
+        self._same = {k: np.zeros(records, dtype) for k, dtype in self.dtypes.items()}
+        self._full: dict[str, np.ndarray] = {}
+        self._twins: dict[str, dict[int, str]] = {k: {} for k in self.dtypes}
+        if not compact:
+            for key in self.dtypes:
+                self._stored(key, 0)
+
+    @classmethod
+    def of(cls, arrays: Mapping[str, np.ndarray]) -> RecordedColumns:
+        """Columns already recorded in full, each of shape (records, N)."""
+        shapes = {v.shape for v in arrays.values()} or {(0, 0)}
+        records, agents = shapes.pop()
+        columns = cls({k: v.dtype for k, v in arrays.items()}, records, agents)
+        columns._full.update(arrays)
+        return columns
+
+    def store(self, row: int, key: str, values: np.ndarray) -> None:
+        """Record ``values`` (shape (N,)) as record ``row`` of column ``key``."""
+        full = self._full.get(key)
+        if full is None:
+            if self.agents == 0:
+                return
+            if same_everywhere(values):
+                self._same[key][row] = values[0]
+                return
+            twin = self._twin(row, values)
+            if twin is not None:
+                self._twins[key][row] = twin
+                return
+            full = self._stored(key, row)
+        full[row] = values
+
+    def _twin(self, row: int, values: np.ndarray) -> str | None:
+        """A column stored in full whose record ``row`` has the bits of ``values``, or None."""
+        for key, full in list(self._full.items()):
+            if full.dtype == values.dtype and same_bits(full[row], values):
+                return key
+        return None
+
+    @property
+    def stored(self) -> list[str]:
+        """The columns stored in full so far."""
+        return list(self._full)
+
+    def block(self, key: str, start: int, stop: int) -> np.ndarray:
+        """Records ``start`` to ``stop`` of ``key``, shape (stop - start, N), not stored in
+        full for it (a column stored in full is returned as a view)."""
+        full = self._full.get(key)
+        if full is not None:
+            return full[start:stop]
+        block = np.repeat(self._same[key][start:stop], self.agents).reshape(-1, self.agents)
+        self._fill_twins(key, block, start)
+        return block
+
+    def _stored(self, key: str, rows: int) -> np.ndarray:
+        """Store ``key`` in full, its first ``rows`` records filled in; the array."""
+        full = preallocated((self.records, self.agents), self.dtypes[key])
+        full[:rows] = self._same[key][:rows, None]
+        self._fill_twins(key, full[:rows], 0)
+        self._full[key] = full  # published once filled in (a writing thread may read)
+        return full
+
+    def _fill_twins(self, key: str, block: np.ndarray, start: int) -> None:
+        """Copy into ``block`` (records ``start``.. of ``key``) the records kept as twins."""
+        for row, twin in list(self._twins[key].items()):
+            if start <= row < start + len(block):
+                block[row - start] = self._full[twin][row]
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        full = self._full.get(key)
+        return full if full is not None else self._stored(key, self.records)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.dtypes)
+
+    def __len__(self) -> int:
+        return len(self.dtypes)
+
+
+def same_bits(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether arrays ``a`` and ``b`` of one dtype and shape (N,) hold the same bits."""
+    size = a.dtype.itemsize
+    if a.shape != b.shape or size not in (1, 2, 4, 8) or a.dtype.hasobject:
+        return False
+    x, y = np.ascontiguousarray(a).view(f"u{size}"), np.ascontiguousarray(b).view(f"u{size}")
+    return x.size == 0 or (bool(x[0] == y[0]) and bool(np.array_equal(x, y)))
+
+
+def same_everywhere(values: np.ndarray) -> bool:
+    """Whether every element of ``values`` (shape (N,), N >= 1) has the same bits."""
+    size = values.dtype.itemsize
+    if not values.flags.c_contiguous or size not in (1, 2, 4, 8) or values.dtype.hasobject:
+        return False
+    bits = values.view(f"u{size}")
+    return bool(bits[-1] == bits[0]) and bool((bits == bits[0]).all())
+
+
 def preallocated(shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
     """A zero-filled array whose memory is committed at once (Linux: ``MAP_POPULATE``).
 
@@ -264,21 +416,25 @@ def preallocated(shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
     return np.frombuffer(mmap.mmap(-1, nbytes, flags=flags), dtype=dtype).reshape(shape)
 
 
-def to_table(recorder: Recorder) -> pa.Table:
-    """The records as a long table: ``iteration, agent``, the state, ``behaviour`` (when the
-    recorder has a tree), the blackboard and model columns.
+def to_table(recorder: Recorder, start: int = 0, stop: int | None = None) -> pa.Table:
+    """The records ``start`` to ``stop`` (record numbers; default: all recorded so far) as a
+    long table: ``iteration, agent``, the state, ``behaviour`` (when the recorder has a
+    tree), the blackboard and model columns; ``(stop - start) x N`` rows.
 
-    Each field's metadata holds its ``unit`` and ``description`` (:data:`COLUMN_DOCS`).
+    The numeric columns share the recorder's memory (no copy). Each field's metadata holds
+    its ``unit`` and ``description`` (:data:`COLUMN_DOCS`).
     """
-    records, n = recorder.count, len(recorder.names)
+    stop = recorder.count if stop is None else stop
+    records, n = stop - start, len(recorder.names)
     data: dict[str, pa.Array] = {
-        "iteration": pa.array(np.repeat(recorder.iterations[:records], n)),
+        "iteration": pa.array(np.repeat(recorder.iterations[start:stop], n)),
         "agent": _agent_column(recorder.names, records),
     }
     for key in recorder.columns:
-        data[key] = pa.array(recorder.column(key).reshape(-1))
-    if recorder.behaviour is not None:
-        data = _insert_after(data, "requested_heading", "behaviour", _behaviour_column(recorder))
+        data[key] = pa.array(recorder.columns.block(key, start, stop).reshape(-1))
+    if recorder.wants_statuses:
+        behaviour = _behaviour_column(recorder, start, stop)
+        data = _insert_after(data, "requested_heading", "behaviour", behaviour)
     groups = {key: group for group, keys in recorder.groups.items() for key in keys}
     return _documented(pa.table(data), docs=recorder.docs, groups=groups)
 
@@ -299,14 +455,17 @@ def recorder_from_tables(
     recorder = Recorder.__new__(Recorder)
     recorder.every = int(np.diff(iteration[::n]).min()) if records > 1 else 1
     recorder.count = records
+    recorder.listeners = []
     recorder.iterations = iteration[::n].astype(np.int64)
     recorder.names = [str(a) for a in states.column("agent").to_pylist()[:n]]
     skip = {"iteration", "agent", "behaviour"}
-    recorder.columns = {
-        f.name: states.column(f.name).to_numpy().reshape(records, n)
-        for f in states.schema
-        if f.name not in skip
-    }
+    recorder.columns = RecordedColumns.of(
+        {
+            f.name: states.column(f.name).to_numpy().reshape(records, n)
+            for f in states.schema
+            if f.name not in skip
+        }
+    )
     recorder.groups = {"state": [], "blackboard": [], "model": []}
     recorder.docs = dict(COLUMN_DOCS)
     for name in recorder.columns:
@@ -421,10 +580,10 @@ def _agent_column(names: Sequence[str], records: int) -> pa.DictionaryArray:
     return pa.DictionaryArray.from_arrays(pa.array(indices), pa.array(list(names), pa.string()))
 
 
-def _behaviour_column(recorder: Recorder) -> pa.DictionaryArray:
-    """The active leaf's name per record and agent; null where none was ticked."""
-    assert recorder.behaviour is not None
-    codes = recorder.behaviour[: recorder.count].reshape(-1).astype(np.int32)
+def _behaviour_column(recorder: Recorder, start: int, stop: int) -> pa.DictionaryArray:
+    """The active leaf's name per record ``start`` to ``stop`` and agent; null where none
+    was ticked."""
+    codes = recorder.behaviour_block(start, stop).reshape(-1).astype(np.int32)
     indices = pa.array(codes, mask=codes < 0)
     dictionary = pa.array([node.name for node in recorder.nodes], pa.string())
     return pa.DictionaryArray.from_arrays(indices, dictionary)
@@ -463,7 +622,7 @@ def write_table(table: pa.Table, path: Path, fmt: str = "parquet") -> Path:
     if fmt == "parquet":
         import pyarrow.parquet as pq
 
-        pq.write_table(table, path)
+        pq.write_table(table, path, **parquet_options(table.schema))
     elif fmt == "csv":
         import pyarrow.csv as pcsv
 
@@ -471,6 +630,21 @@ def write_table(table: pa.Table, path: Path, fmt: str = "parquet") -> Path:
     else:
         raise ValueError(f"unknown format {fmt!r}; use 'parquet' or 'csv'")
     return path
+
+
+def parquet_options(schema: pa.Schema) -> dict[str, Any]:
+    """How the records are written to Parquet (``pyarrow.parquet.write_table`` options).
+
+    Dictionary encoding only for the dictionary-typed columns (agent, behaviour): on the
+    float columns pyarrow first tries a dictionary, gives up after 1 MiB of distinct values
+    and falls back to plain encoding, which doubled the time of writing. Statistics (min, max
+    per row group, which readers use to skip row groups) for ``iteration`` only: for the other
+    columns they cost a sixth of the time of writing. Snappy compression, as pyarrow's
+    default. Measured: docs/performance.md.
+    """
+    dictionary = [f.name for f in schema if pa.types.is_dictionary(f.type)]
+    statistics = [name for name in ("iteration",) if name in schema.names]
+    return {"use_dictionary": dictionary, "write_statistics": statistics, "compression": "snappy"}
 
 
 def read_table(path: Path) -> pa.Table:

@@ -53,6 +53,7 @@ from pyautonomousagent.simulation.scenario import to_mapping
 if TYPE_CHECKING:
     from pyautonomousagent.render.views import Views
     from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.streaming import StatesStream
 
 STATUSES = ("complete", "interrupted", "failed")
 #: The folder that default run folders live in.
@@ -156,6 +157,7 @@ def save_run(
     overwrite: bool = False,
     command: Sequence[str] | None = None,
     overrides: Mapping[str, Any] | None = None,
+    stream: StatesStream | None = None,
 ) -> SavedRun:
     """Save ``sim``'s data, animation and ``run.json`` into ``folder``, all or nothing.
 
@@ -171,6 +173,8 @@ def save_run(
         overwrite: replace an earlier run in ``folder``.
         command: the command line to record (default ``sys.argv``).
         overrides: the parameter overrides to record.
+        stream: the states written while the run went on (:func:`streaming` for ``folder``
+            and ``fmt``): finished here instead of writing the table.
 
     Raises:
         RunError: the folder cannot be used (before anything is written).
@@ -185,14 +189,15 @@ def save_run(
     saved = SavedRun(target, status)
     if target != Path(folder):
         saved.note = f"{folder} holds an earlier run, kept; this run was saved as {target}"
-    try:
-        temp = Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=target.absolute().parent))
-    except OSError as error:
-        raise SaveError(f"cannot write in {target.absolute().parent}: {_reason(error)}") from None
+    temp = stream.path.parent if stream is not None else _temp_folder(target)
     try:
         start = time.perf_counter()
         with _held_interrupts() as caught:
-            saved.files.append(write_table(sim.table(), temp / f"states.{fmt}", fmt))
+            if stream is not None:
+                saved.files.append(stream.finish())
+                sim.timings["write_data_thread"] = stream.busy
+            else:
+                saved.files.append(write_table(sim.table(), temp / f"states.{fmt}", fmt))
             if sim.recorder.traced.size:
                 traces = write_table(sim.trace_table(), temp / f"traces.{fmt}", fmt)
                 saved.files.append(traces)
@@ -217,6 +222,48 @@ def save_run(
         raise
     saved.files = [target / path.name for path in saved.files] + [target / SUMMARY]
     return saved
+
+
+def _temp_folder(target: Path) -> Path:
+    """A new temporary folder beside ``target`` (``.NAME.tmp-*``), where a run is written."""
+    try:
+        return Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=target.absolute().parent))
+    except OSError as error:
+        raise SaveError(f"cannot write in {target.absolute().parent}: {_reason(error)}") from None
+
+
+@contextlib.contextmanager
+def streaming(
+    sim: Simulation, folder: str | Path, fmt: str = "parquet"
+) -> Iterator[StatesStream | None]:
+    """Write ``sim``'s states to Parquet while it runs, for :func:`save_run` into ``folder``.
+
+    Yields a :class:`~pyautonomousagent.streaming.StatesStream` writing ``states.parquet``
+    in a temporary folder beside ``folder`` (the one :func:`save_run` then fills and puts in
+    place), or None for CSV or where no folder can be made there (:func:`save_run` then
+    writes the table at the end, and reports why it cannot). Whatever :func:`save_run` did
+    not put in place is removed on leaving: a failed or abandoned run leaves nothing.
+
+        with streaming(sim, out) as stream:
+            status = simulate(sim)
+            save_run(sim, out, status=status, stream=stream)
+    """
+    if fmt != "parquet":
+        yield None
+        return
+    from pyautonomousagent.streaming import StatesStream
+
+    try:
+        temp = _temp_folder(Path(folder))
+    except SaveError:
+        yield None
+        return
+    stream = StatesStream(sim.recorder, temp / "states.parquet")
+    try:
+        yield stream
+    finally:
+        stream.close()
+        shutil.rmtree(temp, ignore_errors=True)  # gone already once put in place
 
 
 def _write_views(sim: Simulation, temp: Path, views: Views, saved: SavedRun) -> None:

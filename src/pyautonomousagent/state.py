@@ -9,11 +9,13 @@ against this view, so one piece of leaf code serves a single agent and a whole b
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+from pyautonomousagent.names import AgentNames
 
 #: The state every motion model moves: name -> dtype.
 MOTION_COLUMNS: dict[str, type] = {
@@ -44,7 +46,7 @@ class Swarm:
             blackboard key it was made with (keys added later are found too, more slowly).
     """
 
-    names: list[str]
+    names: Sequence[str]
     columns: dict[str, np.ndarray] = field(default_factory=dict)
     blackboard: dict[str, np.ndarray] = field(default_factory=dict)
     view_type: type[AgentView] = field(init=False, repr=False)
@@ -64,12 +66,13 @@ class Swarm:
         """Zero-filled state for the named agents, with the given blackboard keys.
 
         Args:
-            names: agent identifiers.
+            names: agent identifiers (an :class:`~pyautonomousagent.names.AgentNames` is
+                kept as it is, other iterables as a list).
             blackboard_keys: key -> dtype (e.g. ``{"number_ticks": np.int64}``).
             columns: the mission's own state columns, name -> dtype (e.g. ``{"energy":
                 np.float64}``), placed between the motion and the control columns.
         """
-        names = list(names)
+        names = names if isinstance(names, AgentNames) else list(names)
         n = len(names)
         kinds = {**MOTION_COLUMNS, **(columns or {}), **CONTROL_COLUMNS}
         state = {k: np.zeros(n, dtype=t) for k, t in kinds.items()}
@@ -274,7 +277,8 @@ class AgentView:
         """The agent's identifier (a string), or an array of them for a group."""
         if self.is_one:
             return self.swarm.names[int(self.index)]
-        return np.array(self.swarm.names, dtype=object)[self.index]
+        rows = np.arange(self.swarm.size)[self.index].tolist()
+        return np.array([self.swarm.names[i] for i in rows], dtype=object)
 
     if TYPE_CHECKING:  # the mission's columns are attributes of the swarm's subclass
 

@@ -3,6 +3,7 @@ and the reproducible random numbers of leaves."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -29,6 +30,6 @@ class World:
     height: float
     datalink: Datalink
     objects: Any = field(default_factory=dict)
-    agent_index: dict[str, int] = field(default_factory=dict)
+    agent_index: Mapping[str, int] = field(default_factory=dict)
     iteration: int = 0
     random: CounterRandom = field(default_factory=lambda: CounterRandom(0))

@@ -26,6 +26,8 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
+from pyautonomousagent.recording import parquet_options
+
 MANIFEST = "experiment.json"
 RESULTS = "results.parquet"
 JOURNAL = "journal"
@@ -43,10 +45,11 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
 
 
 def atomic_write_table(table: pa.Table, path: Path) -> None:
-    """Write ``table`` as Parquet to ``path`` through a temporary file and a rename."""
+    """Write ``table`` as Parquet (the run data's options) to ``path`` through a temporary
+    file and a rename."""
     temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
     try:
-        pq.write_table(table, temporary)
+        pq.write_table(table, temporary, **parquet_options(table.schema))
         os.replace(temporary, path)
     finally:
         temporary.unlink(missing_ok=True)

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from pyautonomousagent.datalink import message_events
+from pyautonomousagent.names import AgentNames
 from pyautonomousagent.simulation.mission import Mission
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
@@ -38,7 +39,7 @@ def create_agents(
         extra_keys: more blackboard keys (e.g. those a tree declares), key -> dtype.
     """
     scenario = mission.scenario
-    names = [f"{mission.agent_prefix}{i + 1}" for i in range(scenario.agents)]
+    names = AgentNames(mission.agent_prefix, scenario.agents)
     keys = {"number_ticks": np.int64, **mission.blackboard(), **(extra_keys or {})}
     swarm = Swarm.create(names, keys, mission.columns)
     s = swarm.columns

@@ -20,6 +20,7 @@ from pyautonomousagent.datalink import Datalink, Delivery
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, PyTreesEngine
 from pyautonomousagent.inputs import shown
+from pyautonomousagent.names import agent_index
 from pyautonomousagent.progress import Progress
 from pyautonomousagent.randomness import CounterRandom
 from pyautonomousagent.recording import Recorder, check_memory, to_table, trace_table, traced_agents
@@ -209,7 +210,7 @@ class Simulation:
         world = _world(scenario, seed)
         declared = tree_blackboard_keys(tree, mission.blackboard())  # scripts' entries
         swarm = phases.create_agents(mission, world, rng, declared)
-        world.agent_index = {name: i for i, name in enumerate(swarm.names)}
+        world.agent_index = agent_index(swarm.names)
         model = build_model(scenario, swarm, engine, seed, implementation)
         decision = ENGINES.get(engine)(tree, swarm, world, vars(scenario.parameters))
         handlers = {kind.name: kind for kind in mission.message_types()}

@@ -32,7 +32,9 @@ class SharedData:
 
     def __post_init__(self) -> None:
         n, f = self.n_agents, len(self.fields)
-        self._everyone_iteration = np.full(n, -1, dtype=np.int64)
+        # iteration + 1 of the latest broadcast heard from each sender, 0: none; zeros, so
+        # that a swarm that never broadcasts keeps no memory for it (pages never touched)
+        self._everyone_iteration = np.zeros(n, dtype=np.int64)
         self._everyone_data = np.zeros((n, f))
         self._pair_keys = np.zeros(0, dtype=np.int64)
         self._pair_iteration = np.zeros(0, dtype=np.int64)
@@ -47,7 +49,7 @@ class SharedData:
             if not _distinct_ascending(senders):  # keep each sender's last message only
                 last = _last_per_key(senders)
                 senders, values = senders[last], values[last]
-            self._everyone_iteration[senders] = iteration
+            self._everyone_iteration[senders] = iteration + 1
             self._everyone_data[senders] = values
             return
         keys = delivery.receivers * self.n_agents + messages.senders[delivery.rows]
@@ -78,10 +80,10 @@ class SharedData:
         if not 0 <= receiver < self.n_agents:
             raise IndexError(f"no agent {receiver}; there are {self.n_agents}")
         heard: dict[int, dict[str, float]] = {}
-        for sender in np.flatnonzero(self._everyone_iteration >= 0).tolist():
+        for sender in np.flatnonzero(self._everyone_iteration > 0).tolist():
             if sender != receiver:
                 heard[sender] = self._row(
-                    self._everyone_data[sender], self._everyone_iteration[sender]
+                    self._everyone_data[sender], self._everyone_iteration[sender] - 1
                 )
         lo, hi = np.searchsorted(
             self._pair_keys, [receiver * self.n_agents, (receiver + 1) * self.n_agents]
