@@ -21,7 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pyautonomousagent import jit
+from pyautonomousagent.arrays import arctan2
 from pyautonomousagent.models import x8_dynamics as dyn
+from pyautonomousagent.models import x8_kernel as kernel
 from pyautonomousagent.models.autopilot import (
     AttitudeController,
     Guidance,
@@ -129,15 +132,17 @@ def initial_state(
 
 def observe(state: np.ndarray) -> Flight:
     """The :class:`Flight` view of a state array of shape (STATES, N) (rows are views)."""
-    e, velocity = state[dyn.QUATERNION], state[dyn.VELOCITY]
+    e, (u, v, w) = state[dyn.QUATERNION], state[dyn.VELOCITY]
     roll, pitch = dyn.roll_pitch(e)
-    ground = (dyn.rotation(e)[:2] * velocity[None]).sum(axis=1)  # north, east velocity
+    rot = dyn.rotation(e)
+    north = rot[0, 0] * u + rot[0, 1] * v + rot[0, 2] * w  # ground velocity, m/s
+    east = rot[1, 0] * u + rot[1, 1] * v + rot[1, 2] * w
     return Flight(
         north=state[dyn.PN],
         east=state[dyn.PE],
         altitude=-state[dyn.PD],
-        airspeed=np.sqrt((velocity * velocity).sum(axis=0)),
-        course=np.arctan2(ground[1], ground[0]),
+        airspeed=np.sqrt(u * u + v * v + w * w),
+        course=arctan2(east, north),
         roll=roll,
         pitch=pitch,
         p=state[dyn.P],
@@ -201,14 +206,23 @@ class X8Model:
 class X8Vectorised(X8Model):
     """All N X8s integrated at once (fixed step, :func:`x8_dynamics.step`), autopilot on arrays.
 
+    With numba (the ``[fast]`` extra, :func:`pyautonomousagent.jit.available`) each iteration
+    is two compiled calls (:mod:`~pyautonomousagent.models.x8_kernel`) that give the same bits
+    as the NumPy code, which stays the reference and the fallback.
+
     Args:
         settings: the X8 settings.
         s: the swarm's columns; x, y and heading give the start, and all four are updated.
         params: the aircraft's parameters (by default read from the installed package).
+        compiled: use the compiled kernel; by default where numba is available.
     """
 
     def __init__(
-        self, settings: X8Settings, s: dict[str, np.ndarray], params: X8Parameters | None = None
+        self,
+        settings: X8Settings,
+        s: dict[str, np.ndarray],
+        params: X8Parameters | None = None,
+        compiled: bool | None = None,
     ) -> None:
         n = len(s["x"])
         super().__init__(settings, n)
@@ -216,15 +230,64 @@ class X8Vectorised(X8Model):
         self.state = initial_state(settings, s["x"], s["y"], s["heading"])
         self.commands = np.zeros((dyn.COMMANDS, n))
         self.attitude = AttitudeController(attitude_gains(settings.dt), settings.dt, n)
+        self.compiled = jit.available() if compiled is None else compiled
+        if self.compiled:
+            self._compile(n)
         self.flight = observe(self.state)
         self.write(s)
 
+    def _compile(self, n: int) -> None:
+        """Pack the kernel's constants, put the controllers' state in one (7, N) array (the
+        controllers keep views of its rows), and compile (or load) the kernel."""
+        self._packed = kernel.pack_constants(self.constants)
+        self._gains = kernel.pack_gains(self.guidance, self.attitude, self.constants)
+        pids = np.zeros((7, n))
+        pids[1], pids[3] = np.nan, np.nan
+        course, height = self.guidance.course, self.guidance.height
+        course.integral, course.previous, height.integral, height.previous = pids[:4]
+        self.attitude.integral = pids[4:]
+        self._pids = pids
+        self._flight = np.empty((kernel.FLIGHT_ROWS, n))
+        state, flight = self.state.copy(), self._flight
+        self._advance(state, np.ones(n, dtype=bool), np.empty_like(state), flight)
+        no = np.zeros(0)
+        kernel.control(
+            np.zeros((kernel.FLIGHT_ROWS, 0)),
+            no,
+            no,
+            np.zeros((7, 0)),
+            self._gains,
+            np.zeros((3, 0)),
+        )
+
+    def _advance(
+        self, state: np.ndarray, moving: np.ndarray, new: np.ndarray, flight: np.ndarray
+    ) -> None:
+        """The compiled step from ``state`` into ``new`` and ``flight`` (shapes as in
+        :func:`x8_kernel.advance`)."""
+        k = self.constants
+        kernel.advance(state, self.commands, moving, self._packed, k.aero, k.inertia, new, flight)
+
     def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None:
         """Phase 2: one time step of ``settings.dt`` for the agents where ``moving``."""
-        new = dyn.step(self.state, self.commands, self.constants)
-        self.state = new if moving.all() else np.where(moving, new, self.state)
-        self.flight = observe(self.state)
+        if self.compiled:
+            new, self._flight = np.empty_like(self.state), np.empty_like(self._flight)
+            self._advance(self.state, np.asarray(moving, dtype=bool), new, self._flight)
+            self.state = new
+            self.flight = Flight(*self._flight)
+        else:
+            new = dyn.step(self.state, self.commands, self.constants)
+            self.state = new if moving.all() else np.where(moving, new, self.state)
+            self.flight = observe(self.state)
         self.write(s, moving)
+
+    def control(self, s: dict[str, np.ndarray]) -> None:
+        """Phase 4: the autopilot's commands for the requested heading and speed."""
+        if not self.compiled:
+            super().control(s)
+            return
+        heading, speed = s["requested_heading"], s["requested_speed"]
+        kernel.control(self._flight, heading, speed, self._pids, self._gains, self.commands)
 
     def _attitude(self, refs: tuple[np.ndarray, np.ndarray, np.ndarray]) -> None:
         f = self.flight
