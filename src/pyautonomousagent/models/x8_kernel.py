@@ -282,7 +282,7 @@ def _observe_one(y: np.ndarray, flight: np.ndarray, i: int) -> None:
     flight[3, i] = math.sqrt(u * u + v * v + w * w)
     flight[4, i] = atan2(east, north)
     flight[5, i] = atan2(2 * (e0 * e1 + e2 * e3), e0 * e0 + e3 * e3 - e1 * e1 - e2 * e2)
-    flight[6, i] = atan2(s, math.sqrt(1.0 - s * s))
+    flight[6, i] = atan2(s, math.sqrt((1.0 - s) * (1.0 + s)))
     flight[7, i], flight[8, i] = y[4], y[5]
 
 
