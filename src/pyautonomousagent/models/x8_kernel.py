@@ -111,37 +111,51 @@ def exp(x: float) -> float:
     return math.ldexp(total, int(k))
 
 
+#: Workspace of one agent's step (:func:`advance` allocates it once per call): offsets of the
+#: rotation (9), features (16), products (7), forces and moments (6), derivative stages
+#: k1..k3 (13 each), a stage's airframe (13), actuator rows at the middle and end (5 each).
+ROT, FEAT, PROD, FM, K1, K2, K3, STAGE, MIDDLE, END, WORK = (
+    0,
+    9,
+    25,
+    32,
+    38,
+    51,
+    64,
+    77,
+    90,
+    95,
+    100,
+)
+
+
 @njit
-def _rotation(b: np.ndarray, rot: np.ndarray) -> None:
-    """``x8_dynamics.rotation`` of the quaternion ``b[0:4]`` into ``rot`` (3, 3)."""
-    e0, e1, e2, e3 = b[0], b[1], b[2], b[3]
+def _rotation(e: np.ndarray, w: np.ndarray) -> None:
+    """``x8_dynamics.rotation`` of the quaternion ``e[0:4]`` into ``w[ROT:ROT + 9]`` (row major)."""
+    e0, e1, e2, e3 = e[0], e[1], e[2], e[3]
     d = e0 * e0 - (e1 * e1 + e2 * e2 + e3 * e3)
     s1, s2, s3 = 2 * e0 * e1, 2 * e0 * e2, 2 * e0 * e3
-    rot[0, 0] = 2 * (e1 * e1) + d
-    rot[1, 1] = 2 * (e2 * e2) + d
-    rot[2, 2] = 2 * (e3 * e3) + d
-    rot[0, 1] = 2 * (e1 * e2) - s3
-    rot[0, 2] = 2 * (e1 * e3) + s2
-    rot[1, 0] = 2 * (e2 * e1) + s3
-    rot[1, 2] = 2 * (e2 * e3) - s1
-    rot[2, 0] = 2 * (e3 * e1) - s2
-    rot[2, 1] = 2 * (e3 * e2) + s1
+    w[ROT + 0], w[ROT + 1], w[ROT + 2] = 2 * (e1 * e1) + d, 2 * (e1 * e2) - s3, 2 * (e1 * e3) + s2
+    w[ROT + 3], w[ROT + 4], w[ROT + 5] = 2 * (e2 * e1) + s3, 2 * (e2 * e2) + d, 2 * (e2 * e3) - s1
+    w[ROT + 6], w[ROT + 7], w[ROT + 8] = 2 * (e3 * e1) - s2, 2 * (e3 * e2) + s1, 2 * (e3 * e3) + d
 
 
 @njit
-def _features(b: np.ndarray, surf: np.ndarray, c: np.ndarray, f: np.ndarray) -> np.ndarray:
-    """Air data and the (16,) aerodynamic features into ``f`` (``x8_dynamics.FEATURES``).
+def _features(
+    b: np.ndarray, elevator: float, aileron: float, c: np.ndarray, w: np.ndarray
+) -> tuple[float, float, float, float, float, float]:
+    """Air data, and the (16,) aerodynamic features into ``w[FEAT:]`` (``dyn.FEATURES``).
 
-    Returns ``[airspeed, airspeed^2, sin(alpha), cos(alpha), sin(beta), cos(beta)]``.
+    Returns (airspeed, airspeed^2, sin(alpha), cos(alpha), sin(beta), cos(beta)).
     """
-    u, v, w = b[10], b[11], b[12]
-    uw2 = u * u + w * w
+    u, v, ww = b[10], b[11], b[12]
+    uw2 = u * u + ww * ww
     airspeed2 = uw2 + v * v
     airspeed = _max(math.sqrt(airspeed2), c[VMIN])
     inv_2v = 0.5 / airspeed
     uw = math.sqrt(uw2)
-    alpha = atan2(w, u)
-    sa, ca = w / uw, u / uw
+    alpha = atan2(ww, u)
+    sa, ca = ww / uw, u / uw
     sb = v / airspeed
     cb = math.sqrt(1 - sb * sb)
     beta = atan2(sb, cb)
@@ -153,133 +167,157 @@ def _features(b: np.ndarray, surf: np.ndarray, c: np.ndarray, f: np.ndarray) -> 
     lift_linear = c[CL0] + c[CLA] * alpha
     lin_lift = linear * lift_linear
     flat = sigma * sa * abs(sa)
-    f[0], f[1], f[2], f[3] = 1.0, lin_lift, lin_lift * lift_linear, linear * alpha
-    f[4], f[5], f[6], f[7] = linear, flat, flat * ca, flat * sa
-    f[8], f[9], f[10], f[11] = inv_2v * b[5], surf[0], surf[0] * surf[0], beta
-    f[12], f[13], f[14], f[15] = beta * beta, inv_2v * b[4], inv_2v * b[6], surf[1]
-    return np.array([airspeed, airspeed2, sa, ca, sb, cb])
+    w[FEAT + 0], w[FEAT + 1], w[FEAT + 2] = 1.0, lin_lift, lin_lift * lift_linear
+    w[FEAT + 3], w[FEAT + 4], w[FEAT + 5] = linear * alpha, linear, flat
+    w[FEAT + 6], w[FEAT + 7], w[FEAT + 8] = flat * ca, flat * sa, inv_2v * b[5]
+    w[FEAT + 9], w[FEAT + 10], w[FEAT + 11] = elevator, elevator * elevator, beta
+    w[FEAT + 12], w[FEAT + 13], w[FEAT + 14] = beta * beta, inv_2v * b[4], inv_2v * b[6]
+    w[FEAT + 15] = aileron
+    return airspeed, airspeed2, sa, ca, sb, cb
 
 
 @njit
-def _product_row(m: np.ndarray, i: int, x: np.ndarray) -> float:
-    """``x8_dynamics._product`` for row i: ``((m[i,0] x[0] + m[i,1] x[1]) + ...)``."""
-    total = m[i, 0] * x[0]
-    for j in range(1, x.shape[0]):
-        total = total + m[i, j] * x[j]
+def _product_row(m: np.ndarray, i: int, w: np.ndarray, at: int) -> float:
+    """``x8_dynamics._product`` for row i of ``m`` and ``x = w[at:]``:
+    ``((m[i,0] x[0] + m[i,1] x[1]) + ...)``."""
+    total = m[i, 0] * w[at]
+    for j in range(1, m.shape[1]):
+        total = total + m[i, j] * w[at + j]
     return total
 
 
 @njit
 def _forces_moments(
-    b: np.ndarray,
-    surf: np.ndarray,
-    c: np.ndarray,
-    aero: np.ndarray,
-    rot: np.ndarray,
-    fm: np.ndarray,
+    b: np.ndarray, surf: tuple[float, float, float], c: np.ndarray, aero: np.ndarray, w: np.ndarray
 ) -> None:
-    """``x8_dynamics._forces_moments`` for one agent: forces (N) and moments (N m) into ``fm``
-    (6,); ``surf`` = (elevator, aileron, throttle), ``rot`` its rotation matrix (3, 3)."""
-    f = np.empty(16)
-    airspeed, airspeed2, sa, ca, sb, cb = _features(b, surf, c, f)
+    """``x8_dynamics._forces_moments`` for one agent: forces (N), moments (N m) into
+    ``w[FM:FM + 6]``; ``surf`` = (elevator, aileron, throttle); needs the rotation in ``w``."""
+    elevator, aileron, throttle = surf
+    airspeed, airspeed2, sa, ca, sb, cb = _features(b, elevator, aileron, c, w)
     qbar_s = c[QBAR] * airspeed2
-    coef = np.empty(6)
-    for i in range(6):
-        coef[i] = _product_row(aero, i, f) * qbar_s
-    lift, drag, pitch_m, side, roll_m, yaw_m = coef[0], coef[1], coef[2], coef[3], coef[4], coef[5]
-    induced = airspeed + surf[2] * (c[KMOTOR] - airspeed)
+    lift = _product_row(aero, 0, w, FEAT) * qbar_s
+    drag = _product_row(aero, 1, w, FEAT) * qbar_s
+    side = _product_row(aero, 3, w, FEAT) * qbar_s
+    induced = airspeed + throttle * (c[KMOTOR] - airspeed)
     thrust = c[THRUST] * induced * (induced - airspeed)
     along = drag * cb - side * sb
-    fm[0] = c[WEIGHT] * rot[2, 0] + (thrust - ca * along + lift * sa)
-    fm[1] = c[WEIGHT] * rot[2, 1] + (drag * sb + side * cb)
-    fm[2] = c[WEIGHT] * rot[2, 2] - (sa * along + lift * ca)
-    spin = c[KOMEGA] * surf[2]
-    fm[3], fm[4], fm[5] = roll_m - c[KTP] * (spin * spin), pitch_m, yaw_m
+    w[FM + 0] = c[WEIGHT] * w[ROT + 6] + (thrust - ca * along + lift * sa)
+    w[FM + 1] = c[WEIGHT] * w[ROT + 7] + (drag * sb + side * cb)
+    w[FM + 2] = c[WEIGHT] * w[ROT + 8] - (sa * along + lift * ca)
+    spin = c[KOMEGA] * throttle
+    w[FM + 3] = _product_row(aero, 4, w, FEAT) * qbar_s - c[KTP] * (spin * spin)
+    w[FM + 4] = _product_row(aero, 2, w, FEAT) * qbar_s
+    w[FM + 5] = _product_row(aero, 5, w, FEAT) * qbar_s
 
 
 @njit
 def _derivatives(
-    b: np.ndarray, surf: np.ndarray, c: np.ndarray, aero: np.ndarray, inertia: np.ndarray
-) -> np.ndarray:
-    """``x8_dynamics.body_derivatives`` for one agent's airframe ``b`` (13,); returns (13,)."""
-    rot = np.empty((3, 3))
-    _rotation(b, rot)
-    fm = np.empty(6)
-    _forces_moments(b, surf, c, aero, rot, fm)
-    p, q, r, u, v, w = b[4], b[5], b[6], b[10], b[11], b[12]
-    d = np.empty(13)
+    b: np.ndarray,
+    surf: tuple[float, float, float],
+    c: np.ndarray,
+    aero: np.ndarray,
+    inertia: np.ndarray,
+    w: np.ndarray,
+    at: int,
+) -> None:
+    """``x8_dynamics.body_derivatives`` of one agent's airframe ``b`` (13,) into
+    ``w[at:at + 13]``."""
+    _rotation(b, w)
+    _forces_moments(b, surf, c, aero, w)
+    p, q, r, u, v, ww = b[4], b[5], b[6], b[10], b[11], b[12]
     for i in range(4):
-        d[i] = (_HS[0, i] * b[_PERM[0, i]]) * p + (_HS[1, i] * b[_PERM[1, i]]) * q
-        d[i] = d[i] + (_HS[2, i] * b[_PERM[2, i]]) * r
-    products = np.array([p * q, q * r, p * r, p * p - r * r, fm[3], fm[4], fm[5]])
+        d = (_HS[0, i] * b[_PERM[0, i]]) * p + (_HS[1, i] * b[_PERM[1, i]]) * q
+        w[at + i] = d + (_HS[2, i] * b[_PERM[2, i]]) * r
+    w[PROD + 0], w[PROD + 1], w[PROD + 2], w[PROD + 3] = p * q, q * r, p * r, p * p - r * r
+    w[PROD + 4], w[PROD + 5], w[PROD + 6] = w[FM + 3], w[FM + 4], w[FM + 5]
     for i in range(3):
-        d[4 + i] = _product_row(inertia, i, products)
-        d[7 + i] = rot[i, 0] * u + rot[i, 1] * v + rot[i, 2] * w
-    d[10] = v * r - w * q + fm[0] / c[MASS]
-    d[11] = w * p - u * r + fm[1] / c[MASS]
-    d[12] = u * q - v * p + fm[2] / c[MASS]
-    return d
+        w[at + 4 + i] = _product_row(inertia, i, w, PROD)
+        row = ROT + 3 * i
+        w[at + 7 + i] = w[row] * u + w[row + 1] * v + w[row + 2] * ww
+    w[at + 10] = v * r - ww * q + w[FM + 0] / c[MASS]
+    w[at + 11] = ww * p - u * r + w[FM + 1] / c[MASS]
+    w[at + 12] = u * q - v * p + w[FM + 2] / c[MASS]
 
 
 @njit
-def _half_step(a: np.ndarray, cmd: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """``x8_dynamics._actuator_half_step`` for one agent's actuator rows ``a`` (5,)."""
-    out = np.empty(5)
+def _half_step(a: np.ndarray, cmd: np.ndarray, i: int, c: np.ndarray, out: np.ndarray) -> None:
+    """``x8_dynamics._actuator_half_step`` of actuator rows ``a`` (5,) under agent i's commands
+    ``cmd[:, i]`` into ``out`` (5,)."""
     for j in range(2):
-        offset = a[j] - cmd[j]
+        offset = a[j] - cmd[j, i]
         moved = c[F11] * offset + c[F12] * a[2 + j] - offset
         out[j] = a[j] + _clip(moved, -c[LIMIT], c[LIMIT])
         out[2 + j] = _clip(c[F21] * offset + c[F22] * a[2 + j], -c[RMAX], c[RMAX])
-    out[4] = cmd[2] + (a[4] - cmd[2]) * c[DECAY]
-    return out
+    out[4] = cmd[2, i] + (a[4] - cmd[2, i]) * c[DECAY]
 
 
 @njit
-def _surfaces(a: np.ndarray, c: np.ndarray) -> np.ndarray:
+def _surfaces(a: np.ndarray, c: np.ndarray) -> tuple[float, float, float]:
     """``x8_dynamics._surfaces``: (elevator, aileron, throttle) of actuator rows ``a`` (5,)."""
     right = _clip(a[0], c[EMIN], c[EMAX])
     left = _clip(a[1], c[EMIN], c[EMAX])
     throttle = _clip(a[4], c[TMIN], c[TMAX])
-    return np.array([0.5 * (right + left), 0.5 * (left - right), throttle])
+    return 0.5 * (right + left), 0.5 * (left - right), throttle
+
+
+@njit
+def _stages(
+    y: np.ndarray,
+    cmd: np.ndarray,
+    i: int,
+    c: np.ndarray,
+    m: tuple[np.ndarray, np.ndarray],
+    w: np.ndarray,
+) -> None:
+    """The actuators' half steps (``w[MIDDLE:]``, ``w[END:]``) and the three Runge-Kutta
+    stages k1..k3 of ``x8_dynamics.step`` for agent i's state ``y`` (18,)."""
+    aero, inertia = m
+    h, act, b, stage = c[H], y[13:18], y[0:13], w[STAGE : STAGE + 13]
+    _half_step(act, cmd, i, c, w[MIDDLE : MIDDLE + 5])
+    _half_step(w[MIDDLE : MIDDLE + 5], cmd, i, c, w[END : END + 5])
+    _derivatives(b, _surfaces(act, c), c, aero, inertia, w, K1)
+    for j in range(13):
+        stage[j] = b[j] + (h / 2) * w[K1 + j]
+    _derivatives(stage, _surfaces(w[MIDDLE : MIDDLE + 5], c), c, aero, inertia, w, K2)
+    for j in range(13):
+        stage[j] = b[j] + h * (2 * w[K2 + j] - w[K1 + j])
+    _derivatives(stage, _surfaces(w[END : END + 5], c), c, aero, inertia, w, K3)
 
 
 @njit
 def _step_one(
-    y: np.ndarray, cmd: np.ndarray, c: np.ndarray, aero: np.ndarray, inertia: np.ndarray
-) -> np.ndarray:
-    """``x8_dynamics.step`` (settling included) for one agent's state ``y`` (18,)."""
+    y: np.ndarray,
+    cmd: np.ndarray,
+    i: int,
+    c: np.ndarray,
+    m: tuple[np.ndarray, np.ndarray],
+    w: np.ndarray,
+    new: np.ndarray,
+) -> None:
+    """``x8_dynamics.step`` (settling included) of agent i's state ``y`` (18,) into ``new``."""
+    _stages(y, cmd, i, c, m, w)
     h = c[H]
-    act = y[13:18]
-    middle = _half_step(act, cmd, c)
-    end = _half_step(middle, cmd, c)
-    b = y[0:13]
-    k1 = _derivatives(b, _surfaces(act, c), c, aero, inertia)
-    k2 = _derivatives(b + (h / 2) * k1, _surfaces(middle, c), c, aero, inertia)
-    k3 = _derivatives(b + h * (2 * k2 - k1), _surfaces(end, c), c, aero, inertia)
-    new = np.empty(18)
-    new[0:13] = b + (h / 6) * (k1 + 4 * k2 + k3)
-    new[13:18] = end
+    for j in range(13):
+        new[j] = y[j] + (h / 6) * (w[K1 + j] + 4 * w[K2 + j] + w[K3 + j])
     norm = math.sqrt(new[0] * new[0] + new[1] * new[1] + new[2] * new[2] + new[3] * new[3])
-    for i in range(4):
-        new[i] /= norm
-    for i in range(13, 15):
-        new[i] = _clip(new[i], c[EMIN], c[EMAX])
-        new[i + 2] = _clip(new[i + 2], -c[RMAX], c[RMAX])
-    new[17] = _clip(new[17], c[TMIN], c[TMAX])
-    return new
+    for j in range(4):
+        new[j] /= norm
+    for j in range(2):
+        new[13 + j] = _clip(w[END + j], c[EMIN], c[EMAX])
+        new[15 + j] = _clip(w[END + 2 + j], -c[RMAX], c[RMAX])
+    new[17] = _clip(w[END + 4], c[TMIN], c[TMAX])
 
 
 @njit
-def _observe_one(y: np.ndarray, flight: np.ndarray, i: int) -> None:
-    """``x8.observe`` for one agent's state ``y`` (18,) into column i of ``flight`` (9, N)."""
-    e0, e1, e2, e3, u, v, w = y[0], y[1], y[2], y[3], y[10], y[11], y[12]
-    rot = np.empty((3, 3))
-    _rotation(y, rot)
-    north = rot[0, 0] * u + rot[0, 1] * v + rot[0, 2] * w
-    east = rot[1, 0] * u + rot[1, 1] * v + rot[1, 2] * w
+def _observe_one(y: np.ndarray, flight: np.ndarray, i: int, w: np.ndarray) -> None:
+    """``x8.observe`` of one agent's state ``y`` (18,) into column i of ``flight`` (9, N)."""
+    e0, e1, e2, e3, u, v, ww = y[0], y[1], y[2], y[3], y[10], y[11], y[12]
+    _rotation(y, w)
+    north = w[ROT + 0] * u + w[ROT + 1] * v + w[ROT + 2] * ww
+    east = w[ROT + 3] * u + w[ROT + 4] * v + w[ROT + 5] * ww
     s = _clip(2 * (e0 * e2 - e1 * e3), -1.0, 1.0)
     flight[0, i], flight[1, i], flight[2, i] = y[7], y[8], -y[9]
-    flight[3, i] = math.sqrt(u * u + v * v + w * w)
+    flight[3, i] = math.sqrt(u * u + v * v + ww * ww)
     flight[4, i] = atan2(east, north)
     flight[5, i] = atan2(2 * (e0 * e1 + e2 * e3), e0 * e0 + e3 * e3 - e1 * e1 - e2 * e2)
     flight[6, i] = atan2(s, math.sqrt((1.0 - s) * (1.0 + s)))
@@ -308,12 +346,16 @@ def advance(
         flight: receives ``x8.observe`` of the new state, (FLIGHT_ROWS, N): north, east,
             altitude (m), airspeed (m/s), course, roll, pitch (rad), p, q (rad/s).
     """
+    w, y, out = np.empty(WORK), np.empty(18), np.empty(18)
     for i in range(state.shape[1]):
-        y = state[:, i].copy()
+        for j in range(18):
+            y[j] = state[j, i]
         if moving[i]:
-            y = _step_one(y, commands[:, i].copy(), c, aero, inertia)
-        new[:, i] = y
-        _observe_one(y, flight, i)
+            _step_one(y, commands, i, c, (aero, inertia), w, out)
+            y[:] = out
+        for j in range(18):
+            new[j, i] = y[j]
+        _observe_one(y, flight, i, w)
 
 
 # Indices into the gains vector of :func:`pack_gains`.
