@@ -17,7 +17,7 @@ from pyautonomousagent import Simulation, jit, load  # noqa: E402
 from pyautonomousagent.arrays import arctan2  # noqa: E402
 from pyautonomousagent.models import x8_dynamics as dyn  # noqa: E402
 from pyautonomousagent.models import x8_kernel as kernel  # noqa: E402
-from pyautonomousagent.models.x8 import X8Settings, X8Vectorised  # noqa: E402
+from pyautonomousagent.models.x8 import PYTHON_KERNEL_AGENTS, X8Settings, X8Vectorised  # noqa: E402
 
 #: Agents and iterations of the model comparison: compiled, or plain Python (slow).
 AGENTS, ITERATIONS = (40, 1500) if jit.available() else (4, 60)
@@ -69,8 +69,8 @@ def test_compiled_model_equals_numpy_model_over_many_iterations_and_uavs():
     settings = X8Settings(initial_altitude=10.0)
     columns = [{k: v.copy() for k, v in start.items()} for _ in range(2)]
     pairs = zip(columns, (True, False), strict=True)
-    models = [X8Vectorised(settings, s, compiled=c) for s, c in pairs]
-    assert models[0].compiled and not models[1].compiled
+    models = [X8Vectorised(settings, s, agent_by_agent=c) for s, c in pairs]
+    assert models[0].agent_by_agent and not models[1].agent_by_agent
     for i in range(ITERATIONS):
         moving = rng.uniform(size=AGENTS) > 0.02  # a few held now and then
         if i % 300 == 0:  # new headings and speeds: turns, climbs, refuelling floors
@@ -90,20 +90,24 @@ def test_compiled_model_equals_numpy_model_over_many_iterations_and_uavs():
     assert np.array_equal(compiled.guidance.course.previous, reference.guidance.course.previous)
 
 
-def test_the_model_compiles_where_numba_is_available(monkeypatch):
+def test_the_kernel_runs_compiled_where_numba_is_available_else_for_a_few_agents(monkeypatch):
     rng = np.random.default_rng(7)
-    assert X8Vectorised(X8Settings(), _columns(rng, 2)).compiled == jit.available()
+    many = PYTHON_KERNEL_AGENTS + 1
+    model = X8Vectorised(X8Settings(), _columns(rng, many))
+    assert model.compiled == model.agent_by_agent == jit.available()
     monkeypatch.setenv("PYAA_NO_JIT", "1")
-    assert not X8Vectorised(X8Settings(), _columns(rng, 2)).compiled
+    assert not X8Vectorised(X8Settings(), _columns(rng, many)).agent_by_agent
+    few = X8Vectorised(X8Settings(), _columns(rng, PYTHON_KERNEL_AGENTS))
+    assert few.agent_by_agent and not few.compiled
 
 
 def test_x8_patrol_records_the_same_bits_compiled_and_not(monkeypatch):
-    scenario = load("x8-patrol").with_overrides(agents=3, iterations=400)
+    scenario = load("x8-patrol").with_overrides(agents=5, iterations=400)
     runs = []
     for no_jit in ("0", "1"):
         monkeypatch.setenv("PYAA_NO_JIT", no_jit)
         sim = Simulation.create(scenario, seed=2, engine="batched")
-        assert sim.model.compiled == (no_jit == "0" and jit.available())
+        assert sim.model.agent_by_agent == (no_jit == "0" and jit.available())
         runs.append(sim.run(progress=False).recorder)
     compiled, reference = runs
     assert sorted(compiled.columns) == sorted(reference.columns)
