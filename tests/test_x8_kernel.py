@@ -7,6 +7,10 @@ With numba installed the kernel is compiled; with ``PYAA_NO_JIT=1`` it runs as p
 from __future__ import annotations
 
 import math
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +22,7 @@ from pyautonomousagent.arrays import arctan2  # noqa: E402
 from pyautonomousagent.models import x8_dynamics as dyn  # noqa: E402
 from pyautonomousagent.models import x8_kernel as kernel  # noqa: E402
 from pyautonomousagent.models.x8 import PYTHON_KERNEL_AGENTS, X8Settings, X8Vectorised  # noqa: E402
+from tests.test_simd_levels import _enabled_avx512  # noqa: E402
 
 #: Agents and iterations of the model comparison: compiled, or plain Python (slow).
 AGENTS, ITERATIONS = (40, 1500) if jit.available() else (4, 60)
@@ -113,3 +118,41 @@ def test_x8_patrol_records_the_same_bits_compiled_and_not(monkeypatch):
     assert sorted(compiled.columns) == sorted(reference.columns)
     for key in compiled.columns:
         assert np.array_equal(compiled.column(key), reference.column(key)), key
+
+
+#: Run in a subprocess: an x8-patrol run's records, digested.
+DIGEST = """
+import hashlib, sys
+import numpy as np
+from pyautonomousagent import Simulation, load
+scenario = load("x8-patrol").with_overrides(agents=5, iterations=300)
+sim = Simulation.create(scenario, seed=1, engine="batched").run(progress=False)
+assert sim.model.compiled == (sys.argv[1] == "compiled"), sim.model.compiled
+h = hashlib.sha256()
+for key in sorted(sim.recorder.columns):
+    h.update(key.encode() + np.ascontiguousarray(sim.recorder.column(key)).tobytes())
+print(h.hexdigest())
+"""
+
+
+def _digest(mode: str, disable: str = "") -> str:
+    env = {k: v for k, v in os.environ.items() if k not in ("NPY_DISABLE_CPU_FEATURES",)}
+    env["PYAA_NO_JIT"] = "1" if mode == "numpy" else "0"
+    if disable:
+        env["NPY_DISABLE_CPU_FEATURES"] = disable
+    src = str(Path(__file__).resolve().parent.parent / "src")
+    env["PYTHONPATH"] = os.pathsep.join([src, env.get("PYTHONPATH", "")])
+    done = subprocess.run(
+        [sys.executable, "-c", DIGEST, mode], env=env, capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout.strip().splitlines()[-1]
+
+
+@pytest.mark.skipif(not jit.available(), reason="needs numba (the [fast] extra)")
+def test_compiled_run_equals_the_numpy_run_on_every_simd_level():
+    reference = _digest("numpy")
+    assert _digest("compiled") == reference
+    features = _enabled_avx512()
+    if features:  # NumPy's kernels change with the level; the model's bits must not
+        assert _digest("numpy", " ".join(features)) == reference

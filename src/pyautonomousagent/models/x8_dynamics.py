@@ -36,6 +36,7 @@ operations agent by agent and gives the same bits.
 
 from __future__ import annotations
 
+import cmath
 import math
 from dataclasses import dataclass
 from decimal import Context, Decimal
@@ -245,7 +246,7 @@ class Constants:
             aero=_aero_matrix(p),
             inertia=inertia,
             actuator_step=_transition(act.omega_0, act.zeta, dt / 2),
-            throttle_decay=float(np.exp(-dt / 2 / act.throttle_tau)),
+            throttle_decay=math.exp(-dt / 2 / act.throttle_tau),
         )
 
 
@@ -286,10 +287,21 @@ def _aero_matrix(p: X8Parameters) -> np.ndarray:
 
 
 def _transition(omega: float, zeta: float, h: float) -> np.ndarray:
-    """exp(A h) of the second-order actuator ``A = [[0, 1], [-omega^2, -2 zeta omega]]``."""
+    """exp(A h) of the second-order actuator ``A = [[0, 1], [-omega^2, -2 zeta omega]]``.
+
+    In closed form from the eigenvalues l1, l2 of A (Sylvester's formula,
+    ``exp(A h) = c0 I + c1 A``), with the scalar library's ``exp``, so the constants are the
+    same on every machine and SIMD level (NumPy's ``exp`` and LAPACK's ``eig`` are not).
+    """
     a = np.array([[0.0, 1.0], [-(omega**2), -2.0 * zeta * omega]])
-    values, vectors = np.linalg.eig(a * h)
-    return np.real(vectors @ np.diag(np.exp(values)) @ np.linalg.inv(vectors))
+    root = cmath.sqrt(zeta * zeta - 1.0) * omega
+    l1, l2 = -zeta * omega + root, -zeta * omega - root
+    if l1 == l2:  # critically damped: the limit of the formula below
+        e = math.exp(l1.real * h)
+        return e * ((1.0 - l1.real * h) * np.eye(2) + h * a)
+    e1, e2 = cmath.exp(l1 * h), cmath.exp(l2 * h)
+    c0, c1 = (l1 * e2 - l2 * e1) / (l1 - l2), (e1 - e2) / (l1 - l2)
+    return c0.real * np.eye(2) + c1.real * a
 
 
 def _stall_blend(alpha: np.ndarray, m: float, a0: float) -> np.ndarray:
