@@ -132,17 +132,20 @@ def initial_state(
 
 def observe(state: np.ndarray) -> Flight:
     """The :class:`Flight` view of a state array of shape (STATES, N) (rows are views)."""
-    e, (u, v, w) = state[dyn.QUATERNION], state[dyn.VELOCITY]
-    roll, pitch = dyn.roll_pitch(e)
-    rot = dyn.rotation(e)
+    (e0, e1, e2, e3), (u, v, w) = state[dyn.QUATERNION], state[dyn.VELOCITY]
+    rot = dyn.rotation(state[dyn.QUATERNION])
     north = rot[0, 0] * u + rot[0, 1] * v + rot[0, 2] * w  # ground velocity, m/s
     east = rot[1, 0] * u + rot[1, 1] * v + rot[1, 2] * w
+    s = np.minimum(np.maximum(2 * (e0 * e2 - e1 * e3), -1.0), 1.0)  # sin(pitch)
+    y = np.array([east, 2 * (e0 * e1 + e2 * e3), s])
+    x = np.array([north, e0 * e0 + e3 * e3 - e1 * e1 - e2 * e2, np.sqrt((1.0 - s) * (1.0 + s))])
+    course, roll, pitch = arctan2(y, x)  # one call: dyn.roll_pitch's angles and the course
     return Flight(
         north=state[dyn.PN],
         east=state[dyn.PE],
         altitude=-state[dyn.PD],
         airspeed=np.sqrt(u * u + v * v + w * w),
-        course=arctan2(east, north),
+        course=course,
         roll=roll,
         pitch=pitch,
         p=state[dyn.P],

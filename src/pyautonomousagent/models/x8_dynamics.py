@@ -335,11 +335,10 @@ def _forces_moments(
     airspeed = np.maximum(np.sqrt(airspeed2), k.params.airspeed_min)
     inv_2v = 0.5 / airspeed
     uw = np.sqrt(uw2)
-    alpha = arctan2(w, u)
     sa, ca = w / uw, u / uw  # sin, cos of alpha
     sb = v / airspeed  # sin(beta)
     cb = np.sqrt(1 - sb * sb)
-    beta = arctan2(sb, cb)  # asin(sb)
+    alpha, beta = arctan2(np.array([w, sb]), np.array([u, cb]))  # one call: atan2(w, u), asin(sb)
     sigma = _stall_blend(alpha, k.params.aero.M, k.params.aero.a_0)
     linear = 1 - sigma
     lift_linear = k.params.aero.C_L_0 + k.params.aero.C_L_alpha * alpha
