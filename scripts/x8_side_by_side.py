@@ -13,9 +13,9 @@ run by ``pyautonomousagent.bench`` (the case runner of ``pyaa bench``).
 
     python scripts/x8_side_by_side.py --model [--agents 1,100,1000]
 
-times the X8 model alone instead (``X8Vectorised.advance`` and ``control``, 200 iterations,
-minimum of ``--repeat``), agent by agent (compiled where numba is installed) and NumPy,
-interleaved, in this process.
+times the X8 model alone instead (``advance`` and ``control``, 200 iterations, minimum of
+``--repeat``), agent by agent (compiled where numba is installed) and NumPy, and for fleets of
+at most 10 UAVs PyFly's reference model (20 iterations), in this process.
 """
 
 from __future__ import annotations
@@ -74,22 +74,28 @@ def measure(agents: int, baseline: Path, repeat: int, pyfly_iterations: int) -> 
     return {name: min(values) for name, values in runs.items() if values}
 
 
-def model_seconds(agents: int, agent_by_agent: bool, repeat: int) -> float:
-    """Seconds per iteration of the X8 model alone (Phases 2 and 4), minimum of ``repeat``."""
+def model_seconds(agents: int, agent_by_agent: bool | None, repeat: int) -> float:
+    """Seconds per iteration of the X8 model alone (Phases 2 and 4), minimum of ``repeat``;
+    ``agent_by_agent`` None times PyFly's reference model (20 iterations a repeat)."""
     from pyautonomousagent.models.x8 import X8Settings, X8Vectorised
+    from pyautonomousagent.models.x8_pyfly import X8PyFly
 
     rng = np.random.default_rng(0)
     s = {key: rng.uniform(0, 360, agents) for key in ("x", "y", "heading", "requested_heading")}
     s["speed"], s["requested_speed"] = np.zeros(agents), np.full(agents, 22.0)
-    model = X8Vectorised(X8Settings(), s, agent_by_agent=agent_by_agent)
+    if agent_by_agent is None:
+        model: X8Vectorised | X8PyFly = X8PyFly(X8Settings(), s)
+    else:
+        model = X8Vectorised(X8Settings(), s, agent_by_agent=agent_by_agent)
     moving = np.ones(agents, dtype=bool)
+    steps = 20 if agent_by_agent is None else 200
     best = float("inf")
     for _ in range(repeat):
         start = time.perf_counter()
-        for _ in range(200):
+        for _ in range(steps):
             model.advance(s, moving)
             model.control(s)
-        best = min(best, (time.perf_counter() - start) / 200)
+        best = min(best, (time.perf_counter() - start) / steps)
     return best
 
 
@@ -104,10 +110,12 @@ def main() -> None:
     if args.model:
         for agents in (int(a) for a in args.agents.split(",")):
             kernel, numpy = (model_seconds(agents, k, args.repeat) for k in (True, False))
-            print(
-                f"{agents:>5} UAVs  agent by agent {kernel * 1e6:.1f} us/it, NumPy "
-                f"{numpy * 1e6:.1f} us/it, {kernel / agents * 1e6:.2f} us per UAV-iteration"
-            )
+            line = f"{agents:>5} UAVs  agent by agent {kernel * 1e6:.1f} us/it, NumPy "
+            line += f"{numpy * 1e6:.1f} us/it, {kernel / agents * 1e6:.2f} us per UAV-iteration"
+            if agents <= 10:
+                pyfly = model_seconds(agents, None, args.repeat)
+                line += f", PyFly {pyfly * 1e6:.0f} us/it ({pyfly / kernel:.0f}x)"
+            print(line, flush=True)
         return
     if args.baseline is None:
         parser.error("--baseline is required (or --model)")
