@@ -16,6 +16,11 @@ run by ``pyautonomousagent.bench`` (the case runner of ``pyaa bench``).
 times the X8 model alone instead (``advance`` and ``control``, 200 iterations, minimum of
 ``--repeat``), agent by agent (compiled where numba is installed) and NumPy, and for fleets of
 at most 10 UAVs PyFly's reference model (20 iterations), in this process.
+
+    python scripts/x8_side_by_side.py --phases [--agents 1]
+
+times each phase of the batched engine's loop (microseconds per iteration, 4000 iterations)
+for ``x8-patrol`` and the 2-D ``patrol``, in this process.
 """
 
 from __future__ import annotations
@@ -99,14 +104,40 @@ def model_seconds(agents: int, agent_by_agent: bool | None, repeat: int) -> floa
     return best
 
 
+def phase_microseconds(scenario: str, agents: int) -> dict[str, float]:
+    """Microseconds per iteration of each phase of the batched engine's loop (4000 its)."""
+    from pyautonomousagent.scenarios import load
+    from pyautonomousagent.simulation import Simulation, phases
+
+    full = load(scenario).with_overrides(agents=agents, iterations=4000)
+    sim = Simulation.create(full, seed=0, engine="batched", record_every=1)
+    names = ("estimate_state", "decide", "control", "deliver_messages", "record")
+    totals = dict.fromkeys(names, 0.0)
+    for _ in range(4000):
+        sim.world.iteration += 1
+        for name in names:
+            start = time.perf_counter()
+            getattr(phases, name)(sim)
+            totals[name] += time.perf_counter() - start
+    return {name: seconds / 4000 * 1e6 for name, seconds in totals.items()}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--baseline", type=Path, help="the other tree's src/")
     parser.add_argument("--model", action="store_true", help="time the X8 model alone")
+    parser.add_argument("--phases", action="store_true", help="time the loop's phases")
     parser.add_argument("--agents", default="1,10,100")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--pyfly-iterations", type=int, default=400)
     args = parser.parse_args()
+    if args.phases:
+        for agents in (int(a) for a in args.agents.split(",")):
+            for scenario in ("x8-patrol", "patrol"):
+                us = phase_microseconds(scenario, agents)
+                parts = "  ".join(f"{name} {value:.1f}" for name, value in us.items())
+                print(f"{scenario:>9} {agents:>5}: {parts}  total {sum(us.values()):.1f} us/it")
+        return
     if args.model:
         for agents in (int(a) for a in args.agents.split(",")):
             kernel, numpy = (model_seconds(agents, k, args.repeat) for k in (True, False))
