@@ -116,18 +116,8 @@ def exp(x: float) -> float:
 #: rotation (9), features (16), products (7), forces and moments (6), derivative stages
 #: k1..k3 (13 each), a stage's airframe (13), actuator rows at the middle and end (5 each).
 ROT, FEAT, PROD, FM, K1, K2, K3, STAGE, MIDDLE, END, WORK = (
-    0,
-    9,
-    25,
-    32,
-    38,
-    51,
-    64,
-    77,
-    90,
-    95,
-    100,
-)
+    0, 9, 25, 32, 38, 51, 64, 77, 90, 95, 100
+)  # fmt: skip
 
 
 @njit
@@ -178,13 +168,35 @@ def _features(
 
 
 @njit
-def _product_row(m: np.ndarray, i: int, w: np.ndarray, at: int) -> float:
-    """``x8_dynamics._product`` for row i of ``m`` and ``x = w[at:]``:
-    ``((m[i,0] x[0] + m[i,1] x[1]) + ...)``."""
-    total = m[i, 0] * w[at]
-    for j in range(1, m.shape[1]):
-        total = total + m[i, j] * w[at + j]
-    return total
+def _product(m: np.ndarray, w: np.ndarray, at: int, out: int) -> None:
+    """``x8_dynamics._product``: ``m @ x`` with ``x = w[at:]`` into ``w[out:]``, each row
+    summed ``((m[i,0] x[0] + m[i,1] x[1]) + ...)``."""
+    rows, columns = m.shape
+    for i in range(rows):
+        total = m[i, 0] * w[at]
+        for j in range(1, columns):
+            total = total + m[i, j] * w[at + j]
+        w[out + i] = total
+
+
+@njit
+def _aero(m: np.ndarray, w: np.ndarray) -> tuple[float, float, float, float, float, float]:
+    """:func:`_product` of the (6, 16) aerodynamic matrix and the features ``w[FEAT:]``, the six
+    rows kept in registers side by side (their additions overlap in the processor)."""
+    x = w[FEAT]
+    c0, c1, c2, c3, c4, c5 = (
+        m[0, 0] * x,
+        m[1, 0] * x,
+        m[2, 0] * x,
+        m[3, 0] * x,
+        m[4, 0] * x,
+        m[5, 0] * x,
+    )
+    for j in range(1, 16):
+        x = w[FEAT + j]
+        c0, c1, c2 = c0 + m[0, j] * x, c1 + m[1, j] * x, c2 + m[2, j] * x
+        c3, c4, c5 = c3 + m[3, j] * x, c4 + m[4, j] * x, c5 + m[5, j] * x
+    return c0, c1, c2, c3, c4, c5
 
 
 @njit
@@ -196,9 +208,8 @@ def _forces_moments(
     elevator, aileron, throttle = surf
     airspeed, airspeed2, sa, ca, sb, cb = _features(b, elevator, aileron, c, w)
     qbar_s = c[QBAR] * airspeed2
-    lift = _product_row(aero, 0, w, FEAT) * qbar_s
-    drag = _product_row(aero, 1, w, FEAT) * qbar_s
-    side = _product_row(aero, 3, w, FEAT) * qbar_s
+    c_lift, c_drag, c_pitch, c_side, c_roll, c_yaw = _aero(aero, w)
+    lift, drag, side = c_lift * qbar_s, c_drag * qbar_s, c_side * qbar_s
     induced = airspeed + throttle * (c[KMOTOR] - airspeed)
     thrust = c[THRUST] * induced * (induced - airspeed)
     along = drag * cb - side * sb
@@ -206,9 +217,9 @@ def _forces_moments(
     w[FM + 1] = c[WEIGHT] * w[ROT + 7] + (drag * sb + side * cb)
     w[FM + 2] = c[WEIGHT] * w[ROT + 8] - (sa * along + lift * ca)
     spin = c[KOMEGA] * throttle
-    w[FM + 3] = _product_row(aero, 4, w, FEAT) * qbar_s - c[KTP] * (spin * spin)
-    w[FM + 4] = _product_row(aero, 2, w, FEAT) * qbar_s
-    w[FM + 5] = _product_row(aero, 5, w, FEAT) * qbar_s
+    w[FM + 3] = c_roll * qbar_s - c[KTP] * (spin * spin)
+    w[FM + 4] = c_pitch * qbar_s
+    w[FM + 5] = c_yaw * qbar_s
 
 
 @njit
@@ -231,8 +242,8 @@ def _derivatives(
         w[at + i] = d + (_HS[2, i] * b[_PERM[2, i]]) * r
     w[PROD + 0], w[PROD + 1], w[PROD + 2], w[PROD + 3] = p * q, q * r, p * r, p * p - r * r
     w[PROD + 4], w[PROD + 5], w[PROD + 6] = w[FM + 3], w[FM + 4], w[FM + 5]
+    _product(inertia, w, PROD, at + 4)
     for i in range(3):
-        w[at + 4 + i] = _product_row(inertia, i, w, PROD)
         row = ROT + 3 * i
         w[at + 7 + i] = w[row] * u + w[row + 1] * v + w[row + 2] * ww
     w[at + 10] = v * r - ww * q + w[FM + 0] / c[MASS]
