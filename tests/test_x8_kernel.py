@@ -156,3 +156,17 @@ def test_compiled_run_equals_the_numpy_run_on_every_simd_level():
     features = _enabled_avx512()
     if features:  # NumPy's kernels change with the level; the model's bits must not
         assert _digest("numpy", " ".join(features)) == reference
+
+
+def test_a_kernel_that_disagrees_is_not_used(monkeypatch, caplog):
+    pack = kernel.pack_constants
+
+    def stale(k: dyn.Constants) -> np.ndarray:  # as if compiled with an older constant
+        packed = pack(k)
+        packed[kernel.QBAR] *= 1.0 + 1e-12
+        return packed
+
+    monkeypatch.setattr(kernel, "pack_constants", stale)
+    model = X8Vectorised(X8Settings(), _columns(np.random.default_rng(8), 5), agent_by_agent=True)
+    assert not model.agent_by_agent and not model.compiled
+    assert "does not give the NumPy code's bits" in caplog.text

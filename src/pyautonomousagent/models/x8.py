@@ -17,7 +17,8 @@ modelled; the patrol refuels at 40 % and never gets there).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import logging
+from dataclasses import astuple, dataclass
 
 import numpy as np
 
@@ -32,6 +33,8 @@ from pyautonomousagent.models.autopilot import (
     attitude_gains,
 )
 from pyautonomousagent.models.x8_params import X8Parameters, load_parameters
+
+log = logging.getLogger("pyautonomousagent")
 
 #: Turbulence intensities of the Dryden model (MIL-F-8785C) that PyFly offers.
 TURBULENCE_INTENSITIES = ("light", "moderate", "severe")
@@ -242,19 +245,31 @@ class X8Vectorised(X8Model):
         self.attitude = AttitudeController(attitude_gains(settings.dt), settings.dt, n)
         if agent_by_agent is None:
             agent_by_agent = jit.available() or n <= PYTHON_KERNEL_AGENTS
+        if agent_by_agent:
+            agent_by_agent = self._compile(n)
         self.agent_by_agent = agent_by_agent
         #: True where the kernel runs compiled (numba).
         self.compiled = agent_by_agent and jit.available()
-        if agent_by_agent:
-            self._compile(n)
         self.flight = observe(self.state)
         self.write(s)
 
-    def _compile(self, n: int) -> None:
-        """Pack the kernel's constants, put the controllers' state in one (7, N) array (the
-        controllers keep views of its rows), and compile (or load) the kernel."""
+    def _compile(self, n: int) -> bool:
+        """Pack the kernel's constants, compile (or load) the kernel and check it against the
+        NumPy code (:meth:`_kernel_agrees`); if it agrees, put the controllers' state in one
+        (7, N) array (the controllers keep views of its rows). Returns whether it agreed."""
         self._packed = kernel.pack_constants(self.constants)
         self._gains = kernel.pack_gains(self.guidance, self.attitude, self.constants)
+        empty = np.zeros(0)
+        kernel.control(
+            np.zeros((kernel.FLIGHT_ROWS, 0)), empty, empty, np.zeros((7, 0)), self._gains,
+            np.zeros((3, 0)),
+        )  # fmt: skip
+        if not self._kernel_agrees():
+            log.warning(
+                "the X8 kernel does not give the NumPy code's bits here (a stale numba cache "
+                "after a change to arrays.py or x8_dynamics.py?); using the NumPy code"
+            )
+            return False
         pids = np.zeros((7, n))
         pids[1], pids[3] = np.nan, np.nan
         course, height = self.guidance.course, self.guidance.height
@@ -262,17 +277,25 @@ class X8Vectorised(X8Model):
         self.attitude.integral = pids[4:]
         self._pids = pids
         self._flight = np.empty((kernel.FLIGHT_ROWS, n))
-        state, flight = self.state.copy(), self._flight
-        self._advance(state, np.ones(n, dtype=bool), np.empty_like(state), flight)
-        no = np.zeros(0)
-        kernel.control(
-            np.zeros((kernel.FLIGHT_ROWS, 0)),
-            no,
-            no,
-            np.zeros((7, 0)),
-            self._gains,
-            np.zeros((3, 0)),
-        )
+        return True
+
+    def _kernel_agrees(self) -> bool:
+        """One step of up to 8 of the UAVs, disturbed (rates, sideslip, climb, surfaces in
+        motion), by the kernel and by the NumPy code: the same bits? Compiled code keeps the
+        constants it imported when it was cached, so this guards against a stale cache."""
+        y = self.state[:, :8].copy()
+        wiggle = np.linspace(-1.0, 1.0, y.shape[1])
+        y[dyn.RATES] += 0.3 * wiggle
+        y[dyn.V] += 2.0 * wiggle
+        y[dyn.W] -= 1.5 * wiggle
+        y[dyn.ELEVON_RATES] = 4.0 * wiggle
+        commands = np.array([0.2 * wiggle, -0.3 * wiggle, 0.5 + 0.4 * wiggle])
+        want = dyn.step(y, commands, self.constants)
+        got, flight = np.empty_like(y), np.empty((kernel.FLIGHT_ROWS, y.shape[1]))
+        k = self.constants
+        moving = np.ones(y.shape[1], dtype=bool)
+        kernel.advance(y, commands, moving, self._packed, k.aero, k.inertia, got, flight)
+        return np.array_equal(got, want) and np.array_equal(flight, astuple(observe(want)))
 
     def _advance(
         self, state: np.ndarray, moving: np.ndarray, new: np.ndarray, flight: np.ndarray
