@@ -118,7 +118,7 @@ class Guidance:
             requested_heading: the tree's requested heading (degrees clockwise from north).
             requested_speed: the tree's requested speed (m/s).
         """
-        course_error = wrap_angle(np.radians(requested_heading) - course)
+        course_error = wrap_angle(requested_heading * (math.pi / 180.0) - course)
         roll = self.course.update(course_error)
         pitch = self.height.update(self.altitude - altitude)
         return roll, pitch, np.maximum(requested_speed, self.min_airspeed)

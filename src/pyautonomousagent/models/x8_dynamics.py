@@ -23,15 +23,27 @@ the airframe with one third-order Runge-Kutta step that reads the actuators at t
 middle and end of the step. Afterwards the quaternion is renormalised and the actuators clipped, as
 PyFly does after each of its steps. :func:`derivatives` is the whole right-hand side (used to
 check the equations against PyFly's).
+
+Every operation has a fixed order, the same for any number of agents and on every CPU: sums
+are written out term by term (``numpy.sum`` and BLAS reassociate depending on the array's
+shape and the machine), the small matrix products accumulate column by column
+(:func:`_product`), and the arctangent, arcsine and exponential are computed from
+``+ - * /`` and ``sqrt`` alone (:func:`~pyautonomousagent.arrays.arctan2`, :func:`exp`),
+which are correctly rounded everywhere, where NumPy's own kernels differ by an ulp between
+SIMD levels. The compiled kernel (:mod:`~pyautonomousagent.models.x8_kernel`) repeats these
+operations agent by agent and gives the same bits.
 """
 
 from __future__ import annotations
 
+import cmath
 import math
 from dataclasses import dataclass
+from decimal import Context, Decimal
 
 import numpy as np
 
+from pyautonomousagent.arrays import arctan2
 from pyautonomousagent.models.x8_params import X8Parameters
 
 # Rows of the state array, shape (STATES, N).
@@ -61,14 +73,53 @@ _HALF_SIGN = (
 )
 # Row orders of the cross product v x omega = v[_A] omega[_B] - v[_B] omega[_A].
 _A, _B = np.array([1, 2, 0], dtype=np.intp), np.array([2, 0, 1], dtype=np.intp)
-#: Below this many agents the small matrix products go to BLAS (fast for few columns); above,
-#: to einsum (BLAS threads cost more than they give on a (6, 16) x (16, N) product).
-_BLAS_BELOW = 512
+
+#: The exponential's constants: log2(e); ln 2 split in a head with 32 significant bits (so
+#: ``k * LN2_HI`` is exact for |k| < 2**21) and the rest; 1/n!, n = 0..13.
+LOG2E = 1.0 / math.log(2.0)
+LN2_HI = math.floor(math.log(2.0) * 2.0**32) / 2.0**32
+LN2_LO = float(Decimal(2).ln(Context(prec=40)) - Decimal(LN2_HI))
+EXP_SERIES = tuple(1.0 / math.factorial(n) for n in range(14))
+#: Arguments of :func:`exp` are clipped to this range (its result stays finite).
+EXP_LIMIT = 700.0
+
+
+def exp(x: np.ndarray) -> np.ndarray:
+    """``e**x`` from ``+ - * /``, ``floor`` and ``ldexp`` (all exact or correctly rounded).
+
+    ``x = k ln 2 + r`` with ``|r| <= ln(2)/2`` (Cody and Waite's two-part ln 2), ``e**r`` by
+    14 terms of its series (within 2e-18 there), times ``2**k``. Within a few ulp of
+    ``math.exp``; arguments are clipped to +-:data:`EXP_LIMIT`. Shape of ``x``.
+    """
+    x = np.minimum(np.maximum(x, -EXP_LIMIT), EXP_LIMIT)
+    k = np.floor(x * LOG2E + 0.5)
+    r = (x - k * LN2_HI) - k * LN2_LO
+    total = r * EXP_SERIES[-1]
+    for coefficient in EXP_SERIES[-2:0:-1]:
+        total += coefficient
+        total *= r
+    total += EXP_SERIES[0]
+    return np.ldexp(total, k.astype(np.int64))
+
+
+def arcsin(s: np.ndarray) -> np.ndarray:
+    """``asin(s)`` for s in [-1, 1] as ``arctan2(s, sqrt((1 - s)(1 + s)))``, same bits
+    everywhere; the factored square root keeps it accurate next to +-1."""
+    return arctan2(s, np.sqrt((1.0 - s) * (1.0 + s)))
 
 
 def _product(m: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """``m @ x`` for a small matrix ``m`` (k, j) and ``x`` (j, N), shape (k, N)."""
-    return m @ x if x.shape[-1] < _BLAS_BELOW else np.einsum("ij,jn->in", m, x)
+    """``m @ x`` for a small matrix ``m`` (k, j) and ``x`` (j, N), shape (k, N).
+
+    Summed column by column, ``((m[:, 0] x[0] + m[:, 1] x[1]) + ...)``, zero terms included:
+    the order BLAS and ``einsum`` leave to the machine is fixed here.
+    """
+    return np.add.accumulate(m[:, :, None] * x[None], axis=1)[:, -1]
+
+
+def _sum3(a: np.ndarray) -> np.ndarray:
+    """``(a[0] + a[1]) + a[2]`` over the first axis of ``a`` (3, ...)."""
+    return a[0] + a[1] + a[2]
 
 
 def quaternion_from_euler(roll: np.ndarray, pitch: np.ndarray, yaw: np.ndarray) -> np.ndarray:
@@ -89,8 +140,8 @@ def quaternion_from_euler(roll: np.ndarray, pitch: np.ndarray, yaw: np.ndarray) 
 def roll_pitch(e: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Roll and pitch (rad) of unit quaternions ``e`` of shape (4, N); each (N,)."""
     e0, e1, e2, e3 = e
-    roll = np.arctan2(2 * (e0 * e1 + e2 * e3), e0 * e0 + e3 * e3 - e1 * e1 - e2 * e2)
-    pitch = np.arcsin(np.minimum(np.maximum(2 * (e0 * e2 - e1 * e3), -1.0), 1.0))
+    roll = arctan2(2 * (e0 * e1 + e2 * e3), e0 * e0 + e3 * e3 - e1 * e1 - e2 * e2)
+    pitch = arcsin(np.minimum(np.maximum(2 * (e0 * e2 - e1 * e3), -1.0), 1.0))
     return roll, pitch
 
 
@@ -111,7 +162,7 @@ def rotation(e: np.ndarray) -> np.ndarray:
     v = e[1:]
     m = 2 * (v[:, None] * v[None, :])
     flat = m.reshape((9,) + e.shape[1:])
-    flat[::4] += e[0] * e[0] - (v * v).sum(axis=0)
+    flat[::4] += e[0] * e[0] - _sum3(v * v)
     s = 2 * e[0] * v
     m[0, 1] -= s[2]
     m[0, 2] += s[1]
@@ -124,7 +175,7 @@ def rotation(e: np.ndarray) -> np.ndarray:
 
 def body_to_ned(e: np.ndarray, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
     """Rotate body-frame vectors ``(x, y, z)`` (each (N,)) into NED; shape (3, N)."""
-    return (rotation(e) * np.array([x, y, z])[None]).sum(axis=1)
+    return _sum3(np.moveaxis(rotation(e) * np.array([x, y, z])[None], 1, 0))
 
 
 #: Names of the features the aerodynamic coefficients are linear in (rows of the feature
@@ -195,7 +246,7 @@ class Constants:
             aero=_aero_matrix(p),
             inertia=inertia,
             actuator_step=_transition(act.omega_0, act.zeta, dt / 2),
-            throttle_decay=float(np.exp(-dt / 2 / act.throttle_tau)),
+            throttle_decay=math.exp(-dt / 2 / act.throttle_tau),
         )
 
 
@@ -236,10 +287,21 @@ def _aero_matrix(p: X8Parameters) -> np.ndarray:
 
 
 def _transition(omega: float, zeta: float, h: float) -> np.ndarray:
-    """exp(A h) of the second-order actuator ``A = [[0, 1], [-omega^2, -2 zeta omega]]``."""
+    """exp(A h) of the second-order actuator ``A = [[0, 1], [-omega^2, -2 zeta omega]]``.
+
+    In closed form from the eigenvalues l1, l2 of A (Sylvester's formula,
+    ``exp(A h) = c0 I + c1 A``), with the scalar library's ``exp``, so the constants are the
+    same on every machine and SIMD level (NumPy's ``exp`` and LAPACK's ``eig`` are not).
+    """
     a = np.array([[0.0, 1.0], [-(omega**2), -2.0 * zeta * omega]])
-    values, vectors = np.linalg.eig(a * h)
-    return np.real(vectors @ np.diag(np.exp(values)) @ np.linalg.inv(vectors))
+    root = cmath.sqrt(zeta * zeta - 1.0) * omega
+    l1, l2 = -zeta * omega + root, -zeta * omega - root
+    if l1 == l2:  # critically damped: the limit of the formula below
+        e = math.exp(l1.real * h)
+        return e * ((1.0 - l1.real * h) * np.eye(2) + h * a)
+    e1, e2 = cmath.exp(l1 * h), cmath.exp(l2 * h)
+    c0, c1 = (l1 * e2 - l2 * e1) / (l1 - l2), (e1 - e2) / (l1 - l2)
+    return c0.real * np.eye(2) + c1.real * a
 
 
 def _stall_blend(alpha: np.ndarray, m: float, a0: float) -> np.ndarray:
@@ -249,7 +311,7 @@ def _stall_blend(alpha: np.ndarray, m: float, a0: float) -> np.ndarray:
     rewritten with ``k = exp(M a0)`` as ``(1 + 2k cosh(M a)) / (1 + k^2 + 2k cosh(M a))``.
     """
     k = math.exp(m * a0)
-    z = np.exp(m * alpha)
+    z = exp(m * alpha)
     t = k * (z + 1 / z)  # 2k cosh(M a)
     return (1 + t) / ((1 + k * k) + t)
 
@@ -273,11 +335,10 @@ def _forces_moments(
     airspeed = np.maximum(np.sqrt(airspeed2), k.params.airspeed_min)
     inv_2v = 0.5 / airspeed
     uw = np.sqrt(uw2)
-    alpha = 2 * np.arctan(w / (uw + u))  # = atan2(w, u), the half-angle form is cheaper
     sa, ca = w / uw, u / uw  # sin, cos of alpha
     sb = v / airspeed  # sin(beta)
-    beta = np.arcsin(sb)
     cb = np.sqrt(1 - sb * sb)
+    alpha, beta = arctan2(np.array([w, sb]), np.array([u, cb]))  # one call: atan2(w, u), asin(sb)
     sigma = _stall_blend(alpha, k.params.aero.M, k.params.aero.a_0)
     linear = 1 - sigma
     lift_linear = k.params.aero.C_L_0 + k.params.aero.C_L_alpha * alpha
@@ -318,10 +379,10 @@ def body_derivatives(b: np.ndarray, surfaces: tuple[np.ndarray, ...], k: Constan
     forces, moments = _forces_moments(b, surfaces, rot[2], k)
     p, q, r = omega
     d = np.empty_like(b)
-    d[QUATERNION] = (_HALF_SIGN * e.take(_PERM, axis=0) * omega[:, None]).sum(axis=0)
+    d[QUATERNION] = _sum3(_HALF_SIGN * e.take(_PERM, axis=0) * omega[:, None])
     products = np.array([p * q, q * r, p * r, p * p - r * r, *moments])
     d[RATES] = _product(k.inertia, products)
-    d[PN : PD + 1] = (rot * vel[None]).sum(axis=1)
+    d[PN : PD + 1] = _sum3(np.moveaxis(rot * vel[None], 1, 0))
     d[VELOCITY] = vel.take(_A, axis=0) * omega.take(_B, axis=0)
     d[VELOCITY] -= vel.take(_B, axis=0) * omega.take(_A, axis=0)
     d[VELOCITY] += forces / k.params.airframe.mass
@@ -379,7 +440,8 @@ def _actuator_half_step(a: np.ndarray, commands: np.ndarray, k: Constants) -> np
 def settle(y: np.ndarray, k: Constants) -> None:
     """After a full step: renormalise the quaternion and clip the actuators (in place)."""
     act = k.params.actuators
-    y[QUATERNION] /= np.sqrt((y[QUATERNION] ** 2).sum(axis=0))
+    e = y[QUATERNION]
+    e /= np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2] + e[3] * e[3])
     for rows, low, high in (
         (y[ELEVONS], act.elevon_min, act.elevon_max),
         (y[ELEVON_RATES], -act.elevon_rate_max, act.elevon_rate_max),
@@ -428,6 +490,5 @@ def elevon_commands(elevator: np.ndarray, aileron: np.ndarray, k: Constants) -> 
         Shape (2, N): right = elevator - aileron, left = elevator + aileron.
     """
     act = k.params.actuators
-    return np.clip(
-        np.array([elevator - aileron, elevator + aileron]), act.elevon_min, act.elevon_max
-    )
+    both = np.array([elevator - aileron, elevator + aileron])
+    return np.minimum(np.maximum(both, act.elevon_min), act.elevon_max)

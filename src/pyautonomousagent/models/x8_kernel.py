@@ -1,0 +1,451 @@
+"""The vectorised X8's step and autopilot compiled agent by agent (numba, the ``[fast]`` extra).
+
+The NumPy code in :mod:`~pyautonomousagent.models.x8_dynamics`, :mod:`.x8` and
+:mod:`.autopilot` is the reference; the functions here repeat its operations on one agent's
+numbers at a time, in the same order, so that they give the same bits (no ``fastmath``, no
+library arctangent or exponential: :func:`atan2` and :func:`exp` follow
+:func:`pyautonomousagent.arrays.arctan2` and :func:`.x8_dynamics.exp` step by step).
+Without numba (or with ``PYAA_NO_JIT=1``) they run as plain Python, with the same bits: the
+model uses them so for a few agents, where that beats NumPy's cost per call, and the NumPy
+code above (:attr:`pyautonomousagent.models.x8.X8Vectorised.agent_by_agent`).
+
+Two calls per iteration, whatever the number of agents: :func:`advance` (Phase 2: one step
+of every moving agent, then what the loop reads of it) and :func:`control` (Phase 4: guidance,
+attitude and airspeed PIDs, elevon mixing). Their scalar constants travel in float arrays
+laid out by :func:`pack_constants` and :func:`pack_gains`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pyautonomousagent.arrays import _SERIES, _SQRT3, _TAN_PI_12
+from pyautonomousagent.jit import njit
+from pyautonomousagent.models import x8_dynamics as dyn
+from pyautonomousagent.models.autopilot import AttitudeController, Guidance
+
+#: Rows of the flight array that :func:`advance` fills (the fields of ``x8.Flight``).
+FLIGHT_ROWS = 9
+_HS = dyn._HALF_SIGN[:, :, 0].copy()  # (3, 4): +-0.5
+_PERM = dyn._PERM
+_EXP = dyn.EXP_SERIES
+_LOG2E, _LN2_HI, _LN2_LO, _EXP_LIMIT = dyn.LOG2E, dyn.LN2_HI, dyn.LN2_LO, dyn.EXP_LIMIT
+
+# Indices into the constants vector of :func:`pack_constants`.
+(H, VMIN, M_STALL, K_STALL, CL0, CLA, QBAR, KMOTOR, THRUST, WEIGHT, MASS, KTP, KOMEGA) = range(13)
+(EMIN, EMAX, RMAX, TMIN, TMAX, LIMIT, DECAY, F11, F12, F21, F22) = range(13, 24)
+
+
+def pack_constants(k: dyn.Constants) -> np.ndarray:
+    """The scalars :func:`advance` needs, computed as the NumPy code computes them, (24,)."""
+    p, a, act = k.params, k.params.airframe, k.params.actuators
+    (f11, f12), (f21, f22) = k.actuator_step
+    return np.array(
+        [k.dt, p.airspeed_min, p.aero.M, math.exp(p.aero.M * p.aero.a_0), p.aero.C_L_0]
+        + [p.aero.C_L_alpha, 0.5 * p.rho * a.S_wing, a.k_motor]
+        + [0.5 * p.rho * a.S_prop * a.C_prop, a.mass * p.g, a.mass, a.k_T_P, a.k_Omega]
+        + [act.elevon_min, act.elevon_max, act.elevon_rate_max, act.throttle_min]
+        + [act.throttle_max, act.elevon_rate_max * 0.5 * k.dt, k.throttle_decay]
+        + [f11, f12, f21, f22],
+        dtype=np.float64,
+    )
+
+
+@njit
+def _min(a: float, b: float) -> float:
+    """``numpy.minimum`` of two finite numbers (the first where equal)."""
+    return a if a <= b else b
+
+
+@njit
+def _max(a: float, b: float) -> float:
+    """``numpy.maximum`` of two finite numbers (the first where equal)."""
+    return a if a >= b else b
+
+
+@njit
+def _clip(x: float, low: float, high: float) -> float:
+    """``minimum(maximum(x, low), high)``."""
+    return _min(_max(x, low), high)
+
+
+@njit
+def _atan_unit(t: float) -> float:
+    """``arrays._atan_unit`` for one number t in [0, 1] (rad)."""
+    big = 1.0 if t > _TAN_PI_12 else 0.0
+    u = big * ((t * _SQRT3 - 1.0) / (t + _SQRT3)) + (1.0 - big) * t
+    z = u * u
+    total = z * _SERIES[15]
+    for j in range(14, 0, -1):
+        total += _SERIES[j]
+        total *= z
+    total += _SERIES[0]
+    return (math.pi / 6.0) * big + u * total
+
+
+@njit
+def atan2(y: float, x: float) -> float:
+    """``arrays.arctan2`` for one pair (rad, [-pi, pi])."""
+    ay, ax = abs(y), abs(x)
+    steep = 1.0 if ay > ax else 0.0
+    high = _max(ay, ax)
+    angle = _atan_unit(_min(ay, ax) / (high + (1.0 if high == 0.0 else 0.0)))
+    angle = (math.pi / 2.0) * steep + (1.0 - 2.0 * steep) * angle
+    west = 1.0 - math.copysign(1.0, x)
+    angle = (math.pi / 2.0) * west + (1.0 - west) * angle
+    return math.copysign(angle, y)
+
+
+@njit
+def exp(x: float) -> float:
+    """``x8_dynamics.exp`` for one number."""
+    x = _clip(x, -_EXP_LIMIT, _EXP_LIMIT)
+    k = math.floor(x * _LOG2E + 0.5)
+    r = (x - k * _LN2_HI) - k * _LN2_LO
+    total = r * _EXP[13]
+    for j in range(12, 0, -1):
+        total += _EXP[j]
+        total *= r
+    total += _EXP[0]
+    return math.ldexp(total, int(k))
+
+
+#: Workspace of one agent's step (:func:`advance` allocates it once per call): offsets of the
+#: rotation (9), features (16), products (7), forces and moments (6), derivative stages
+#: k1..k3 (13 each), a stage's airframe (13), actuator rows at the middle and end (5 each).
+ROT, FEAT, PROD, FM, K1, K2, K3, STAGE, MIDDLE, END, WORK = (
+    0, 9, 25, 32, 38, 51, 64, 77, 90, 95, 100
+)  # fmt: skip
+
+
+@njit
+def _rotation(e: np.ndarray, w: np.ndarray) -> None:
+    """``x8_dynamics.rotation`` of the quaternion ``e[0:4]`` into ``w[ROT:ROT + 9]`` (row major)."""
+    e0, e1, e2, e3 = e[0], e[1], e[2], e[3]
+    d = e0 * e0 - (e1 * e1 + e2 * e2 + e3 * e3)
+    s1, s2, s3 = 2 * e0 * e1, 2 * e0 * e2, 2 * e0 * e3
+    w[ROT + 0], w[ROT + 1], w[ROT + 2] = 2 * (e1 * e1) + d, 2 * (e1 * e2) - s3, 2 * (e1 * e3) + s2
+    w[ROT + 3], w[ROT + 4], w[ROT + 5] = 2 * (e2 * e1) + s3, 2 * (e2 * e2) + d, 2 * (e2 * e3) - s1
+    w[ROT + 6], w[ROT + 7], w[ROT + 8] = 2 * (e3 * e1) - s2, 2 * (e3 * e2) + s1, 2 * (e3 * e3) + d
+
+
+@njit
+def _features(
+    b: np.ndarray, elevator: float, aileron: float, c: np.ndarray, w: np.ndarray
+) -> tuple[float, float, float, float, float, float]:
+    """Air data, and the (16,) aerodynamic features into ``w[FEAT:]`` (``dyn.FEATURES``).
+
+    Returns (airspeed, airspeed^2, sin(alpha), cos(alpha), sin(beta), cos(beta)).
+    """
+    u, v, ww = b[10], b[11], b[12]
+    uw2 = u * u + ww * ww
+    airspeed2 = uw2 + v * v
+    airspeed = _max(math.sqrt(airspeed2), c[VMIN])
+    inv_2v = 0.5 / airspeed
+    uw = math.sqrt(uw2)
+    alpha = atan2(ww, u)
+    sa, ca = ww / uw, u / uw
+    sb = v / airspeed
+    cb = math.sqrt(1 - sb * sb)
+    beta = atan2(sb, cb)
+    kk = c[K_STALL]
+    z = exp(c[M_STALL] * alpha)
+    t = kk * (z + 1 / z)
+    sigma = (1 + t) / ((1 + kk * kk) + t)
+    linear = 1 - sigma
+    lift_linear = c[CL0] + c[CLA] * alpha
+    lin_lift = linear * lift_linear
+    flat = sigma * sa * abs(sa)
+    w[FEAT + 0], w[FEAT + 1], w[FEAT + 2] = 1.0, lin_lift, lin_lift * lift_linear
+    w[FEAT + 3], w[FEAT + 4], w[FEAT + 5] = linear * alpha, linear, flat
+    w[FEAT + 6], w[FEAT + 7], w[FEAT + 8] = flat * ca, flat * sa, inv_2v * b[5]
+    w[FEAT + 9], w[FEAT + 10], w[FEAT + 11] = elevator, elevator * elevator, beta
+    w[FEAT + 12], w[FEAT + 13], w[FEAT + 14] = beta * beta, inv_2v * b[4], inv_2v * b[6]
+    w[FEAT + 15] = aileron
+    return airspeed, airspeed2, sa, ca, sb, cb
+
+
+@njit
+def _product(m: np.ndarray, w: np.ndarray, at: int, out: int) -> None:
+    """``x8_dynamics._product``: ``m @ x`` with ``x = w[at:]`` into ``w[out:]``, each row
+    summed ``((m[i,0] x[0] + m[i,1] x[1]) + ...)``."""
+    rows, columns = m.shape
+    for i in range(rows):
+        total = m[i, 0] * w[at]
+        for j in range(1, columns):
+            total = total + m[i, j] * w[at + j]
+        w[out + i] = total
+
+
+@njit
+def _aero(m: np.ndarray, w: np.ndarray) -> tuple[float, float, float, float, float, float]:
+    """:func:`_product` of the (6, 16) aerodynamic matrix and the features ``w[FEAT:]``, the six
+    rows kept in registers side by side (their additions overlap in the processor)."""
+    x = w[FEAT]
+    c0, c1, c2, c3, c4, c5 = (
+        m[0, 0] * x,
+        m[1, 0] * x,
+        m[2, 0] * x,
+        m[3, 0] * x,
+        m[4, 0] * x,
+        m[5, 0] * x,
+    )
+    for j in range(1, 16):
+        x = w[FEAT + j]
+        c0, c1, c2 = c0 + m[0, j] * x, c1 + m[1, j] * x, c2 + m[2, j] * x
+        c3, c4, c5 = c3 + m[3, j] * x, c4 + m[4, j] * x, c5 + m[5, j] * x
+    return c0, c1, c2, c3, c4, c5
+
+
+@njit
+def _forces_moments(
+    b: np.ndarray, surf: tuple[float, float, float], c: np.ndarray, aero: np.ndarray, w: np.ndarray
+) -> None:
+    """``x8_dynamics._forces_moments`` for one agent: forces (N), moments (N m) into
+    ``w[FM:FM + 6]``; ``surf`` = (elevator, aileron, throttle); needs the rotation in ``w``."""
+    elevator, aileron, throttle = surf
+    airspeed, airspeed2, sa, ca, sb, cb = _features(b, elevator, aileron, c, w)
+    qbar_s = c[QBAR] * airspeed2
+    c_lift, c_drag, c_pitch, c_side, c_roll, c_yaw = _aero(aero, w)
+    lift, drag, side = c_lift * qbar_s, c_drag * qbar_s, c_side * qbar_s
+    induced = airspeed + throttle * (c[KMOTOR] - airspeed)
+    thrust = c[THRUST] * induced * (induced - airspeed)
+    along = drag * cb - side * sb
+    w[FM + 0] = c[WEIGHT] * w[ROT + 6] + (thrust - ca * along + lift * sa)
+    w[FM + 1] = c[WEIGHT] * w[ROT + 7] + (drag * sb + side * cb)
+    w[FM + 2] = c[WEIGHT] * w[ROT + 8] - (sa * along + lift * ca)
+    spin = c[KOMEGA] * throttle
+    w[FM + 3] = c_roll * qbar_s - c[KTP] * (spin * spin)
+    w[FM + 4] = c_pitch * qbar_s
+    w[FM + 5] = c_yaw * qbar_s
+
+
+@njit
+def _derivatives(
+    b: np.ndarray,
+    surf: tuple[float, float, float],
+    c: np.ndarray,
+    aero: np.ndarray,
+    inertia: np.ndarray,
+    w: np.ndarray,
+    at: int,
+) -> None:
+    """``x8_dynamics.body_derivatives`` of one agent's airframe ``b`` (13,) into
+    ``w[at:at + 13]``."""
+    _rotation(b, w)
+    _forces_moments(b, surf, c, aero, w)
+    p, q, r, u, v, ww = b[4], b[5], b[6], b[10], b[11], b[12]
+    for i in range(4):
+        d = (_HS[0, i] * b[_PERM[0, i]]) * p + (_HS[1, i] * b[_PERM[1, i]]) * q
+        w[at + i] = d + (_HS[2, i] * b[_PERM[2, i]]) * r
+    w[PROD + 0], w[PROD + 1], w[PROD + 2], w[PROD + 3] = p * q, q * r, p * r, p * p - r * r
+    w[PROD + 4], w[PROD + 5], w[PROD + 6] = w[FM + 3], w[FM + 4], w[FM + 5]
+    _product(inertia, w, PROD, at + 4)
+    for i in range(3):
+        row = ROT + 3 * i
+        w[at + 7 + i] = w[row] * u + w[row + 1] * v + w[row + 2] * ww
+    w[at + 10] = v * r - ww * q + w[FM + 0] / c[MASS]
+    w[at + 11] = ww * p - u * r + w[FM + 1] / c[MASS]
+    w[at + 12] = u * q - v * p + w[FM + 2] / c[MASS]
+
+
+@njit
+def _half_step(a: np.ndarray, cmd: np.ndarray, i: int, c: np.ndarray, out: np.ndarray) -> None:
+    """``x8_dynamics._actuator_half_step`` of actuator rows ``a`` (5,) under agent i's commands
+    ``cmd[:, i]`` into ``out`` (5,)."""
+    for j in range(2):
+        offset = a[j] - cmd[j, i]
+        moved = c[F11] * offset + c[F12] * a[2 + j] - offset
+        out[j] = a[j] + _clip(moved, -c[LIMIT], c[LIMIT])
+        out[2 + j] = _clip(c[F21] * offset + c[F22] * a[2 + j], -c[RMAX], c[RMAX])
+    out[4] = cmd[2, i] + (a[4] - cmd[2, i]) * c[DECAY]
+
+
+@njit
+def _surfaces(a: np.ndarray, c: np.ndarray) -> tuple[float, float, float]:
+    """``x8_dynamics._surfaces``: (elevator, aileron, throttle) of actuator rows ``a`` (5,)."""
+    right = _clip(a[0], c[EMIN], c[EMAX])
+    left = _clip(a[1], c[EMIN], c[EMAX])
+    throttle = _clip(a[4], c[TMIN], c[TMAX])
+    return 0.5 * (right + left), 0.5 * (left - right), throttle
+
+
+@njit
+def _stages(
+    y: np.ndarray,
+    cmd: np.ndarray,
+    i: int,
+    c: np.ndarray,
+    m: tuple[np.ndarray, np.ndarray],
+    w: np.ndarray,
+) -> None:
+    """The actuators' half steps (``w[MIDDLE:]``, ``w[END:]``) and the three Runge-Kutta
+    stages k1..k3 of ``x8_dynamics.step`` for agent i's state ``y`` (18,)."""
+    aero, inertia = m
+    h, act, b, stage = c[H], y[13:18], y[0:13], w[STAGE : STAGE + 13]
+    _half_step(act, cmd, i, c, w[MIDDLE : MIDDLE + 5])
+    _half_step(w[MIDDLE : MIDDLE + 5], cmd, i, c, w[END : END + 5])
+    _derivatives(b, _surfaces(act, c), c, aero, inertia, w, K1)
+    for j in range(13):
+        stage[j] = b[j] + (h / 2) * w[K1 + j]
+    _derivatives(stage, _surfaces(w[MIDDLE : MIDDLE + 5], c), c, aero, inertia, w, K2)
+    for j in range(13):
+        stage[j] = b[j] + h * (2 * w[K2 + j] - w[K1 + j])
+    _derivatives(stage, _surfaces(w[END : END + 5], c), c, aero, inertia, w, K3)
+
+
+@njit
+def _step_one(
+    y: np.ndarray,
+    cmd: np.ndarray,
+    i: int,
+    c: np.ndarray,
+    m: tuple[np.ndarray, np.ndarray],
+    w: np.ndarray,
+    new: np.ndarray,
+) -> None:
+    """``x8_dynamics.step`` (settling included) of agent i's state ``y`` (18,) into ``new``."""
+    _stages(y, cmd, i, c, m, w)
+    h = c[H]
+    for j in range(13):
+        new[j] = y[j] + (h / 6) * (w[K1 + j] + 4 * w[K2 + j] + w[K3 + j])
+    norm = math.sqrt(new[0] * new[0] + new[1] * new[1] + new[2] * new[2] + new[3] * new[3])
+    for j in range(4):
+        new[j] /= norm
+    for j in range(2):
+        new[13 + j] = _clip(w[END + j], c[EMIN], c[EMAX])
+        new[15 + j] = _clip(w[END + 2 + j], -c[RMAX], c[RMAX])
+    new[17] = _clip(w[END + 4], c[TMIN], c[TMAX])
+
+
+@njit
+def _observe_one(y: np.ndarray, flight: np.ndarray, i: int, w: np.ndarray) -> None:
+    """``x8.observe`` of one agent's state ``y`` (18,) into column i of ``flight`` (9, N)."""
+    e0, e1, e2, e3, u, v, ww = y[0], y[1], y[2], y[3], y[10], y[11], y[12]
+    _rotation(y, w)
+    north = w[ROT + 0] * u + w[ROT + 1] * v + w[ROT + 2] * ww
+    east = w[ROT + 3] * u + w[ROT + 4] * v + w[ROT + 5] * ww
+    s = _clip(2 * (e0 * e2 - e1 * e3), -1.0, 1.0)
+    flight[0, i], flight[1, i], flight[2, i] = y[7], y[8], -y[9]
+    flight[3, i] = math.sqrt(u * u + v * v + ww * ww)
+    flight[4, i] = atan2(east, north)
+    flight[5, i] = atan2(2 * (e0 * e1 + e2 * e3), e0 * e0 + e3 * e3 - e1 * e1 - e2 * e2)
+    flight[6, i] = atan2(s, math.sqrt((1.0 - s) * (1.0 + s)))
+    flight[7, i], flight[8, i] = y[4], y[5]
+
+
+@njit
+def advance(
+    state: np.ndarray,
+    commands: np.ndarray,
+    moving: np.ndarray,
+    c: np.ndarray,
+    aero: np.ndarray,
+    inertia: np.ndarray,
+    new: np.ndarray,
+    flight: np.ndarray,
+) -> None:
+    """One time step of every agent where ``moving``; the others are held.
+
+    Args:
+        state: the state, (STATES, N); not modified.
+        commands: actuator set points, (COMMANDS, N).
+        moving: (N,) bool.
+        c: :func:`pack_constants`; aero, inertia: ``Constants.aero`` (6, 16), ``.inertia`` (3, 7).
+        new: receives the new state, (STATES, N).
+        flight: receives ``x8.observe`` of the new state, (FLIGHT_ROWS, N): north, east,
+            altitude (m), airspeed (m/s), course, roll, pitch (rad), p, q (rad/s).
+    """
+    w, y, out = np.empty(WORK), np.empty(18), np.empty(18)
+    for i in range(state.shape[1]):
+        for j in range(18):
+            y[j] = state[j, i]
+        if moving[i]:
+            _step_one(y, commands, i, c, (aero, inertia), w, out)
+            y[:] = out
+        for j in range(18):
+            new[j, i] = y[j]
+        _observe_one(y, flight, i, w)
+
+
+# Indices into the gains vector of :func:`pack_gains`.
+(C_KP, C_KI, C_KD, C_LIM, C_DT, A_KP, A_KI, A_KD, A_LIM, A_DT, ALT_REF, V_MIN) = range(12)
+(KP_V, KI_V, KP_ROLL, KI_ROLL, KD_ROLL, KP_PITCH, KI_PITCH, KD_PITCH) = range(12, 20)
+(AIL_MIN, AIL_MAX, ELEV_MIN, ELEV_MAX, ATT_DT, ELEVON_MIN, ELEVON_MAX) = range(20, 27)
+
+
+def pack_gains(guidance: Guidance, attitude: AttitudeController, k: dyn.Constants) -> np.ndarray:
+    """The scalars :func:`control` needs, read from the NumPy controllers, shape (27,)."""
+    g, act = attitude.gains, k.params.actuators
+    values = []
+    for pid in (guidance.course, guidance.height):
+        values += [pid.kp, pid.ki, pid.kd, pid.limit, pid.dt]
+    values += [guidance.altitude, guidance.min_airspeed, g.kp_airspeed, g.ki_airspeed]
+    values += [g.kp_roll, g.ki_roll, g.kd_roll, g.kp_pitch, g.ki_pitch, g.kd_pitch]
+    values += [g.aileron_min, g.aileron_max, g.elevator_min, g.elevator_max, attitude.dt]
+    values += [act.elevon_min, act.elevon_max]
+    return np.array(values, dtype=np.float64)
+
+
+@njit
+def _mod(a: float, b: float) -> float:
+    """``numpy.mod`` of two finite numbers, b != 0: Python's ``%`` (``fmod``, then moved to
+    the sign of b; numba follows CPython), the rule NumPy's float remainder follows too."""
+    return a % b
+
+
+@njit
+def _pid(error: float, state: np.ndarray, row: int, i: int, g: np.ndarray, at: int) -> float:
+    """``autopilot.PID.update`` for agent i: integral in ``state[row]``, previous error in
+    ``state[row + 1]``; gains ``g[at:at + 5]`` = kp, ki, kd, limit, dt."""
+    kp, ki, kd, limit, dt = g[at], g[at + 1], g[at + 2], g[at + 3], g[at + 4]
+    state[row, i] += error * dt
+    previous = state[row + 1, i]
+    slope = 0.0 if math.isnan(previous) else (error - previous) / dt
+    state[row + 1, i] = error
+    out = kp * error + ki * state[row, i] + kd * slope
+    return _clip(out, -limit, limit)
+
+
+@njit
+def control(
+    flight: np.ndarray,
+    heading: np.ndarray,
+    speed: np.ndarray,
+    pids: np.ndarray,
+    g: np.ndarray,
+    commands: np.ndarray,
+) -> None:
+    """Phase 4 for every agent: ``X8Vectorised.control`` (guidance, attitude, elevon mixing).
+
+    Args:
+        flight: (FLIGHT_ROWS, N), as :func:`advance` fills it.
+        heading, speed: the requested heading (degrees clockwise from north) and speed
+            (m/s), (N,).
+        pids: controller state, (7, N), updated: course integral and previous error,
+            altitude integral and previous error, integrals of the airspeed, roll and pitch
+            errors.
+        g: :func:`pack_gains`.
+        commands: receives the actuator set points, (COMMANDS, N).
+    """
+    for i in range(flight.shape[1]):
+        error = _mod(heading[i] * (math.pi / 180.0) - flight[4, i] + math.pi, 2 * math.pi)
+        roll_ref = _pid(error - math.pi, pids, 0, i, g, C_KP)
+        pitch_ref = _pid(g[ALT_REF] - flight[2, i], pids, 2, i, g, A_KP)
+        errors = (
+            flight[3, i] - _max(speed[i], g[V_MIN]),
+            flight[5, i] - roll_ref,
+            flight[6, i] - pitch_ref,
+        )
+        for j in range(3):
+            pids[4 + j, i] += g[ATT_DT] * errors[j]
+        throttle = -g[KP_V] * errors[0] - g[KI_V] * pids[4, i]
+        aileron = -g[KP_ROLL] * errors[1] - g[KI_ROLL] * pids[5, i] - g[KD_ROLL] * flight[7, i]
+        elevator = -g[KP_PITCH] * errors[2] - g[KI_PITCH] * pids[6, i] - g[KD_PITCH] * flight[8, i]
+        elevator = _clip(elevator, g[ELEV_MIN], g[ELEV_MAX])
+        aileron = _clip(aileron, g[AIL_MIN], g[AIL_MAX])
+        commands[0, i] = _clip(elevator - aileron, g[ELEVON_MIN], g[ELEVON_MAX])
+        commands[1, i] = _clip(elevator + aileron, g[ELEVON_MIN], g[ELEVON_MAX])
+        commands[2, i] = _clip(throttle, 0.0, 1.0)
