@@ -47,6 +47,8 @@ PAPER_TABLES = {
 BENCH_ENGINES: dict[str, tuple[str, str | None]] = {
     "pytrees": ("pytrees", None),
     "batched": ("batched", None),
+    "compiled": ("compiled", None),
+    "auto": ("auto", None),
     "pyfly": ("pytrees", "pyfly"),
 }
 

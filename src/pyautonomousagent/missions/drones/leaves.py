@@ -12,6 +12,8 @@ from typing import Any
 from pyautonomousagent.arrays import bearing, choose, maximum, minimum
 from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS, status_if, success_if
+from pyautonomousagent.kernels import ITERATION, LeafKernel
+from pyautonomousagent.missions.drones import kernels as k
 from pyautonomousagent.state import AgentView
 from pyautonomousagent.world import World
 
@@ -29,6 +31,10 @@ PATROL = (
     "x_surveillance_position_2",
     "y_surveillance_position_2",
 )
+#: The control references a navigating leaf writes.
+REQUESTED = ("requested_heading", "requested_speed")
+#: The arrays of ``kernels.patrol_position``, in its order.
+PATROL_ARRAYS = (PATROL[0], *DESTINATION, *SURVEILLANCE, *PATROL[1:])
 SPEED = Port("speed", float, "reference_speed", 0.0, "cruise speed requested, units per iteration")
 
 
@@ -47,6 +53,9 @@ class ConditionDestinationReached(Leaf):
         dy = agents.y - bb.y_current_destination_position
         return success_if(dx * dx + dy * dy <= self.distance * self.distance)
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.destination_reached, ("x", "y", *DESTINATION), (self.distance,))
+
 
 @register_leaf
 class ConditionLowEnergyLevel(Leaf):
@@ -58,6 +67,9 @@ class ConditionLowEnergyLevel(Leaf):
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return success_if(agents.energy <= self.threshold)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.at_most, ("energy",), (self.threshold,))
 
 
 @register_leaf
@@ -77,6 +89,13 @@ class ConditionGatheringMoment(Leaf):
             return FAILURE
         return success_if(agents.rows == world.agent_index.get(self.sender, -1))
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(
+            k.gathering_moment,
+            (ITERATION,),
+            (self.iteration, world.agent_index.get(self.sender, -1)),
+        )
+
 
 @register_leaf
 class ConditionRadiationDetected(Leaf):
@@ -89,6 +108,9 @@ class ConditionRadiationDetected(Leaf):
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return success_if(agents.radiation > self.threshold)
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.above, ("radiation",), (self.threshold,))
+
 
 @register_leaf
 class ConditionHighDamageLevel(Leaf):
@@ -100,6 +122,9 @@ class ConditionHighDamageLevel(Leaf):
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return success_if(agents.damage >= self.threshold)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.at_least, ("damage",), (self.threshold,))
 
 
 @register_leaf
@@ -119,6 +144,9 @@ class ActionNavigateToDestinationA(Leaf):
         agents.requested_speed = self.speed
         return RUNNING
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.navigate, ("x", "y", *DESTINATION, *REQUESTED), (self.speed,))
+
 
 def _set_destination(agents: AgentView, x: Any, y: Any) -> int:
     agents.blackboard.x_current_destination_position = x
@@ -137,6 +165,9 @@ class ActionSetDestinationEqualToSurveillanceS(Leaf):
         bb = agents.blackboard
         return _set_destination(agents, bb.x_surveillance_position, bb.y_surveillance_position)
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.copy_destination, DESTINATION + SURVEILLANCE)
+
 
 @register_leaf
 class ActionSetDestinationEqualToRefuelingS(Leaf):
@@ -148,6 +179,9 @@ class ActionSetDestinationEqualToRefuelingS(Leaf):
     def evaluate(self, agents: AgentView, world: World) -> Any:
         bb = agents.blackboard
         return _set_destination(agents, bb.x_refueling_position, bb.y_refueling_position)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.copy_destination, DESTINATION + REFUELING)
 
 
 def _go_to_patrol_position(agents: AgentView, index: Any) -> int:
@@ -174,6 +208,9 @@ class ActionSetDestinationEqualToOtherSurveillanceS(Leaf):
             agents, 3 - agents.blackboard.index_current_surveillance_position
         )
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.patrol_position, PATROL_ARRAYS, (1,))
+
 
 @register_leaf
 class ActionSetDestinationEqualToCurrentSurveillanceS(Leaf):
@@ -184,6 +221,9 @@ class ActionSetDestinationEqualToCurrentSurveillanceS(Leaf):
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return _go_to_patrol_position(agents, agents.blackboard.index_current_surveillance_position)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.patrol_position, PATROL_ARRAYS, (0,))
 
 
 @register_leaf
@@ -234,6 +274,11 @@ class ActionRefuelA(Leaf):
         agents.energy = energy
         return _hold_still_until(agents, energy >= 100.0, self.speed)
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(
+            k.refuel, ("energy", "heading", *REQUESTED[::-1]), (self.rate, self.speed)
+        )
+
 
 @register_leaf
 class ActionRepairDamageA(Leaf):
@@ -248,3 +293,8 @@ class ActionRepairDamageA(Leaf):
         damage = maximum(agents.damage - self.rate, 0.0)
         agents.damage = damage
         return _hold_still_until(agents, damage <= 0.0, self.speed)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(
+            k.repair, ("damage", "heading", *REQUESTED[::-1]), (self.rate, self.speed)
+        )
