@@ -173,7 +173,8 @@ def block_function(layout: Layout, sensors: SensorKernel) -> str:
     rs, rh = c["requested_speed"], c["requested_heading"]
     records = ", ".join(f"r{j}" for j in range(len(layout.names)))
     store = "\n".join(
-        f"                    r{j}[row, a] = c{j}[a]" for j in range(len(layout.names))
+        f"                r{j}[row, first:last] = c{j}[first:last]"
+        for j in range(len(layout.names))
     )
     return f"""
 @njit(cache=True, parallel=True)
@@ -209,9 +210,10 @@ def block(t0, count, every, chunk, st, cur, {layout.arrays}, us, uh, cache,
                 if error > 180.0:
                     error = error - 360.0
                 uh[a] = turn_step * np_sign(error)
-                if t % every == 0:
-                    row = t // every
+            if t % every == 0:  # a contiguous run of each record row, column by column
+                row = t // every
 {store}
+                for a in range(first, last):
                     record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)
 """
 
