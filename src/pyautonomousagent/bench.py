@@ -129,8 +129,7 @@ def run_case_here(case: Case) -> dict[str, float]:
         implementation=implementation,
     )
     setup = time.perf_counter() - start
-    for _ in range(case.iterations):
-        sim.step()
+    sim.run(progress=False, iterations=case.iterations)
     seconds = time.perf_counter() - start
     figures = {"seconds": seconds, "setup": setup, "peak_mb": peak_rss_mb()}
     if case.save:

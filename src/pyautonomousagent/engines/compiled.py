@@ -91,8 +91,11 @@ def load_source(source: str) -> ModuleType:
     return module
 
 
-#: Swarms from this size are ticked by numba's parallel function (outside :meth:`loop`).
-PARALLEL_TICK = 64
+#: Agent-iterations from which :meth:`CompiledEngine.loop` runs numba's parallel function
+#: (on every core, and about twice as fast per agent on one: numba passes its arrays
+#: without reference counting); its threads can take milliseconds to start on a busy
+#: machine, more than a few agents' iteration.
+PARALLEL = 100_000
 
 
 class CompiledEngine:
@@ -140,14 +143,14 @@ class CompiledEngine:
 
     def tick(self) -> None:
         """Tick the tree once for every agent (at the world's iteration)."""
-        code = self._code(self._sensors)
-        tick = code.tick_parallel if self.swarm.size >= PARALLEL_TICK else code.tick_serial
-        tick(self.world.iteration, self.status, self.current, *self.arrays)
+        self._code(self._sensors).tick(
+            self.world.iteration, self.status, self.current, *self.arrays
+        )
 
     def prepare(self, sim: Simulation) -> None:
         """Compile (or load from numba's cache) what this run will call, before its loop."""
         if self._fusable(sim) is not None:
-            self.loop(sim, 0)
+            self.loop(sim, 0, typical=min(sim.scenario.iterations, 500))
         else:
             self._code(None)
 
@@ -155,9 +158,10 @@ class CompiledEngine:
         """Status codes after the last tick, shape (nodes in tick order, N), int8."""
         return self.status.copy()
 
-    def loop(self, sim: Simulation, count: int) -> int:
+    def loop(self, sim: Simulation, count: int, typical: int | None = None) -> int:
         """Run up to ``count`` whole iterations (Phases 2-6) in compiled code; return how many
-        were run: 0 where this run cannot be fused (then call ``sim.step()``)."""
+        were run: 0 where this run cannot be fused (then call ``sim.step()``). ``typical``:
+        pick the compiled function as for that many iterations (``count`` 0 compiles it)."""
         sensors = self._fusable(sim)
         if sensors is None:
             return 0
@@ -169,7 +173,9 @@ class CompiledEngine:
         traced_at[recorder.traced] = np.arange(recorder.traced.size)
         stopped = np.full(self.swarm.size, -1, dtype=np.int64)
         p = model.params
-        code.block(start, count, every, CHUNK, self.status, self.current, *self.arrays,
+        parallel = (typical or count) * self.swarm.size >= PARALLEL
+        block = code.block_parallel if parallel else code.block_serial
+        block(start, count, every, CHUNK, self.status, self.current, *self.arrays,
               model.u_speed, model.u_heading, self._trig,
               *(recorder.columns[k] for k in self.layout.names), recorder.traces, traced_at,
               recorder.behaviour, recorder._leaf_rows.astype(np.int64), stopped,

@@ -2,18 +2,19 @@
 source for numba.
 
 Every node of the flattened tree (:class:`~pyautonomousagent.engines.batched.Program`)
-becomes one function ``n<i>(a, t, st, cur, c0, c1, ...)`` that ticks it for agent row ``a``
-at iteration ``t``: ``st`` holds the node statuses (nodes, N) int8 and ``cur`` the remembered
+becomes a block of straight-line code that ticks it for agent row ``a`` at iteration ``t``
+(:func:`tree_body`): ``st`` holds the node statuses (nodes, N) int8 and ``cur`` the remembered
 child of each Sequence/Fallback (one row per such node, (M, N) int32), exactly as the batched
 engine keeps them; ``c0, c1, ...`` are the swarm's columns and blackboard arrays in
 :attr:`Layout.names` order. A leaf calls its :class:`~pyautonomousagent.kernels.LeafKernel`.
 The rules are the batched engine's (``_sequence``, ``_selector``, ``_decorator``), written
-for one agent. ``tick_serial``/``tick_parallel`` tick every agent; ``block`` runs whole
+for one agent. ``tick`` ticks every agent; ``block_serial``/``block_parallel`` run whole
 iterations (sensors, the 2-D drone's motion, the tree, control and recording) agent by agent.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -133,27 +134,47 @@ def _decorator(program: Program, i: int) -> list[str]:
     ]
 
 
-def node_functions(
-    program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, ticks: str
+def _node_lines(
+    program: Program, i: int, kernels: Mapping[int, LeafKernel], layout: Layout, ticks: str
 ) -> list[str]:
-    """The source of every node function, children first (``ticks``: the number_ticks array)."""
-    out: list[str] = []
-    for i in reversed(range(len(program.nodes))):
-        node = program.nodes[i]
-        if not node.is_control:
-            body = [f"    st[{i}, a] = {_call(kernels[i], layout)}", f"    {ticks}[a] += 1"]
-        elif node.type == "Sequence":
-            memory = bool(program.params[i]["memory"])
-            body = _sequence(program, i, layout.memory_rows[i], memory)
-        elif node.type == "Fallback":
-            memory = bool(program.params[i]["memory"])
-            body = _selector(program, i, layout.memory_rows[i], memory)
-        else:
-            body = _decorator(program, i)
-        text = "\n".join(body).replace("ARRAYS", layout.arrays)
-        head = f"def n{i}(a, t, st, cur, {layout.arrays}):"
-        out.append(f'@njit(cache=True, inline="always")\n{head}\n{text}\n')
-    return out
+    """Node ``i``'s rules, indented by 4, its children as ``n<child>(...)`` lines."""
+    node = program.nodes[i]
+    if not node.is_control:
+        return [f"    st[{i}, a] = {_call(kernels[i], layout)}", f"    {ticks}[a] += 1"]
+    if node.type in ("Sequence", "Fallback"):
+        build = _sequence if node.type == "Sequence" else _selector
+        return build(program, i, layout.memory_rows[i], bool(program.params[i]["memory"]))
+    return _decorator(program, i)
+
+
+_CHILD = re.compile(r"^(\s*)n(\d+)\(a, t, st, cur, ARRAYS\)$")
+_LOCALS = re.compile(r"\b(fresh|start|previous|res|new)\b")
+
+
+def tree_body(
+    program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, indent: str
+) -> str:
+    """The tick of agent ``a`` at iteration ``t`` as straight-line code, indented by
+    ``indent``: each control node is a ``while True:`` block left with ``break`` (its
+    ``return``), children written in place, locals suffixed with the node index. One body
+    with no calls between nodes: numba passes no arrays between functions (which costs
+    reference counting per call and made a tick ten times slower)."""
+    ticks = layout.array("number_ticks")
+
+    def expand(i: int) -> list[str]:
+        lines = []
+        for line in _node_lines(program, i, kernels, layout, ticks):
+            line = _LOCALS.sub(lambda m: f"{m.group(1)}_{i}", line[4:])
+            child = _CHILD.match(line)
+            if child:
+                lines += [child.group(1) + inner for inner in expand(int(child.group(2)))]
+            else:
+                lines.append(re.sub(r"\breturn\b", "break", line))
+        if not program.nodes[i].is_control:
+            return lines
+        return ["while True:", *("    " + line for line in lines), "    break"]
+
+    return "\n".join(indent + line for line in expand(0))
 
 
 def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:
@@ -162,9 +183,16 @@ def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:
     return f"S({', '.join(args)})"
 
 
-def block_function(layout: Layout, sensors: SensorKernel) -> str:
-    """``block(t0, count, every, chunk, st, cur, arrays..., us, uh, cache (3, N),
-    records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed, speed_step,
+def block_function(
+    program: Program,
+    kernels: Mapping[int, LeafKernel],
+    layout: Layout,
+    sensors: SensorKernel,
+    parallel: bool,
+) -> str:
+    """``block_serial``/``block_parallel(t0, count, every, chunk, st, cur, arrays..., us, uh,
+    cache (3, N), records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed,
+    speed_step,
     turn_step)``: iterations ``t0 + 1 .. t0 + count`` of Phases 2 (sensors, motion), 3, 4 and
     6 for every agent, ``chunk`` agents at a time. ``cache`` rows: the heading whose sine
     and cosine are in rows 1 and 2 (the same inputs give the same bits)."""
@@ -176,9 +204,10 @@ def block_function(layout: Layout, sensors: SensorKernel) -> str:
         f"                r{j}[row, first:last] = c{j}[first:last]"
         for j in range(len(layout.names))
     )
+    name = "block_parallel" if parallel else "block_serial"
     return f"""
-@njit(cache=True, parallel=True)
-def block(t0, count, every, chunk, st, cur, {layout.arrays}, us, uh, cache,
+@njit(cache=True, parallel={parallel})
+def {name}(t0, count, every, chunk, st, cur, {layout.arrays}, us, uh, cache,
            {records}, traces, traced_at, behaviour, leaf_rows, stopped_at,
            max_speed, speed_step, turn_step):
     n = {x}.shape[0]
@@ -204,7 +233,7 @@ def block(t0, count, every, chunk, st, cur, {layout.arrays}, us, uh, cache,
                     {v}[a] = 0.0
                     if stopped_at[a] < 0:
                         stopped_at[a] = t
-                n0(a, t, st, cur, {layout.arrays})
+{tree_body(program, kernels, layout, " " * 16)}
                 us[a] = speed_step * np_sign({rs}[a] - {v}[a])
                 error = wrap_degrees({rh}[a] - {h}[a])
                 if error > 180.0:
@@ -218,15 +247,13 @@ def block(t0, count, every, chunk, st, cur, {layout.arrays}, us, uh, cache,
 """
 
 
-def tick_function(layout: Layout, parallel: bool) -> str:
-    """``tick_parallel``/``tick_serial(t, st, cur, arrays...)``: Phase 3 for every agent at
-    iteration ``t`` (numba's parallel functions pass arrays without reference counting, much
-    faster per agent, but start threads at every call)."""
+def tick_function(program: Program, kernels: Mapping[int, LeafKernel], layout: Layout) -> str:
+    """``tick(t, st, cur, arrays...)``: Phase 3 for every agent at iteration ``t``."""
     return f"""
-@njit(cache=True, parallel={parallel})
-def tick_{"parallel" if parallel else "serial"}(t, st, cur, {layout.arrays}):
-    for a in prange(st.shape[1]):
-        n0(a, t, st, cur, {layout.arrays})
+@njit(cache=True)
+def tick(t, st, cur, {layout.arrays}):
+    for a in range(st.shape[1]):
+{tree_body(program, kernels, layout, " " * 8)}
 """
 
 
@@ -257,8 +284,7 @@ def module_source(
     for name, function in sorted(used.items()):
         py = getattr(function, "py_func", function)
         lines.append(f"from {py.__module__} import {py.__qualname__} as {name}")
-    lines += node_functions(program, kernels, layout, layout.array("number_ticks"))
-    lines += [tick_function(layout, False), tick_function(layout, True)]
+    lines.append(tick_function(program, kernels, layout))
     if sensors is not None:
-        lines.append(block_function(layout, sensors))
+        lines += [block_function(program, kernels, layout, sensors, p) for p in (False, True)]
     return "\n".join(lines) + "\n"

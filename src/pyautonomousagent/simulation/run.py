@@ -268,6 +268,9 @@ class Simulation:
                 "create a Simulation of a longer scenario, e.g. "
                 "scenario.with_overrides(iterations=...)"
             )
+        loop = getattr(self.engine, "loop", None)  # an engine that runs whole iterations
+        if loop is not None and loop(self, 1):
+            return
         self.world.iteration += 1
         phases.estimate_state(self)
         phases.decide(self)
@@ -275,11 +278,14 @@ class Simulation:
         phases.deliver_messages(self)
         phases.record(self)
 
-    def run(self, progress: bool | None = None) -> Simulation:
-        """Run the scenario's remaining iterations; a progress bar if ``progress``
-        (by default when standard error is a terminal). Returns ``self``."""
+    def run(self, progress: bool | None = None, iterations: int | None = None) -> Simulation:
+        """Run the scenario's remaining iterations (at most ``iterations`` of them); a
+        progress bar if ``progress`` (by default when standard error is a terminal).
+        Returns ``self``."""
         start = time.perf_counter()
         remaining = self.scenario.iterations - self.world.iteration
+        if iterations is not None:
+            remaining = max(0, min(remaining, iterations))
         bar = Progress(remaining, f"{self.scenario.name} ({self.engine.name})", enabled=progress)
         loop = getattr(self.engine, "loop", None)  # an engine that runs whole iterations
         done = 0
