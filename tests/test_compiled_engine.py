@@ -137,3 +137,10 @@ def test_a_run_that_cannot_be_fused_ticks_compiled_every_iteration() -> None:
     assert sim.engine.loop(sim, 10) == 0
     sim.run(progress=False)
     assert_same_runs(run("batched", **overrides), sim)
+
+
+@needs_numba
+def test_compiled_sines_are_numpys_on_this_cpu() -> None:
+    from pyautonomousagent.engines.compiled_runtime import trig_agrees_with_numpy
+
+    assert trig_agrees_with_numpy()  # else the engine would not fuse the motion model

@@ -8,8 +8,9 @@ remembered children are the batched engine's arrays, updated by the same rules, 
 engines give the same bits.
 
 Where the run allows it (the mission's sensors have a compiled form, the motion model is the
-2-D drone, no message is in flight: no leaf with a kernel sends any), :meth:`CompiledEngine.loop`
-runs whole iterations, Phases 2 to 6, in one compiled call, ``CHUNK`` agents at a time and on
+2-D drone, no message is in flight: no leaf with a kernel sends any, and the C library's
+``sin``/``cos`` give NumPy's bits on this CPU: :func:`trig_agrees_with_numpy`),
+:meth:`CompiledEngine.loop` runs whole iterations, Phases 2 to 6, in one compiled call, ``CHUNK`` agents at a time and on
 every core; elsewhere the simulation calls :meth:`CompiledEngine.tick` once per iteration.
 """
 
@@ -30,6 +31,7 @@ from pyautonomousagent import jit
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, leaf_type, make_leaf
 from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_entries
 from pyautonomousagent.engines.batched import Program, compile_tree
+from pyautonomousagent.engines.compiled_runtime import trig_agrees_with_numpy
 from pyautonomousagent.engines.compiled_source import CHUNK, Layout, module_source, supported
 from pyautonomousagent.kernels import LeafKernel, SensorKernel
 from pyautonomousagent.models.drone2d import Drone2D
@@ -134,6 +136,7 @@ class CompiledEngine:
         self._module: ModuleType | None = None
         self._sensors: SensorKernel | None = None
         self._trig = np.full((3, swarm.size), np.nan)  # heading, its sine and cosine
+        self._trig_agrees: bool | None = None  # compiled sin/cos give NumPy's bits
 
     def _code(self, sensors: SensorKernel | None) -> ModuleType:
         if self._module is None or (sensors is not None and self._sensors is None):
@@ -196,7 +199,9 @@ class CompiledEngine:
             or recorder.behaviour is None
         ):
             return None
-        return sensors
+        if self._trig_agrees is None:
+            self._trig_agrees = trig_agrees_with_numpy()
+        return sensors if self._trig_agrees else None
 
     @staticmethod
     def _after(
