@@ -10,8 +10,8 @@ engines give the same bits.
 Where the run allows it (the mission's sensors have a compiled form, the motion model is the
 2-D drone, no message is in flight: no leaf with a kernel sends any, and the C library's
 ``sin``/``cos`` give NumPy's bits on this CPU: :func:`trig_agrees_with_numpy`),
-:meth:`CompiledEngine.loop` runs whole iterations, Phases 2 to 6, in one compiled call, ``CHUNK`` agents at a time and on
-every core; elsewhere the simulation calls :meth:`CompiledEngine.tick` once per iteration.
+:meth:`CompiledEngine.loop` runs whole iterations, Phases 2 to 6, in one compiled call,
+``CHUNK`` agents at a time and on every core; elsewhere the simulation calls :meth:`CompiledEngine.tick` once per iteration.
 """
 
 from __future__ import annotations
