@@ -11,7 +11,8 @@ Where the run allows it (the mission's sensors have a compiled form, the motion 
 2-D drone, no message is in flight: no leaf with a kernel sends any, and the C library's
 ``sin``/``cos`` give NumPy's bits on this CPU: :func:`trig_agrees_with_numpy`),
 :meth:`CompiledEngine.loop` runs whole iterations, Phases 2 to 6, in one compiled call,
-``CHUNK`` agents at a time and on every core; elsewhere the simulation calls :meth:`CompiledEngine.tick` once per iteration.
+``CHUNK`` agents at a time and on every core; elsewhere the simulation calls
+:meth:`CompiledEngine.tick` once per iteration.
 """
 
 from __future__ import annotations
