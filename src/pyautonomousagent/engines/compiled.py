@@ -101,6 +101,11 @@ def load_source(source: str) -> ModuleType:
 PARALLEL = 100_000
 
 
+#: Chunks of agents each thread takes at a time in the parallel loop (dynamic sharing: on a
+#: shared machine one core can run at a fraction of the other's speed).
+SHARE = 4
+
+
 class CompiledEngine:
     """Phase 3 (and, where possible, Phases 2-6) compiled with numba; the batched engine's
     semantics and bits.
@@ -179,11 +184,14 @@ class CompiledEngine:
         p = model.params
         parallel = (typical or count) * self.swarm.size >= PARALLEL
         block = code.block_parallel if parallel else code.block_serial
-        block(start, count, every, CHUNK, self.status, self.current, *self.arrays,
-              model.u_speed, model.u_heading, self._trig,
-              *(recorder.columns[k] for k in self.layout.names), recorder.traces, traced_at,
-              recorder.behaviour, recorder._leaf_rows.astype(np.int64), stopped,
-              p.max_speed, p.speed_step, p.turn_step)  # fmt: skip
+        import numba
+
+        with numba.parallel_chunksize(SHARE):  # a core that others slow down takes less
+            block(start, count, every, CHUNK, self.status, self.current, *self.arrays,
+                  model.u_speed, model.u_heading, self._trig,
+                  *(recorder.columns[k] for k in self.layout.names), recorder.traces,
+                  traced_at, recorder.behaviour, recorder._leaf_rows.astype(np.int64),
+                  stopped, p.max_speed, p.speed_step, p.turn_step)  # fmt: skip
         self._after(sim, sensors, start, count, stopped)
         return count
 
