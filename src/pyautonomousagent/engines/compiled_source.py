@@ -206,7 +206,7 @@ def block_function(
     )
     name = "block_parallel" if parallel else "block_serial"
     return f"""
-@njit(cache=True, parallel={parallel})
+@njit(cache=True, parallel={parallel}, error_model="numpy")
 def {name}(t0, count, every, chunk, st, cur, {layout.arrays}, us, uh, cache,
            {records}, traces, traced_at, behaviour, leaf_rows, stopped_at,
            max_speed, speed_step, turn_step):
@@ -250,7 +250,7 @@ def {name}(t0, count, every, chunk, st, cur, {layout.arrays}, us, uh, cache,
 def tick_function(program: Program, kernels: Mapping[int, LeafKernel], layout: Layout) -> str:
     """``tick(t, st, cur, arrays...)``: Phase 3 for every agent at iteration ``t``."""
     return f"""
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def tick(t, st, cur, {layout.arrays}):
     for a in range(st.shape[1]):
 {tree_body(program, kernels, layout, " " * 8)}
