@@ -101,9 +101,9 @@ def load_source(source: str) -> ModuleType:
 PARALLEL = 100_000
 
 
-#: Chunks of agents each thread takes at a time in the parallel loop (dynamic sharing: on a
-#: shared machine one core can run at a fraction of the other's speed).
-SHARE = 4
+#: The parallel loop hands each thread about 1 / SHARE of its share of the chunks at a time
+#: (dynamic sharing: on a shared machine one core can run at a fraction of the other's speed).
+SHARE = 8
 
 
 class CompiledEngine:
@@ -186,7 +186,9 @@ class CompiledEngine:
         block = code.block_parallel if parallel else code.block_serial
         import numba
 
-        with numba.parallel_chunksize(SHARE):  # a core that others slow down takes less
+        groups = -(-self.swarm.size // CHUNK)
+        share = max(1, groups // (SHARE * numba.get_num_threads()))
+        with numba.parallel_chunksize(share):  # a core that others slow down takes less
             block(start, count, every, CHUNK, self.status, self.current, *self.arrays,
                   model.u_speed, model.u_heading, self._trig,
                   *(recorder.columns[k] for k in self.layout.names), recorder.traces,
