@@ -219,8 +219,10 @@ def test_ctrl_c_during_the_simulation_saves_a_marked_partial_run(tmp_path):
     out = tmp_path / "run"
     assert run_cli(out, "--no-gif") == 0
     before = snapshot(out)
+    # the batched engine: the driver signals from Simulation.step, which the compiled
+    # engine's fused loop does not call
     argv = ["run", "patrol", "--agents", "3", "--iterations", "2000000", "--record-every",
-            "50", "--out", str(out), "--overwrite"]  # fmt: skip
+            "50", "--out", str(out), "--overwrite", "--engine", "batched"]  # fmt: skip
     code, err = interrupt("simulation", argv)
     assert code == 130, err
     assert "saved a partial run marked 'interrupted'" in one_line(err)

@@ -26,10 +26,11 @@ AVX512_FEATURES = ("X86_V4", "AVX512_ICL", "AVX512_SPR", "AVX512_SKX")
 COMPARE = """
 import hashlib, json, numpy as np
 from pyautonomousagent import Simulation, load
+from pyautonomousagent import jit
 from pyautonomousagent.arrays import arctan2
 scenario = load("patrol").with_overrides(agents=3, iterations=300)
 digests = {}
-for engine in ("pytrees", "batched"):
+for engine in ("pytrees", "batched") + (("compiled",) if jit.available() else ()):
     sim = Simulation.create(scenario, seed=5, engine=engine).run(progress=False)
     h = hashlib.sha256()
     for key in sorted(sim.recorder.columns):
@@ -58,7 +59,7 @@ def _digests(disable: str = "") -> dict[str, str]:
     src = os.path.join(os.path.dirname(__file__), "..", "src")
     env["PYTHONPATH"] = os.pathsep.join([os.path.abspath(src), env.get("PYTHONPATH", "")])
     done = subprocess.run(
-        [sys.executable, "-c", COMPARE], env=env, capture_output=True, text=True, timeout=120
+        [sys.executable, "-c", COMPARE], env=env, capture_output=True, text=True, timeout=600
     )
     assert done.returncode == 0, done.stderr[-2000:]
     return json.loads(done.stdout.strip().splitlines()[-1])
@@ -88,9 +89,9 @@ def test_bearing_points_clockwise_from_north():
 def test_engines_agree_with_and_without_avx512():
     features = _enabled_avx512()
     here = _digests()
-    assert here["pytrees"] == here["batched"]
+    assert here["pytrees"] == here["batched"] == here.get("compiled", here["batched"])
     if not features:
         pytest.skip("this CPU has no AVX-512: only one SIMD level to test")
     without = _digests(" ".join(features))
-    assert without["pytrees"] == without["batched"]
+    assert without["pytrees"] == without["batched"] == without.get("compiled", here["batched"])
     assert without == here  # the same bits on both SIMD levels

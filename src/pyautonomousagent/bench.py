@@ -47,6 +47,8 @@ PAPER_TABLES = {
 BENCH_ENGINES: dict[str, tuple[str, str | None]] = {
     "pytrees": ("pytrees", None),
     "batched": ("batched", None),
+    "compiled": ("compiled", None),
+    "auto": ("auto", None),
     "pyfly": ("pytrees", "pyfly"),
 }
 
@@ -131,8 +133,7 @@ def run_case_here(case: Case) -> dict[str, float]:
     )
     setup = time.perf_counter() - start
     if not case.save:
-        for _ in range(case.iterations):
-            sim.step()
+        sim.run(progress=False, iterations=case.iterations)
         return {"seconds": time.perf_counter() - start, "setup": setup, "peak_mb": peak_rss_mb()}
     return {"setup": setup, **saved_timings(sim, case.iterations, start)}
 
@@ -148,8 +149,7 @@ def saved_timings(sim: Simulation, iterations: int, start: float) -> dict[str, f
     with tempfile.TemporaryDirectory(prefix="pyaa-bench-") as folder:
         out = Path(folder) / "run"
         with streaming(sim, out) as stream:
-            for _ in range(iterations):
-                sim.step()
+            sim.run(progress=False, iterations=iterations)
             seconds, peak = time.perf_counter() - start, peak_rss_mb()
             save_run(sim, out, progress=False, command=["pyaa", "bench"], stream=stream)
     return {

@@ -30,7 +30,9 @@ def available() -> bool:
 
 
 def njit(function: F | None = None, **options: Any) -> Any:
-    """``numba.njit(cache=True, **options)`` where available, else the function itself.
+    """``numba.njit(cache=True, error_model="numpy", **options)`` where available, else the
+    function itself (NumPy's error model: a division by zero gives inf or nan, as NumPy does,
+    and costs no test).
 
     Usable bare (``@njit``) or with options (``@njit(parallel=True)``).
     """
@@ -41,6 +43,7 @@ def njit(function: F | None = None, **options: Any) -> Any:
         import numba
 
         options.setdefault("cache", True)
+        options.setdefault("error_model", "numpy")  # x / 0 is inf or nan, as in NumPy
         return numba.njit(**options)(f)
 
     return wrap(function) if function is not None else wrap

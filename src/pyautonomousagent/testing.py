@@ -91,14 +91,16 @@ def check_engines_agree(
     tree: Node | None = None,
     scenario: str | Scenario = "gathering",
     seed: int = 0,
+    engines: tuple[str, str] = ("pytrees", "batched"),
     **overrides: Any,
 ) -> int:
-    """Run ``tree`` (default: the scenario's) on the pytrees and batched engines side by side.
+    """Run ``tree`` (default: the scenario's) on two engines side by side, stepping both.
 
     Args:
         tree: the tree, or None for the scenario's own.
         scenario: a scenario name, file or object.
         seed: the run's seed.
+        engines: the reference engine and the engine checked against it.
         overrides: scenario changes, e.g. ``agents=6, iterations=200``.
 
     Returns:
@@ -108,16 +110,18 @@ def check_engines_agree(
         AssertionError: naming the first iteration, node or column, and agent that differ.
     """
     scenario = _scenario(scenario).with_overrides(**overrides)
-    a, b = (Simulation.create(scenario, seed=seed, engine=e, tree=tree) for e in ENGINE_PAIR)
+    a, b = (Simulation.create(scenario, seed=seed, engine=e, tree=tree) for e in engines)
     nodes = [node.name for node in (tree or scenario_tree(scenario)).walk()]
     for _ in range(scenario.iterations):
         a.step()
         b.step()
-        _same(a.engine.node_statuses(), b.engine.node_statuses(), a, nodes, "node")
+        _same(a.engine.node_statuses(), b.engine.node_statuses(), a, nodes, "node", engines)
     for key in a.recorder.columns:
-        _same(a.recorder.column(key), b.recorder.column(key), a, None, key)
+        _same(a.recorder.column(key), b.recorder.column(key), a, None, key, engines)
     if a.events != b.events:
-        raise AssertionError(f"events differ: {a.events[:3]} (pytrees) vs {b.events[:3]} (batched)")
+        raise AssertionError(
+            f"events differ: {a.events[:3]} ({engines[0]}) vs {b.events[:3]} ({engines[1]})"
+        )
     return scenario.iterations
 
 
@@ -186,8 +190,15 @@ def _scenario(scenario: str | Scenario) -> Scenario:
     raise TypeError(f"scenario must be a name, a .yaml file or a Scenario, got {scenario!r}")
 
 
-def _same(a: np.ndarray, b: np.ndarray, sim: Simulation, rows: list[str] | None, what: str) -> None:
-    """Raise at the first entry where ``a`` (pytrees) and ``b`` (batched) differ."""
+def _same(
+    a: np.ndarray,
+    b: np.ndarray,
+    sim: Simulation,
+    rows: list[str] | None,
+    what: str,
+    engines: tuple[str, str] = ("pytrees", "batched"),
+) -> None:
+    """Raise at the first entry where ``a`` (``engines[0]``) and ``b`` (``engines[1]``) differ."""
     if np.array_equal(a, b, equal_nan=a.dtype.kind == "f"):
         return
     diff = np.argwhere(~((a == b) | ((a != a) & (b != b))))[0]
@@ -198,5 +209,5 @@ def _same(a: np.ndarray, b: np.ndarray, sim: Simulation, rows: list[str] | None,
         where = f"column {what!r}, record {row} (iteration {int(sim.recorder.iterations[row])})"
     raise AssertionError(
         f"engines differ at {where}, agent {sim.swarm.names[agent]}: "
-        f"{a[row, agent]!r} (pytrees) vs {b[row, agent]!r} (batched)"
+        f"{a[row, agent]!r} ({engines[0]}) vs {b[row, agent]!r} ({engines[1]})"
     )

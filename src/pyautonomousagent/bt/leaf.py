@@ -16,6 +16,7 @@ from typing import Any, ClassVar
 
 from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure
 from pyautonomousagent.inputs import shown
+from pyautonomousagent.kernels import LeafKernel
 from pyautonomousagent.randomness import stream_key
 from pyautonomousagent.registry import Registry, UnknownNameError
 from pyautonomousagent.state import AgentView, Swarm
@@ -157,6 +158,11 @@ class Leaf:
     def halt(self, agents: AgentView, world: World) -> None:
         """Called when the leaf is interrupted while RUNNING (BehaviorTree.CPP's
         ``onHalted``) for ``agents``; by default it does nothing."""
+
+    def kernel(self, world: World) -> LeafKernel | None:
+        """The leaf's per-agent form for the compiled engine, or None (the default: a tree
+        with this leaf runs on the batched engine). See :mod:`pyautonomousagent.kernels`."""
+        return None
 
     def broadcast(
         self, agents: AgentView, world: World, kind: str, data: Mapping[str, Any]

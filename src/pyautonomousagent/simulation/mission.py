@@ -34,6 +34,8 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from pyautonomousagent.datalink import Delivery
+from pyautonomousagent.jit import njit
+from pyautonomousagent.kernels import SensorKernel
 from pyautonomousagent.registry import Registry
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation.params import Param, Reader, ScenarioError
@@ -89,6 +91,12 @@ class MessageType:
     doc: str = ""
 
 
+@njit
+def _no_sensors(a: int) -> bool:
+    """The default sensors for one agent: nothing is sensed, every agent moves."""
+    return True
+
+
 class Mission:
     """Base class of missions; subclass it, set the class attributes, override what you need.
 
@@ -138,6 +146,14 @@ class Mission:
         Returns:
             Which agents can move this iteration (bool, shape (N,)), or None for all.
         """
+        return None
+
+    def compiled_sensors(self, sim: Simulation) -> SensorKernel | None:
+        """Phase 2's :meth:`sense` for one agent, for the compiled engine; None where the
+        sensors have no compiled form (the engine then calls :meth:`sense` every iteration).
+        A mission that keeps the default :meth:`sense` senses nothing, which compiles."""
+        if type(self).sense is Mission.sense:
+            return SensorKernel(_no_sensors, ())
         return None
 
     def message_types(self) -> list[MessageType]:

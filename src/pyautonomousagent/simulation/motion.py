@@ -71,9 +71,9 @@ X8_IMPLEMENTATIONS = ("pyfly", "vectorised")
 
 
 def x8_implementation(engine: str, implementation: str | None = None) -> str:
-    """The X8 implementation for ``engine``: "vectorised" on "batched", else "pyfly"."""
+    """The X8 implementation for ``engine``: "pyfly" on "pytrees", else "vectorised"."""
     if implementation is None:
-        return "vectorised" if engine == "batched" else "pyfly"
+        return "pyfly" if engine == "pytrees" else "vectorised"
     if implementation not in X8_IMPLEMENTATIONS:
         raise ValueError(
             f"unknown X8 implementation {implementation!r}; choose from "

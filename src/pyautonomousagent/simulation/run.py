@@ -18,6 +18,7 @@ from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.datalink import Datalink, Delivery
 from pyautonomousagent.engines.batched import BatchedEngine
+from pyautonomousagent.engines.compiled import CompiledEngine, compilable
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, PyTreesEngine
 from pyautonomousagent.inputs import shown
 from pyautonomousagent.names import agent_index
@@ -99,6 +100,10 @@ def _world(scenario: Scenario, seed: int) -> World:
     )
 
 
+#: Iterations an engine with a ``loop`` method runs per call (the progress bar's step).
+FUSED = 500
+
+
 class Engine(Protocol):
     """What the loop needs of a decision engine (Phase 3)."""
 
@@ -116,12 +121,20 @@ class Engine(Protocol):
 ENGINES: Registry[type[Engine]] = Registry("engine")
 ENGINES.register("pytrees", PyTreesEngine)
 ENGINES.register("batched", BatchedEngine)
+ENGINES.register("compiled", CompiledEngine)
 
 
 def choose_engine(tree: Node) -> str:
-    """ "batched", unless a leaf of ``tree`` is a hand-written py_trees behaviour ("pytrees")."""
-    hand_written = any(node.type in BEHAVIOUR_TYPES for node in tree.leaves())
-    return "pytrees" if hand_written else "batched"
+    """The engine "auto" picks: "pytrees" if a leaf of ``tree`` is a hand-written py_trees
+    behaviour, else "compiled" where numba is installed and the tree compiles (see
+    :func:`~pyautonomousagent.engines.compiled.compilable`), else "batched"."""
+    if any(node.type in BEHAVIOUR_TYPES for node in tree.leaves()):
+        return "pytrees"
+    why = compilable(tree)
+    if why:
+        log.debug("engine auto: batched, not compiled: %s", why)
+        return "batched"
+    return "compiled"
 
 
 def scenario_tree(scenario: Scenario) -> Node:
@@ -238,6 +251,9 @@ class Simulation:
             recorded_types=tuple(name for name, kind in handlers.items() if kind.recorded),
         )
         phases.record(sim)  # the initial state, iteration 0
+        prepare = getattr(decision, "prepare", None)  # e.g. compile before the loop
+        if prepare is not None:
+            prepare(sim)
         sim.timings["setup"] = time.perf_counter() - start
         return sim
 
@@ -253,6 +269,9 @@ class Simulation:
                 "create a Simulation of a longer scenario, e.g. "
                 "scenario.with_overrides(iterations=...)"
             )
+        loop = getattr(self.engine, "loop", None)  # an engine that runs whole iterations
+        if loop is not None and loop(self, 1):
+            return
         self.world.iteration += 1
         phases.estimate_state(self)
         phases.decide(self)
@@ -260,15 +279,23 @@ class Simulation:
         phases.deliver_messages(self)
         phases.record(self)
 
-    def run(self, progress: bool | None = None) -> Simulation:
-        """Run the scenario's remaining iterations; a progress bar if ``progress``
-        (by default when standard error is a terminal). Returns ``self``."""
+    def run(self, progress: bool | None = None, iterations: int | None = None) -> Simulation:
+        """Run the scenario's remaining iterations (at most ``iterations`` of them); a
+        progress bar if ``progress`` (by default when standard error is a terminal).
+        Returns ``self``."""
         start = time.perf_counter()
         remaining = self.scenario.iterations - self.world.iteration
+        if iterations is not None:
+            remaining = max(0, min(remaining, iterations))
         bar = Progress(remaining, f"{self.scenario.name} ({self.engine.name})", enabled=progress)
-        for done in range(1, remaining + 1):
-            self.step()
-            if done % 50 == 0 or done == remaining:
+        loop = getattr(self.engine, "loop", None)  # an engine that runs whole iterations
+        done = 0
+        while done < remaining:
+            fused = loop(self, min(remaining - done, FUSED)) if loop is not None else 0
+            if not fused:
+                self.step()
+            done += fused or 1
+            if done % 50 == 0 or done == remaining or fused:
                 bar.update(done)
         bar.close()
         self.timings["simulate"] = self.timings.get("simulate", 0.0) + time.perf_counter() - start

@@ -12,6 +12,8 @@ from typing import Any
 from pyautonomousagent.arrays import bearing, choose, maximum, minimum
 from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS, status_if, success_if
+from pyautonomousagent.kernels import ITERATION, LeafKernel
+from pyautonomousagent.missions.drones import kernels as k
 from pyautonomousagent.state import AgentView
 from pyautonomousagent.world import World
 
@@ -29,6 +31,10 @@ PATROL = (
     "x_surveillance_position_2",
     "y_surveillance_position_2",
 )
+#: The control references a navigating leaf writes.
+REQUESTED = ("requested_heading", "requested_speed")
+#: The arrays of ``kernels.patrol_position``, in its order.
+PATROL_ARRAYS = (PATROL[0], *DESTINATION, *SURVEILLANCE, *PATROL[1:])
 SPEED = Port("speed", float, "reference_speed", 0.0, "cruise speed requested, units per iteration")
 
 
@@ -50,6 +56,9 @@ class ConditionDestinationReached(Leaf):
         dx += dy
         return success_if(dx <= self.distance * self.distance)
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.destination_reached, ("x", "y", *DESTINATION), (self.distance,))
+
 
 @register_leaf
 class ConditionLowEnergyLevel(Leaf):
@@ -61,6 +70,9 @@ class ConditionLowEnergyLevel(Leaf):
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return success_if(agents.energy <= self.threshold)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.at_most, ("energy",), (self.threshold,))
 
 
 @register_leaf
@@ -80,6 +92,13 @@ class ConditionGatheringMoment(Leaf):
             return FAILURE
         return success_if(agents.rows == world.agent_index.get(self.sender, -1))
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(
+            k.gathering_moment,
+            (ITERATION,),
+            (self.iteration, world.agent_index.get(self.sender, -1)),
+        )
+
 
 @register_leaf
 class ConditionRadiationDetected(Leaf):
@@ -92,6 +111,9 @@ class ConditionRadiationDetected(Leaf):
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return success_if(agents.radiation > self.threshold)
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.above, ("radiation",), (self.threshold,))
+
 
 @register_leaf
 class ConditionHighDamageLevel(Leaf):
@@ -103,6 +125,9 @@ class ConditionHighDamageLevel(Leaf):
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return success_if(agents.damage >= self.threshold)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.at_least, ("damage",), (self.threshold,))
 
 
 @register_leaf
@@ -122,6 +147,9 @@ class ActionNavigateToDestinationA(Leaf):
         agents.requested_speed = self.speed
         return RUNNING
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.navigate, ("x", "y", *DESTINATION, *REQUESTED), (self.speed,))
+
 
 def _set_destination(agents: AgentView, x: Any, y: Any) -> int:
     agents.blackboard.x_current_destination_position = x
@@ -140,6 +168,9 @@ class ActionSetDestinationEqualToSurveillanceS(Leaf):
         bb = agents.blackboard
         return _set_destination(agents, bb.x_surveillance_position, bb.y_surveillance_position)
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.copy_destination, DESTINATION + SURVEILLANCE)
+
 
 @register_leaf
 class ActionSetDestinationEqualToRefuelingS(Leaf):
@@ -151,6 +182,9 @@ class ActionSetDestinationEqualToRefuelingS(Leaf):
     def evaluate(self, agents: AgentView, world: World) -> Any:
         bb = agents.blackboard
         return _set_destination(agents, bb.x_refueling_position, bb.y_refueling_position)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.copy_destination, DESTINATION + REFUELING)
 
 
 def _go_to_patrol_position(agents: AgentView, index: Any) -> int:
@@ -177,6 +211,9 @@ class ActionSetDestinationEqualToOtherSurveillanceS(Leaf):
             agents, 3 - agents.blackboard.index_current_surveillance_position
         )
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.patrol_position, PATROL_ARRAYS, (1,))
+
 
 @register_leaf
 class ActionSetDestinationEqualToCurrentSurveillanceS(Leaf):
@@ -187,6 +224,9 @@ class ActionSetDestinationEqualToCurrentSurveillanceS(Leaf):
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return _go_to_patrol_position(agents, agents.blackboard.index_current_surveillance_position)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.patrol_position, PATROL_ARRAYS, (0,))
 
 
 @register_leaf
@@ -238,6 +278,11 @@ class ActionRefuelA(Leaf):
         agents.energy = energy
         return _hold_still_until(agents, energy >= 100.0, self.speed)
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(
+            k.refuel, ("energy", "heading", *REQUESTED[::-1]), (self.rate, self.speed)
+        )
+
 
 @register_leaf
 class ActionRepairDamageA(Leaf):
@@ -252,3 +297,8 @@ class ActionRepairDamageA(Leaf):
         damage = maximum(agents.damage - self.rate, 0.0)
         agents.damage = damage
         return _hold_still_until(agents, damage <= 0.0, self.speed)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(
+            k.repair, ("damage", "heading", *REQUESTED[::-1]), (self.rate, self.speed)
+        )

@@ -12,6 +12,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 from pyautonomousagent.datalink import Delivery
+from pyautonomousagent.kernels import SensorKernel
+from pyautonomousagent.missions.drones.kernels import drain_energy as drain_energy_of_one
 from pyautonomousagent.missions.drones.leaves import (
     DESTINATION,
     REFUELING,
@@ -162,10 +164,21 @@ class DroneMission(Mission):
             )
         # else: no source is active, so every reading is 0 and damage does not grow
         if not powered.all():
-            sim.alert(
-                np.flatnonzero(~powered), "zero energy", "zero energy: sensors off, not moving"
-            )
+            self._stopped(sim, np.flatnonzero(~powered))
         return powered
+
+    def compiled_sensors(self, sim: Simulation) -> SensorKernel | None:
+        """:meth:`sense` for one drone (``kernels.drain_energy``) while no radiation source
+        is active; None otherwise, or where a subclass senses otherwise."""
+        sources = sim.world.objects.radiation_sources
+        if type(self).sense is not DroneMission.sense or any(s.active for s in sources):
+            return None
+        return SensorKernel(
+            drain_energy_of_one, ("energy",), (self.params.energy_use,), self._stopped
+        )
+
+    def _stopped(self, sim: Simulation, rows: np.ndarray) -> None:
+        sim.alert(rows, "zero energy", "zero energy: sensors off, not moving")
 
     def message_types(self) -> list[MessageType]:
         """ "sharing data": each receiver keeps the latest state per sender."""

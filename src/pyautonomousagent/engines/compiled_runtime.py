@@ -1,0 +1,76 @@
+"""Helpers the compiled engine's generated code calls (numba-compiled; see compiled_source)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from pyautonomousagent.bt.status import INVALID, RUNNING
+from pyautonomousagent.jit import njit
+
+
+@njit(inline="always")
+def halt(a: int, status: np.ndarray, node: int, end: int) -> None:
+    """The batched engine's ``_halt`` for agent ``a``: a node that is not INVALID becomes
+    INVALID with its whole subtree ``[node, end)`` (status shape (nodes, N), int8)."""
+    if status[node, a] != INVALID:
+        for j in range(node, end):
+            status[j, a] = INVALID
+
+
+@njit(inline="always")
+def record_statuses(
+    a: int,
+    row: int,
+    status: np.ndarray,
+    traces: np.ndarray,
+    traced_at: np.ndarray,
+    behaviour: np.ndarray,
+    leaf_rows: np.ndarray,
+) -> None:
+    """Phase 6's node statuses of agent ``a`` into record ``row``: its trace (where
+    ``traced_at[a] >= 0``, the agent's position among the traced, shape (N,)) and its active
+    leaf (:func:`pyautonomousagent.recording.active_leaf`: the first RUNNING leaf in tick
+    order, else the last ticked one, else -1).
+
+    Args:
+        status: node statuses, shape (nodes, N), int8.
+        traces: shape (records, nodes, traced), int8.
+        behaviour: shape (records, N), int16.
+        leaf_rows: the leaves' node indices, ascending, shape (L,).
+    """
+    k = traced_at[a]
+    if k >= 0:
+        for j in range(status.shape[0]):
+            traces[row, j, k] = status[j, a]
+    found = -1
+    for p in range(leaf_rows.shape[0]):
+        code = status[leaf_rows[p], a]
+        if code == RUNNING:
+            found = leaf_rows[p]
+            break
+        if code != INVALID:
+            found = leaf_rows[p]
+    behaviour[row, a] = found
+
+
+@njit
+def _sines(radians: np.ndarray, sines: np.ndarray, cosines: np.ndarray) -> None:
+    for i in range(radians.shape[0]):
+        sines[i] = math.sin(radians[i])
+        cosines[i] = math.cos(radians[i])
+
+
+def trig_agrees_with_numpy(samples: int = 20_000) -> bool:
+    """Whether compiled ``sin``/``cos`` (the C library's) give NumPy's bits on ``samples``
+    headings spread over [0, 360) degrees and on every whole degree (radians: degrees *
+    (pi / 180)). NumPy may use SIMD kernels of its own on some CPUs (e.g. a vector math
+    library on AVX-512), which round differently; where this check fails, the compiled
+    engine leaves the motion model to NumPy (it does not fuse the loop)."""
+    degrees = np.concatenate([np.arange(360.0), np.linspace(0.0, 360.0, samples, endpoint=False)])
+    degrees = np.concatenate([degrees, np.random.default_rng(13).uniform(0.0, 360.0, samples)])
+    radians = degrees * (math.pi / 180.0)
+    sines, cosines = np.empty_like(radians), np.empty_like(radians)
+    _sines(radians, sines, cosines)
+    return bool(np.array_equal(sines, np.sin(radians)) and np.array_equal(cosines, np.cos(radians)))

@@ -1,0 +1,131 @@
+"""Per-agent kernels for the compiled engine: what a leaf or a mission's sensors supply.
+
+The compiled engine (:mod:`pyautonomousagent.engines.compiled`) runs the whole tree, the
+sensors and the motion model agent by agent in code compiled with numba. A leaf takes part by
+returning a :class:`LeafKernel` from :meth:`~pyautonomousagent.bt.leaf.Leaf.kernel`; a mission
+by returning a :class:`SensorKernel` from
+:meth:`~pyautonomousagent.simulation.mission.Mission.compiled_sensors`. A tree with a leaf
+that has no kernel runs on the batched engine instead.
+
+A kernel function takes the agent's row ``a`` first, then the arrays it names (shape (N,),
+read and written at ``[a]``), then its constants; it must give the same bits as the NumPy
+``evaluate``/``sense`` it stands for (the engine-identity tests hold them equal). The helpers
+below repeat :mod:`pyautonomousagent.arrays` and NumPy's element-wise rules operation for
+operation on one number, so kernels can use them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from pyautonomousagent.arrays import _SERIES, _SQRT3, _TAN_PI_12
+from pyautonomousagent.jit import njit
+
+if TYPE_CHECKING:
+    from pyautonomousagent.simulation.run import Simulation
+
+#: The name that passes the iteration number (an int) to a kernel instead of an array.
+ITERATION = "@iteration"
+
+
+@dataclass(frozen=True)
+class LeafKernel:
+    """A leaf's per-agent form.
+
+    Attributes:
+        function: ``function(a, *arrays, *constants) -> status code`` (an njit function).
+        names: the swarm columns or blackboard keys passed as arrays, in order;
+            :data:`ITERATION` passes the iteration number.
+        constants: numbers passed after the arrays (port values, an agent row, ...).
+    """
+
+    function: Callable[..., int]
+    names: tuple[str, ...]
+    constants: tuple[float | int, ...] = ()
+
+
+@dataclass(frozen=True)
+class SensorKernel:
+    """A mission's Phase 2 sensors for one agent.
+
+    Attributes:
+        function: ``function(a, *arrays, *constants) -> bool``: updates agent ``a``'s sensed
+            columns and says whether it can move this iteration (an njit function).
+        names: the swarm columns or blackboard keys passed as arrays, in order.
+        constants: numbers passed after the arrays.
+        stopped: ``stopped(sim, rows)`` is called, with ``sim.world.iteration`` set, for the
+            agents (int array) found unable to move for the first time in a run of
+            iterations (the mission's alerts), in order of iteration.
+    """
+
+    function: Callable[..., bool]
+    names: tuple[str, ...]
+    constants: tuple[float | int, ...] = ()
+    stopped: Callable[[Simulation, Any], None] | None = None
+
+
+@njit(inline="always")
+def np_maximum(a: float, b: float) -> float:
+    """``numpy.maximum`` of two numbers (NaN propagates; ``b`` when they are equal)."""
+    return a if (a > b or a != a) else b
+
+
+@njit(inline="always")
+def np_minimum(a: float, b: float) -> float:
+    """``numpy.minimum`` of two numbers (NaN propagates; ``b`` when they are equal)."""
+    return a if (a < b or a != a) else b
+
+
+@njit(inline="always")
+def np_sign(v: float) -> float:
+    """``numpy.sign`` of a number: -1, +1, +0 for either zero, NaN for NaN."""
+    if v > 0.0:
+        return 1.0
+    if v < 0.0:
+        return -1.0
+    return v if v != v else 0.0
+
+
+@njit(inline="always")
+def wrap_degrees(angle: float) -> float:
+    """:func:`pyautonomousagent.arrays.wrap_degrees` of one angle in [-360, 720), degrees."""
+    if angle < 0.0:
+        angle = angle + 360.0
+    return angle - 360.0 if angle >= 360.0 else angle
+
+
+@njit(inline="always")
+def _atan_unit(t: float) -> float:
+    """:func:`pyautonomousagent.arrays._atan_unit` (the array path), one number."""
+    big = 1.0 if t > _TAN_PI_12 else 0.0
+    u = big * ((t * _SQRT3 - 1.0) / (t + _SQRT3)) + (1.0 - big) * t
+    z = u * u
+    total = z * _SERIES[15]
+    for k in range(14, 0, -1):
+        total = total + _SERIES[k]
+        total = total * z
+    total = total + _SERIES[0]
+    return (math.pi / 6.0) * big + u * total
+
+
+@njit(inline="always")
+def arctan2(y: float, x: float) -> float:
+    """:func:`pyautonomousagent.arrays.arctan2`, operation for operation, radians."""
+    ay, ax = abs(y), abs(x)
+    steep = 1.0 if ay > ax else 0.0
+    high = np_maximum(ay, ax)
+    angle = _atan_unit(np_minimum(ay, ax) / (high + (1.0 if high == 0.0 else 0.0)))
+    angle = (math.pi / 2.0) * steep + (1.0 - 2.0 * steep) * angle
+    west = 1.0 - math.copysign(1.0, x)
+    angle = (math.pi / 2.0) * west + (1.0 - west) * angle
+    return math.copysign(angle, y)
+
+
+@njit(inline="always")
+def bearing(x: float, y: float, to_x: float, to_y: float) -> float:
+    """:func:`pyautonomousagent.arrays.bearing` of one agent: degrees clockwise from north,
+    [0, 360)."""
+    return wrap_degrees(arctan2(to_x - x, to_y - y) * (180.0 / math.pi))

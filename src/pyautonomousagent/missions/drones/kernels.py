@@ -1,0 +1,123 @@
+"""The drone leaves and sensors for one agent, for the compiled engine.
+
+Each function repeats, operation for operation, the NumPy body of the leaf or sensor named in
+its docstring (``leaves.py``, ``sensors.py``), on agent row ``a`` of the arrays it is given
+(shape (N,)); the engine-identity tests hold the two equal bit for bit. Statuses are the codes
+of :mod:`pyautonomousagent.bt.status`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
+from pyautonomousagent.jit import njit
+from pyautonomousagent.kernels import bearing, np_maximum, np_minimum
+
+
+@njit(inline="always")
+def destination_reached(a: int, x: np.ndarray, y: np.ndarray, to_x: np.ndarray,
+                        to_y: np.ndarray, distance: float) -> int:  # fmt: skip
+    """Condition_Destination_Reached."""
+    dx = x[a] - to_x[a]
+    dy = y[a] - to_y[a]
+    return SUCCESS if dx * dx + dy * dy <= distance * distance else FAILURE
+
+
+@njit(inline="always")
+def at_most(a: int, values: np.ndarray, threshold: float) -> int:
+    """Condition_Low_Energy_Level: SUCCESS if ``values[a] <= threshold``."""
+    return SUCCESS if values[a] <= threshold else FAILURE
+
+
+@njit(inline="always")
+def above(a: int, values: np.ndarray, threshold: float) -> int:
+    """Condition_Radiation_Detected: SUCCESS if ``values[a] > threshold``."""
+    return SUCCESS if values[a] > threshold else FAILURE
+
+
+@njit(inline="always")
+def at_least(a: int, values: np.ndarray, threshold: float) -> int:
+    """Condition_High_Damage_Level: SUCCESS if ``values[a] >= threshold``."""
+    return SUCCESS if values[a] >= threshold else FAILURE
+
+
+@njit(inline="always")
+def gathering_moment(a: int, iteration: int, moment: int, sender: int) -> int:
+    """Condition_Gathering_Moment (``sender``: the sender's row, -1 for none)."""
+    if iteration != moment:
+        return FAILURE
+    return SUCCESS if a == sender else FAILURE
+
+
+@njit(inline="always")
+def navigate(a: int, x: np.ndarray, y: np.ndarray, to_x: np.ndarray, to_y: np.ndarray,
+             heading: np.ndarray, speed: np.ndarray, cruise: float) -> int:  # fmt: skip
+    """Action_Navigate_To_Destination_A: requested heading and speed; RUNNING."""
+    heading[a] = bearing(x[a], y[a], to_x[a], to_y[a])
+    speed[a] = cruise
+    return RUNNING
+
+
+@njit(inline="always")
+def copy_destination(a: int, to_x: np.ndarray, to_y: np.ndarray, from_x: np.ndarray,
+                     from_y: np.ndarray) -> int:  # fmt: skip
+    """Action_Set_Destination_Equal_To_{Surveillance,Refueling}_S: destination := from; SUCCESS."""
+    to_x[a] = from_x[a]
+    to_y[a] = from_y[a]
+    return SUCCESS
+
+
+@njit(inline="always")
+def patrol_position(a: int, index: np.ndarray, to_x: np.ndarray, to_y: np.ndarray,
+                    sx: np.ndarray, sy: np.ndarray, x1: np.ndarray, y1: np.ndarray,
+                    x2: np.ndarray, y2: np.ndarray, other: int) -> int:  # fmt: skip
+    """Action_Set_Destination_Equal_To_{Other,Current}_Surveillance_S (``other`` 1 or 0)."""
+    k = 3 - index[a] if other else index[a]
+    first = k == 1
+    px = x1[a] if first else x2[a]
+    py = y1[a] if first else y2[a]
+    index[a] = k
+    sx[a] = px
+    sy[a] = py
+    to_x[a] = px
+    to_y[a] = py
+    return SUCCESS
+
+
+@njit(inline="always")
+def hold_still_until(a: int, done: bool, heading: np.ndarray, requested_speed: np.ndarray,
+                     requested_heading: np.ndarray, cruise: float) -> int:  # fmt: skip
+    """``_hold_still_until``: speed 0 (same heading) until ``done``; RUNNING / SUCCESS."""
+    requested_speed[a] = cruise if done else 0.0
+    requested_heading[a] = heading[a]
+    return SUCCESS if done else RUNNING
+
+
+@njit(inline="always")
+def refuel(a: int, energy: np.ndarray, heading: np.ndarray, requested_speed: np.ndarray,
+           requested_heading: np.ndarray, rate: float, cruise: float) -> int:  # fmt: skip
+    """Action_Refuel_A."""
+    level = np_minimum(energy[a] + rate, 100.0)
+    energy[a] = level
+    return hold_still_until(a, level >= 100.0, heading, requested_speed, requested_heading,
+                            cruise)  # fmt: skip
+
+
+@njit(inline="always")
+def repair(a: int, damage: np.ndarray, heading: np.ndarray, requested_speed: np.ndarray,
+           requested_heading: np.ndarray, rate: float, cruise: float) -> int:  # fmt: skip
+    """Action_Repair_Damage_A."""
+    level = np_maximum(damage[a] - rate, 0.0)
+    damage[a] = level
+    return hold_still_until(a, level <= 0.0, heading, requested_speed, requested_heading,
+                            cruise)  # fmt: skip
+
+
+@njit(inline="always")
+def drain_energy(a: int, energy: np.ndarray, use: float) -> bool:
+    """``DroneMission.sense`` without an active radiation source: energy drains; True where
+    some is left (the drone can move)."""
+    level = np_maximum(energy[a] - use, 0.0)
+    energy[a] = level
+    return level > 0.0

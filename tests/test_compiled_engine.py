@@ -1,0 +1,146 @@
+"""The compiled engine against the batched engine: the same bits, fused loop or not."""
+
+from __future__ import annotations
+
+import random
+
+import numpy as np
+import pytest
+
+from pyautonomousagent import Simulation, arrays, jit, kernels, load
+from pyautonomousagent.bt import leaf
+from pyautonomousagent.bt.nodes import NODE_TYPES
+from pyautonomousagent.bt.spec import Node, TreeError
+from pyautonomousagent.engines.compiled import CompiledEngine, compilable
+from pyautonomousagent.simulation.run import choose_engine, scenario_tree
+from pyautonomousagent.testing import check_engines_agree
+
+needs_numba = pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
+
+#: Drone leaves with kernels, with ports that make them change status during a patrol.
+LEAVES = (
+    ("Condition_Destination_Reached", {"distance": 3.0}),
+    ("Condition_Low_Energy_Level", {"threshold": 97.0}),
+    ("Condition_High_Damage_Level", {"threshold": 0.0}),
+    ("Condition_Radiation_Detected", {}),
+    ("Condition_Gathering_Moment", {"iteration": 7, "sender": "drone2"}),
+    ("Action_Navigate_To_Destination_A", {}),
+    ("Action_Set_Destination_Equal_To_Refueling_S", {}),
+    ("Action_Set_Destination_Equal_To_Surveillance_S", {}),
+    ("Action_Set_Destination_Equal_To_Other_Surveillance_S", {}),
+    ("Action_Set_Destination_Equal_To_Current_Surveillance_S", {}),
+    ("Action_Refuel_A", {"rate": 0.5}),
+    ("Action_Repair_Damage_A", {}),
+)
+DECORATORS = sorted(name for name, r in NODE_TYPES.items() if r.status_map is not None)
+
+
+def random_tree(rng: random.Random, depth: int = 3) -> Node:
+    """A random tree of Sequence/Fallback (with and without memory), status-mapping
+    decorators and drone leaves."""
+    if depth == 0 or rng.random() < 0.25:
+        kind, ports = rng.choice(LEAVES)
+        return leaf(kind, f"l{rng.randrange(10**6)}", **ports)
+    if rng.random() < 0.25:
+        return Node(
+            rng.choice(DECORATORS), f"d{rng.randrange(10**6)}", (random_tree(rng, depth - 1),)
+        )
+    kids = tuple(random_tree(rng, depth - 1) for _ in range(rng.randint(1, 4)))
+    kind = rng.choice(["Sequence", "Fallback"])
+    return Node(kind, f"c{rng.randrange(10**6)}", kids, {"memory": rng.random() < 0.5})
+
+
+def run(engine: str, scenario: str = "patrol", tree: Node | None = None, **overrides: object):
+    sim = Simulation.create(load(scenario).with_overrides(**overrides), seed=5, engine=engine,
+                            tree=tree)  # fmt: skip
+    return sim.run(progress=False)
+
+
+def assert_same_runs(a: Simulation, b: Simulation) -> None:
+    assert a.events == b.events
+    for key, expected in a.recorder.columns.items():
+        assert np.array_equal(b.recorder.columns[key], expected), key  # the same bits
+    assert np.array_equal(a.recorder.traces, b.recorder.traces)
+    assert np.array_equal(a.recorder.behaviour, b.recorder.behaviour)
+    assert np.array_equal(a.recorder.iterations, b.recorder.iterations)
+    assert np.array_equal(a.engine.node_statuses(), b.engine.node_statuses())
+
+
+def test_scalar_helpers_repeat_the_array_code_bit_for_bit() -> None:
+    rng = np.random.default_rng(1)
+    points = rng.normal(0.0, 50.0, (4, 20000))
+    points[:, :50] = 0.0  # zero vectors, both signs of zero
+    points[0, 50:100] = points[2, 50:100]
+    points[1, 25:50] = -0.0
+    expected = arrays.bearing(*points)
+    got = [kernels.bearing(*column) for column in points.T.tolist()]
+    assert np.array_equal(np.array(got), expected)
+    values = rng.normal(0.0, 1.0, 1000).tolist() + [0.0, -0.0, 1.0, -1.0]
+    for v in values:
+        assert kernels.np_sign(v) == np.sign(v) and str(kernels.np_sign(v)) == str(np.sign(v))
+        assert kernels.np_maximum(v, 0.0) == np.maximum(v, 0.0)
+        assert kernels.np_minimum(v, 0.5) == np.minimum(v, 0.5)
+
+
+@needs_numba
+@pytest.mark.parametrize("overrides", [{"agents": 300, "iterations": 1500},
+                                       {"agents": 7, "iterations": 900, "energy_use": 0.2,
+                                        "refuel_rate": 0.1}])  # fmt: skip
+def test_fused_patrol_gives_the_batched_data(overrides: dict) -> None:
+    batched, compiled = run("batched", **overrides), run("compiled", **overrides)
+    assert compiled.engine.name == "compiled"
+    assert_same_runs(batched, compiled)
+
+
+@needs_numba
+def test_drones_out_of_energy_raise_the_same_alerts() -> None:
+    overrides = {"agents": 5, "iterations": 400, "energy_use": 0.5, "low_energy_threshold": 0.0}
+    batched, compiled = run("batched", **overrides), run("compiled", **overrides)
+    assert any(event["event"] == "alert" for event in batched.events)
+    assert_same_runs(batched, compiled)
+
+
+@needs_numba
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_random_trees_tick_alike(seed: int) -> None:
+    tree = random_tree(random.Random(seed))
+    check_engines_agree(tree, "patrol", seed, ("batched", "compiled"), agents=9, iterations=300)
+
+
+@needs_numba
+def test_auto_picks_compiled_where_it_can_and_batched_elsewhere() -> None:
+    patrol = scenario_tree(load("patrol"))
+    assert choose_engine(patrol) == "compiled"
+    gathering = scenario_tree(load("gathering"))  # it sends messages: no kernel
+    assert choose_engine(gathering) == "batched"
+    assert "no kernel" in compilable(gathering)
+    scripted = leaf("Scripted", "s", statuses=[[1]])
+    assert choose_engine(scripted) == "batched"
+    sim = Simulation.create(load("gathering").with_overrides(iterations=5))
+    assert sim.engine.name == "batched"
+
+
+def test_without_numba_auto_falls_back_to_batched(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("PYAA_NO_JIT", "1")
+    assert choose_engine(scenario_tree(load("patrol"))) == "batched"
+    with pytest.raises(TreeError, match="numba"):
+        Simulation.create(load("patrol"), engine="compiled")
+
+
+@needs_numba
+def test_a_run_that_cannot_be_fused_ticks_compiled_every_iteration() -> None:
+    overrides = {"agents": 6, "iterations": 300}
+    scenario = load("patrol").with_overrides(**overrides)
+    sim = Simulation.create(scenario, seed=5, engine="compiled")
+    assert isinstance(sim.engine, CompiledEngine)
+    sim.mission.compiled_sensors = lambda sim: None  # type: ignore[method-assign]
+    assert sim.engine.loop(sim, 10) == 0
+    sim.run(progress=False)
+    assert_same_runs(run("batched", **overrides), sim)
+
+
+@needs_numba
+def test_compiled_sines_are_numpys_on_this_cpu() -> None:
+    from pyautonomousagent.engines.compiled_runtime import trig_agrees_with_numpy
+
+    assert trig_agrees_with_numpy()  # else the engine would not fuse the motion model
