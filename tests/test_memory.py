@@ -56,7 +56,9 @@ def test_records_alike_are_kept_as_one_value_with_their_bits():
 def test_the_initial_state_of_agents_alike_is_not_stored_in_full(monkeypatch):
     monkeypatch.setattr(recording, "COMPACT_AGENTS", 1)
     sim = Simulation.create(
-        load("patrol").with_overrides(agents=50, iterations=100), record_every=101
+        load("patrol").with_overrides(agents=50, iterations=100),
+        record_every=101,
+        engine="batched",  # the compiled engine writes its records in full
     )
     stored = set(sim.recorder.columns.stored)
     assert stored == {"heading"}  # the drones start alike but for it (requested: its twin)
@@ -92,7 +94,10 @@ def test_a_record_equal_to_another_column_is_kept_as_a_reference():
 
 def test_behaviours_alike_are_not_stored_in_full(monkeypatch):
     monkeypatch.setattr(recording, "COMPACT_AGENTS", 1)
-    sim = Simulation.create(load("patrol").with_overrides(agents=20, iterations=3))
+    # the batched engine: the compiled one writes its records in full
+    sim = Simulation.create(
+        load("patrol").with_overrides(agents=20, iterations=3), engine="batched"
+    )
     assert sim.recorder.behaviour_block(0, 1).tolist() == [[-1] * 20]
     assert sim.recorder._codes is not None and sim.recorder._codes.stored == []
     sim.run(progress=False)

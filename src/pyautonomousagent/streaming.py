@@ -57,9 +57,9 @@ class StatesStream:
 
     def _recorded(self, count: int) -> None:
         """Recorder listener: hand a full block of finished records to the thread."""
-        if count - self.written >= self.block:
-            self._queue.put((self.written, count))
-            self.written = count
+        while count - self.written >= self.block:  # an engine may record many at once
+            self._queue.put((self.written, self.written + self.block))
+            self.written += self.block
 
     def finish(self) -> Path:
         """Write the records not written yet, close the file and return its path.

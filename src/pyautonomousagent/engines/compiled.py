@@ -41,6 +41,7 @@ from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
 if TYPE_CHECKING:
+    from pyautonomousagent.recording import Recorder
     from pyautonomousagent.simulation.run import Simulation
 
 
@@ -188,14 +189,26 @@ class CompiledEngine:
 
         groups = -(-self.swarm.size // CHUNK)
         share = max(1, groups // (SHARE * numba.get_num_threads()))
+        records = self._records(recorder, count)  # the columns, then the active behaviour
         with numba.parallel_chunksize(share):  # a core that others slow down takes less
             block(start, count, every, CHUNK, self.status, self.current, *self.arrays,
                   model.u_speed, model.u_heading, self._trig,
-                  *(recorder.columns[k] for k in self.layout.names), recorder.traces,
-                  traced_at, recorder.behaviour, recorder._leaf_rows.astype(np.int64),
+                  *records[:-1], recorder.traces,
+                  traced_at, records[-1], recorder._leaf_rows.astype(np.int64),
                   stopped, p.max_speed, p.speed_step, p.turn_step)  # fmt: skip
         self._after(sim, sensors, start, count, stopped)
         return count
+
+    def _records(self, recorder: Recorder, count: int) -> list[np.ndarray]:
+        """The record arrays the fused loop writes, shape (records, N) each: the recorded
+        columns in layout order, then the active behaviour. For ``count`` 0 (compiling only)
+        empty ones of the same types, so that compiling does not make the recorder store
+        columns it keeps as one value while agents are alike (``RecordedColumns``)."""
+        if count:
+            assert recorder.behaviour is not None  # checked by _fusable
+            return [*(recorder.columns[k] for k in self.layout.names), recorder.behaviour]
+        dtypes = [*(recorder.columns.dtypes[k] for k in self.layout.names), np.dtype(np.int16)]
+        return [np.empty((0, self.swarm.size), dtype) for dtype in dtypes]
 
     def _fusable(self, sim: Simulation) -> SensorKernel | None:
         """The mission's compiled sensors where :meth:`loop` can run ``sim``, else None."""
