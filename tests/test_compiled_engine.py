@@ -12,7 +12,7 @@ from pyautonomousagent.bt import leaf
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.engines.compiled import CompiledEngine, compilable
-from pyautonomousagent.simulation.run import choose_engine, scenario_tree
+from pyautonomousagent.simulation.run import AUTO_COMPILED_WORK, choose_engine, scenario_tree
 from pyautonomousagent.testing import check_engines_agree
 
 needs_numba = pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
@@ -118,6 +118,15 @@ def test_auto_picks_compiled_where_it_can_and_batched_elsewhere() -> None:
     assert choose_engine(scripted) == "batched"
     sim = Simulation.create(load("gathering").with_overrides(iterations=5))
     assert sim.engine.name == "batched"
+
+
+@needs_numba
+def test_auto_compiles_only_runs_that_pay_for_the_compiling() -> None:
+    patrol = scenario_tree(load("patrol"))
+    assert choose_engine(patrol, AUTO_COMPILED_WORK - 1) == "batched"
+    assert choose_engine(patrol, AUTO_COMPILED_WORK) == "compiled"
+    small = Simulation.create(load("patrol").with_overrides(agents=10, iterations=5))
+    assert small.engine.name == "batched"
 
 
 def test_without_numba_auto_falls_back_to_batched(monkeypatch: pytest.MonkeyPatch) -> None:
