@@ -6,6 +6,7 @@ registered with :func:`~pyautonomousagent.bt.leaf.register_leaf`. See docs/missi
 """
 
 from pyautonomousagent.datalink import Delivery
+from pyautonomousagent.models.drone2d import next_position
 from pyautonomousagent.recording import Recorder
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation.mission import (
@@ -40,5 +41,6 @@ __all__ = [
     "World",
     "WorldObject",
     "check_point_in_world",
+    "next_position",
     "register_mission",
 ]

@@ -50,12 +50,24 @@ def advance(
     Returns:
         New (x, y, speed, heading); speed clipped to [0, max_speed], heading in [0, 360).
     """
-    rad = heading * (np.pi / 180.0)
-    new_x = x + speed * np.sin(rad)
-    new_y = y + speed * np.cos(rad)
+    new_x, new_y = next_position(x, y, speed, heading)
     new_speed = np.minimum(np.maximum(speed + u_speed, 0.0), params.max_speed)
     new_heading = wrap_degrees(heading + u_heading)
     return new_x, new_y, new_speed, new_heading
+
+
+def next_position(
+    x: np.ndarray, y: np.ndarray, speed: np.ndarray, heading: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where each drone will be after its next step (paper eqs. 1-2), shape (N,) each.
+
+    Args:
+        x, y: position, world units, shape (N,).
+        speed: world units per iteration, shape (N,).
+        heading: degrees clockwise from north, shape (N,).
+    """
+    rad = heading * (np.pi / 180.0)
+    return x + speed * np.sin(rad), y + speed * np.cos(rad)
 
 
 def heading_error(requested: np.ndarray, current: np.ndarray) -> np.ndarray:

@@ -50,6 +50,7 @@ from pyautonomousagent.mission import (
     World,
     WorldObject,
     check_point_in_world,
+    next_position,
     register_mission,
 )
 from pyautonomousagent.missions.vacuum import leaves
@@ -200,9 +201,7 @@ class VacuumMission(Mission):
         s["cleaned_cells"] += self.grid.clean(s["x"], s["y"], s["vacuuming"] == 1)
         s["vacuuming"][:] = 0
         s["sonar"][:] = self.room.sonar(s["x"], s["y"], s["heading"], self.params.sonar_range)
-        rad = s["heading"] * (np.pi / 180.0)  # the drone2d step (paper eqs. 1-2)
-        next_x = s["x"] + s["speed"] * np.sin(rad)
-        next_y = s["y"] + s["speed"] * np.cos(rad)
+        next_x, next_y = next_position(s["x"], s["y"], s["speed"], s["heading"])
         return ~self.room.blocked(next_x, next_y, STOP_MARGIN)
 
     def coverage(self) -> float:
