@@ -171,8 +171,7 @@ class Recorder:
         row = self.count
         self.iterations[row] = iteration
         sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
-        for key in self.columns:
-            self.columns.store(row, key, sources[key])
+        self.columns.store_record(row, sources)
         if self._codes is not None:
             if statuses is None:
                 raise ValueError("this recorder keeps traces: pass the engine's node statuses")
@@ -333,6 +332,15 @@ class RecordedColumns(Mapping[str, np.ndarray]):
                 return
             full = self._stored(key, row)
         full[row] = values
+
+    def store_record(self, row: int, sources: Mapping[str, np.ndarray]) -> None:
+        """Record ``sources[key]`` (shape (N,)) as record ``row`` of every column ``key``."""
+        if len(self._full) == len(self.dtypes):  # all stored in full: no comparisons
+            for key, full in self._full.items():
+                full[row] = sources[key]
+            return
+        for key in self.dtypes:
+            self.store(row, key, sources[key])
 
     def _twin(self, row: int, values: np.ndarray) -> str | None:
         """A column stored in full whose record ``row`` has the bits of ``values``, or None."""
