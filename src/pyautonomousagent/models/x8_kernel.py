@@ -21,8 +21,8 @@ import math
 
 import numpy as np
 
-from pyautonomousagent.arrays import _SERIES, _SQRT3, _TAN_PI_12
 from pyautonomousagent.jit import njit
+from pyautonomousagent.kernels import arctan2 as atan2  # arrays.arctan2, one pair
 from pyautonomousagent.models import x8_dynamics as dyn
 from pyautonomousagent.models.autopilot import AttitudeController, Guidance
 
@@ -69,33 +69,6 @@ def _max(a: float, b: float) -> float:
 def _clip(x: float, low: float, high: float) -> float:
     """``minimum(maximum(x, low), high)``."""
     return _min(_max(x, low), high)
-
-
-@njit
-def _atan_unit(t: float) -> float:
-    """``arrays._atan_unit`` for one number t in [0, 1] (rad)."""
-    big = 1.0 if t > _TAN_PI_12 else 0.0
-    u = big * ((t * _SQRT3 - 1.0) / (t + _SQRT3)) + (1.0 - big) * t
-    z = u * u
-    total = z * _SERIES[15]
-    for j in range(14, 0, -1):
-        total += _SERIES[j]
-        total *= z
-    total += _SERIES[0]
-    return (math.pi / 6.0) * big + u * total
-
-
-@njit
-def atan2(y: float, x: float) -> float:
-    """``arrays.arctan2`` for one pair (rad, [-pi, pi])."""
-    ay, ax = abs(y), abs(x)
-    steep = 1.0 if ay > ax else 0.0
-    high = _max(ay, ax)
-    angle = _atan_unit(_min(ay, ax) / (high + (1.0 if high == 0.0 else 0.0)))
-    angle = (math.pi / 2.0) * steep + (1.0 - 2.0 * steep) * angle
-    west = 1.0 - math.copysign(1.0, x)
-    angle = (math.pi / 2.0) * west + (1.0 - west) * angle
-    return math.copysign(angle, y)
 
 
 @njit
