@@ -10,6 +10,7 @@ pyaa bench x8-patrol --agents 1 --iterations 50 --engines compiled,batched > /de
 pyaa bench gathering --engines pytrees,batched,auto,pytrees,batched,auto
 pyaa bench patrol --agents 1000 --iterations 4000 --engines pytrees,batched,compiled,batched,compiled --reference-iterations 200
 pyaa bench patrol --agents 1000000 --iterations 20 --record-every 20 --engines batched,compiled,batched,compiled
+pyaa bench patrol --agents 1000000 --iterations 200 --record-every 200 --engines batched,compiled,batched,compiled
 pyaa bench x8-patrol --agents 1,10 --engines pyfly,batched,compiled,batched,compiled --reference-iterations 400
 pyaa bench x8-patrol --agents 100 --engines batched,compiled,batched,compiled
 pyaa bench patrol --agents 10000 --iterations 1000 --engines batched,batched,batched --save --json
