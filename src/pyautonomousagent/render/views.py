@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Any
 
 from pyautonomousagent.recording import Recorder
-from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation.scenario import Scenario
 
 
@@ -36,11 +35,6 @@ class Views:
     timings: dict[str, float] = field(default_factory=dict)
 
 
-def run_marks(scenario: Scenario) -> list[Mark]:
-    """The marks drawn for a run: its mission's."""
-    return scenario.create_mission().marks()
-
-
 def write_views(
     recorder: Recorder,
     scenario: Scenario,
@@ -51,7 +45,8 @@ def write_views(
     """Write the chosen views of a recorded run into ``out``; ``views.written`` and
     ``views.timings`` (seconds per view) say what was done."""
     events = list(events)
-    marks = run_marks(scenario)
+    mission = scenario.create_mission()  # its marks, and the replay's changing marks
+    marks = mission.marks()
     if views.video:
         from pyautonomousagent.render.animation import write_animation
 
@@ -72,7 +67,6 @@ def write_views(
     if views.replay:
         from pyautonomousagent.render.replay import write_replay
 
-        mission = scenario.create_mission()
         replay = write_replay(
             recorder,
             out / "replay.html",
