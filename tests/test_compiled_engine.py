@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import random
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -111,17 +112,33 @@ def test_random_trees_tick_alike(seed: int) -> None:
 def test_auto_picks_compiled_where_it_can_and_batched_elsewhere() -> None:
     patrol = scenario_tree(load("patrol"))
     assert choose_engine(patrol) == "compiled"
-    gathering = scenario_tree(load("gathering"))  # it sends messages: no kernel
-    assert choose_engine(gathering) == "batched"
-    assert "no kernel" in compilable(gathering)
+    gathering = scenario_tree(load("gathering"))  # its messages have kernels too
+    assert choose_engine(gathering) == "compiled"
     scripted = leaf("Scripted", "s", statuses=[[1]])
     assert choose_engine(scripted) == "batched"
-    sim = Simulation.create(load("gathering").with_overrides(iterations=5))
-    assert sim.engine.name == "batched"
+    assert "no kernel" in compilable(scripted)
 
 
 @needs_numba
-def test_auto_compiles_only_runs_that_pay_for_the_compiling() -> None:
+def test_auto_takes_compiled_once_the_runs_loop_was_compiled(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("PYAA_CACHE_DIR", str(tmp_path))
+    scenario = load("gathering").with_overrides(iterations=20)
+    assert Simulation.create(scenario).engine.name == "batched"  # nothing compiled yet
+    Simulation.create(scenario.with_overrides(low_energy_threshold=30.0), engine="compiled")
+    assert Simulation.create(scenario).engine.name == "compiled"  # ports are no source
+    other = load("gathering").with_overrides(iterations=20, agents=5000)
+    assert Simulation.create(other).engine.name == "compiled"  # nor is the swarm's size
+    patrol = load("patrol").with_overrides(agents=10, iterations=20)  # another tree
+    assert Simulation.create(patrol).engine.name == "batched"
+
+
+@needs_numba
+def test_auto_compiles_only_runs_that_pay_for_the_compiling(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("PYAA_CACHE_DIR", str(tmp_path))  # nothing compiled yet
     patrol = scenario_tree(load("patrol"))
     assert choose_engine(patrol, AUTO_COMPILED_WORK - 1) == "batched"
     assert choose_engine(patrol, AUTO_COMPILED_WORK) == "compiled"
@@ -153,3 +170,59 @@ def test_compiled_sines_are_numpys_on_this_cpu() -> None:
     from pyautonomousagent.engines.compiled_runtime import trig_agrees_with_numpy
 
     assert trig_agrees_with_numpy()  # else the engine would not fuse the motion model
+
+
+def counted_run(engine: str, scenario: str = "gathering", **overrides: object):
+    """A run, and how many of its iterations the compiled engine fused."""
+    sim = Simulation.create(load(scenario).with_overrides(**overrides), seed=5, engine=engine)
+    fused = []
+    loop = getattr(sim.engine, "loop", None)
+    if loop is not None:
+        sim.engine.loop = lambda s, count, **kw: fused.append(loop(s, count, **kw)) or fused[-1]
+    sim.run(progress=False)
+    return sim, sum(fused)
+
+
+def assert_same_shared_data(a: Simulation, b: Simulation) -> None:
+    for receiver in range(a.swarm.size):
+        assert a.mission.shared[receiver] == b.mission.shared[receiver], receiver
+
+
+@needs_numba
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        {},  # the paper's run: every message reaches everyone
+        {"agents": 7, "iterations": 1500, "gathering_iteration": 900,
+         "gathering_sender": "drone3", "low_energy_threshold": 90.0},
+    ],
+)  # fmt: skip
+def test_fused_gathering_gives_the_batched_data_and_events(overrides: dict) -> None:
+    batched, _ = counted_run("batched", **overrides)
+    compiled, fused = counted_run("compiled", **overrides)
+    assert fused == compiled.scenario.iterations  # stopped at the order, to record it
+    assert_same_runs(batched, compiled)
+    assert [e["type"] for e in compiled.events if e["event"] == "message"] == ["gathering"]
+    assert_same_shared_data(batched, compiled)
+
+
+@needs_numba
+def test_messages_that_reach_only_some_go_through_the_python_datalink() -> None:
+    overrides = {"agents": 6, "iterations": 900, "datalink_range": 25.0,
+                 "gathering_iteration": 400, "low_energy_threshold": 80.0}  # fmt: skip
+    batched, _ = counted_run("batched", **overrides)
+    compiled, fused = counted_run("compiled", **overrides)
+    assert 0 < fused < 900  # fused while all were in range (at the start), stepped after
+    assert_same_runs(batched, compiled)
+    assert_same_shared_data(batched, compiled)
+
+
+@needs_numba
+def test_stepping_the_fused_engine_one_iteration_at_a_time() -> None:
+    scenario = load("gathering").with_overrides(iterations=300, gathering_iteration=120)
+    stepped = Simulation.create(scenario, seed=5, engine="compiled")
+    for _ in range(300):
+        stepped.step()
+    ran = Simulation.create(scenario, seed=5, engine="batched").run(progress=False)
+    assert_same_runs(ran, stepped)
+    assert_same_shared_data(ran, stepped)

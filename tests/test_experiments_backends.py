@@ -159,7 +159,8 @@ def test_ctrl_c_stops_pyaa_sweep_and_resume_finishes_it(tmp_path) -> None:
     out = tmp_path / "s"
     command = [sys.executable, "-m", "pyautonomousagent.cli", "sweep", "patrol", "--vary",
                "low_energy_threshold=96:99:1", "--agents", "5", "--iterations", "400",
-               "--seeds", "20", "--measure", "refuels", "--serial", "--out", str(out)]  # fmt: skip
+               "--seeds", "20", "--measure", "refuels", "--serial", "--out", str(out),
+               "--engine", "batched"]  # fmt: skip  (compiled, if cached, ends before Ctrl-C)
     process = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.monotonic() + 30

@@ -72,7 +72,8 @@ def _parser() -> argparse.ArgumentParser:
         "--engine",
         choices=["auto", *ENGINES],
         default="auto",
-        help="decision engine (default auto: batched unless the tree has hand-written leaves)",
+        help="decision engine (default auto: compiled for long runs and trees compiled "
+        "before, pytrees for hand-written leaves, else batched)",
     )
     run.add_argument("--out", type=Path, help="output folder (default: runs/SCENARIO)")
     run.add_argument(
@@ -548,6 +549,11 @@ def _print_summary(sim: Simulation, written: list[Path]) -> None:
     print(f"  time: {timings_line(sim.timings)}")
     for path in written:
         print(f"  wrote {path}")
+    if sim.could_compile:
+        print(
+            "  tip: --engine compiled compiles this tree once (seconds; numba's cache keeps it) "
+            "and runs it many times faster; later runs then take it by themselves"
+        )
 
 
 def timings_line(timings: Mapping[str, float]) -> str:

@@ -9,7 +9,11 @@ that has no kernel runs on the batched engine instead.
 
 A kernel function takes the agent's row ``a`` first, then the arrays it names (shape (N,),
 read and written at ``[a]``), then its constants; it must give the same bits as the NumPy
-``evaluate``/``sense`` it stands for (the engine-identity tests hold them equal). The helpers
+``evaluate``/``sense`` it stands for (the engine-identity tests hold them equal).
+
+Messages: a leaf that broadcasts declares what it sends (:class:`Sends`) and its kernel gets
+an outbox after its arrays; a mission's message type may have a :class:`HandlerKernel`, the
+compiled form of its handler for deliveries that reached every agent. The helpers
 below repeat :mod:`pyautonomousagent.arrays` and NumPy's element-wise rules operation for
 operation on one number, so kernels can use them.
 """
@@ -32,18 +36,65 @@ ITERATION = "@iteration"
 
 
 @dataclass(frozen=True)
+class Sends:
+    """What a leaf's kernel broadcasts: one message of ``type`` per tick at most.
+
+    Its kernel gets an outbox, shape (3 + len(fields), N) float64, after its arrays: to send
+    from agent ``a`` it sets ``outbox[0, a] = 1.0``, rows 1 and 2 to the sender's x and y
+    (world units) and rows 3, 4, ... to the payload ``fields`` in order. The engine clears
+    row 0 before every tick and hands what was sent to the datalink as
+    :meth:`~pyautonomousagent.bt.leaf.Leaf.broadcast` would (senders in ascending rows).
+
+    Attributes:
+        type: the message type (a mission's ``MessageType.name``).
+        fields: the payload's names, in outbox row order.
+    """
+
+    type: str
+    fields: tuple[str, ...]
+
+
+@dataclass(frozen=True)
 class LeafKernel:
     """A leaf's per-agent form.
 
     Attributes:
-        function: ``function(a, *arrays, *constants) -> status code`` (an njit function).
+        function: ``function(a, *arrays, [outbox,] *constants) -> status code`` (an njit
+            function).
         names: the swarm columns or blackboard keys passed as arrays, in order;
             :data:`ITERATION` passes the iteration number.
         constants: numbers passed after the arrays (port values, an agent row, ...).
+        sends: what the leaf broadcasts (its outbox comes after the arrays), or None.
     """
 
     function: Callable[..., int]
     names: tuple[str, ...]
+    constants: tuple[float | int, ...] = ()
+    sends: Sends | None = None
+
+
+@dataclass(frozen=True)
+class HandlerKernel:
+    """A message type's handler, compiled, for messages that reached every agent but their
+    sender (``Delivery.to_all``), the usual case of a long-range datalink.
+
+    Attributes:
+        function: ``function(t, senders, data, count, *arrays, *state, *constants)``, called
+            once per iteration ``t`` with messages delivered (an njit function): ``senders``
+            shape (>= count,) int64 and ``data`` shape (len(fields), >= count) float64 hold
+            the ``count`` messages sent at iteration ``t - 1``, in canonical order (by sender,
+            then sending order); it must do what the Python handler does with them.
+        fields: the payload names, in ``data`` row order.
+        names: swarm columns or blackboard keys passed as arrays (shape (N,)), in order.
+        state: arrays of the mission's run state passed as they are (e.g. what each agent
+            heard), in order.
+        constants: numbers passed last.
+    """
+
+    function: Callable[..., None]
+    fields: tuple[str, ...]
+    names: tuple[str, ...] = ()
+    state: tuple[Any, ...] = ()
     constants: tuple[float | int, ...] = ()
 
 

@@ -8,11 +8,14 @@ remembered children are the batched engine's arrays, updated by the same rules, 
 engines give the same bits.
 
 Where the run allows it (the mission's sensors have a compiled form, the motion model is the
-2-D drone, no message is in flight: no leaf with a kernel sends any, and the C library's
-``sin``/``cos`` give NumPy's bits on this CPU: :func:`trig_agrees_with_numpy`),
-:meth:`CompiledEngine.loop` runs whole iterations, Phases 2 to 6, in one compiled call,
-``CHUNK`` agents at a time and on every core; elsewhere the simulation calls
-:meth:`CompiledEngine.tick` once per iteration.
+2-D drone, and the C library's ``sin``/``cos`` give NumPy's bits on this CPU:
+:func:`trig_agrees_with_numpy`), :meth:`CompiledEngine.loop` runs whole iterations, Phases 2
+to 6, in one compiled call. A tree that sends no message runs ``CHUNK`` agents at a time over
+many iterations, on every core. A tree that sends messages runs iteration by iteration, its
+messages handled by the mission's compiled handlers (``MessageType.kernel``) while they reach
+every agent; a delivery that reaches only some, or a recorded message type, is handed to the
+datalink in Python. Elsewhere the simulation calls :meth:`CompiledEngine.tick` once per
+iteration, and what the leaves sent goes to the datalink after it.
 """
 
 from __future__ import annotations
@@ -20,8 +23,10 @@ from __future__ import annotations
 import hashlib
 import importlib.util
 import os
+import re
 import sys
 from collections.abc import Mapping
+from dataclasses import dataclass, replace
 from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
@@ -33,14 +38,22 @@ from pyautonomousagent.bt.leaf import Leaf, check_leaves, leaf_type, make_leaf
 from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_entries
 from pyautonomousagent.engines.batched import Program, compile_tree
 from pyautonomousagent.engines.compiled_runtime import trig_agrees_with_numpy
-from pyautonomousagent.engines.compiled_source import CHUNK, Layout, module_source, supported
-from pyautonomousagent.kernels import LeafKernel, SensorKernel
+from pyautonomousagent.engines.compiled_source import (
+    CHUNK,
+    Constants,
+    Layout,
+    Messaging,
+    module_source,
+    supported,
+)
+from pyautonomousagent.kernels import LeafKernel, Sends, SensorKernel
 from pyautonomousagent.models.drone2d import Drone2D
 from pyautonomousagent.registry import UnknownNameError
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
 if TYPE_CHECKING:
+    from pyautonomousagent.datalink import Datalink
     from pyautonomousagent.recording import Recorder
     from pyautonomousagent.simulation.run import Simulation
 
@@ -74,10 +87,22 @@ def cache_folder() -> Path:
     return Path(base) / "pyautonomousagent" / "compiled"
 
 
+def module_name(source: str) -> str:
+    """The name of generated ``source``'s module: a hash of it and of the files of the
+    modules it imports from (numba's cache checks only the generated file, so a changed
+    kernel must give a new name)."""
+    digest = hashlib.sha256(source.encode())
+    for module in sorted(set(re.findall(r"^from (\S+) import", source, re.MULTILINE))):
+        spec = importlib.util.find_spec(module)
+        if spec is not None and spec.origin and os.path.isfile(spec.origin):
+            digest.update(Path(spec.origin).read_bytes())
+    return "pyaa_tree_" + digest.hexdigest()[:24]
+
+
 def load_source(source: str) -> ModuleType:
-    """Import generated ``source`` as a module from a file named by its hash (written once;
-    numba caches the compiled functions beside it)."""
-    name = "pyaa_tree_" + hashlib.sha256(source.encode()).hexdigest()[:24]
+    """Import generated ``source`` as a module from a file named by :func:`module_name`
+    (written once; numba caches the compiled functions beside it)."""
+    name = module_name(source)
     if name in sys.modules:
         return sys.modules[name]
     folder = cache_folder()
@@ -107,6 +132,15 @@ PARALLEL = 100_000
 SHARE = 8
 
 
+@dataclass(frozen=True)
+class Fused:
+    """What the fused loop of a run calls: the mission's compiled sensors and, where the
+    tree sends messages, their compiled handling."""
+
+    sensors: SensorKernel
+    messaging: Messaging | None
+
+
 class CompiledEngine:
     """Phase 3 (and, where possible, Phases 2-6) compiled with numba; the batched engine's
     semantics and bits.
@@ -134,70 +168,190 @@ class CompiledEngine:
                     raise TreeError(f"leaf {node.name!r} ({node.type}) has no kernel")
                 self.kernels[i] = kernel
         memory = [i for i, n in enumerate(self.program.nodes) if n.type in ("Sequence", "Fallback")]
+        senders = tuple(i for i, kernel in sorted(self.kernels.items()) if kernel.sends)
         self.layout = Layout(
-            tuple(swarm.columns) + tuple(swarm.blackboard), {i: k for k, i in enumerate(memory)}
+            tuple(swarm.columns) + tuple(swarm.blackboard),
+            {i: k for k, i in enumerate(memory)},
+            senders,
         )
         self.status = np.zeros((len(self.program.nodes), swarm.size), dtype=np.int8)
         self.current = np.full((len(memory), swarm.size), -1, dtype=np.int32)
+        self.outboxes = {i: np.zeros((3 + len(self._sends(i).fields), swarm.size)) for i in senders}
         self.arrays = [{**swarm.columns, **swarm.blackboard}[k] for k in self.layout.names]
+        self.arrays += list(self.outboxes.values())
         self._module: ModuleType | None = None
-        self._sensors: SensorKernel | None = None
+        self._fused: Fused | None = None
+        self._constants: tuple[np.ndarray, np.ndarray] = Constants().arrays()
+        self._inboxes: list[tuple[np.ndarray, np.ndarray]] | None = None
         self._trig = np.full((3, swarm.size), np.nan)  # heading, its sine and cosine
         self._trig_agrees: bool | None = None  # compiled sin/cos give NumPy's bits
 
-    def _code(self, sensors: SensorKernel | None) -> ModuleType:
-        if self._module is None or (sensors is not None and self._sensors is None):
-            source = module_source(self.program, self.kernels, self.layout, sensors)
-            self._module, self._sensors = load_source(source), sensors
+    def _sends(self, node: int) -> Sends:
+        sends = self.kernels[node].sends
+        assert sends is not None
+        return sends
+
+    def _code(self, fused: Fused | None) -> ModuleType:
+        if self._module is None or (fused is not None and self._fused is None):
+            self._module, self._fused = load_source(self._source(fused)), fused
         return self._module
 
+    def _source(self, fused: Fused | None) -> str:
+        """The generated module for ``fused`` (or the tick only); sets the constants' arrays."""
+        sensors, messaging = (fused.sensors, fused.messaging) if fused else (None, None)
+        layout = replace(self.layout, constants=Constants())
+        source = module_source(self.program, self.kernels, layout, sensors, messaging)
+        self._constants = layout.constants.arrays()
+        return source
+
     def tick(self) -> None:
-        """Tick the tree once for every agent (at the world's iteration)."""
-        self._code(self._sensors).tick(
-            self.world.iteration, self.status, self.current, *self.arrays
-        )
+        """Tick the tree once for every agent (at the world's iteration); what the leaves
+        sent goes to the datalink."""
+        code = self._code(self._fused)
+        code.tick(self.world.iteration, self.status, self.current, *self._constants, *self.arrays)
+        self._send(self.world.datalink)
+
+    def _send(self, datalink: Datalink) -> None:
+        """Hand the outboxes' messages to ``datalink``, leaf by leaf in node order, senders in
+        ascending rows: the batched engine's calls of ``Leaf.broadcast``."""
+        for i, box in self.outboxes.items():
+            rows = np.flatnonzero(box[0] == 1.0)
+            if rows.size:
+                sends = self._sends(i)
+                data = {f: box[3 + j, rows] for j, f in enumerate(sends.fields)}
+                datalink.send(rows, sends.type, data, (box[1, rows], box[2, rows]))
 
     def prepare(self, sim: Simulation) -> None:
-        """Compile (or load from numba's cache) what this run will call, before its loop."""
-        if self._fusable(sim) is not None:
-            self.loop(sim, 0, typical=min(sim.scenario.iterations, 500))
-        else:
+        """Compile (or load from numba's cache) what this run will call, before its loop;
+        mark a fused loop compiled (see :meth:`ready`)."""
+        fused = self._fusable(sim)
+        if fused is None:
             self._code(None)
+            return
+        self.loop(sim, 0, typical=min(sim.scenario.iterations, 500))
+        self._marker(sim, fused).touch()
+
+    def ready(self, sim: Simulation) -> bool:
+        """Whether ``sim`` runs fused and :meth:`prepare` compiled that loop before on this
+        machine (numba's cache holds it: set-up takes well under a second)."""
+        fused = self._fusable(sim)
+        return fused is not None and self._marker(sim, fused).exists()
+
+    def fuses(self, sim: Simulation) -> bool:
+        """Whether :meth:`loop` can run ``sim``'s iterations (from its start)."""
+        return self._fusable(sim) is not None
+
+    def _marker(self, sim: Simulation, fused: Fused) -> Path:
+        """The file saying that the fused function ``sim``'s loop calls is in numba's cache."""
+        if fused.messaging is not None:
+            function = "block_messages"
+        else:
+            work = min(sim.scenario.iterations, 500) * self.swarm.size
+            function = "block_parallel" if work >= PARALLEL else "block_serial"
+        return cache_folder() / f"{module_name(self._source(fused))}.{function}.compiled"
 
     def node_statuses(self) -> np.ndarray:
         """Status codes after the last tick, shape (nodes in tick order, N), int8."""
         return self.status.copy()
 
     def loop(self, sim: Simulation, count: int, typical: int | None = None) -> int:
-        """Run up to ``count`` whole iterations (Phases 2-6) in compiled code; return how many
-        were run: 0 where this run cannot be fused (then call ``sim.step()``). ``typical``:
-        pick the compiled function as for that many iterations (``count`` 0 compiles it)."""
-        sensors = self._fusable(sim)
-        if sensors is None:
+        """Run up to ``count`` whole iterations in compiled code; return how many were run:
+        0 where this run cannot be fused now (then call ``sim.step()``). Phases 2-6 of
+        each, except the last one's Phase 5: its messages wait on the datalink's channel,
+        for the caller to deliver. ``typical``: pick the compiled function as for that many
+        iterations (``count`` 0 compiles it and runs nothing)."""
+        fused = self._fusable(sim)
+        if fused is None:
             return 0
         recorder, model = sim.recorder, sim.model
         assert isinstance(model, Drone2D)
-        code = self._code(sensors)
-        start, every = sim.world.iteration, recorder.every
+        code = self._code(fused)
         traced_at = np.full(self.swarm.size, -1, dtype=np.int64)
         traced_at[recorder.traced] = np.arange(recorder.traced.size)
         stopped = np.full(self.swarm.size, -1, dtype=np.int64)
         p = model.params
-        parallel = (typical or count) * self.swarm.size >= PARALLEL
-        block = code.block_parallel if parallel else code.block_serial
+        records = self._records(recorder, count)  # the columns, then the active behaviour
+        arguments = (
+            self.status, self.current, *self._constants, *self.arrays, model.u_speed,
+            model.u_heading, self._trig, *records[:-1], recorder.traces, traced_at, records[-1],
+            recorder._leaf_rows.astype(np.int64), stopped, p.max_speed, p.speed_step,
+            p.turn_step,
+        )  # fmt: skip
+        start, every = sim.world.iteration, recorder.every
+        if fused.messaging is not None:
+            inbox = self._inbox(sim, fused.messaging)
+            done = code.block_messages(start, count, every, *arguments, *inbox)
+            sim.inbox = [] if done else sim.inbox  # handled in the first iteration
+        else:
+            done = self._block(code, (typical or count) * self.swarm.size, start, count, every,
+                               arguments)  # fmt: skip
+        if done:
+            self._after(sim, fused.sensors, start, done, stopped)
+            self._send(sim.world.datalink)
+        return int(done)
+
+    def _block(
+        self, code: ModuleType, work: int, start: int, count: int, every: int, arguments: tuple
+    ) -> int:
+        """Run the chunked fused loop (no messages) on every core where ``work``
+        agent-iterations make it worth it; return ``count``."""
         import numba
 
+        block = code.block_parallel if work >= PARALLEL else code.block_serial
         groups = -(-self.swarm.size // CHUNK)
         share = max(1, groups // (SHARE * numba.get_num_threads()))
-        records = self._records(recorder, count)  # the columns, then the active behaviour
         with numba.parallel_chunksize(share):  # a core that others slow down takes less
-            block(start, count, every, CHUNK, self.status, self.current, *self.arrays,
-                  model.u_speed, model.u_heading, self._trig,
-                  *records[:-1], recorder.traces,
-                  traced_at, records[-1], recorder._leaf_rows.astype(np.int64),
-                  stopped, p.max_speed, p.speed_step, p.turn_step)  # fmt: skip
-        self._after(sim, sensors, start, count, stopped)
+            block(start, count, every, CHUNK, *arguments)
         return count
+
+    def _inbox(self, sim: Simulation, messaging: Messaging) -> list[Any]:
+        """The arguments of ``block_messages`` after the common ones: the datalink's range,
+        ``order``, ``counts``, ``first``, each type's inbox (senders, data) filled with
+        ``sim.inbox`` (deliveries that reached everyone, checked by :meth:`_fusable`), and
+        the handlers' state."""
+        types = messaging.types
+        if self._inboxes is None or len(self._inboxes) != len(types):
+            self._inboxes = []
+            for k, handler in enumerate(messaging.handlers):
+                leaves = sum(1 for kind, _ in messaging.senders.values() if kind == k)
+                capacity = leaves * self.swarm.size  # one message per sending leaf and agent
+                self._inboxes.append((np.zeros(capacity, dtype=np.int64),
+                                      np.zeros((len(handler.fields), capacity))))  # fmt: skip
+        order = np.full(len(types), -1, dtype=np.int64)
+        counts = np.zeros(len(types), dtype=np.int64)
+        for j, delivery in enumerate(sim.inbox):
+            messages = delivery.messages
+            k = types.index(messages.type)
+            senders, data = self._inboxes[k]
+            m = len(messages)
+            senders[:m] = messages.senders
+            for f, name in enumerate(messaging.handlers[k].fields):
+                data[f, :m] = messages.data[name]
+            order[j], counts[k] = k, m
+        inboxes = [array for pair in self._inboxes for array in pair]
+        state = [array for handler in messaging.handlers for array in handler.state]
+        first = np.zeros(len(types), dtype=np.int64)
+        return [sim.world.datalink.range, order, counts, first, *inboxes, *state]
+
+    def _messaging(self, sim: Simulation) -> Messaging | None:
+        """The compiled handling of the messages the tree sends, or None where a type sent
+        has no compiled handler in ``sim`` (or one that reads a field not sent)."""
+        types = tuple(dict.fromkeys(self._sends(i).type for i in self.layout.outboxes))
+        handlers = []
+        for kind in types:
+            declared = sim.handlers.get(kind)
+            if declared is None or declared.kernel is None:
+                return None
+            handlers.append(declared.kernel)
+        senders = {}
+        for i in self.layout.outboxes:
+            sends = self._sends(i)
+            k = types.index(sends.type)
+            if not set(handlers[k].fields) <= set(sends.fields):
+                return None
+            senders[i] = (k, tuple(3 + sends.fields.index(f) for f in handlers[k].fields))
+        recorded = tuple(sim.handlers[kind].recorded for kind in types)
+        return Messaging(types, tuple(handlers), recorded, senders)
 
     def _records(self, recorder: Recorder, count: int) -> list[np.ndarray]:
         """The record arrays the fused loop writes, shape (records, N) each: the recorded
@@ -210,22 +364,30 @@ class CompiledEngine:
         dtypes = [*(recorder.columns.dtypes[k] for k in self.layout.names), np.dtype(np.int16)]
         return [np.empty((0, self.swarm.size), dtype) for dtype in dtypes]
 
-    def _fusable(self, sim: Simulation) -> SensorKernel | None:
-        """The mission's compiled sensors where :meth:`loop` can run ``sim``, else None."""
+    def _fusable(self, sim: Simulation) -> Fused | None:
+        """What :meth:`loop` calls where it can run ``sim`` now, else None: the mission's
+        compiled sensors and the 2-D drone; a tree that sends nothing with no message in
+        flight, or one whose messages have compiled handlers, the messages in flight having
+        reached everyone; records of the layout's columns."""
         sensors = sim.mission.compiled_sensors(sim)
         recorder = sim.recorder
         if (
             sensors is None
             or not isinstance(sim.model, Drone2D)
-            or sim.inbox
             or sim.world.datalink.channel
             or list(recorder.columns) != list(self.layout.names)
             or recorder.behaviour is None
         ):
             return None
+        messaging = self._messaging(sim) if self.layout.outboxes else None
+        if self.layout.outboxes and messaging is None:
+            return None
+        types = messaging.types if messaging is not None else ()
+        if any(not d.to_all or d.messages.type not in types for d in sim.inbox):
+            return None
         if self._trig_agrees is None:
             self._trig_agrees = trig_agrees_with_numpy()
-        return sensors if self._trig_agrees else None
+        return Fused(sensors, messaging) if self._trig_agrees else None
 
     @staticmethod
     def _after(

@@ -16,19 +16,53 @@ from __future__ import annotations
 
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
+
+import numpy as np
 
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.status import FAILURE, NAMES, RUNNING, SUCCESS
 from pyautonomousagent.engines.batched import Program
-from pyautonomousagent.kernels import ITERATION, LeafKernel, SensorKernel
+from pyautonomousagent.kernels import ITERATION, HandlerKernel, LeafKernel, SensorKernel
 
 _CODES = {name: code for code, name in NAMES.items()}
 
 #: Agents ticked together over a run of iterations in the fused loop: their records of one
 #: iteration are contiguous (2 KiB per column), and their state stays in the L2 cache.
 CHUNK = 256
+
+
+class Constants:
+    """The numbers the generated code reads at run time (ports, parameters, agent rows): not
+    written into it, so that one compiled module serves every value. Each call site's
+    numbers get slots in two arrays, ``kf`` (float64) and ``ki`` (int64: whole numbers and
+    flags), arguments of every generated function."""
+
+    def __init__(self) -> None:
+        self._slots: dict[tuple[str, int], str] = {}
+        self.floats: list[float] = []
+        self.ints: list[int] = []
+
+    def refs(self, site: str, values: Sequence[Any]) -> list[str]:
+        """Where the code reads ``values`` of call site ``site`` (e.g. ``"leaf 3"``)."""
+        refs = []
+        for j, value in enumerate(values):
+            key = (site, j)
+            if key not in self._slots:
+                if isinstance(value, bool | int | np.integer):
+                    self.ints.append(int(value))
+                    self._slots[key] = f"ki[{len(self.ints) - 1}]"
+                else:
+                    self.floats.append(float(value))
+                    self._slots[key] = f"kf[{len(self.floats) - 1}]"
+            refs.append(self._slots[key])
+        return refs
+
+    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """``kf`` and ``ki`` (never empty: numba types an empty list poorly)."""
+        return (np.array(self.floats or [0.0], dtype=np.float64),
+                np.array(self.ints or [0], dtype=np.int64))  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -38,15 +72,26 @@ class Layout:
     Attributes:
         names: the arrays ``c0, c1, ...``: swarm columns, then blackboard keys.
         memory_rows: node index -> its row of ``cur`` (Sequence and Fallback nodes).
+        outboxes: the nodes whose leaves send messages (their kernels' ``Sends``), in node
+            order; each has an outbox ``o<node>`` (see :class:`~pyautonomousagent.kernels.Sends`).
+        constants: the numbers the code reads from ``kf`` and ``ki``, filled while the
+            source is written.
     """
 
     names: tuple[str, ...]
     memory_rows: Mapping[int, int]
+    outboxes: tuple[int, ...] = ()
+    constants: Constants = field(default_factory=Constants)
 
     @property
     def arrays(self) -> str:
-        """The argument list of every node function after ``a, t, st, cur``."""
-        return ", ".join(f"c{j}" for j in range(len(self.names)))
+        """The arrays' argument list: ``c0, c1, ...``, then the outboxes ``o<node>, ...``."""
+        return ", ".join([f"c{j}" for j in range(len(self.names))] + self.outbox_names)
+
+    @property
+    def outbox_names(self) -> list[str]:
+        """The outboxes of the sending leaves, in node order."""
+        return [f"o{i}" for i in self.outboxes]
 
     def array(self, name: str) -> str:
         """The variable holding array ``name`` (``t`` for the iteration)."""
@@ -71,9 +116,10 @@ def alias(function: Any) -> str:
     return "K_" + f"{py.__module__}.{py.__qualname__}".replace(".", "_")
 
 
-def _call(kernel: LeafKernel, layout: Layout) -> str:
+def _call(kernel: LeafKernel, layout: Layout, node: int) -> str:
     args = ["a", *(layout.array(name) for name in kernel.names)]
-    args += [repr(value) for value in kernel.constants]
+    args += [f"o{node}"] if kernel.sends is not None else []
+    args += layout.constants.refs(f"leaf {node}", kernel.constants)
     return f"{alias(kernel.function)}({', '.join(args)})"
 
 
@@ -140,7 +186,7 @@ def _node_lines(
     """Node ``i``'s rules, indented by 4, its children as ``n<child>(...)`` lines."""
     node = program.nodes[i]
     if not node.is_control:
-        return [f"    st[{i}, a] = {_call(kernels[i], layout)}", f"    {ticks}[a] += 1"]
+        return [f"    st[{i}, a] = {_call(kernels[i], layout, i)}", f"    {ticks}[a] += 1"]
     if node.type in ("Sequence", "Fallback"):
         build = _sequence if node.type == "Sequence" else _selector
         return build(program, i, layout.memory_rows[i], bool(program.params[i]["memory"]))
@@ -174,13 +220,58 @@ def tree_body(
             return lines
         return ["while True:", *("    " + line for line in lines), "    break"]
 
-    return "\n".join(indent + line for line in expand(0))
+    clear = [f"o{i}[0, a] = 0.0" for i in layout.outboxes]  # nothing sent yet this tick
+    return "\n".join(indent + line for line in clear + expand(0))
 
 
 def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:
     args = ["a", *(layout.array(name) for name in sensors.names)]
-    args += [repr(value) for value in sensors.constants]
+    args += layout.constants.refs("sensors", sensors.constants)
     return f"S({', '.join(args)})"
+
+
+def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
+    """Phase 2 for agent ``a``: the sensors, then the 2-D drone's step (``cache`` keeps the
+    sine and cosine of the last heading: the same inputs give the same bits)."""
+    c = {name: layout.array(name) for name in layout.names}
+    x, y, v, h = c["x"], c["y"], c["speed"], c["heading"]
+    lines = f"""moving = {_sensor_call(sensors, layout)}
+if moving:
+    heading = {h}[a]
+    speed = {v}[a]
+    if heading != cache[0, a]:
+        rad = heading * DEGREE
+        cache[0, a] = heading
+        cache[1, a] = math.sin(rad)
+        cache[2, a] = math.cos(rad)
+    {x}[a] = {x}[a] + speed * cache[1, a]
+    {y}[a] = {y}[a] + speed * cache[2, a]
+    {v}[a] = np_minimum(np_maximum(speed + us[a], 0.0), max_speed)
+    {h}[a] = wrap_degrees(heading + uh[a])
+else:
+    {v}[a] = 0.0
+    if stopped_at[a] < 0:
+        stopped_at[a] = t"""
+    return "\n".join(indent + line for line in lines.splitlines())
+
+
+def _control(layout: Layout, indent: str) -> str:
+    """Phase 4 for agent ``a``: the 2-D drone's speed and turn steps toward the requests."""
+    v, h = layout.array("speed"), layout.array("heading")
+    rs, rh = layout.array("requested_speed"), layout.array("requested_heading")
+    lines = f"""us[a] = speed_step * np_sign({rs}[a] - {v}[a])
+error = wrap_degrees({rh}[a] - {h}[a])
+if error > 180.0:
+    error = error - 360.0
+uh[a] = turn_step * np_sign(error)"""
+    return "\n".join(indent + line for line in lines.splitlines())
+
+
+#: The arguments of the fused functions from the node statuses on (see
+#: :func:`block_function`).
+_FUSED_ARGS = """st, cur, kf, ki, {arrays}, us, uh, cache,
+           {records}, traces, traced_at, behaviour, leaf_rows, stopped_at,
+           max_speed, speed_step, turn_step"""
 
 
 def block_function(
@@ -190,15 +281,12 @@ def block_function(
     sensors: SensorKernel,
     parallel: bool,
 ) -> str:
-    """``block_serial``/``block_parallel(t0, count, every, chunk, st, cur, arrays..., us, uh,
-    cache (3, N), records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed,
-    speed_step,
-    turn_step)``: iterations ``t0 + 1 .. t0 + count`` of Phases 2 (sensors, motion), 3, 4 and
-    6 for every agent, ``chunk`` agents at a time. ``cache`` rows: the heading whose sine
-    and cosine are in rows 1 and 2 (the same inputs give the same bits)."""
-    c = {name: layout.array(name) for name in layout.names}
-    x, y, v, h = c["x"], c["y"], c["speed"], c["heading"]
-    rs, rh = c["requested_speed"], c["requested_heading"]
+    """``block_serial``/``block_parallel(t0, count, every, chunk, st, cur, kf, ki, arrays...,
+    us, uh, cache (3, N), records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
+    max_speed, speed_step, turn_step)``: iterations ``t0 + 1 .. t0 + count`` of Phases 2 (sensors,
+    motion), 3, 4 and 6 for every agent, ``chunk`` agents at a time (no agent hears another:
+    the tree sends no message). ``cache`` rows: the heading whose sine and cosine are in
+    rows 1 and 2."""
     records = ", ".join(f"r{j}" for j in range(len(layout.names)))
     store = "\n".join(
         f"                r{j}[row, first:last] = c{j}[first:last]"
@@ -207,38 +295,16 @@ def block_function(
     name = "block_parallel" if parallel else "block_serial"
     return f"""
 @njit(cache=True, parallel={parallel}, error_model="numpy")
-def {name}(t0, count, every, chunk, st, cur, {layout.arrays}, us, uh, cache,
-           {records}, traces, traced_at, behaviour, leaf_rows, stopped_at,
-           max_speed, speed_step, turn_step):
-    n = {x}.shape[0]
+def {name}(t0, count, every, chunk, {_FUSED_ARGS.format(arrays=layout.arrays, records=records)}):
+    n = {layout.array("x")}.shape[0]
     for group in prange((n + chunk - 1) // chunk):
         first = group * chunk
         last = min(n, first + chunk)
         for t in range(t0 + 1, t0 + count + 1):
             for a in range(first, last):
-                moving = {_sensor_call(sensors, layout)}
-                if moving:
-                    heading = {h}[a]
-                    speed = {v}[a]
-                    if heading != cache[0, a]:
-                        rad = heading * DEGREE
-                        cache[0, a] = heading
-                        cache[1, a] = math.sin(rad)
-                        cache[2, a] = math.cos(rad)
-                    {x}[a] = {x}[a] + speed * cache[1, a]
-                    {y}[a] = {y}[a] + speed * cache[2, a]
-                    {v}[a] = np_minimum(np_maximum(speed + us[a], 0.0), max_speed)
-                    {h}[a] = wrap_degrees(heading + uh[a])
-                else:
-                    {v}[a] = 0.0
-                    if stopped_at[a] < 0:
-                        stopped_at[a] = t
+{_motion(layout, sensors, " " * 16)}
 {tree_body(program, kernels, layout, " " * 16)}
-                us[a] = speed_step * np_sign({rs}[a] - {v}[a])
-                error = wrap_degrees({rh}[a] - {h}[a])
-                if error > 180.0:
-                    error = error - 360.0
-                uh[a] = turn_step * np_sign(error)
+{_control(layout, " " * 16)}
             if t % every == 0:  # a contiguous run of each record row, column by column
                 row = t // every
 {store}
@@ -247,11 +313,147 @@ def {name}(t0, count, every, chunk, st, cur, {layout.arrays}, us, uh, cache,
 """
 
 
-def tick_function(program: Program, kernels: Mapping[int, LeafKernel], layout: Layout) -> str:
-    """``tick(t, st, cur, arrays...)``: Phase 3 for every agent at iteration ``t``."""
+@dataclass(frozen=True)
+class Messaging:
+    """The message types the tree sends, for :func:`message_block_function`.
+
+    Attributes:
+        types: the types, in order of their first sending node (type ``k`` is index ``k``).
+        handlers: each type's compiled handler.
+        recorded: each type's ``MessageType.recorded``.
+        senders: sending node -> (its type's index, outbox row of each handler field).
+    """
+
+    types: tuple[str, ...]
+    handlers: tuple[HandlerKernel, ...]
+    recorded: tuple[bool, ...]
+    senders: Mapping[int, tuple[int, tuple[int, ...]]]
+
+    @property
+    def inboxes(self) -> str:
+        """The inbox arguments ``ib_s0, ib_d0, ...`` (senders, data per type)."""
+        return ", ".join(f"ib_s{k}, ib_d{k}" for k in range(len(self.types)))
+
+    @property
+    def state(self) -> str:
+        """The handlers' state arguments ``hs<type>_<j>``."""
+        names = [f"hs{k}_{j}" for k, h in enumerate(self.handlers) for j in range(len(h.state))]
+        return ", ".join(names)
+
+
+def _handle(messaging: Messaging, layout: Layout) -> str:
+    """Phase 2's handlers: each type delivered last iteration, in the inbox's ``order``."""
+    lines = ["for j in range(order.shape[0]):", "    k = order[j]"]
+    for k, handler in enumerate(messaging.handlers):
+        args = [f"t, ib_s{k}, ib_d{k}, counts[{k}]"]
+        args += [layout.array(name) for name in handler.names]
+        args += [f"hs{k}_{j}" for j in range(len(handler.state))]
+        args += layout.constants.refs(f"handler {k}", handler.constants)
+        lines += [f"    if k == {k}:", f"        H{k}({', '.join(args)})"]
+    return "\n".join(" " * 8 + line for line in lines)
+
+
+def _collect(messaging: Messaging, layout: Layout) -> str:
+    """Phase 5: this iteration's messages into the inboxes, by type in canonical order (by
+    sender, then sending node), each type's lowest sending node in ``first``, the bounding
+    box of the agents and senders (``bad``: a NaN), then ``order``: the types sent, by their
+    first sending node (the order in which the batched engine sends them)."""
+    x, y = layout.array("x"), layout.array("y")
+    lines = [
+        "for k in range(counts.shape[0]):",
+        "    counts[k] = 0",
+        "    first[k] = -1",
+        f"low_x = high_x = {x}[0]",
+        f"low_y = high_y = {y}[0]",
+        "bad = False",
+        "for a in range(n):",
+        f"    px = {x}[a]",
+        f"    py = {y}[a]",
+        "    bad = bad or px != px or py != py",
+        "    low_x = min(low_x, px)",
+        "    high_x = max(high_x, px)",
+        "    low_y = min(low_y, py)",
+        "    high_y = max(high_y, py)",
+    ]
+    for i, (k, rows) in messaging.senders.items():
+        copy = "\n".join(f"    ib_d{k}[{f}, m] = o{i}[{row}, a]" for f, row in enumerate(rows))
+        block = f"""if o{i}[0, a] == 1.0:
+    m = counts[{k}]
+    ib_s{k}[m] = a
+{copy}
+    counts[{k}] = m + 1
+    if first[{k}] < 0 or first[{k}] > {i}:
+        first[{k}] = {i}
+    px = o{i}[1, a]
+    py = o{i}[2, a]
+    bad = bad or px != px or py != py
+    low_x = min(low_x, px)
+    high_x = max(high_x, px)
+    low_y = min(low_y, py)
+    high_y = max(high_y, py)"""
+        lines += ["    " + line for line in block.splitlines()]
+    lines += ["for j in range(order.shape[0]):", "    order[j] = -1", "j = 0"]
+    for i, (k, _) in messaging.senders.items():
+        lines += [f"if counts[{k}] > 0 and first[{k}] == {i}:", f"    order[j] = {k}", "    j += 1"]
+    return "\n".join(" " * 8 + line for line in lines)
+
+
+def message_block_function(
+    program: Program,
+    kernels: Mapping[int, LeafKernel],
+    layout: Layout,
+    sensors: SensorKernel,
+    messaging: Messaging,
+) -> str:
+    """``block_messages(t0, count, every, st, cur, kf, ki, arrays..., outboxes..., us, uh, cache,
+    records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed, speed_step,
+    turn_step, reach, order, counts, first, inboxes..., handler state...) -> iterations done``:
+    up to ``count`` whole iterations, Phase by Phase over every agent, the messages handled
+    compiled. The inboxes hold the messages to handle in the first iteration (``order``: the
+    types delivered, in delivery order, -1 after them; ``counts`` per type). It stops after
+    an iteration whose messages do not reach every agent (``reach``: the datalink's range,
+    world units), or include a recorded type: the caller delivers those (the outboxes keep
+    them) as it does after the last iteration."""
+    records = ", ".join(f"r{j}" for j in range(len(layout.names)))
+    store = "\n".join(f"            r{j}[row, :] = c{j}" for j in range(len(layout.names)))
+    recorded = [k for k, flag in enumerate(messaging.recorded) if flag]
+    deliver_here = " or ".join(f"counts[{k}] > 0" for k in recorded) or "False"
+    state = f", {messaging.state}" if messaging.state else ""
     return f"""
 @njit(cache=True, error_model="numpy")
-def tick(t, st, cur, {layout.arrays}):
+def block_messages(t0, count, every, {_FUSED_ARGS.format(arrays=layout.arrays, records=records)},
+                   reach, order, counts, first, {messaging.inboxes}{state}):
+    n = {layout.array("x")}.shape[0]
+    done = 0
+    for t in range(t0 + 1, t0 + count + 1):
+        for a in range(n):
+{_motion(layout, sensors, " " * 12)}
+{_handle(messaging, layout)}
+        for a in range(n):
+{tree_body(program, kernels, layout, " " * 12)}
+{_control(layout, " " * 12)}
+        if t % every == 0:
+            row = t // every
+{store}
+            for a in range(n):
+                record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)
+        done += 1
+{_collect(messaging, layout)}
+        if j > 0:
+            if bad or not math.hypot(high_x - low_x, high_y - low_y) <= reach:
+                return done
+            if {deliver_here}:
+                return done
+    return done
+"""
+
+
+def tick_function(program: Program, kernels: Mapping[int, LeafKernel], layout: Layout) -> str:
+    """``tick(t, st, cur, kf, ki, arrays..., outboxes...)``: Phase 3 for every agent at iteration
+    ``t``."""
+    return f"""
+@njit(cache=True, error_model="numpy")
+def tick(t, st, cur, kf, ki, {layout.arrays}):
     for a in range(st.shape[1]):
 {tree_body(program, kernels, layout, " " * 8)}
 """
@@ -274,17 +476,24 @@ def module_source(
     kernels: Mapping[int, LeafKernel],
     layout: Layout,
     sensors: SensorKernel | None,
+    messaging: Messaging | None = None,
 ) -> str:
-    """The whole generated module: imports of the kernels, node functions, ``tick_all`` and,
-    given ``sensors``, the fused ``block_serial`` and ``block_parallel``."""
+    """The whole generated module: imports of the kernels, ``tick`` and, given ``sensors``,
+    the fused loop: ``block_messages`` where the tree sends messages (given ``messaging``),
+    else ``block_serial`` and ``block_parallel``."""
     lines = [HEADER]
-    used = {alias(k.function): k.function for k in kernels.values()}
+    used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
     if sensors is not None:
         used["S"] = sensors.function
+    for k, handler in enumerate(messaging.handlers if messaging is not None else ()):
+        used[f"H{k}"] = handler.function
     for name, function in sorted(used.items()):
         py = getattr(function, "py_func", function)
         lines.append(f"from {py.__module__} import {py.__qualname__} as {name}")
     lines.append(tick_function(program, kernels, layout))
-    if sensors is not None:
+    if sensors is not None and layout.outboxes:
+        if messaging is not None:
+            lines.append(message_block_function(program, kernels, layout, sensors, messaging))
+    elif sensors is not None:
         lines += [block_function(program, kernels, layout, sensors, p) for p in (False, True)]
     return "\n".join(lines) + "\n"

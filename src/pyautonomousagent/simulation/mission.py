@@ -35,7 +35,7 @@ import numpy as np
 
 from pyautonomousagent.datalink import Delivery
 from pyautonomousagent.jit import njit
-from pyautonomousagent.kernels import SensorKernel
+from pyautonomousagent.kernels import HandlerKernel, SensorKernel
 from pyautonomousagent.registry import Registry
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation.params import Param, Reader, ScenarioError
@@ -83,12 +83,16 @@ class MessageType:
             messages of this type delivered last iteration; None to ignore them quietly.
         recorded: whether each message is written to the run's events.
         doc: what it carries.
+        kernel: ``handle`` compiled, for the compiled engine's fused loop (see
+            :class:`~pyautonomousagent.kernels.HandlerKernel`), or None: runs that send this
+            type then tick compiled but deliver in Python, iteration by iteration.
     """
 
     name: str
     handle: Callable[[Simulation, Delivery], None] | None
     recorded: bool = False
     doc: str = ""
+    kernel: HandlerKernel | None = None
 
 
 @njit

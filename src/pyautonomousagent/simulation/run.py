@@ -134,7 +134,9 @@ def choose_engine(tree: Node, work: int = AUTO_COMPILED_WORK) -> str:
     """The engine "auto" picks for ``work`` agent-iterations: "pytrees" if a leaf of ``tree``
     is a hand-written py_trees behaviour; else "compiled" for runs of at least
     :data:`AUTO_COMPILED_WORK` agent-iterations where numba is installed and the tree
-    compiles (see :func:`~pyautonomousagent.engines.compiled.compilable`); else "batched"."""
+    compiles (see :func:`~pyautonomousagent.engines.compiled.compilable`); else "batched".
+    (:meth:`Simulation.create` then takes "compiled" instead of "batched" where the run's
+    fused loop was compiled before: ``CompiledEngine.ready``.)"""
     if any(node.type in BEHAVIOUR_TYPES for node in tree.leaves()):
         return "pytrees"
     if work < AUTO_COMPILED_WORK:
@@ -171,6 +173,8 @@ class Simulation:
         inbox: messages delivered in Phase 5, acted on in the next Phase 2.
         events: alerts and recorded messages, as plain dicts.
         timings: seconds spent per stage.
+        could_compile: "auto" took the batched engine where the compiled engine would run
+            whole iterations once this tree is compiled (``engine="compiled"`` once).
     """
 
     scenario: Scenario
@@ -189,6 +193,7 @@ class Simulation:
     everyone: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
     recorded_types: tuple[str, ...] = ()
     unhandled: set[str] = field(default_factory=set)
+    could_compile: bool = False
     _alerted: set[tuple[str, int]] = field(default_factory=set)
 
     @classmethod
@@ -207,8 +212,9 @@ class Simulation:
         Args:
             scenario: the scenario to run.
             seed: seed of the run's random generators.
-            engine: name of the decision engine (see :data:`ENGINES`), or "auto": the
-                batched engine unless the tree has hand-written py_trees behaviours.
+            engine: name of the decision engine (see :data:`ENGINES`), or "auto"
+                (:func:`choose_engine`; the compiled engine also where this run's compiled
+                loop is in the cache already).
             record_every: record every K-th iteration (and the initial state).
             tree: a tree description (or a tree file's path) to use instead of the
                 scenario's own.
@@ -224,7 +230,8 @@ class Simulation:
         """
         scenario, tree = _checked(scenario, seed, engine, record_every, tree)
         tree = tree or scenario_tree(scenario)
-        if engine == "auto":
+        auto = engine == "auto"
+        if auto:
             engine = choose_engine(tree, scenario.agents * scenario.iterations)
         mission = scenario.create_mission()
         _check_fits(scenario, mission, tree, engine, record_every)
@@ -260,6 +267,12 @@ class Simulation:
             everyone=np.ones(swarm.size, dtype=bool),
             recorded_types=tuple(name for name, kind in handlers.items() if kind.recorded),
         )
+        if auto and engine == "batched" and not compilable(tree):
+            compiled = CompiledEngine(tree, swarm, world, vars(scenario.parameters))
+            if compiled.ready(sim):  # compiled before: no wait, and faster at every size
+                sim.engine = compiled
+            else:
+                sim.could_compile = compiled.fuses(sim)
         phases.record(sim)  # the initial state, iteration 0
         prepare = getattr(decision, "prepare", None)  # e.g. compile before the loop
         if prepare is not None:
@@ -279,8 +292,7 @@ class Simulation:
                 "create a Simulation of a longer scenario, e.g. "
                 "scenario.with_overrides(iterations=...)"
             )
-        loop = getattr(self.engine, "loop", None)  # an engine that runs whole iterations
-        if loop is not None and loop(self, 1):
+        if self._fused(1):
             return
         self.world.iteration += 1
         phases.estimate_state(self)
@@ -298,10 +310,9 @@ class Simulation:
         if iterations is not None:
             remaining = max(0, min(remaining, iterations))
         bar = Progress(remaining, f"{self.scenario.name} ({self.engine.name})", enabled=progress)
-        loop = getattr(self.engine, "loop", None)  # an engine that runs whole iterations
         done = 0
         while done < remaining:
-            fused = loop(self, min(remaining - done, FUSED)) if loop is not None else 0
+            fused = self._fused(min(remaining - done, FUSED))
             if not fused:
                 self.step()
             done += fused or 1
@@ -310,6 +321,16 @@ class Simulation:
         bar.close()
         self.timings["simulate"] = self.timings.get("simulate", 0.0) + time.perf_counter() - start
         return self
+
+    def _fused(self, count: int) -> int:
+        """Up to ``count`` whole iterations in one call of an engine that runs them (the
+        compiled engine's ``loop``), then the last one's Phase 5; how many were run (0: none,
+        step the next one)."""
+        loop = getattr(self.engine, "loop", None)
+        done = loop(self, count) if loop is not None else 0
+        if done:
+            phases.deliver_messages(self)
+        return int(done)
 
     def trace_table(self) -> pa.Table:
         """The traced agents' node statuses: one row per record and traced agent."""

@@ -121,3 +121,59 @@ def drain_energy(a: int, energy: np.ndarray, use: float) -> bool:
     level = np_maximum(energy[a] - use, 0.0)
     energy[a] = level
     return level > 0.0
+
+
+@njit(inline="always")
+def transmit_state(a: int, x: np.ndarray, y: np.ndarray, speed: np.ndarray, heading: np.ndarray,
+                   damage: np.ndarray, energy: np.ndarray, outbox: np.ndarray) -> int:  # fmt: skip
+    """Action_Transmit_Shared_Data_S: "sharing data" with x, y, speed, heading, damage and
+    energy (outbox rows 3-8) from where the drone is; SUCCESS."""
+    outbox[0, a] = 1.0
+    outbox[1, a] = x[a]
+    outbox[2, a] = y[a]
+    outbox[3, a] = x[a]
+    outbox[4, a] = y[a]
+    outbox[5, a] = speed[a]
+    outbox[6, a] = heading[a]
+    outbox[7, a] = damage[a]
+    outbox[8, a] = energy[a]
+    return SUCCESS
+
+
+@njit(inline="always")
+def transmit_point(a: int, x: np.ndarray, y: np.ndarray, px: np.ndarray, py: np.ndarray,
+                   outbox: np.ndarray) -> int:  # fmt: skip
+    """Action_Transmit_Gathering_Message_S: the point (``px``, ``py``) as payload x, y
+    (outbox rows 3-4) from where the drone is; SUCCESS."""
+    outbox[0, a] = 1.0
+    outbox[1, a] = x[a]
+    outbox[2, a] = y[a]
+    outbox[3, a] = px[a]
+    outbox[4, a] = py[a]
+    return SUCCESS
+
+
+@njit
+def remember_everyone(t: int, senders: np.ndarray, data: np.ndarray, count: int,
+                      heard_at: np.ndarray, heard: np.ndarray) -> None:  # fmt: skip
+    """``SharedData.store`` of a delivery that reached everyone: each sender's latest data
+    (``heard`` shape (N, fields)) and its iteration + 1 (``heard_at`` shape (N,) int64;
+    the messages were sent at ``t - 1``)."""
+    for m in range(count):
+        s = senders[m]
+        heard_at[s] = t
+        for f in range(data.shape[0]):
+            heard[s, f] = data[f, m]
+
+
+@njit
+def adopt_point_everyone(t: int, senders: np.ndarray, data: np.ndarray, count: int,
+                         px: np.ndarray, py: np.ndarray) -> None:  # fmt: skip
+    """``GatheringMission.adopt_gathering_position`` of a delivery that reached everyone:
+    every drone but the sender takes the point (data rows x, y); the last message wins."""
+    for m in range(count):
+        s = senders[m]
+        for r in range(px.shape[0]):
+            if r != s:
+                px[r] = data[0, m]
+                py[r] = data[1, m]

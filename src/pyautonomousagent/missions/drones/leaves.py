@@ -12,7 +12,7 @@ from typing import Any
 from pyautonomousagent.arrays import bearing, choose, maximum, minimum
 from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS, status_if, success_if
-from pyautonomousagent.kernels import ITERATION, LeafKernel
+from pyautonomousagent.kernels import ITERATION, LeafKernel, Sends
 from pyautonomousagent.missions.drones import kernels as k
 from pyautonomousagent.state import AgentView
 from pyautonomousagent.world import World
@@ -35,6 +35,8 @@ PATROL = (
 REQUESTED = ("requested_heading", "requested_speed")
 #: The arrays of ``kernels.patrol_position``, in its order.
 PATROL_ARRAYS = (PATROL[0], *DESTINATION, *SURVEILLANCE, *PATROL[1:])
+#: What "sharing data" carries: the sender's state, in payload order.
+STATE = ("x", "y", "speed", "heading", "damage", "energy")
 SPEED = Port("speed", float, "reference_speed", 0.0, "cruise speed requested, units per iteration")
 
 
@@ -242,6 +244,11 @@ class ActionTransmitGatheringMessageS(Leaf):
         self.broadcast(agents, world, GATHERING, data)
         return SUCCESS
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(
+            k.transmit_point, ("x", "y", *SURVEILLANCE), sends=Sends(GATHERING, ("x", "y"))
+        )
+
 
 @register_leaf
 class ActionTransmitSharedDataS(Leaf):
@@ -255,6 +262,9 @@ class ActionTransmitSharedDataS(Leaf):
                 "damage": a.damage, "energy": a.energy}  # fmt: skip
         self.broadcast(agents, world, SHARING_DATA, data)
         return SUCCESS
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.transmit_state, STATE, sends=Sends(SHARING_DATA, STATE))
 
 
 def _hold_still_until(agents: AgentView, done: Any, speed: float) -> Any:

@@ -182,7 +182,11 @@ class DroneMission(Mission):
 
     def message_types(self) -> list[MessageType]:
         """ "sharing data": each receiver keeps the latest state per sender."""
-        return [MessageType(SHARING_DATA, self.store_shared_data, doc="the sender's state")]
+        kernel = self.shared.kernel() if hasattr(self, "shared") else None  # set by place()
+        return [
+            MessageType(SHARING_DATA, self.store_shared_data, doc="the sender's state",
+                        kernel=kernel)
+        ]  # fmt: skip
 
     def store_shared_data(self, sim: Simulation, delivery: Delivery) -> None:
         """Remember the latest "sharing data" per sender (sent last iteration)."""

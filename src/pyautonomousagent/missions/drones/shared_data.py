@@ -9,6 +9,8 @@ from typing import Any
 import numpy as np
 
 from pyautonomousagent.datalink import Delivery
+from pyautonomousagent.kernels import HandlerKernel
+from pyautonomousagent.missions.drones.kernels import remember_everyone
 
 
 @dataclass
@@ -68,6 +70,12 @@ class SharedData:
         self._pair_keys = np.insert(self._pair_keys, at[new], keys[new])
         self._pair_iteration = np.insert(self._pair_iteration, at[new], iteration)
         self._pair_data = np.insert(self._pair_data, at[new], values[new], axis=0)
+
+    def kernel(self) -> HandlerKernel:
+        """:meth:`store` of a delivery that reached everyone, compiled (it writes the same
+        per-sender arrays)."""
+        state = (self._everyone_iteration, self._everyone_data)
+        return HandlerKernel(remember_everyone, self.fields, state=state)
 
     def __len__(self) -> int:
         return self.n_agents
