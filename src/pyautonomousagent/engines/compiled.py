@@ -183,7 +183,7 @@ class CompiledEngine:
         self._fused: Fused | None = None
         self._constants: tuple[np.ndarray, np.ndarray] = Constants().arrays()
         self._inboxes: list[tuple[np.ndarray, np.ndarray]] | None = None
-        self._trig = np.full((3, swarm.size), np.nan)  # heading, its sine and cosine
+        self._trig = np.full((6, swarm.size), np.nan)  # 2 x (heading, its sine and cosine)
         self._trig_agrees: bool | None = None  # compiled sin/cos give NumPy's bits
 
     def _sends(self, node: int) -> Sends:

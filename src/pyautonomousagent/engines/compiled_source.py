@@ -231,21 +231,34 @@ def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:
 
 
 def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
-    """Phase 2 for agent ``a``: the sensors, then the 2-D drone's step (``cache`` keeps the
-    sine and cosine of the last heading: the same inputs give the same bits)."""
+    """Phase 2 for agent ``a``: the sensors, then the 2-D drone's step. ``cache`` keeps the
+    sine and cosine of the agent's last two headings (rows 0-2 the latest, 3-5 the one
+    before: a drone on course turns back and forth between two headings), so that the same
+    inputs give the same bits without calling ``sin`` and ``cos`` again."""
     c = {name: layout.array(name) for name in layout.names}
     x, y, v, h = c["x"], c["y"], c["speed"], c["heading"]
     lines = f"""moving = {_sensor_call(sensors, layout)}
 if moving:
     heading = {h}[a]
     speed = {v}[a]
-    if heading != cache[0, a]:
+    if heading == cache[0, a]:
+        sine = cache[1, a]
+        cosine = cache[2, a]
+    elif heading == cache[3, a]:
+        sine = cache[4, a]
+        cosine = cache[5, a]
+    else:
         rad = heading * DEGREE
+        sine = math.sin(rad)
+        cosine = math.cos(rad)
+        cache[3, a] = cache[0, a]
+        cache[4, a] = cache[1, a]
+        cache[5, a] = cache[2, a]
         cache[0, a] = heading
-        cache[1, a] = math.sin(rad)
-        cache[2, a] = math.cos(rad)
-    {x}[a] = {x}[a] + speed * cache[1, a]
-    {y}[a] = {y}[a] + speed * cache[2, a]
+        cache[1, a] = sine
+        cache[2, a] = cosine
+    {x}[a] = {x}[a] + speed * sine
+    {y}[a] = {y}[a] + speed * cosine
     {v}[a] = np_minimum(np_maximum(speed + us[a], 0.0), max_speed)
     {h}[a] = wrap_degrees(heading + uh[a])
 else:
@@ -282,11 +295,10 @@ def block_function(
     parallel: bool,
 ) -> str:
     """``block_serial``/``block_parallel(t0, count, every, chunk, st, cur, kf, ki, arrays...,
-    us, uh, cache (3, N), records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
+    us, uh, cache (6, N), records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
     max_speed, speed_step, turn_step)``: iterations ``t0 + 1 .. t0 + count`` of Phases 2 (sensors,
     motion), 3, 4 and 6 for every agent, ``chunk`` agents at a time (no agent hears another:
-    the tree sends no message). ``cache`` rows: the heading whose sine and cosine are in
-    rows 1 and 2."""
+    the tree sends no message). ``cache``: see :func:`_motion`."""
     records = ", ".join(f"r{j}" for j in range(len(layout.names)))
     store = "\n".join(
         f"                r{j}[row, first:last] = c{j}[first:last]"

@@ -274,7 +274,7 @@ class Simulation:
             else:
                 sim.could_compile = compiled.fuses(sim)
         phases.record(sim)  # the initial state, iteration 0
-        prepare = getattr(decision, "prepare", None)  # e.g. compile before the loop
+        prepare = getattr(sim.engine, "prepare", None)  # e.g. compile before the loop
         if prepare is not None:
             prepare(sim)
         sim.timings["setup"] = time.perf_counter() - start
