@@ -157,10 +157,11 @@ def test_dask_cluster_losing_a_worker_gives_every_result_once(on_pool, tmp_path)
 
 def test_ctrl_c_stops_pyaa_sweep_and_resume_finishes_it(tmp_path) -> None:
     out = tmp_path / "s"
+    # --engine batched: the compiled engine (where cached) would end before the Ctrl-C
     command = [sys.executable, "-m", "pyautonomousagent.cli", "sweep", "patrol", "--vary",
                "low_energy_threshold=96:99:1", "--agents", "5", "--iterations", "400",
                "--seeds", "20", "--measure", "refuels", "--serial", "--out", str(out),
-               "--engine", "batched"]  # fmt: skip  (compiled, if cached, ends before Ctrl-C)
+               "--engine", "batched"]  # fmt: skip
     process = subprocess.Popen(command, stderr=subprocess.PIPE, text=True)
     try:
         deadline = time.monotonic() + 30

@@ -43,6 +43,7 @@ from pyautonomousagent.engines.compiled_source import (
     Constants,
     Layout,
     Messaging,
+    deferrable,
     module_source,
     supported,
 )
@@ -173,7 +174,9 @@ class CompiledEngine:
             tuple(swarm.columns) + tuple(swarm.blackboard),
             {i: k for k, i in enumerate(memory)},
             senders,
+            deferrable(self.program, self.kernels),
         )
+        self.pending = np.full(swarm.size, -1, dtype=np.int32)  # deferred Later steps
         self.status = np.zeros((len(self.program.nodes), swarm.size), dtype=np.int8)
         self.current = np.full((len(memory), swarm.size), -1, dtype=np.int32)
         self.outboxes = {i: np.zeros((3 + len(self._sends(i).fields), swarm.size)) for i in senders}
@@ -208,7 +211,8 @@ class CompiledEngine:
         """Tick the tree once for every agent (at the world's iteration); what the leaves
         sent goes to the datalink."""
         code = self._code(self._fused)
-        code.tick(self.world.iteration, self.status, self.current, *self._constants, *self.arrays)
+        code.tick(self.world.iteration, self.status, self.current, self.pending, *self._constants,
+                  *self.arrays)  # fmt: skip
         self._send(self.world.datalink)
 
     def _send(self, datalink: Datalink) -> None:
@@ -272,10 +276,10 @@ class CompiledEngine:
         p = model.params
         records = self._records(recorder, count)  # the columns, then the active behaviour
         arguments = (
-            self.status, self.current, *self._constants, *self.arrays, model.u_speed,
-            model.u_heading, self._trig, *records[:-1], recorder.traces, traced_at, records[-1],
-            recorder._leaf_rows.astype(np.int64), stopped, p.max_speed, p.speed_step,
-            p.turn_step,
+            self.status, self.current, self.pending, *self._constants, *self.arrays,
+            model.u_speed, model.u_heading, self._trig, *records[:-1], recorder.traces,
+            traced_at, records[-1], recorder._leaf_rows.astype(np.int64), stopped,
+            p.max_speed, p.speed_step, p.turn_step,
         )  # fmt: skip
         start, every = sim.world.iteration, recorder.every
         if fused.messaging is not None:

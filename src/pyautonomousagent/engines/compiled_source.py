@@ -24,7 +24,7 @@ import numpy as np
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.status import FAILURE, NAMES, RUNNING, SUCCESS
 from pyautonomousagent.engines.batched import Program
-from pyautonomousagent.kernels import ITERATION, HandlerKernel, LeafKernel, SensorKernel
+from pyautonomousagent.kernels import ITERATION, HandlerKernel, Later, LeafKernel, SensorKernel
 
 _CODES = {name: code for code, name in NAMES.items()}
 
@@ -74,6 +74,8 @@ class Layout:
         memory_rows: node index -> its row of ``cur`` (Sequence and Fallback nodes).
         outboxes: the nodes whose leaves send messages (their kernels' ``Sends``), in node
             order; each has an outbox ``o<node>`` (see :class:`~pyautonomousagent.kernels.Sends`).
+        deferred: the leaves whose ``Later`` step is done for all agents after the tree
+            (:func:`deferrable`); the tree marks each agent's in ``pend`` (-1: none).
         constants: the numbers the code reads from ``kf`` and ``ki``, filled while the
             source is written.
     """
@@ -81,6 +83,7 @@ class Layout:
     names: tuple[str, ...]
     memory_rows: Mapping[int, int]
     outboxes: tuple[int, ...] = ()
+    deferred: tuple[int, ...] = ()
     constants: Constants = field(default_factory=Constants)
 
     @property
@@ -108,6 +111,26 @@ def supported(program: Program) -> bool:
         if not plain and NODE_TYPES.get(node.type).status_map is None:
             return False
     return True
+
+
+def deferrable(program: Program, kernels: Mapping[int, LeafKernel]) -> tuple[int, ...]:
+    """The leaves with a ``Later`` step that no node ticked after them can see: every
+    ancestor returns at once when its child is RUNNING (a Sequence, a Fallback, or a
+    decorator that maps RUNNING to RUNNING), so the tick ends with the leaf."""
+    deferred = []
+    for i, kernel in sorted(kernels.items()):
+        if kernel.later is None:
+            continue
+        up, safe = int(program.parent[i]), True
+        while up >= 0 and safe:
+            node = program.nodes[up]
+            if node.type not in ("Sequence", "Fallback"):
+                status_map = NODE_TYPES.get(node.type).status_map or {}
+                safe = status_map.get("RUNNING", "RUNNING") == "RUNNING"
+            up = int(program.parent[up])
+        if safe:
+            deferred.append(i)
+    return tuple(deferred)
 
 
 def alias(function: Any) -> str:
@@ -186,11 +209,39 @@ def _node_lines(
     """Node ``i``'s rules, indented by 4, its children as ``n<child>(...)`` lines."""
     node = program.nodes[i]
     if not node.is_control:
-        return [f"    st[{i}, a] = {_call(kernels[i], layout, i)}", f"    {ticks}[a] += 1"]
+        lines = [f"    st[{i}, a] = {_call(kernels[i], layout, i)}"]
+        later = kernels[i].later
+        if later is not None:
+            lines.append(
+                f"    pend[a] = {i}" if i in layout.deferred else f"    {_later(later, layout)}"
+            )
+        return [*lines, f"    {ticks}[a] += 1"]
     if node.type in ("Sequence", "Fallback"):
         build = _sequence if node.type == "Sequence" else _selector
         return build(program, i, layout.memory_rows[i], bool(program.params[i]["memory"]))
     return _decorator(program, i)
+
+
+def _later(later: Later, layout: Layout) -> str:
+    """The statement of a ``Later`` step for agent ``a``."""
+    values = ", ".join(f"{layout.array(name)}[a]" for name in later.names)
+    return f"{layout.array(later.target)}[a] = {alias(later.function)}({values})"
+
+
+def _later_pass(
+    kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, then: str, indent: str
+) -> str:
+    """A loop over ``agents`` doing the deferred ``Later`` steps the tree marked in ``pend``,
+    then ``then`` (code for agent ``a``, indented by 4, e.g. Phase 4), indented by
+    ``indent``."""
+    lines = [f"for a in {agents}:", "    p = pend[a]", "    if p >= 0:"]
+    for i in layout.deferred:
+        later = kernels[i].later
+        assert later is not None
+        lines += [f"        if p == {i}:", f"            {_later(later, layout)}"]
+    lines.append("        pend[a] = -1")
+    body = "\n".join(indent + line for line in lines)
+    return body + ("\n" + then if then else "")
 
 
 _CHILD = re.compile(r"^(\s*)n(\d+)\(a, t, st, cur, ARRAYS\)$")
@@ -280,9 +331,18 @@ uh[a] = turn_step * np_sign(error)"""
     return "\n".join(indent + line for line in lines.splitlines())
 
 
+def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, indent: str) -> str:
+    """Phase 4 for the agents whose tree was just ticked in a loop over ``agents`` at
+    ``indent``: inside that loop, or, where ``Later`` steps were deferred, in a loop of its
+    own after them."""
+    if not layout.deferred:
+        return _control(layout, indent + " " * 4)
+    return _later_pass(kernels, layout, agents, _control(layout, indent + " " * 4), indent)
+
+
 #: The arguments of the fused functions from the node statuses on (see
 #: :func:`block_function`).
-_FUSED_ARGS = """st, cur, kf, ki, {arrays}, us, uh, cache,
+_FUSED_ARGS = """st, cur, pend, kf, ki, {arrays}, us, uh, cache,
            {records}, traces, traced_at, behaviour, leaf_rows, stopped_at,
            max_speed, speed_step, turn_step"""
 
@@ -294,7 +354,7 @@ def block_function(
     sensors: SensorKernel,
     parallel: bool,
 ) -> str:
-    """``block_serial``/``block_parallel(t0, count, every, chunk, st, cur, kf, ki, arrays...,
+    """``block_serial``/``block_parallel(t0, count, every, chunk, st, cur, pend, kf, ki, arrays...,
     us, uh, cache (6, N), records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
     max_speed, speed_step, turn_step)``: iterations ``t0 + 1 .. t0 + count`` of Phases 2 (sensors,
     motion), 3, 4 and 6 for every agent, ``chunk`` agents at a time (no agent hears another:
@@ -316,7 +376,7 @@ def {name}(t0, count, every, chunk, {_FUSED_ARGS.format(arrays=layout.arrays, re
             for a in range(first, last):
 {_motion(layout, sensors, " " * 16)}
 {tree_body(program, kernels, layout, " " * 16)}
-{_control(layout, " " * 16)}
+{_phase4(kernels, layout, "range(first, last)", " " * 12)}
             if t % every == 0:  # a contiguous run of each record row, column by column
                 row = t // every
 {store}
@@ -417,7 +477,8 @@ def message_block_function(
     sensors: SensorKernel,
     messaging: Messaging,
 ) -> str:
-    """``block_messages(t0, count, every, st, cur, kf, ki, arrays..., outboxes..., us, uh, cache,
+    """``block_messages(t0, count, every, st, cur, pend, kf, ki, arrays..., outboxes..., us, uh,
+    cache,
     records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed, speed_step,
     turn_step, reach, order, counts, first, inboxes..., handler state...) -> iterations done``:
     up to ``count`` whole iterations, Phase by Phase over every agent, the messages handled
@@ -443,7 +504,7 @@ def block_messages(t0, count, every, {_FUSED_ARGS.format(arrays=layout.arrays, r
 {_handle(messaging, layout)}
         for a in range(n):
 {tree_body(program, kernels, layout, " " * 12)}
-{_control(layout, " " * 12)}
+{_phase4(kernels, layout, "range(n)", " " * 8)}
         if t % every == 0:
             row = t // every
 {store}
@@ -461,13 +522,15 @@ def block_messages(t0, count, every, {_FUSED_ARGS.format(arrays=layout.arrays, r
 
 
 def tick_function(program: Program, kernels: Mapping[int, LeafKernel], layout: Layout) -> str:
-    """``tick(t, st, cur, kf, ki, arrays..., outboxes...)``: Phase 3 for every agent at iteration
-    ``t``."""
+    """``tick(t, st, cur, pend, kf, ki, arrays..., outboxes...)``: Phase 3 for every agent at
+    iteration ``t``."""
     return f"""
 @njit(cache=True, error_model="numpy")
-def tick(t, st, cur, kf, ki, {layout.arrays}):
-    for a in range(st.shape[1]):
+def tick(t, st, cur, pend, kf, ki, {layout.arrays}):
+    n = st.shape[1]
+    for a in range(n):
 {tree_body(program, kernels, layout, " " * 8)}
+{_later_pass(kernels, layout, "range(n)", "", " " * 4) if layout.deferred else ""}
 """
 
 
@@ -495,6 +558,7 @@ def module_source(
     else ``block_serial`` and ``block_parallel``."""
     lines = [HEADER]
     used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
+    used |= {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
     if sensors is not None:
         used["S"] = sensors.function
     for k, handler in enumerate(messaging.handlers if messaging is not None else ()):

@@ -12,7 +12,7 @@ import numpy as np
 
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.jit import njit
-from pyautonomousagent.kernels import bearing, np_maximum, np_minimum
+from pyautonomousagent.kernels import np_maximum, np_minimum
 
 
 @njit(inline="always")
@@ -51,10 +51,10 @@ def gathering_moment(a: int, iteration: int, moment: int, sender: int) -> int:
 
 
 @njit(inline="always")
-def navigate(a: int, x: np.ndarray, y: np.ndarray, to_x: np.ndarray, to_y: np.ndarray,
-             heading: np.ndarray, speed: np.ndarray, cruise: float) -> int:  # fmt: skip
-    """Action_Navigate_To_Destination_A: requested heading and speed; RUNNING."""
-    heading[a] = bearing(x[a], y[a], to_x[a], to_y[a])
+def navigate(a: int, speed: np.ndarray, cruise: float) -> int:
+    """Action_Navigate_To_Destination_A: the requested speed; RUNNING. Its last step, the
+    requested heading, is ``kernels.bearing`` of the position and the destination (a
+    ``Later``)."""
     speed[a] = cruise
     return RUNNING
 

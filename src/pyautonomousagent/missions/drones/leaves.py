@@ -12,7 +12,8 @@ from typing import Any
 from pyautonomousagent.arrays import bearing, choose, maximum, minimum
 from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS, status_if, success_if
-from pyautonomousagent.kernels import ITERATION, LeafKernel, Sends
+from pyautonomousagent.kernels import ITERATION, Later, LeafKernel, Sends
+from pyautonomousagent.kernels import bearing as bearing_of_one
 from pyautonomousagent.missions.drones import kernels as k
 from pyautonomousagent.state import AgentView
 from pyautonomousagent.world import World
@@ -150,7 +151,8 @@ class ActionNavigateToDestinationA(Leaf):
         return RUNNING
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.navigate, ("x", "y", *DESTINATION, *REQUESTED), (self.speed,))
+        heading = Later(bearing_of_one, ("x", "y", *DESTINATION), "requested_heading")
+        return LeafKernel(k.navigate, ("requested_speed",), (self.speed,), later=heading)
 
 
 def _set_destination(agents: AgentView, x: Any, y: Any) -> int:
