@@ -177,11 +177,10 @@ def _atan_unit(t: float) -> float:
     big = 1.0 if t > _TAN_PI_12 else 0.0
     u = big * ((t * _SQRT3 - 1.0) / (t + _SQRT3)) + (1.0 - big) * t
     z = u * u
-    total = z * _SERIES[15]
-    for k in range(14, 0, -1):
-        total = total + _SERIES[k]
-        total = total * z
-    total = total + _SERIES[0]
+    c = _SERIES  # Horner's rule, innermost first, as the loop of the array path (no loop here)
+    total = (((((((((((((((z * c[15] + c[14]) * z + c[13]) * z + c[12]) * z + c[11]) * z
+        + c[10]) * z + c[9]) * z + c[8]) * z + c[7]) * z + c[6]) * z + c[5]) * z + c[4]) * z
+        + c[3]) * z + c[2]) * z + c[1]) * z + c[0])  # fmt: skip
     return (math.pi / 6.0) * big + u * total
 
 
