@@ -1,5 +1,6 @@
 # Two commands do all the set-up from a fresh clone:
-#   make demo   installs into .venv and runs the gathering scenario into runs/gathering/
+#   make demo   installs into .venv (with the [fast] extra) and runs the gathering scenario
+#               on the compiled engine into runs/gathering/
 #   make test   installs the test dependencies (and the [x8], [dask], [video] and [fast] extras, and
 #               chromium when missing) into .venv and runs the suite
 PYTHON ?= python3
@@ -14,15 +15,17 @@ $(BIN)/python:
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e .
+	$(BIN)/python -m pip install --quiet -e ".[fast]"
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test,x8,dask,video,fast]"
 	touch $@ $(VENV)/.installed
 
+# The compiled engine compiles the gathering tree once (seconds; numba's cache keeps it), so
+# that later runs of it, with any parameters, take the compiled engine by themselves (auto).
 demo: $(VENV)/.installed
-	$(BIN)/pyaa run gathering --out runs/gathering --overwrite
+	$(BIN)/pyaa run gathering --out runs/gathering --overwrite --engine compiled
 
 # The replay's browser test drives Debian's chromium; install it when missing and we can (root).
 browser:

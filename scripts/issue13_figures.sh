@@ -7,7 +7,8 @@ export PYAA_CACHE_DIR=${PYAA_CACHE_DIR:-/tmp/pyaa_cache}
 pyaa bench patrol --agents 1000 --iterations 4000 --engines compiled > /dev/null
 pyaa bench patrol --agents 1000000 --iterations 20 --record-every 20 --engines compiled > /dev/null
 pyaa bench x8-patrol --agents 1 --iterations 50 --engines compiled,batched > /dev/null
-pyaa bench gathering --engines pytrees,batched,auto,pytrees,batched,auto
+pyaa bench gathering --engines compiled > /dev/null  # from here on, auto takes compiled for it
+pyaa bench gathering --engines pytrees,batched,compiled,auto,pytrees,batched,compiled,auto
 pyaa bench patrol --agents 1000 --iterations 4000 --engines pytrees,batched,compiled,batched,compiled --reference-iterations 200
 pyaa bench patrol --agents 1000000 --iterations 20 --record-every 20 --engines batched,compiled,batched,compiled
 pyaa bench patrol --agents 1000000 --iterations 200 --record-every 200 --engines batched,compiled,batched,compiled
