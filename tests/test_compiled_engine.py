@@ -226,3 +226,18 @@ def test_stepping_the_fused_engine_one_iteration_at_a_time() -> None:
     ran = Simulation.create(scenario, seed=5, engine="batched").run(progress=False)
     assert_same_runs(ran, stepped)
     assert_same_shared_data(ran, stepped)
+
+
+@needs_numba
+def test_a_later_step_waits_only_where_nothing_ticked_after_it_sees_it() -> None:
+    def navigate_then_hold(decorator: str) -> Node:  # Action_Repair_A writes the heading too
+        navigate = leaf("Action_Navigate_To_Destination_A", "go")
+        hold = leaf("Action_Repair_Damage_A", "hold", speed=0.05)
+        return Node("Sequence", "s", (Node(decorator, "d", (navigate,)), hold), {"memory": False})
+
+    for decorator, waits in (("RunningIsSuccess", False), ("Inverter", True)):
+        tree = navigate_then_hold(decorator)
+        sim = Simulation.create(load("patrol").with_overrides(agents=4, iterations=5),
+                                engine="compiled", tree=tree)  # fmt: skip
+        assert sim.engine.layout.deferred == ((2,) if waits else ())
+        check_engines_agree(tree, "patrol", 3, ("batched", "compiled"), agents=9, iterations=200)
