@@ -13,7 +13,7 @@ from pyautonomousagent.bt import leaf
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.engines.compiled import CompiledEngine, compilable
-from pyautonomousagent.simulation.run import AUTO_COMPILED_WORK, choose_engine, scenario_tree
+from pyautonomousagent.simulation.run import batched_seconds, choose_engine, scenario_tree
 from pyautonomousagent.testing import check_engines_agree
 
 needs_numba = pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
@@ -140,8 +140,10 @@ def test_auto_compiles_only_runs_that_pay_for_the_compiling(
 ) -> None:
     monkeypatch.setenv("PYAA_CACHE_DIR", str(tmp_path))  # nothing compiled yet
     patrol = scenario_tree(load("patrol"))
-    assert choose_engine(patrol, AUTO_COMPILED_WORK - 1) == "batched"
-    assert choose_engine(patrol, AUTO_COMPILED_WORK) == "compiled"
+    assert choose_engine(patrol, 1000, 4000) == "batched"  # 0.9 s on the batched engine
+    assert choose_engine(patrol, 10**6, 400) == "compiled"  # 26 s
+    assert choose_engine(patrol, 4, 200_000) == "compiled"  # 30 s: NumPy's cost per call
+    assert 0.5 < batched_seconds(1000, 4000) < 2.0 and batched_seconds(4, 8000) < 1.5
     small = Simulation.create(load("patrol").with_overrides(agents=10, iterations=5))
     assert small.engine.name == "batched"
 

@@ -124,22 +124,32 @@ ENGINES.register("batched", BatchedEngine)
 ENGINES.register("compiled", CompiledEngine)
 
 
-#: Agent-iterations from which "auto" picks the compiled engine: compiling a tree takes
-#: 10-30 s the first time (then well under 1 s from numba's cache), which a run of this size
-#: on the batched engine (about 1.5e7 agent-iterations per second on 2 cores) pays back.
-AUTO_COMPILED_WORK = 100_000_000
+#: Seconds of batched loop from which "auto" compiles: compiling a tree takes 5-30 s the
+#: first time (then well under 1 s from numba's cache), which a loop this long pays back.
+AUTO_COMPILE_SECONDS = 15.0
+#: The batched engine's loop cost on 2 cores: NumPy's fixed cost per iteration (about 250
+#: calls; gathering, 4 drones: 170 us) and the cost per agent-iteration (patrol, 10^6 drones:
+#: 65 ns), in seconds (docs/performance.md).
+BATCHED_PER_ITERATION = 1.5e-4
+BATCHED_PER_AGENT = 6.5e-8
 
 
-def choose_engine(tree: Node, work: int = AUTO_COMPILED_WORK) -> str:
-    """The engine "auto" picks for ``work`` agent-iterations: "pytrees" if a leaf of ``tree``
-    is a hand-written py_trees behaviour; else "compiled" for runs of at least
-    :data:`AUTO_COMPILED_WORK` agent-iterations where numba is installed and the tree
-    compiles (see :func:`~pyautonomousagent.engines.compiled.compilable`); else "batched".
+def batched_seconds(agents: int, iterations: int) -> float:
+    """About how long the batched engine's loop takes for a run, in seconds."""
+    return iterations * (BATCHED_PER_ITERATION + agents * BATCHED_PER_AGENT)
+
+
+def choose_engine(tree: Node, agents: int = 10**6, iterations: int = 4000) -> str:
+    """The engine "auto" picks for a run of ``agents`` x ``iterations``: "pytrees" if a leaf
+    of ``tree`` is a hand-written py_trees behaviour; else "compiled" where the batched
+    engine's loop would take at least :data:`AUTO_COMPILE_SECONDS` (:func:`batched_seconds`),
+    numba is installed and the tree compiles (see
+    :func:`~pyautonomousagent.engines.compiled.compilable`); else "batched".
     (:meth:`Simulation.create` then takes "compiled" instead of "batched" where the run's
     fused loop was compiled before: ``CompiledEngine.ready``.)"""
     if any(node.type in BEHAVIOUR_TYPES for node in tree.leaves()):
         return "pytrees"
-    if work < AUTO_COMPILED_WORK:
+    if batched_seconds(agents, iterations) < AUTO_COMPILE_SECONDS:
         return "batched"
     why = compilable(tree)
     if why:
@@ -232,7 +242,7 @@ class Simulation:
         tree = tree or scenario_tree(scenario)
         auto = engine == "auto"
         if auto:
-            engine = choose_engine(tree, scenario.agents * scenario.iterations)
+            engine = choose_engine(tree, scenario.agents, scenario.iterations)
         mission = scenario.create_mission()
         _check_fits(scenario, mission, tree, engine, record_every)
         start = time.perf_counter()
