@@ -243,3 +243,22 @@ def test_a_later_step_waits_only_where_nothing_ticked_after_it_sees_it() -> None
                                 engine="compiled", tree=tree)  # fmt: skip
         assert sim.engine.layout.deferred == ((2,) if waits else ())
         check_engines_agree(tree, "patrol", 3, ("batched", "compiled"), agents=9, iterations=200)
+
+
+@needs_numba
+@pytest.mark.parametrize("parallel", [True, False])
+def test_fused_messages_in_groups_of_agents_give_the_batched_data(
+    monkeypatch: pytest.MonkeyPatch, parallel: bool
+) -> None:
+    from pyautonomousagent.engines import compiled
+
+    monkeypatch.setattr(compiled, "PARALLEL_AGENTS", 100 if parallel else 10**9)
+    overrides = {"agents": 700, "iterations": 400, "gathering_iteration": 150,
+                 "gathering_sender": "drone650", "low_energy_threshold": 85.0}  # fmt: skip
+    batched, _ = counted_run("batched", **overrides)
+    compiled_run, fused = counted_run("compiled", **overrides)
+    assert fused == 400
+    function = compiled_run.engine._function(compiled_run.engine._fused, 1)
+    assert function.endswith("_parallel" if parallel else "_serial")  # 3 groups of 256 either way
+    assert_same_runs(batched, compiled_run)
+    assert_same_shared_data(batched, compiled_run)

@@ -128,6 +128,12 @@ def load_source(source: str) -> ModuleType:
 PARALLEL = 100_000
 
 
+#: Agents from which a tree that sends messages runs numba's parallel function: it starts the
+#: threads three times an iteration (tens of microseconds), which this many agents' iteration
+#: (about a millisecond on one core) pays for.
+PARALLEL_AGENTS = 20_000
+
+
 #: The parallel loop hands each thread about 1 / SHARE of its share of the chunks at a time
 #: (dynamic sharing: on a shared machine one core can run at a fraction of the other's speed).
 SHARE = 8
@@ -247,12 +253,17 @@ class CompiledEngine:
 
     def _marker(self, sim: Simulation, fused: Fused) -> Path:
         """The file saying that the fused function ``sim``'s loop calls is in numba's cache."""
-        if fused.messaging is not None:
-            function = "block_messages"
-        else:
-            work = min(sim.scenario.iterations, 500) * self.swarm.size
-            function = "block_parallel" if work >= PARALLEL else "block_serial"
+        function = self._function(fused, min(sim.scenario.iterations, 500))
         return cache_folder() / f"{module_name(self._source(fused))}.{function}.compiled"
+
+    def _function(self, fused: Fused, iterations: int) -> str:
+        """The fused function a call of ``iterations`` iterations runs: the parallel one
+        where it pays for starting the threads (once a call without messages, three times
+        an iteration with them)."""
+        if fused.messaging is not None:
+            parallel = self.swarm.size >= PARALLEL_AGENTS
+            return "block_messages_parallel" if parallel else "block_messages_serial"
+        return "block_parallel" if iterations * self.swarm.size >= PARALLEL else "block_serial"
 
     def node_statuses(self) -> np.ndarray:
         """Status codes after the last tick, shape (nodes in tick order, N), int8."""
@@ -283,30 +294,20 @@ class CompiledEngine:
         )  # fmt: skip
         start, every = sim.world.iteration, recorder.every
         if fused.messaging is not None:
-            inbox = self._inbox(sim, fused.messaging)
-            done = code.block_messages(start, count, every, *arguments, *inbox)
-            sim.inbox = [] if done else sim.inbox  # handled in the first iteration
-        else:
-            done = self._block(code, (typical or count) * self.swarm.size, start, count, every,
-                               arguments)  # fmt: skip
+            arguments += tuple(self._inbox(sim, fused.messaging))
+        block = getattr(code, self._function(fused, typical or count))
+        import numba
+
+        groups = -(-self.swarm.size // CHUNK)
+        share = max(1, groups // (SHARE * numba.get_num_threads()))
+        with numba.parallel_chunksize(share):  # a core that others slow down takes less
+            done = block(start, count, every, CHUNK, *arguments)
+        if fused.messaging is not None and done:
+            sim.inbox = []  # handled in the first iteration
         if done:
             self._after(sim, fused.sensors, start, done, stopped)
             self._send(sim.world.datalink)
         return int(done)
-
-    def _block(
-        self, code: ModuleType, work: int, start: int, count: int, every: int, arguments: tuple
-    ) -> int:
-        """Run the chunked fused loop (no messages) on every core where ``work``
-        agent-iterations make it worth it; return ``count``."""
-        import numba
-
-        block = code.block_parallel if work >= PARALLEL else code.block_serial
-        groups = -(-self.swarm.size // CHUNK)
-        share = max(1, groups // (SHARE * numba.get_num_threads()))
-        with numba.parallel_chunksize(share):  # a core that others slow down takes less
-            block(start, count, every, CHUNK, *arguments)
-        return count
 
     def _inbox(self, sim: Simulation, messaging: Messaging) -> list[Any]:
         """The arguments of ``block_messages`` after the common ones: the datalink's range,

@@ -358,9 +358,9 @@ def block_function(
 ) -> str:
     """``block_serial``/``block_parallel(t0, count, every, chunk, st, cur, pend, kf, ki, arrays...,
     us, uh, cache (6, N), records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
-    max_speed, speed_step, turn_step)``: iterations ``t0 + 1 .. t0 + count`` of Phases 2 (sensors,
-    motion), 3, 4 and 6 for every agent, ``chunk`` agents at a time (no agent hears another:
-    the tree sends no message). ``cache``: see :func:`_motion`."""
+    max_speed, speed_step, turn_step) -> count``: iterations ``t0 + 1 .. t0 + count`` of
+    Phases 2 (sensors, motion), 3, 4 and 6 for every agent, ``chunk`` agents at a time (no
+    agent hears another: the tree sends no message). ``cache``: see :func:`_motion`."""
     records = ", ".join(f"r{j}" for j in range(len(layout.names)))
     store = "\n".join(
         f"                r{j}[row, first:last] = c{j}[first:last]"
@@ -384,6 +384,7 @@ def {name}(t0, count, every, chunk, {_FUSED_ARGS.format(arrays=layout.arrays, re
 {store}
                 for a in range(U(first), U(last)):
                     record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)
+    return count
 """
 
 
@@ -429,14 +430,14 @@ def _handle(messaging: Messaging, layout: Layout) -> str:
 
 def _collect(messaging: Messaging, layout: Layout) -> str:
     """Phase 5: this iteration's messages into the inboxes, by type in canonical order (by
-    sender, then sending node), each type's lowest sending node in ``first``, the bounding
+    sender, then sending node), each type's lowest sending node in ``lowest``, the bounding
     box of the agents and senders (``bad``: a NaN), then ``order``: the types sent, by their
     first sending node (the order in which the batched engine sends them)."""
     x, y = layout.array("x"), layout.array("y")
     lines = [
         "for k in range(counts.shape[0]):",
         "    counts[k] = 0",
-        "    first[k] = -1",
+        "    lowest[k] = -1",
         f"low_x = high_x = {x}[0]",
         f"low_y = high_y = {y}[0]",
         "bad = False",
@@ -456,8 +457,8 @@ def _collect(messaging: Messaging, layout: Layout) -> str:
     ib_s{k}[m] = a
 {copy}
     counts[{k}] = m + 1
-    if first[{k}] < 0 or first[{k}] > {i}:
-        first[{k}] = {i}
+    if lowest[{k}] < 0 or lowest[{k}] > {i}:
+        lowest[{k}] = {i}
     px = o{i}[1, a]
     py = o{i}[2, a]
     bad = bad or px != px or py != py
@@ -468,8 +469,21 @@ def _collect(messaging: Messaging, layout: Layout) -> str:
         lines += ["    " + line for line in block.splitlines()]
     lines += ["for j in range(order.shape[0]):", "    order[j] = -1", "j = 0"]
     for i, (k, _) in messaging.senders.items():
-        lines += [f"if counts[{k}] > 0 and first[{k}] == {i}:", f"    order[j] = {k}", "    j += 1"]
+        lines += [
+            f"if counts[{k}] > 0 and lowest[{k}] == {i}:",
+            f"    order[j] = {k}",
+            "    j += 1",
+        ]
     return "\n".join(" " * 8 + line for line in lines)
+
+
+def _groups(body: str, indent: str) -> str:
+    """``body`` (code for the agents ``first`` to ``last``, indented by 4) for every group of
+    ``chunk`` agents, the groups shared among the cores in a parallel function."""
+    head = """for group in prange(groups):
+    first = group * chunk
+    last = min(n, first + chunk)"""
+    return "\n".join(indent + line for line in head.splitlines()) + "\n" + body
 
 
 def message_block_function(
@@ -478,40 +492,51 @@ def message_block_function(
     layout: Layout,
     sensors: SensorKernel,
     messaging: Messaging,
+    parallel: bool,
 ) -> str:
-    """``block_messages(t0, count, every, st, cur, pend, kf, ki, arrays..., outboxes..., us, uh,
-    cache,
-    records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed, speed_step,
-    turn_step, reach, order, counts, first, inboxes..., handler state...) -> iterations done``:
-    up to ``count`` whole iterations, Phase by Phase over every agent, the messages handled
-    compiled. The inboxes hold the messages to handle in the first iteration (``order``: the
-    types delivered, in delivery order, -1 after them; ``counts`` per type). It stops after
-    an iteration whose messages do not reach every agent (``reach``: the datalink's range,
-    world units), or include a recorded type: the caller delivers those (the outboxes keep
-    them) as it does after the last iteration."""
+    """``block_messages_serial``/``block_messages_parallel(t0, count, every, chunk, st, cur,
+    pend, kf, ki, arrays..., outboxes..., us, uh, cache, records..., traces, traced_at,
+    behaviour, leaf_rows, stopped_at, max_speed, speed_step, turn_step, reach, order, counts,
+    lowest, inboxes..., handler state...) -> iterations done``: up to ``count`` whole
+    iterations, Phase by Phase over every agent (``chunk`` agents at a time, on every core
+    in the parallel one), the messages handled compiled. The inboxes hold the messages to
+    handle in the first iteration (``order``: the types delivered, in delivery order, -1
+    after them; ``counts`` per type). It stops after an iteration whose messages do not
+    reach every agent (``reach``: the datalink's range, world units), or include a recorded
+    type: the caller delivers those (the outboxes keep them) as it does after the last
+    iteration."""
     records = ", ".join(f"r{j}" for j in range(len(layout.names)))
-    store = "\n".join(f"            r{j}[row, :] = c{j}" for j in range(len(layout.names)))
+    store = "\n".join(
+        f"                r{j}[row, first:last] = c{j}[first:last]"
+        for j in range(len(layout.names))
+    )
     recorded = [k for k, flag in enumerate(messaging.recorded) if flag]
     deliver_here = " or ".join(f"counts[{k}] > 0" for k in recorded) or "False"
     state = f", {messaging.state}" if messaging.state else ""
+    agents = "range(U(first), U(last))"
+    sense_and_move = f"""            for a in {agents}:
+{_motion(layout, sensors, " " * 16)}"""
+    tick_and_control = f"""            for a in {agents}:
+{tree_body(program, kernels, layout, " " * 16)}
+{_phase4(kernels, layout, agents, " " * 12)}"""
+    record = f"""{store}
+                for a in {agents}:
+                    record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"""
+    name = "block_messages_parallel" if parallel else "block_messages_serial"
     return f"""
-@njit(cache=True, error_model="numpy")
-def block_messages(t0, count, every, {_FUSED_ARGS.format(arrays=layout.arrays, records=records)},
-                   reach, order, counts, first, {messaging.inboxes}{state}):
+@njit(cache=True, parallel={parallel}, error_model="numpy")
+def {name}(t0, count, every, chunk, {_FUSED_ARGS.format(arrays=layout.arrays, records=records)},
+           reach, order, counts, lowest, {messaging.inboxes}{state}):
     n = {layout.array("x")}.shape[0]
+    groups = (n + chunk - 1) // chunk
     done = 0
     for t in range(t0 + 1, t0 + count + 1):
-        for a in range(U(0), U(n)):
-{_motion(layout, sensors, " " * 12)}
+{_groups(sense_and_move, " " * 8)}
 {_handle(messaging, layout)}
-        for a in range(U(0), U(n)):
-{tree_body(program, kernels, layout, " " * 12)}
-{_phase4(kernels, layout, "range(U(0), U(n))", " " * 8)}
+{_groups(tick_and_control, " " * 8)}
         if t % every == 0:
             row = t // every
-{store}
-            for a in range(U(0), U(n)):
-                record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)
+{_groups(record, " " * 12)}
         done += 1
 {_collect(messaging, layout)}
         if j > 0:
@@ -557,8 +582,8 @@ def module_source(
     messaging: Messaging | None = None,
 ) -> str:
     """The whole generated module: imports of the kernels, ``tick`` and, given ``sensors``,
-    the fused loop: ``block_messages`` where the tree sends messages (given ``messaging``),
-    else ``block_serial`` and ``block_parallel``."""
+    the fused loop: ``block_messages_serial`` and ``block_messages_parallel`` where the tree
+    sends messages (given ``messaging``), else ``block_serial`` and ``block_parallel``."""
     lines = [HEADER]
     used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
     used |= {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
@@ -572,7 +597,10 @@ def module_source(
     lines.append(tick_function(program, kernels, layout))
     if sensors is not None and layout.outboxes:
         if messaging is not None:
-            lines.append(message_block_function(program, kernels, layout, sensors, messaging))
+            lines += [
+                message_block_function(program, kernels, layout, sensors, messaging, p)
+                for p in (False, True)
+            ]
     elif sensors is not None:
         lines += [block_function(program, kernels, layout, sensors, p) for p in (False, True)]
     return "\n".join(lines) + "\n"
