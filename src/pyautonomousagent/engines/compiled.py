@@ -310,8 +310,8 @@ class CompiledEngine:
         return int(done)
 
     def _inbox(self, sim: Simulation, messaging: Messaging) -> list[Any]:
-        """The arguments of ``block_messages`` after the common ones: the datalink's range,
-        ``order``, ``counts``, ``first``, each type's inbox (senders, data) filled with
+        """The arguments of ``block_messages_*`` after the common ones: the datalink's range,
+        ``order``, ``counts``, ``lowest``, each type's inbox (senders, data) filled with
         ``sim.inbox`` (deliveries that reached everyone, checked by :meth:`_fusable`), and
         the handlers' state."""
         types = messaging.types
@@ -335,8 +335,8 @@ class CompiledEngine:
             order[j], counts[k] = k, m
         inboxes = [array for pair in self._inboxes for array in pair]
         state = [array for handler in messaging.handlers for array in handler.state]
-        first = np.zeros(len(types), dtype=np.int64)
-        return [sim.world.datalink.range, order, counts, first, *inboxes, *state]
+        lowest = np.zeros(len(types), dtype=np.int64)
+        return [sim.world.datalink.range, order, counts, lowest, *inboxes, *state]
 
     def _messaging(self, sim: Simulation) -> Messaging | None:
         """The compiled handling of the messages the tree sends, or None where a type sent
