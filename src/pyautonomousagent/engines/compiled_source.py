@@ -368,7 +368,7 @@ def block_function(
     )
     name = "block_parallel" if parallel else "block_serial"
     return f"""
-@njit(cache=True, parallel={parallel}, error_model="numpy")
+@njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
 def {name}(t0, count, every, chunk, {_FUSED_ARGS.format(arrays=layout.arrays, records=records)}):
     n = {layout.array("x")}.shape[0]
     for group in prange((n + chunk - 1) // chunk):
@@ -524,7 +524,7 @@ def message_block_function(
                     record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"""
     name = "block_messages_parallel" if parallel else "block_messages_serial"
     return f"""
-@njit(cache=True, parallel={parallel}, error_model="numpy")
+@njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
 def {name}(t0, count, every, chunk, {_FUSED_ARGS.format(arrays=layout.arrays, records=records)},
            reach, order, counts, lowest, {messaging.inboxes}{state}):
     n = {layout.array("x")}.shape[0]
