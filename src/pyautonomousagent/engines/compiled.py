@@ -202,16 +202,17 @@ class CompiledEngine:
 
     def _code(self, fused: Fused | None) -> ModuleType:
         if self._module is None or (fused is not None and self._fused is None):
-            self._module, self._fused = load_source(self._source(fused)), fused
+            source, self._constants = self._source(fused)
+            self._module, self._fused = load_source(source), fused
         return self._module
 
-    def _source(self, fused: Fused | None) -> str:
-        """The generated module for ``fused`` (or the tick only); sets the constants' arrays."""
+    def _source(self, fused: Fused | None) -> tuple[str, tuple[np.ndarray, np.ndarray]]:
+        """The generated module for ``fused`` (or the tick only), and the arrays ``kf``,
+        ``ki`` of the numbers it reads."""
         sensors, messaging = (fused.sensors, fused.messaging) if fused else (None, None)
         layout = replace(self.layout, constants=Constants())
         source = module_source(self.program, self.kernels, layout, sensors, messaging)
-        self._constants = layout.constants.arrays()
-        return source
+        return source, layout.constants.arrays()
 
     def tick(self) -> None:
         """Tick the tree once for every agent (at the world's iteration); what the leaves
@@ -254,7 +255,7 @@ class CompiledEngine:
     def _marker(self, sim: Simulation, fused: Fused) -> Path:
         """The file saying that the fused function ``sim``'s loop calls is in numba's cache."""
         function = self._function(fused, min(sim.scenario.iterations, 500))
-        return cache_folder() / f"{module_name(self._source(fused))}.{function}.compiled"
+        return cache_folder() / f"{module_name(self._source(fused)[0])}.{function}.compiled"
 
     def _function(self, fused: Fused, iterations: int) -> str:
         """The fused function a call of ``iterations`` iterations runs: the parallel one

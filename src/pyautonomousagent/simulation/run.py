@@ -278,11 +278,7 @@ class Simulation:
             recorded_types=tuple(name for name, kind in handlers.items() if kind.recorded),
         )
         if auto and engine == "batched" and not compilable(tree):
-            compiled = CompiledEngine(tree, swarm, world, vars(scenario.parameters))
-            if compiled.ready(sim):  # compiled before: no wait, and faster at every size
-                sim.engine = compiled
-            else:
-                sim.could_compile = compiled.fuses(sim)
+            _compiled_if_ready(sim, tree)
         phases.record(sim)  # the initial state, iteration 0
         prepare = getattr(sim.engine, "prepare", None)  # e.g. compile before the loop
         if prepare is not None:
@@ -369,6 +365,17 @@ class Simulation:
     def table(self) -> pa.Table:
         """The recorded data: one row per recorded iteration and agent."""
         return to_table(self.recorder)
+
+
+def _compiled_if_ready(sim: Simulation, tree: Node) -> None:
+    """Auto's second look, once ``sim`` is built on the batched engine: the compiled engine
+    where this run's fused loop was compiled before on this machine (no wait, and faster at
+    every size); else note whether compiling it would serve (``sim.could_compile``)."""
+    compiled = CompiledEngine(tree, sim.swarm, sim.world, vars(sim.scenario.parameters))
+    if compiled.ready(sim):
+        sim.engine = compiled
+    else:
+        sim.could_compile = compiled.fuses(sim)
 
 
 def _traced(names: Sequence[str], trace: int | str | Sequence[str] | None) -> list[int]:
