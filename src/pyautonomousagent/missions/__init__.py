@@ -2,6 +2,8 @@
 
 - ``gathering`` (the paper's Fig. 6) and ``patrol`` (Fig. 12; also flown by the Skywalker X8
   in ``x8-patrol``) share the paper's drones (:mod:`pyautonomousagent.missions.drones`);
+- ``gathering-3d`` and ``patrol-3d``: the same missions flown by the 3-D drone
+  (:mod:`pyautonomousagent.missions.drones3d`, docs/drone3d.md);
 - ``vacuum``: the paper's Fig. 2 robot with a sonar;
 - ``radiation-search``: drones that wander, find a radiation source and call the others.
 
@@ -14,10 +16,17 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-from pyautonomousagent.missions import drones, gathering, patrol, radiation_search, vacuum
+from pyautonomousagent.missions import (
+    drones,
+    drones3d,
+    gathering,
+    patrol,
+    radiation_search,
+    vacuum,
+)
 from pyautonomousagent.scenarios import register
 
-__all__ = ["drones", "gathering", "patrol", "radiation_search", "vacuum"]
+__all__ = ["drones", "drones3d", "gathering", "patrol", "radiation_search", "vacuum"]
 
 _SCENARIO_FILES = {
     "gathering": "gathering/gathering.yaml",
@@ -25,6 +34,8 @@ _SCENARIO_FILES = {
     "x8-patrol": "patrol/x8-patrol.yaml",
     "vacuum": "vacuum/vacuum.yaml",
     "radiation-search": "radiation_search/radiation-search.yaml",
+    "gathering-3d": "drones3d/gathering-3d.yaml",
+    "patrol-3d": "drones3d/patrol-3d.yaml",
 }
 for _name, _file in _SCENARIO_FILES.items():
     register(_name, Path(str(resources.files(__name__) / _file)))

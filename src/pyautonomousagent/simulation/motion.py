@@ -2,6 +2,8 @@
 
 - ``drone2d`` (the default): the paper's 2-D drone, whatever the engine; its parameters
   (``max_speed``, ``speed_step``, ``turn_step``) are read from ``parameters:``.
+- ``drone3d``: the 2-D drone with altitude and climb rate (docs/drone3d.md); its mission
+  declares the columns it moves (``models.drone3d.COLUMNS_3D``);
 - ``x8``: the Skywalker X8, with its settings in the scenario's ``x8:`` section. The py_trees
   engine flies the reference implementation (one PyFly simulator per agent, as the paper
   did); the batched engine flies the vectorised one. ``implementation`` overrides that
@@ -21,6 +23,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 
 from pyautonomousagent.models.drone2d import Drone2D, DroneParameters
+from pyautonomousagent.models.drone3d import COLUMNS_3D, Drone3D, Drone3DParameters
 from pyautonomousagent.models.x8 import TURBULENCE_INTENSITIES, X8Settings
 from pyautonomousagent.registry import Registry
 from pyautonomousagent.simulation.params import Param, Reader, ScenarioError
@@ -101,6 +104,28 @@ def _drone2d(
     return Drone2D(DroneParameters(p.max_speed, p.speed_step, p.turn_step), swarm.size)
 
 
+def _drone3d(
+    scenario: Scenario, swarm: Swarm, engine: str, seed: int, implementation: str | None
+) -> Model:
+    """The 3-D drone; its mission must declare the columns of ``COLUMNS_3D``.
+
+    Raises:
+        ScenarioError: a column is missing.
+    """
+    missing = [k for k in COLUMNS_3D if k not in swarm.columns]
+    if missing:
+        raise ScenarioError(
+            f"scenario {scenario.name!r}: model drone3d moves the state columns "
+            f"{', '.join(COLUMNS_3D)}, which mission {scenario.mission_type.name!r} does not "
+            "declare (fly a 3-D mission, e.g. gathering-3d, or add them to its columns)"
+        )
+    p = scenario.parameters
+    params = Drone3DParameters(
+        p.max_speed, p.speed_step, p.turn_step, p.max_climb_rate, p.climb_step, p.max_altitude
+    )
+    return Drone3D(params, swarm.size)
+
+
 def _x8(
     scenario: Scenario, swarm: Swarm, engine: str, seed: int, implementation: str | None
 ) -> Model:
@@ -163,6 +188,24 @@ MOTION_MODELS.register(
                   "magnitude of the heading control signal u_a", minimum=0.0),
         ),
         doc="the paper's 2-D drone (eqs. 1-4) with bang-bang control",
+    ),
+)  # fmt: skip
+_DRONE3D = Drone3DParameters()
+MOTION_MODELS.register(
+    "drone3d",
+    MotionModel(
+        "drone3d",
+        _drone3d,
+        (
+            *MOTION_MODELS.get("drone2d").parameters,
+            Param("max_climb_rate", _DRONE3D.max_climb_rate, "world units per iteration",
+                  "largest climb or sink rate", minimum=0.0),
+            Param("climb_step", _DRONE3D.climb_step, "world units per iteration per iteration",
+                  "largest change of the climb rate in one iteration (u_w)", minimum=0.0),
+            Param("max_altitude", _DRONE3D.max_altitude, "world units",
+                  "ceiling above the ground", minimum=0.0),
+        ),
+        doc="the 2-D drone with altitude and climb rate (docs/drone3d.md)",
     ),
 )  # fmt: skip
 MOTION_MODELS.register(

@@ -1,0 +1,247 @@
+"""The paper's drones in three dimensions (issue 18, part 1): ``gathering-3d`` and
+``patrol-3d``, flown by the 3-D drone (``model: drone3d``, docs/drone3d.md).
+
+Surveillance and patrol positions are ``[x, y, z]`` (z: altitude, world units above the
+ground); the refuelling slots are on the ground (z = 0): a drone lands to refuel. Climbing
+costs energy (``climb_energy_use``, percent per world unit climbed) on top of the paper's
+``energy_use`` per iteration. Written with the public mission API only; the leaves are in
+:mod:`pyautonomousagent.missions.drones3d.leaves`.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+
+from pyautonomousagent.datalink import Delivery
+from pyautonomousagent.missions.drones.leaves import GATHERING
+from pyautonomousagent.missions.drones.mission import TARGET_COLOUR, DroneMission, cycled
+from pyautonomousagent.missions.drones.sensors import drain_energy
+from pyautonomousagent.missions.drones3d.leaves import (
+    DESTINATION_3D,
+    PATROL_3D,
+    REFUELING_3D,
+    SURVEILLANCE_3D,
+)
+from pyautonomousagent.missions.gathering import GatheringMission
+from pyautonomousagent.missions.patrol import PatrolMission
+from pyautonomousagent.models.drone3d import COLUMNS_3D, MEANINGS_3D
+from pyautonomousagent.render.marks import Mark
+from pyautonomousagent.simulation import (
+    MessageType,
+    Param,
+    Simulation,
+    WorldObject,
+    register_mission,
+)
+from pyautonomousagent.simulation.params import Reader
+from pyautonomousagent.simulation.scenario import Scenario
+from pyautonomousagent.state import Swarm
+from pyautonomousagent.world import World
+
+#: A point with an altitude: (x, y, z), world units.
+Point3D = tuple[float, float, float]
+
+PARAMETERS_3D: tuple[Param, ...] = (
+    Param("climb_energy_use", 0.5, "percent per world unit climbed",
+          "energy used to climb, on top of energy_use (descending costs nothing)",
+          minimum=0.0, maximum=100.0),
+    Param("cruise_altitude", 20.0, "world units",
+          "altitude Action_Request_Altitude_S requests by default", minimum=0.0),
+)  # fmt: skip
+
+COLUMNS: dict[str, Any] = {
+    "z": COLUMNS_3D["z"],
+    "climb_rate": COLUMNS_3D["climb_rate"],
+    **DroneMission.columns,
+    "requested_altitude": COLUMNS_3D["requested_altitude"],
+}
+
+MEANINGS: dict[str, tuple[str, str]] = {
+    **MEANINGS_3D,
+    "z_surveillance_position": ("world unit", "blackboard: surveillance position, altitude"),
+    "z_refueling_position": ("world unit", "blackboard: own refuelling slot, altitude (0)"),
+    "z_current_destination_position": ("world unit", "blackboard: current destination, altitude"),
+}
+
+
+def read_point_3d(reader: Reader, value: Any, path: str) -> Point3D:
+    """``[x, y, z]``: finite numbers, z (the altitude) at or above the ground."""
+    if not isinstance(value, list | tuple) or len(value) != 3:
+        raise reader.fail(path, "a point [x, y, z] (z: altitude above the ground)", value)
+    x, y = reader.number(value[0], f"{path}[0]"), reader.number(value[1], f"{path}[1]")
+    z = reader.number(value[2], f"{path}[2]")
+    if z < 0:
+        raise reader.fail(f"{path}[2]", "an altitude >= 0 (at or above the ground)", z)
+    return (x, y, z)
+
+
+def read_points_3d(
+    reader: Reader, data: Any, path: str, least: int = 1, most: int | None = None
+) -> tuple[Point3D, ...]:
+    """A list of ``least``..``most`` points ``[x, y, z]``."""
+    if not isinstance(data, list | tuple) or len(data) < least or (most and len(data) > most):
+        count = f"exactly {least}" if least == most else f"at least {least}"
+        raise reader.fail(path, f"a list of {count} points [x, y, z]", data)
+    return tuple(read_point_3d(reader, p, f"{path}[{i}]") for i, p in enumerate(data))
+
+
+def check_3d(scenario: Scenario, reader: Reader, key: str) -> None:
+    """The scenario flies the 3-D drone, and the points of ``world.<key>`` lie below its
+    ceiling (``max_altitude``)."""
+    if scenario.model != "drone3d":
+        raise reader.fail("model", "drone3d (a 3-D mission flies the 3-D drone)", scenario.model)
+    ceiling = scenario.parameters.max_altitude
+    for i, point in enumerate(getattr(scenario.objects, key)):
+        if point[2] > ceiling:
+            raise reader.fail(
+                f"world.{key}[{i}][2]", f"an altitude <= max_altitude ({ceiling:g})", point[2]
+            )
+
+
+def sense_climb(mission: DroneMission, sim: Simulation) -> None:
+    """Phase 2, before the drones' sensors: climbing costs ``climb_energy_use`` percent per
+    world unit climbed this iteration (the climb rate about to be flown)."""
+    s = sim.swarm.columns
+    climbed = np.maximum(s["climb_rate"], 0.0)
+    s["energy"][:] = drain_energy(s["energy"], mission.params.climb_energy_use * climbed)
+
+
+def set_surveillance_3d(swarm: Swarm, points: np.ndarray) -> None:
+    """Each drone's surveillance position and first destination, shape (N, 3)."""
+    bb = swarm.blackboard
+    for axis, (surveillance, destination) in enumerate(
+        zip(SURVEILLANCE_3D, DESTINATION_3D, strict=True)
+    ):
+        bb[surveillance][:] = points[:, axis]
+        bb[destination][:] = points[:, axis]
+
+
+def surveillance_marks_3d(points: Any) -> list[Mark]:
+    """Surveillance positions S1.. as "x" markers labelled with their altitude."""
+    distinct = list(dict.fromkeys((float(x), float(y), float(z)) for x, y, z in points))
+    return [
+        Mark("point", x, y, f"S{i} z={z:g}", colour=TARGET_COLOUR, symbol="x",
+             legend="surveillance position (altitude)")
+        for i, (x, y, z) in enumerate(distinct, start=1)
+    ]  # fmt: skip
+
+
+@register_mission
+class Gathering3DMission(GatheringMission):
+    """Fig. 6's mission in 3-D: surveillance positions with altitudes, refuelling on the
+    ground, the gathering order carrying the altitude."""
+
+    name = "gathering-3d"
+    description = "3-D drones hover at surveillance positions, land to refuel, and gather"
+    parameters: ClassVar[tuple[Param, ...]] = (*GatheringMission.parameters, *PARAMETERS_3D)
+    world_objects: ClassVar[tuple[WorldObject, ...]] = (
+        *DroneMission.world_objects,
+        WorldObject("surveillance_positions", read_points_3d,
+                    doc="surveillance positions [x, y, z], used in turn by drones 1, 2, ..."),
+    )  # fmt: skip
+    columns: ClassVar[dict[str, Any]] = COLUMNS
+    meanings: ClassVar[dict[str, tuple[str, str]]] = {**GatheringMission.meanings, **MEANINGS}
+
+    @classmethod
+    def check(cls, scenario: Scenario, reader: Reader) -> None:
+        """The gathering's checks; the 3-D drone; altitudes below the ceiling."""
+        super().check(scenario, reader)
+        check_3d(scenario, reader, "surveillance_positions")
+
+    def blackboard(self) -> dict[str, Any]:
+        """Table 3 with altitudes."""
+        keys = super().blackboard()
+        keys.update({k: np.float64 for k in DESTINATION_3D + SURVEILLANCE_3D + REFUELING_3D})
+        return keys
+
+    def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
+        """On the refuelling slots, on the ground; the first destination is the own
+        surveillance position."""
+        DroneMission.place(self, swarm, world, rng)
+        set_surveillance_3d(swarm, cycled(self.scenario.objects.surveillance_positions, swarm.size))
+
+    def sense(self, sim: Simulation) -> np.ndarray:
+        """The climb's energy, then the drones' sensors."""
+        sense_climb(self, sim)
+        return super().sense(sim)
+
+    def message_types(self) -> list[MessageType]:
+        """Sharing data, and "gathering" (recorded) with the altitude."""
+        kinds = [kind for kind in super().message_types() if kind.name != GATHERING]
+        return [
+            *kinds,
+            MessageType(GATHERING, self.adopt_gathering_position, recorded=True,
+                        doc="x, y, z: the position to gather on"),
+        ]  # fmt: skip
+
+    def adopt_gathering_position(self, sim: Simulation, delivery: Delivery) -> None:
+        """The receiver's surveillance position becomes the message's x, y, z (the last one,
+        in canonical order, if several arrived)."""
+        bb = sim.swarm.blackboard
+        receivers, rows = delivery.pairs(sim.swarm.size)
+        last = receivers.size - 1 - np.unique(receivers[::-1], return_index=True)[1]
+        data = delivery.messages.data
+        for key, field in zip(SURVEILLANCE_3D, ("x", "y", "z"), strict=True):
+            bb[key][receivers[last]] = data[field][rows[last]]
+
+    def marks(self) -> list[Mark]:
+        """Slots R1.. (on the ground), surveillance positions S1.. with their altitude."""
+        points = self.scenario.objects.surveillance_positions
+        return [*DroneMission.marks(self), *surveillance_marks_3d(points)]
+
+
+@register_mission
+class Patrol3DMission(PatrolMission):
+    """Fig. 12's mission in 3-D: two patrol positions at their altitudes, refuelling on the
+    ground."""
+
+    name = "patrol-3d"
+    description = "3-D drones patrol between two positions at their altitudes, land to refuel"
+    parameters: ClassVar[tuple[Param, ...]] = (*PatrolMission.parameters, *PARAMETERS_3D)
+    world_objects: ClassVar[tuple[WorldObject, ...]] = (
+        *DroneMission.world_objects,
+        WorldObject("patrol_positions", lambda r, d, p: read_points_3d(r, d, p, 2, 2),
+                    doc="the two positions [x, y, z] patrolled by every drone"),
+    )  # fmt: skip
+    columns: ClassVar[dict[str, Any]] = COLUMNS
+    meanings: ClassVar[dict[str, tuple[str, str]]] = {
+        **PatrolMission.meanings,
+        **MEANINGS,
+        "z_surveillance_position_1": ("world unit", "blackboard: patrol position 1, altitude"),
+        "z_surveillance_position_2": ("world unit", "blackboard: patrol position 2, altitude"),
+    }
+
+    @classmethod
+    def check(cls, scenario: Scenario, reader: Reader) -> None:
+        """The patrol's checks; the 3-D drone; altitudes below the ceiling."""
+        super().check(scenario, reader)
+        check_3d(scenario, reader, "patrol_positions")
+
+    def blackboard(self) -> dict[str, Any]:
+        """The patrol's keys with altitudes."""
+        keys = super().blackboard()
+        keys.update({k: np.float64 for k in DESTINATION_3D + SURVEILLANCE_3D + REFUELING_3D})
+        keys.update({k: np.float64 for k in PATROL_3D[1:]})
+        return keys
+
+    def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
+        """On the refuelling slots, on the ground; the first patrol position first."""
+        DroneMission.place(self, swarm, world, rng)
+        first, second = self.scenario.objects.patrol_positions
+        bb = swarm.blackboard
+        for key, value in zip(PATROL_3D[1:], (*first, *second), strict=True):
+            bb[key][:] = value
+        bb["index_current_surveillance_position"][:] = 1
+        set_surveillance_3d(swarm, np.tile(np.asarray(first, dtype=np.float64), (swarm.size, 1)))
+
+    def sense(self, sim: Simulation) -> np.ndarray:
+        """The climb's energy, then the drones' sensors."""
+        sense_climb(self, sim)
+        return super().sense(sim)
+
+    def marks(self) -> list[Mark]:
+        """Slots R1.. (on the ground), the two patrol positions with their altitude."""
+        points = self.scenario.objects.patrol_positions
+        return [*DroneMission.marks(self), *surveillance_marks_3d(points)]

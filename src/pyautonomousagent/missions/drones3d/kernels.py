@@ -1,0 +1,91 @@
+"""The 3-D drone leaves for one agent, for the compiled engine.
+
+Each function repeats, operation for operation, the NumPy body of the leaf named in its
+docstring (``leaves.py``) on agent row ``a`` of the arrays it is given (shape (N,)); the
+engine-identity tests hold the two equal bit for bit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
+from pyautonomousagent.jit import njit
+
+
+@njit(inline="always")
+def destination_reached_3d(a: int, x: np.ndarray, y: np.ndarray, z: np.ndarray,
+                           to_x: np.ndarray, to_y: np.ndarray, to_z: np.ndarray,
+                           distance: float) -> int:  # fmt: skip
+    """Condition_Destination_Reached_3D."""
+    dx = x[a] - to_x[a]
+    dy = y[a] - to_y[a]
+    dz = z[a] - to_z[a]
+    near = dx * dx + dy * dy <= distance * distance
+    return SUCCESS if near and abs(dz) <= distance else FAILURE
+
+
+@njit(inline="always")
+def navigate_3d(a: int, x: np.ndarray, y: np.ndarray, to_x: np.ndarray, to_y: np.ndarray,
+                to_z: np.ndarray, speed: np.ndarray, altitude: np.ndarray, cruise: float,
+                distance: float) -> int:  # fmt: skip
+    """Action_Navigate_To_Destination_3D_A: speed (0 over the destination) and altitude;
+    RUNNING. Its last step, the requested heading, is ``kernels.bearing`` (a ``Later``)."""
+    dx = x[a] - to_x[a]
+    dy = y[a] - to_y[a]
+    speed[a] = 0.0 if dx * dx + dy * dy <= distance * distance else cruise
+    altitude[a] = to_z[a]
+    return RUNNING
+
+
+@njit(inline="always")
+def copy_destination_3d(a: int, to_x: np.ndarray, to_y: np.ndarray, to_z: np.ndarray,
+                        from_x: np.ndarray, from_y: np.ndarray,
+                        from_z: np.ndarray) -> int:  # fmt: skip
+    """Action_Set_Destination_Equal_To_{Surveillance,Refueling}_3D_S; SUCCESS."""
+    to_x[a] = from_x[a]
+    to_y[a] = from_y[a]
+    to_z[a] = from_z[a]
+    return SUCCESS
+
+
+@njit(inline="always")
+def patrol_position_3d(a: int, index: np.ndarray, to_x: np.ndarray, to_y: np.ndarray,
+                       to_z: np.ndarray, sx: np.ndarray, sy: np.ndarray, sz: np.ndarray,
+                       x1: np.ndarray, y1: np.ndarray, z1: np.ndarray, x2: np.ndarray,
+                       y2: np.ndarray, z2: np.ndarray, other: int) -> int:  # fmt: skip
+    """Action_Set_Destination_Equal_To_{Other,Current}_Surveillance_3D_S (``other`` 1/0)."""
+    k = 3 - index[a] if other else index[a]
+    first = k == 1
+    px = x1[a] if first else x2[a]
+    py = y1[a] if first else y2[a]
+    pz = z1[a] if first else z2[a]
+    index[a] = k
+    sx[a] = px
+    sy[a] = py
+    sz[a] = pz
+    to_x[a] = px
+    to_y[a] = py
+    to_z[a] = pz
+    return SUCCESS
+
+
+@njit(inline="always")
+def request_altitude(a: int, altitude: np.ndarray, value: float) -> int:
+    """Action_Request_Altitude_S; SUCCESS."""
+    altitude[a] = value
+    return SUCCESS
+
+
+@njit(inline="always")
+def transmit_point_3d(a: int, x: np.ndarray, y: np.ndarray, px: np.ndarray, py: np.ndarray,
+                      pz: np.ndarray, outbox: np.ndarray) -> int:  # fmt: skip
+    """Action_Transmit_Gathering_Message_3D_S: the point as payload x, y, z (outbox rows
+    3-5) from where the drone is; SUCCESS."""
+    outbox[0, a] = 1.0
+    outbox[1, a] = x[a]
+    outbox[2, a] = y[a]
+    outbox[3, a] = px[a]
+    outbox[4, a] = py[a]
+    outbox[5, a] = pz[a]
+    return SUCCESS

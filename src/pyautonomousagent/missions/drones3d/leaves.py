@@ -1,0 +1,221 @@
+"""The 3-D drones' leaves: destinations with an altitude, and the leaves that request one.
+
+Each works like its 2-D namesake in :mod:`pyautonomousagent.missions.drones.leaves`, with the
+altitude ``z`` (world units above the ground) beside x and y. The altitude is requested
+through the swarm column ``requested_altitude``, which the 3-D drone's control system
+follows (:mod:`pyautonomousagent.models.drone3d`). Written once with array expressions, so the
+same code runs for one agent (py_trees engine) or many (batched); ``kernels.py`` repeats them
+for the compiled engine.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pyautonomousagent.arrays import bearing, choose
+from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
+from pyautonomousagent.bt.status import RUNNING, SUCCESS, success_if
+from pyautonomousagent.kernels import Later, LeafKernel, Sends
+from pyautonomousagent.kernels import bearing as bearing_of_one
+from pyautonomousagent.missions.drones.leaves import (
+    DESTINATION,
+    GATHERING,
+    PATROL,
+    REFUELING,
+    SPEED,
+    SURVEILLANCE,
+)
+from pyautonomousagent.missions.drones3d import kernels as k
+from pyautonomousagent.state import AgentView
+from pyautonomousagent.world import World
+
+DESTINATION_3D = (*DESTINATION, "z_current_destination_position")
+SURVEILLANCE_3D = (*SURVEILLANCE, "z_surveillance_position")
+REFUELING_3D = (*REFUELING, "z_refueling_position")
+#: The patrol keys with altitudes: the index, then position 1 (x, y, z) and 2 (x, y, z).
+PATROL_3D = (
+    PATROL[0],
+    PATROL[1], PATROL[2], "z_surveillance_position_1",
+    PATROL[3], PATROL[4], "z_surveillance_position_2",
+)  # fmt: skip
+#: The arrays of ``kernels.patrol_position_3d``, in its order.
+PATROL_ARRAYS_3D = (PATROL_3D[0], *DESTINATION_3D, *SURVEILLANCE_3D, *PATROL_3D[1:])
+DISTANCE = Port("distance", float, "destination_tolerance", 0.0, "world units")
+
+
+@register_leaf
+class ConditionDestinationReached3D(Leaf):
+    """SUCCESS if the agent is within ``distance`` of its current destination horizontally
+    and within ``distance`` of its altitude (a cylinder round the destination)."""
+
+    type_name = "Condition_Destination_Reached_3D"
+    ports = (DISTANCE,)
+    keys = DESTINATION_3D
+    distance: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        dx = agents.x - bb.x_current_destination_position
+        dy = agents.y - bb.y_current_destination_position
+        dz = agents.z - bb.z_current_destination_position
+        near = dx * dx + dy * dy <= self.distance * self.distance
+        return success_if(near & (abs(dz) <= self.distance))
+
+    def kernel(self, world: World) -> LeafKernel:
+        names = ("x", "y", "z", *DESTINATION_3D)
+        return LeafKernel(k.destination_reached_3d, names, (self.distance,))
+
+
+@register_leaf
+class ActionNavigateToDestination3DA(Leaf):
+    """Request the heading toward the current destination, its altitude, and cruise speed
+    (0 once within ``distance`` horizontally: the drone hovers while it climbs or descends
+    to it); always RUNNING."""
+
+    type_name = "Action_Navigate_To_Destination_3D_A"
+    ports = (SPEED, DISTANCE)
+    keys = DESTINATION_3D
+    speed: float
+    distance: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        to_x, to_y = bb.x_current_destination_position, bb.y_current_destination_position
+        agents.requested_heading = bearing(agents.x, agents.y, to_x, to_y)
+        dx = agents.x - to_x
+        dy = agents.y - to_y
+        over = dx * dx + dy * dy <= self.distance * self.distance
+        agents.requested_speed = choose(over, 0.0, self.speed)
+        agents.requested_altitude = bb.z_current_destination_position
+        return RUNNING
+
+    def kernel(self, world: World) -> LeafKernel:
+        heading = Later(bearing_of_one, ("x", "y", *DESTINATION), "requested_heading")
+        names = ("x", "y", *DESTINATION_3D, "requested_speed", "requested_altitude")
+        return LeafKernel(k.navigate_3d, names, (self.speed, self.distance), later=heading)
+
+
+@register_leaf
+class ActionRequestAltitudeS(Leaf):
+    """Request altitude ``altitude`` (the control system climbs or descends to it); SUCCESS."""
+
+    type_name = "Action_Request_Altitude_S"
+    ports = (Port("altitude", float, "cruise_altitude", 0.0, "world units above the ground"),)
+    altitude: float
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        agents.requested_altitude = self.altitude
+        return SUCCESS
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.request_altitude, ("requested_altitude",), (self.altitude,))
+
+
+def _set_destination(agents: AgentView, x: Any, y: Any, z: Any) -> int:
+    bb = agents.blackboard
+    bb.x_current_destination_position = x
+    bb.y_current_destination_position = y
+    bb.z_current_destination_position = z
+    return SUCCESS
+
+
+@register_leaf
+class ActionSetDestinationEqualToSurveillance3DS(Leaf):
+    """Destination := the surveillance position, with its altitude; SUCCESS."""
+
+    type_name = "Action_Set_Destination_Equal_To_Surveillance_3D_S"
+    keys = DESTINATION_3D + SURVEILLANCE_3D
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        return _set_destination(
+            agents, bb.x_surveillance_position, bb.y_surveillance_position,
+            bb.z_surveillance_position,
+        )  # fmt: skip
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.copy_destination_3d, DESTINATION_3D + SURVEILLANCE_3D)
+
+
+@register_leaf
+class ActionSetDestinationEqualToRefueling3DS(Leaf):
+    """Destination := the refuelling slot, on the ground; SUCCESS."""
+
+    type_name = "Action_Set_Destination_Equal_To_Refueling_3D_S"
+    keys = DESTINATION_3D + REFUELING_3D
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        return _set_destination(
+            agents, bb.x_refueling_position, bb.y_refueling_position, bb.z_refueling_position
+        )
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.copy_destination_3d, DESTINATION_3D + REFUELING_3D)
+
+
+def _go_to_patrol_position(agents: AgentView, index: Any) -> int:
+    """Make patrol position ``index`` (1 or 2) current and the destination."""
+    bb = agents.blackboard
+    first = index == 1
+    x = choose(first, bb.x_surveillance_position_1, bb.x_surveillance_position_2)
+    y = choose(first, bb.y_surveillance_position_1, bb.y_surveillance_position_2)
+    z = choose(first, bb.z_surveillance_position_1, bb.z_surveillance_position_2)
+    bb.index_current_surveillance_position = index
+    bb.x_surveillance_position = x
+    bb.y_surveillance_position = y
+    bb.z_surveillance_position = z
+    return _set_destination(agents, x, y, z)
+
+
+@register_leaf
+class ActionSetDestinationEqualToOtherSurveillance3DS(Leaf):
+    """Switch to the other patrol position and make it (with its altitude) the destination;
+    SUCCESS."""
+
+    type_name = "Action_Set_Destination_Equal_To_Other_Surveillance_3D_S"
+    keys = DESTINATION_3D + SURVEILLANCE_3D + PATROL_3D
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        return _go_to_patrol_position(
+            agents, 3 - agents.blackboard.index_current_surveillance_position
+        )
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.patrol_position_3d, PATROL_ARRAYS_3D, (1,))
+
+
+@register_leaf
+class ActionSetDestinationEqualToCurrentSurveillance3DS(Leaf):
+    """Destination := the current patrol position, with its altitude; SUCCESS."""
+
+    type_name = "Action_Set_Destination_Equal_To_Current_Surveillance_3D_S"
+    keys = DESTINATION_3D + SURVEILLANCE_3D + PATROL_3D
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        return _go_to_patrol_position(agents, agents.blackboard.index_current_surveillance_position)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.patrol_position_3d, PATROL_ARRAYS_3D, (0,))
+
+
+@register_leaf
+class ActionTransmitGatheringMessage3DS(Leaf):
+    """Send everyone a "gathering" message carrying this agent's surveillance position with
+    its altitude (x, y, z); SUCCESS."""
+
+    type_name = "Action_Transmit_Gathering_Message_3D_S"
+    keys = SURVEILLANCE_3D
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        data = {"x": bb.x_surveillance_position, "y": bb.y_surveillance_position,
+                "z": bb.z_surveillance_position}  # fmt: skip
+        self.broadcast(agents, world, GATHERING, data)
+        return SUCCESS
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(
+            k.transmit_point_3d, ("x", "y", *SURVEILLANCE_3D),
+            sends=Sends(GATHERING, ("x", "y", "z")),
+        )  # fmt: skip
