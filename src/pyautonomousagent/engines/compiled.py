@@ -8,7 +8,7 @@ remembered children are the batched engine's arrays, updated by the same rules, 
 engines give the same bits.
 
 Where the run allows it (the mission's sensors have a compiled form, the motion model is the
-2-D drone, and the C library's ``sin``/``cos`` give NumPy's bits on this CPU:
+2-D or the 3-D drone, and the C library's ``sin``/``cos`` give NumPy's bits on this CPU:
 :func:`trig_agrees_with_numpy`), :meth:`CompiledEngine.loop` runs whole iterations, Phases 2
 to 6, in one compiled call. A tree that sends no message runs ``CHUNK`` agents at a time over
 many iterations, on every core. A tree that sends messages runs iteration by iteration, its
@@ -49,6 +49,7 @@ from pyautonomousagent.engines.compiled_source import (
 )
 from pyautonomousagent.kernels import LeafKernel, Sends, SensorKernel
 from pyautonomousagent.models.drone2d import Drone2D
+from pyautonomousagent.models.drone3d import Drone3D
 from pyautonomousagent.registry import UnknownNameError
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
@@ -142,10 +143,12 @@ SHARE = 8
 @dataclass(frozen=True)
 class Fused:
     """What the fused loop of a run calls: the mission's compiled sensors and, where the
-    tree sends messages, their compiled handling."""
+    tree sends messages, their compiled handling; for the 3-D drone, its vertical
+    parameters (``Layout.vertical``)."""
 
     sensors: SensorKernel
     messaging: Messaging | None
+    vertical: tuple[float, float, float] | None = None
 
 
 class CompiledEngine:
@@ -194,6 +197,7 @@ class CompiledEngine:
         self._inboxes: list[tuple[np.ndarray, np.ndarray]] | None = None
         self._trig = np.full((6, swarm.size), np.nan)  # 2 x (heading, its sine and cosine)
         self._trig_agrees: bool | None = None  # compiled sin/cos give NumPy's bits
+        self._no_climb = np.zeros(0)  # the fused loop's u_w argument for the 2-D drone
 
     def _sends(self, node: int) -> Sends:
         sends = self.kernels[node].sends
@@ -210,7 +214,8 @@ class CompiledEngine:
         """The generated module for ``fused`` (or the tick only), and the arrays ``kf``,
         ``ki`` of the numbers it reads."""
         sensors, messaging = (fused.sensors, fused.messaging) if fused else (None, None)
-        layout = replace(self.layout, constants=Constants())
+        vertical = fused.vertical if fused else None
+        layout = replace(self.layout, constants=Constants(), vertical=vertical)
         source = module_source(self.program, self.kernels, layout, sensors, messaging)
         return source, layout.constants.arrays()
 
@@ -280,7 +285,8 @@ class CompiledEngine:
         if fused is None:
             return 0
         recorder, model = sim.recorder, sim.model
-        assert isinstance(model, Drone2D)
+        assert isinstance(model, Drone2D | Drone3D)
+        u_climb = model.u_climb if isinstance(model, Drone3D) else self._no_climb
         code = self._code(fused)
         traced_at = np.full(self.swarm.size, -1, dtype=np.int64)
         traced_at[recorder.traced] = np.arange(recorder.traced.size)
@@ -289,7 +295,7 @@ class CompiledEngine:
         records = self._records(recorder, count)  # the columns, then the active behaviour
         arguments = (
             self.status, self.current, self.pending, *self._constants, *self.arrays,
-            model.u_speed, model.u_heading, self._trig, *records[:-1], recorder.traces,
+            model.u_speed, model.u_heading, u_climb, self._trig, *records[:-1], recorder.traces,
             traced_at, records[-1], recorder._leaf_rows.astype(np.int64), stopped,
             p.max_speed, p.speed_step, p.turn_step,
         )  # fmt: skip
@@ -372,14 +378,14 @@ class CompiledEngine:
 
     def _fusable(self, sim: Simulation) -> Fused | None:
         """What :meth:`loop` calls where it can run ``sim`` now, else None: the mission's
-        compiled sensors and the 2-D drone; a tree that sends nothing with no message in
+        compiled sensors and the 2-D or 3-D drone; a tree that sends nothing with no message in
         flight, or one whose messages have compiled handlers, the messages in flight having
         reached everyone; records of the layout's columns."""
         sensors = sim.mission.compiled_sensors(sim)
         recorder = sim.recorder
         if (
             sensors is None
-            or not isinstance(sim.model, Drone2D)
+            or not isinstance(sim.model, Drone2D | Drone3D)
             or sim.world.datalink.channel
             or list(recorder.columns) != list(self.layout.names)
             or recorder.behaviour is None
@@ -393,7 +399,13 @@ class CompiledEngine:
             return None
         if self._trig_agrees is None:
             self._trig_agrees = trig_agrees_with_numpy()
-        return Fused(sensors, messaging) if self._trig_agrees else None
+        if not self._trig_agrees:
+            return None
+        model = sim.model
+        if isinstance(model, Drone3D):
+            p = model.params
+            return Fused(sensors, messaging, (p.max_climb_rate, p.climb_step, p.max_altitude))
+        return Fused(sensors, messaging)
 
     @staticmethod
     def _after(

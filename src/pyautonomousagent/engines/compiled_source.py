@@ -9,7 +9,8 @@ engine keeps them; ``c0, c1, ...`` are the swarm's columns and blackboard arrays
 :attr:`Layout.names` order. A leaf calls its :class:`~pyautonomousagent.kernels.LeafKernel`.
 The rules are the batched engine's (``_sequence``, ``_selector``, ``_decorator``), written
 for one agent. ``tick`` ticks every agent; ``block_serial``/``block_parallel`` run whole
-iterations (sensors, the 2-D drone's motion, the tree, control and recording) agent by agent.
+iterations (sensors, the 2-D drone's motion, with the 3-D drone's altitude where
+:attr:`Layout.vertical` is set, the tree, control and recording) agent by agent.
 """
 
 from __future__ import annotations
@@ -78,6 +79,9 @@ class Layout:
             (:func:`deferrable`); the tree marks each agent's in ``pend`` (-1: none).
         constants: the numbers the code reads from ``kf`` and ``ki``, filled while the
             source is written.
+        vertical: the 3-D drone's ``(max_climb_rate, climb_step, max_altitude)`` where the
+            motion model is the 3-D drone (its altitude and climb rate are moved too, the
+            control signal u_w kept in ``uc``), else None (the 2-D drone).
     """
 
     names: tuple[str, ...]
@@ -85,6 +89,7 @@ class Layout:
     outboxes: tuple[int, ...] = ()
     deferred: tuple[int, ...] = ()
     constants: Constants = field(default_factory=Constants)
+    vertical: tuple[float, float, float] | None = None
 
     @property
     def arrays(self) -> str:
@@ -284,7 +289,8 @@ def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:
 
 
 def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
-    """Phase 2 for agent ``a``: the sensors, then the 2-D drone's step. ``cache`` keeps the
+    """Phase 2 for agent ``a``: the sensors, then the 2-D drone's step (and the 3-D drone's
+    altitude, :func:`_vertical_motion`). ``cache`` keeps the
     sine and cosine of the agent's last two headings (rows 0-2 the latest, 3-5 the one
     before: a drone on course turns back and forth between two headings), so that the same
     inputs give the same bits without calling ``sin`` and ``cos`` again."""
@@ -313,16 +319,42 @@ if moving:
     {x}[a] = {x}[a] + speed * sine
     {y}[a] = {y}[a] + speed * cosine
     {v}[a] = np_minimum(np_maximum(speed + us[a], 0.0), max_speed)
-    {h}[a] = wrap_degrees(heading + uh[a])
+    {h}[a] = wrap_degrees(heading + uh[a]){_vertical_motion(layout)}
 else:
-    {v}[a] = 0.0
+    {v}[a] = 0.0{_vertical_stop(layout)}
     if stopped_at[a] < 0:
         stopped_at[a] = t"""
     return "\n".join(indent + line for line in lines.splitlines())
 
 
+def _vertical_refs(layout: Layout) -> tuple[str, str, str]:
+    """Where the code reads the 3-D drone's max_climb_rate, climb_step and max_altitude."""
+    assert layout.vertical is not None
+    top, step, ceiling = layout.constants.refs("drone3d", layout.vertical)
+    return top, step, ceiling
+
+
+def _vertical_motion(layout: Layout) -> str:
+    """The 3-D drone's eqs. 5-6 for agent ``a`` (``models.drone3d.advance_vertical``), after
+    the 2-D step in :func:`_motion`; "" for the 2-D drone."""
+    if layout.vertical is None:
+        return ""
+    z, w = layout.array("z"), layout.array("climb_rate")
+    top, _, ceiling = _vertical_refs(layout)
+    return f"""
+    climb = {w}[a]
+    {z}[a] = np_minimum(np_maximum({z}[a] + climb, 0.0), {ceiling})
+    {w}[a] = np_minimum(np_maximum(climb + uc[a], -{top}), {top})"""
+
+
+def _vertical_stop(layout: Layout) -> str:
+    """A 3-D drone that cannot move stops climbing; "" for the 2-D drone."""
+    return "" if layout.vertical is None else f"\n    {layout.array('climb_rate')}[a] = 0.0"
+
+
 def _control(layout: Layout, indent: str) -> str:
-    """Phase 4 for agent ``a``: the 2-D drone's speed and turn steps toward the requests."""
+    """Phase 4 for agent ``a``: the 2-D drone's speed and turn steps toward the requests
+    (and the 3-D drone's climb step toward the requested altitude)."""
     v, h = layout.array("speed"), layout.array("heading")
     rs, rh = layout.array("requested_speed"), layout.array("requested_heading")
     lines = f"""us[a] = speed_step * np_sign({rs}[a] - {v}[a])
@@ -330,6 +362,12 @@ error = wrap_degrees({rh}[a] - {h}[a])
 if error > 180.0:
     error = error - 360.0
 uh[a] = turn_step * np_sign(error)"""
+    if layout.vertical is not None:  # eq. 7, models.drone3d.climb_control
+        z, w, ra = (layout.array(k) for k in ("z", "climb_rate", "requested_altitude"))
+        top, step, _ = _vertical_refs(layout)
+        lines += f"""
+wanted = np_minimum(np_maximum({ra}[a] - ({z}[a] + {w}[a]), -{top}), {top})
+uc[a] = np_minimum(np_maximum(wanted - {w}[a], -{step}), {step})"""
     return "\n".join(indent + line for line in lines.splitlines())
 
 
@@ -344,7 +382,7 @@ def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, inde
 
 #: The arguments of the fused functions from the node statuses on (see
 #: :func:`block_function`).
-_FUSED_ARGS = """st, cur, pend, kf, ki, {arrays}, us, uh, cache,
+_FUSED_ARGS = """st, cur, pend, kf, ki, {arrays}, us, uh, uc, cache,
            {records}, traces, traced_at, behaviour, leaf_rows, stopped_at,
            max_speed, speed_step, turn_step"""
 
@@ -357,10 +395,11 @@ def block_function(
     parallel: bool,
 ) -> str:
     """``block_serial``/``block_parallel(t0, count, every, chunk, st, cur, pend, kf, ki, arrays...,
-    us, uh, cache (6, N), records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
+    us, uh, uc, cache (6, N), records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
     max_speed, speed_step, turn_step) -> count``: iterations ``t0 + 1 .. t0 + count`` of
     Phases 2 (sensors, motion), 3, 4 and 6 for every agent, ``chunk`` agents at a time (no
-    agent hears another: the tree sends no message). ``cache``: see :func:`_motion`."""
+    agent hears another: the tree sends no message). ``us``, ``uh``, ``uc``: the control
+signals u_v, u_a and (3-D drone) u_w, shape (N,); ``cache``: see :func:`_motion`."""
     records = ", ".join(f"r{j}" for j in range(len(layout.names)))
     store = "\n".join(
         f"                r{j}[row, first:last] = c{j}[first:last]"
@@ -495,7 +534,7 @@ def message_block_function(
     parallel: bool,
 ) -> str:
     """``block_messages_serial``/``block_messages_parallel(t0, count, every, chunk, st, cur,
-    pend, kf, ki, arrays..., outboxes..., us, uh, cache, records..., traces, traced_at,
+    pend, kf, ki, arrays..., outboxes..., us, uh, uc, cache, records..., traces, traced_at,
     behaviour, leaf_rows, stopped_at, max_speed, speed_step, turn_step, reach, order, counts,
     lowest, inboxes..., handler state...) -> iterations done``: up to ``count`` whole
     iterations, Phase by Phase over every agent (``chunk`` agents at a time, on every core

@@ -157,6 +157,4 @@ class Drone3D:
             s["speed"], s["heading"], s["requested_speed"], s["requested_heading"],
             self.params.horizontal,
         )  # fmt: skip
-        self.u_climb = climb_control(
-            s["z"], s["climb_rate"], s["requested_altitude"], self.params
-        )
+        self.u_climb = climb_control(s["z"], s["climb_rate"], s["requested_altitude"], self.params)

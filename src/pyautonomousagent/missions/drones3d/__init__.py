@@ -15,9 +15,11 @@ from typing import Any, ClassVar
 import numpy as np
 
 from pyautonomousagent.datalink import Delivery
+from pyautonomousagent.kernels import HandlerKernel, SensorKernel
 from pyautonomousagent.missions.drones.leaves import GATHERING
 from pyautonomousagent.missions.drones.mission import TARGET_COLOUR, DroneMission, cycled
 from pyautonomousagent.missions.drones.sensors import drain_energy
+from pyautonomousagent.missions.drones3d.kernels import adopt_point_everyone_3d, drain_energy_3d
 from pyautonomousagent.missions.drones3d.leaves import (
     DESTINATION_3D,
     PATROL_3D,
@@ -108,6 +110,18 @@ def sense_climb(mission: DroneMission, sim: Simulation) -> None:
     s["energy"][:] = drain_energy(s["energy"], mission.params.climb_energy_use * climbed)
 
 
+def compiled_sensors_3d(mission: DroneMission, sim: Simulation) -> SensorKernel | None:
+    """``sense_climb`` and the drones' sensors for one drone (``kernels.drain_energy_3d``)
+    while no radiation source is active; None otherwise."""
+    if any(source.active for source in sim.world.objects.radiation_sources):
+        return None
+    p = mission.params
+    return SensorKernel(
+        drain_energy_3d, ("energy", "climb_rate"), (p.energy_use, p.climb_energy_use),
+        mission._stopped,
+    )  # fmt: skip
+
+
 def set_surveillance_3d(swarm: Swarm, points: np.ndarray) -> None:
     """Each drone's surveillance position and first destination, shape (N, 3)."""
     bb = swarm.blackboard
@@ -167,13 +181,19 @@ class Gathering3DMission(GatheringMission):
         sense_climb(self, sim)
         return super().sense(sim)
 
+    def compiled_sensors(self, sim: Simulation) -> SensorKernel | None:
+        """:meth:`sense` for one drone, for the compiled engine's fused loop."""
+        return compiled_sensors_3d(self, sim)
+
     def message_types(self) -> list[MessageType]:
         """Sharing data, and "gathering" (recorded) with the altitude."""
         kinds = [kind for kind in super().message_types() if kind.name != GATHERING]
         return [
             *kinds,
             MessageType(GATHERING, self.adopt_gathering_position, recorded=True,
-                        doc="x, y, z: the position to gather on"),
+                        doc="x, y, z: the position to gather on",
+                        kernel=HandlerKernel(adopt_point_everyone_3d, ("x", "y", "z"),
+                                             SURVEILLANCE_3D)),
         ]  # fmt: skip
 
     def adopt_gathering_position(self, sim: Simulation, delivery: Delivery) -> None:
@@ -240,6 +260,10 @@ class Patrol3DMission(PatrolMission):
         """The climb's energy, then the drones' sensors."""
         sense_climb(self, sim)
         return super().sense(sim)
+
+    def compiled_sensors(self, sim: Simulation) -> SensorKernel | None:
+        """:meth:`sense` for one drone, for the compiled engine's fused loop."""
+        return compiled_sensors_3d(self, sim)
 
     def marks(self) -> list[Mark]:
         """Slots R1.. (on the ground), the two patrol positions with their altitude."""

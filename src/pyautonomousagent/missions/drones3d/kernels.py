@@ -11,6 +11,7 @@ import numpy as np
 
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.jit import njit
+from pyautonomousagent.kernels import np_maximum
 
 
 @njit(inline="always")
@@ -89,3 +90,28 @@ def transmit_point_3d(a: int, x: np.ndarray, y: np.ndarray, px: np.ndarray, py: 
     outbox[4, a] = py[a]
     outbox[5, a] = pz[a]
     return SUCCESS
+
+
+@njit(inline="always")
+def drain_energy_3d(a: int, energy: np.ndarray, climb_rate: np.ndarray, use: float,
+                    climb_use: float) -> bool:  # fmt: skip
+    """``sense_climb`` then ``DroneMission.sense`` without an active radiation source: the
+    climb's energy, then the energy of the iteration; True where some is left."""
+    level = np_maximum(energy[a] - climb_use * np_maximum(climb_rate[a], 0.0), 0.0)
+    level = np_maximum(level - use, 0.0)
+    energy[a] = level
+    return level > 0.0
+
+
+@njit
+def adopt_point_everyone_3d(t: int, senders: np.ndarray, data: np.ndarray, count: int,
+                            px: np.ndarray, py: np.ndarray, pz: np.ndarray) -> None:  # fmt: skip
+    """``Gathering3DMission.adopt_gathering_position`` of a delivery that reached everyone:
+    every drone but the sender takes the point (data rows x, y, z); the last message wins."""
+    for m in range(count):
+        s = senders[m]
+        for r in range(px.shape[0]):
+            if r != s:
+                px[r] = data[0, m]
+                py[r] = data[1, m]
+                pz[r] = data[2, m]
