@@ -229,7 +229,8 @@ def test_missing_file(tmp_path):
 
 def test_unknown_scenario_name():
     with pytest.raises(
-        ScenarioError, match=r"unknown scenario 'gatherin'; did you mean 'gathering'\?"
+        ScenarioError,
+        match=r"unknown scenario 'gatherin'; did you mean 'gathering'( or 'gathering-3d')?\?",
     ):
         load("gatherin")
     with pytest.raises(ScenarioError, match="known: gathering, patrol"):

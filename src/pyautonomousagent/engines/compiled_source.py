@@ -399,7 +399,7 @@ def block_function(
     max_speed, speed_step, turn_step) -> count``: iterations ``t0 + 1 .. t0 + count`` of
     Phases 2 (sensors, motion), 3, 4 and 6 for every agent, ``chunk`` agents at a time (no
     agent hears another: the tree sends no message). ``us``, ``uh``, ``uc``: the control
-signals u_v, u_a and (3-D drone) u_w, shape (N,); ``cache``: see :func:`_motion`."""
+    signals u_v, u_a and (3-D drone) u_w, shape (N,); ``cache``: see :func:`_motion`."""
     records = ", ".join(f"r{j}" for j in range(len(layout.names)))
     store = "\n".join(
         f"                r{j}[row, first:last] = c{j}[first:last]"

@@ -117,7 +117,7 @@ def _drone3d(
         raise ScenarioError(
             f"scenario {scenario.name!r}: model drone3d moves the state columns "
             f"{', '.join(COLUMNS_3D)}, which mission {scenario.mission_type.name!r} does not "
-            "declare (fly a 3-D mission, e.g. gathering-3d, or add them to its columns)"
+            "declare (add them to its columns: models.drone3d.COLUMNS_3D)"
         )
     p = scenario.parameters
     params = Drone3DParameters(
