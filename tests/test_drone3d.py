@@ -1,0 +1,207 @@
+"""The 3-D drone (issue 18, part 1): one step worked by hand, the altitude loop, the 3-D
+patrol visiting its points at their altitudes on every engine with identical data (on both
+SIMD levels), the 3-D leaves on both engines, and the 3-D gathering."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from pyautonomousagent import Simulation, jit, load
+from pyautonomousagent.missions.drones3d import leaves as leaves3d
+from pyautonomousagent.models.drone3d import (
+    Drone3D,
+    Drone3DParameters,
+    advance_vertical,
+    climb_control,
+)
+from pyautonomousagent.testing import check_leaf
+from tests.test_simd_levels import _enabled_avx512
+
+ENGINES = ("pytrees", "batched", *(("compiled",) if jit.available() else ()))
+
+
+def _swarm(**values: float) -> dict[str, np.ndarray]:
+    """One agent's state columns, shape (1,) each."""
+    names = ("x", "y", "z", "speed", "heading", "climb_rate",
+             "requested_speed", "requested_heading", "requested_altitude")  # fmt: skip
+    return {k: np.array([float(values.get(k, 0.0))]) for k in names}
+
+
+def test_one_step_worked_by_hand():
+    # Defaults: max_speed 0.1, speed_step 0.1, turn_step 1, max_climb_rate 0.05,
+    # climb_step 0.05, max_altitude 100. Heading 90 flies east: sin 90 deg = 1.
+    model = Drone3D(Drone3DParameters(), 1)
+    s = _swarm(x=1.0, y=2.0, z=3.0, speed=0.05, heading=90.0, climb_rate=0.02)
+    model.u_speed[:], model.u_heading[:], model.u_climb[:] = 0.1, 1.0, -0.05
+    model.advance(s, np.array([True]))
+    assert s["x"][0] == pytest.approx(1.05, abs=1e-15)  # eq. 1: 1 + 0.05 * sin 90
+    assert s["y"][0] == pytest.approx(2.0, abs=1e-15)  # eq. 2: 2 + 0.05 * cos 90
+    assert s["speed"][0] == 0.1  # eq. 3: min(max(0.05 + 0.1, 0), 0.1)
+    assert s["heading"][0] == 91.0  # eq. 4: 90 + 1
+    assert s["z"][0] == pytest.approx(3.02, abs=1e-15)  # eq. 5: 3 + 0.02 (the old rate)
+    assert s["climb_rate"][0] == pytest.approx(-0.03, abs=1e-15)  # eq. 6: 0.02 - 0.05
+    # Phase 4 from there, asking for altitude 3.5, speed 0.1 and heading 80:
+    s["requested_altitude"][:], s["requested_speed"][:], s["requested_heading"][:] = 3.5, 0.1, 80
+    model.control(s)
+    # eq. 7: w* = clip(3.5 - (3.02 - 0.03), -0.05, 0.05) = 0.05 (far: full climb);
+    # u_w = clip(0.05 - (-0.03), -0.05, 0.05) = 0.05 (bang: one full step)
+    assert model.u_climb[0] == pytest.approx(0.05, abs=1e-15)
+    assert model.u_speed[0] == 0.0  # speed 0.1 = the request
+    assert model.u_heading[0] == -1.0  # 80 is 11 degrees to the left
+
+
+def test_the_last_step_is_trimmed_and_the_ground_holds():
+    p = Drone3DParameters()
+    # Near the request: z 10, w 0.05, h* 10.06: w* = clip(10.06 - 10.05) = 0.01 (within one
+    # step), u_w = 0.01 - 0.05 = -0.04 (not the full -0.05 of a bang).
+    u = climb_control(np.array([10.0]), np.array([0.05]), np.array([10.06]), p)
+    assert u[0] == pytest.approx(-0.04, abs=1e-12)
+    # The ground: z 0.01 sinking at 0.05 lands at 0, not -0.04 (eq. 5's clip).
+    z, w = advance_vertical(np.array([0.01]), np.array([-0.05]), np.array([0.05]), p)
+    assert z[0] == 0.0 and w[0] == 0.0
+    # The ceiling: max_altitude 2, z 1.98 climbing at 0.05 stops at 2.
+    z, _ = advance_vertical(
+        np.array([1.98]), np.array([0.05]), np.zeros(1), Drone3DParameters(max_altitude=2.0)
+    )
+    assert z[0] == 2.0
+
+
+@pytest.mark.parametrize(("start", "wanted"), [(0.0, 12.345), (30.0, 0.0), (9.97, 10.0)])
+def test_the_altitude_settles_on_the_request_within_bounds(start: float, wanted: float):
+    p = Drone3DParameters()
+    z, w, u = np.array([start]), np.zeros(1), np.zeros(1)
+    heights, rates = [], []
+    for _ in range(1500):
+        z, w = advance_vertical(z, w, u, p)
+        u = climb_control(z, w, np.array([wanted]), p)
+        heights.append(z[0])
+        rates.append(w[0])
+    assert min(heights) >= 0.0 and max(np.abs(rates)) <= p.max_climb_rate
+    # reached in about |wanted - start| / max_climb_rate iterations and held there
+    settle = int(abs(wanted - start) / p.max_climb_rate) + 5
+    assert np.all(np.abs(np.array(heights[settle:]) - wanted) <= 1e-9), heights[settle - 5 :]
+
+
+def _digest(sim: Simulation) -> dict[str, np.ndarray]:
+    """Every recorded column, the traces and the events of a finished run."""
+    r = sim.recorder
+    data = {k: r.column(k) for k in r.columns}
+    data["@traces"] = r.traces[: r.count]
+    data["@events"] = np.frombuffer(json.dumps(sim.events).encode(), dtype=np.uint8)
+    return data
+
+
+def _visits(sim: Simulation, point: tuple[float, float, float], tolerance: float) -> np.ndarray:
+    """For each agent: whether it came within ``tolerance`` of ``point`` horizontally and
+    in altitude, shape (N,)."""
+    r = sim.recorder
+    x, y, z = (r.column(k) for k in ("x", "y", "z"))
+    near = np.hypot(x - point[0], y - point[1]) <= tolerance
+    return (near & (np.abs(z - point[2]) <= tolerance)).any(axis=0)
+
+
+def test_patrol_3d_visits_its_points_at_their_altitudes_on_every_engine_alike():
+    scenario = load("patrol-3d").with_overrides(agents=3, iterations=2600)
+    points = scenario.objects.patrol_positions
+    tolerance = scenario.parameters.destination_tolerance
+    runs = {e: Simulation.create(scenario, seed=4, engine=e).run(progress=False) for e in ENGINES}
+    if "compiled" in runs:
+        assert runs["compiled"].engine.fuses(runs["compiled"])  # the fused loop flew it
+    for engine, sim in runs.items():
+        z = sim.recorder.column("z")
+        assert z.min() >= 0.0 and z.max() <= scenario.parameters.max_altitude, engine
+        for point in points:
+            assert _visits(sim, point, tolerance).all(), (engine, point)
+        energy = sim.recorder.column("energy")
+        landed = (z == 0.0) & (np.diff(energy, axis=0, prepend=energy[:1]) > 0)
+        assert landed.any(axis=0).all(), engine  # every drone refuelled on the ground
+    reference = _digest(runs["pytrees"])
+    for engine in ENGINES[1:]:
+        other = _digest(runs[engine])
+        assert reference.keys() == other.keys()
+        for key, values in reference.items():
+            assert np.array_equal(values, other[key], equal_nan=True), (engine, key)
+
+
+def test_gathering_3d_gathers_at_the_senders_altitude_on_every_engine_alike():
+    scenario = load("gathering-3d").with_overrides(iterations=2400, gathering_iteration=900)
+    runs = {e: Simulation.create(scenario, seed=2, engine=e).run(progress=False) for e in ENGINES}
+    reference = _digest(runs["pytrees"])
+    for engine in ENGINES[1:]:
+        other = _digest(runs[engine])
+        for key, values in reference.items():
+            assert np.array_equal(values, other[key], equal_nan=True), (engine, key)
+    sim = runs["batched"]
+    order = [e for e in sim.events if e["event"] == "message"]
+    assert order and order[0]["data"] == {"x": 50.0, "y": 50.0, "z": 20.0}  # drone1's point
+    bb = sim.swarm.blackboard
+    assert np.all(bb["z_surveillance_position"] == 20.0)
+    # after their next refuelling every drone flies there and hovers at 20 units
+    there = _visits(sim, (50.0, 50.0, 20.0), scenario.parameters.destination_tolerance)
+    assert there.all(), there
+    assert np.all(sim.swarm.columns["z"] == 20.0), sim.swarm.columns["z"]
+
+
+@pytest.mark.parametrize(
+    ("leaf_type", "scenario", "ports"),
+    [
+        (leaves3d.ConditionDestinationReached3D, "patrol-3d", {"distance": 30.0}),
+        (leaves3d.ActionNavigateToDestination3DA, "patrol-3d", {"distance": 20.0}),
+        (leaves3d.ActionRequestAltitudeS, "patrol-3d", {"altitude": 7.5}),
+        (leaves3d.ActionSetDestinationEqualToSurveillance3DS, "gathering-3d", {}),
+        (leaves3d.ActionSetDestinationEqualToRefueling3DS, "gathering-3d", {}),
+        (leaves3d.ActionSetDestinationEqualToOtherSurveillance3DS, "patrol-3d", {}),
+        (leaves3d.ActionSetDestinationEqualToCurrentSurveillance3DS, "patrol-3d", {}),
+        (leaves3d.ActionTransmitGatheringMessage3DS, "gathering-3d", {}),
+    ],
+)
+def test_each_3d_leaf_runs_alike_on_both_engines(leaf_type, scenario, ports):
+    assert check_leaf(leaf_type, scenario, agents=6, iterations=40, **ports) == 40
+
+
+#: Run in a subprocess: the 3-D patrol on every engine, a digest of each run's data.
+COMPARE_3D = """
+import hashlib, json, numpy as np
+from pyautonomousagent import Simulation, load, jit
+scenario = load("patrol-3d").with_overrides(agents=3, iterations=900)
+digests = {}
+for engine in ("pytrees", "batched") + (("compiled",) if jit.available() else ()):
+    sim = Simulation.create(scenario, seed=5, engine=engine).run(progress=False)
+    h = hashlib.sha256(json.dumps(sim.events).encode())
+    for key in sorted(sim.recorder.columns):
+        h.update(key.encode() + np.ascontiguousarray(sim.recorder.column(key)).tobytes())
+    h.update(np.ascontiguousarray(sim.recorder.traces[: sim.recorder.count]).tobytes())
+    digests[engine] = h.hexdigest()
+print(json.dumps(digests))
+"""
+
+
+def _digests_3d(disable: str = "") -> dict[str, str]:
+    env = dict(os.environ)
+    env.pop("NPY_DISABLE_CPU_FEATURES", None)
+    if disable:
+        env["NPY_DISABLE_CPU_FEATURES"] = disable
+    src = os.path.join(os.path.dirname(__file__), "..", "src")
+    env["PYTHONPATH"] = os.pathsep.join([os.path.abspath(src), env.get("PYTHONPATH", "")])
+    done = subprocess.run(
+        [sys.executable, "-c", COMPARE_3D], env=env, capture_output=True, text=True, timeout=600
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def test_patrol_3d_engines_agree_with_and_without_avx512():
+    here = _digests_3d()
+    assert len(here) >= 2 and len(set(here.values())) == 1, here
+    features = _enabled_avx512()
+    if not features:
+        pytest.skip("this CPU has no AVX-512: only one SIMD level to test")
+    without = _digests_3d(" ".join(features))
+    assert len(set(without.values())) == 1, without  # the engines agree without AVX-512
+    assert without == here  # and give the same bits on both SIMD levels
