@@ -57,7 +57,12 @@ def run_both(scenario_name: str, **overrides: object) -> tuple[Simulation, Simul
 
 @pytest.mark.parametrize(
     ("scenario", "overrides"),
-    [("gathering", {}), ("patrol", {"agents": 12, "iterations": 4000})],
+    [
+        ("gathering", {}),
+        ("patrol", {"agents": 12, "iterations": 4000}),
+        ("patrol-3d", {"agents": 4, "iterations": 2600}),
+        ("gathering-3d", {"iterations": 2400, "gathering_iteration": 900}),
+    ],
 )
 def test_scenarios_give_the_same_data(scenario: str, overrides: dict[str, object]) -> None:
     reference, batched = run_both(scenario, **overrides)
