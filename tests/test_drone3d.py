@@ -154,6 +154,7 @@ def test_gathering_3d_gathers_at_the_senders_altitude_on_every_engine_alike():
         (leaves3d.ConditionDestinationReached3D, "patrol-3d", {"distance": 30.0}),
         (leaves3d.ActionNavigateToDestination3DA, "patrol-3d", {"distance": 20.0}),
         (leaves3d.ActionRequestAltitudeS, "patrol-3d", {"altitude": 7.5}),
+        (leaves3d.ActionLandA, "patrol-3d", {}),
         (leaves3d.ActionSetDestinationEqualToSurveillance3DS, "gathering-3d", {}),
         (leaves3d.ActionSetDestinationEqualToRefueling3DS, "gathering-3d", {}),
         (leaves3d.ActionSetDestinationEqualToOtherSurveillance3DS, "patrol-3d", {}),

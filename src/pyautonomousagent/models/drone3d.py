@@ -39,7 +39,7 @@ COLUMNS_3D: dict[str, type] = {
 #: Their units and meanings, for a mission's ``meanings``.
 MEANINGS_3D: dict[str, tuple[str, str]] = {
     "z": ("world unit", "altitude above the ground, 0 to max_altitude"),
-    "climb_rate": ("world unit per iteration", "vertical speed, up positive"),
+    "climb_rate": ("world unit / iteration", "vertical speed, up positive"),
     "requested_altitude": ("world unit", "the altitude the control system flies toward"),
 }
 

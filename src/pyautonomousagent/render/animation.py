@@ -3,7 +3,9 @@
 The layout (Fig. 5): the world box ``[0, width] x [0, height]`` at equal aspect with the
 mission's marks (a ``list[Mark]``: refuelling slots R1.., surveillance positions S1.., ...);
 agents as dark-blue circles with a small red dot on the side they head to and their 1-based
-index (labels that would overlap another are moved or left out); events as diamonds with a
+index (labels that would overlap another are moved or left out); where the run records an
+altitude (column ``z``: the 3-D drone), each drone is coloured by it, with a colour bar
+beside the map, and its label reads ``N z=A`` (A: altitude, rounded); events as diamonds with a
 line of text above the map for a while after they happen; beside the map, a panel with the
 iteration and the followed agent's active behaviour, state and blackboard (each with its
 unit), and a legend; optionally, an inset with the tree, each node coloured by the followed
@@ -57,6 +59,10 @@ HEADING_COLOUR = "#e31a1c"
 """Red of the heading dot."""
 FOLLOW_COLOUR = "#ff7f0e"
 """Orange of the ring around the followed agent."""
+ALTITUDE = "z"
+"""The column drawn as altitude where a run records it (world units above the ground)."""
+ALTITUDE_COLOURS = "viridis"
+"""The colour map of the altitude (dark low, yellow high: legible in grey too)."""
 STATUS_COLOURS = {
     SUCCESS: "#2ca02c",
     FAILURE: "#d62728",
@@ -145,7 +151,8 @@ def _value_rows(
     agent: int,
     docs: Mapping[str, tuple[str, str]],
 ) -> list[tuple[str, str]]:
-    """Panel lines for ``keys``: ``x_K, y_K`` (or ``x, y``) pairs as one point, others alone."""
+    """Panel lines for ``keys``: ``x_K, y_K`` (or ``x, y``) pairs as one point, with
+    ``z_K`` (or ``z``) where it is recorded too (a 3-D point); others alone."""
     lines: list[tuple[str, str]] = []
     done: set[str] = set()
     for key in keys:
@@ -154,12 +161,14 @@ def _value_rows(
         if key in ("x", "y") or key.startswith(("x_", "y_")):
             partner = ("y" if key[0] == "x" else "x") + key[1:]
             if partner in columns and partner in keys:
-                done.update((key, partner))
                 xk, yk = (key, partner) if key[0] == "x" else (partner, key)
+                zk = "z" + key[1:]
+                point = [xk, yk, *([zk] if zk in columns and zk in keys else [])]
+                done.update(point)
                 stem = key[2:] if len(key) > 1 else "position"
                 label = _label(stem.removesuffix("_position") or "position", docs.get(xk))
-                value = f"({columns[xk][row, agent]:.2f}, {columns[yk][row, agent]:.2f})"
-                lines.append((label, value))
+                value = ", ".join(f"{columns[k][row, agent]:.2f}" for k in point)
+                lines.append((label, f"({value})"))
                 continue
         values = columns[key]
         v = values[row, agent]
@@ -216,6 +225,12 @@ class FramePainter:
         self.follow = _agent_index(recorder, follow)
         self.trace = recorder.trace(self.follow) if inset else None
         self.radius = DRONE_RADIUS * max(scenario.world)
+        self.altitude = altitude_range(recorder)
+        # labels go to the upper right first; with altitudes (longer labels, of drones that
+        # hover on their marks) to the lower right first, clear of the marks' labels
+        self._diagonals = ((1, -1), (1, 1), (-1, -1), (-1, 1))
+        if self.altitude is not None:
+            self._diagonals = ((1, 1), (1, -1), (-1, 1), (-1, -1))
         self.mission = scenario.create_mission()
         self.marks = list(self.mission.marks() if marks is None else marks)
         self.changing = _MarkLayer(self.mission, recorder)
@@ -279,6 +294,12 @@ class FramePainter:
         self.bodies = circles(agents, 2 * self.radius, DRONE_COLOUR)
         self.dots = circles(agents, 0.8 * self.radius, HEADING_COLOUR)
         self.labelled = agents <= MAX_LABELLED
+        if self.altitude is not None:
+            self.bodies.set_cmap(ALTITUDE_COLOURS)
+            self.bodies.set_clim(*self.altitude)
+            self.bodies.set_array(np.zeros(agents))
+            bar = self.axes.inset_axes((1.03, 0.0, 0.03, 1.0))
+            self.figure.colorbar(self.bodies, cax=bar, label="altitude z [world units]")
         self.event_marks = self.axes.scatter(
             [], [], s=110, marker="D", edgecolors="white", linewidths=1.0, animated=True, zorder=5
         )
@@ -421,6 +442,8 @@ class FramePainter:
         x, y = columns["x"][row], columns["y"][row]
         heading = np.radians(columns["heading"][row])
         self.bodies.set_offsets(np.column_stack([x, y]))
+        if self.altitude is not None:
+            self.bodies.set_array(columns[ALTITUDE][row])
         self.dots.set_offsets(np.column_stack([x + r * np.sin(heading), y + r * np.cos(heading)]))
         self.ring.set_offsets([[x[self.follow], y[self.follow]]])
         iteration = int(self.recorder.iterations[row])
@@ -473,9 +496,9 @@ class FramePainter:
         cell_h = font.cell[0]
         placed: list[tuple[int, float, float, float, float]] = []
         for i, (px, py) in enumerate(points):
-            w = font.width(str(i + 1))
+            w = font.width(self._label(i, row))
             top_y = height - py
-            for dx, dy in ((1, -1), (1, 1), (-1, -1), (-1, 1)):
+            for dx, dy in self._diagonals:
                 left = px + gap if dx > 0 else px - gap - w
                 top = top_y - gap - cell_h if dy < 0 else top_y + gap
                 box = (i, left, top, left + w, top + cell_h)
@@ -491,7 +514,14 @@ class FramePainter:
         """Agent numbers beside the agents (:meth:`label_boxes`)."""
         colour = _rgb(DRONE_COLOUR)
         for i, left, top, _, _ in self.label_boxes(row):
-            self.label_font.draw(pixels, str(i + 1), left, top, colour, anchor="top")
+            self.label_font.draw(pixels, self._label(i, row), left, top, colour, anchor="top")
+
+    def _label(self, agent: int, row: int) -> str:
+        """Agent ``agent``'s label at record ``row``: its number, and its altitude where one
+        is recorded (``3 z=20``)."""
+        if self.altitude is None:
+            return str(agent + 1)
+        return f"{agent + 1} z={self.recorder.columns[ALTITUDE][row, agent]:.0f}"
 
     def _draw_panel(self, pixels: np.ndarray, row: int) -> None:
         font, colour = self.panel_font, (0, 0, 0)
@@ -524,6 +554,15 @@ class FramePainter:
         from PIL import Image
 
         return Image.fromarray(np.ascontiguousarray(self.render(row)[..., :3]))
+
+
+def altitude_range(recorder: Recorder) -> tuple[float, float] | None:
+    """(0, highest recorded altitude, at least 1) where the run records column ``z``, for
+    the colour scale of the altitude; else None."""
+    if ALTITUDE not in recorder.columns:
+        return None
+    top = float(np.max(recorder.columns[ALTITUDE][: recorder.count]))
+    return 0.0, max(top, 1.0)
 
 
 def _agent_index(recorder: Recorder, agent: int | str) -> int:

@@ -49,6 +49,9 @@ PARAMETERS_3D: tuple[Param, ...] = (
     Param("climb_energy_use", 0.5, "percent per world unit climbed",
           "energy used to climb, on top of energy_use (descending costs nothing)",
           minimum=0.0, maximum=100.0),
+    Param("descent_slope", 0.4, "world units down per world unit flown",
+          "steepest glide path toward a lower destination (max_climb_rate / reference_speed "
+          "is the drone's own steepest)", minimum=0.0),
     Param("cruise_altitude", 20.0, "world units",
           "altitude Action_Request_Altitude_S requests by default", minimum=0.0),
 )  # fmt: skip

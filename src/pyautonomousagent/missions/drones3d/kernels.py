@@ -7,11 +7,13 @@ engine-identity tests hold the two equal bit for bit.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.jit import njit
-from pyautonomousagent.kernels import np_maximum
+from pyautonomousagent.kernels import np_maximum, np_minimum
 
 
 @njit(inline="always")
@@ -27,15 +29,19 @@ def destination_reached_3d(a: int, x: np.ndarray, y: np.ndarray, z: np.ndarray,
 
 
 @njit(inline="always")
-def navigate_3d(a: int, x: np.ndarray, y: np.ndarray, to_x: np.ndarray, to_y: np.ndarray,
-                to_z: np.ndarray, speed: np.ndarray, altitude: np.ndarray, cruise: float,
-                distance: float) -> int:  # fmt: skip
-    """Action_Navigate_To_Destination_3D_A: speed (0 over the destination) and altitude;
-    RUNNING. Its last step, the requested heading, is ``kernels.bearing`` (a ``Later``)."""
+def navigate_3d(a: int, x: np.ndarray, y: np.ndarray, z: np.ndarray, to_x: np.ndarray,
+                to_y: np.ndarray, to_z: np.ndarray, speed: np.ndarray, altitude: np.ndarray,
+                cruise: float, distance: float, slope: float) -> int:  # fmt: skip
+    """Action_Navigate_To_Destination_3D_A: speed (0 over the destination) and altitude
+    (the glide path toward a lower destination); RUNNING. Its last step, the requested
+    heading, is ``kernels.bearing`` (a ``Later``)."""
     dx = x[a] - to_x[a]
     dy = y[a] - to_y[a]
-    speed[a] = 0.0 if dx * dx + dy * dy <= distance * distance else cruise
-    altitude[a] = to_z[a]
+    squared = dx * dx + dy * dy
+    speed[a] = 0.0 if squared <= distance * distance else cruise
+    target = to_z[a]
+    glide = target + slope * math.sqrt(squared)
+    altitude[a] = np_maximum(target, np_minimum(z[a], glide))
     return RUNNING
 
 
@@ -69,6 +75,16 @@ def patrol_position_3d(a: int, index: np.ndarray, to_x: np.ndarray, to_y: np.nda
     to_y[a] = py
     to_z[a] = pz
     return SUCCESS
+
+
+@njit(inline="always")
+def land(a: int, z: np.ndarray, heading: np.ndarray, requested_speed: np.ndarray,
+         requested_heading: np.ndarray, requested_altitude: np.ndarray) -> int:  # fmt: skip
+    """Action_Land_A."""
+    requested_speed[a] = 0.0
+    requested_heading[a] = heading[a]
+    requested_altitude[a] = 0.0
+    return SUCCESS if z[a] <= 0.0 else RUNNING
 
 
 @njit(inline="always")

@@ -10,11 +10,14 @@ for the compiled engine.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
-from pyautonomousagent.arrays import bearing, choose
+import numpy as np
+
+from pyautonomousagent.arrays import bearing, choose, maximum, minimum
 from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
-from pyautonomousagent.bt.status import RUNNING, SUCCESS, success_if
+from pyautonomousagent.bt.status import RUNNING, SUCCESS, status_if, success_if
 from pyautonomousagent.kernels import Later, LeafKernel, Sends
 from pyautonomousagent.kernels import bearing as bearing_of_one
 from pyautonomousagent.missions.drones.leaves import (
@@ -41,6 +44,9 @@ PATROL_3D = (
 #: The arrays of ``kernels.patrol_position_3d``, in its order.
 PATROL_ARRAYS_3D = (PATROL_3D[0], *DESTINATION_3D, *SURVEILLANCE_3D, *PATROL_3D[1:])
 DISTANCE = Port("distance", float, "destination_tolerance", 0.0, "world units")
+SLOPE = Port("slope", float, "descent_slope", 0.0,
+             "steepest descent toward a lower destination, world units down per world unit "
+             "flown")  # fmt: skip
 
 
 @register_leaf
@@ -66,17 +72,29 @@ class ConditionDestinationReached3D(Leaf):
         return LeafKernel(k.destination_reached_3d, names, (self.distance,))
 
 
+def _sqrt(value: Any) -> Any:
+    """Square root (correctly rounded: the same bits for one agent and for arrays)."""
+    return np.sqrt(value) if isinstance(value, np.ndarray) else math.sqrt(value)
+
+
 @register_leaf
 class ActionNavigateToDestination3DA(Leaf):
-    """Request the heading toward the current destination, its altitude, and cruise speed
-    (0 once within ``distance`` horizontally: the drone hovers while it climbs or descends
-    to it); always RUNNING."""
+    """Fly toward the current destination and its altitude; always RUNNING.
+
+    Requests the heading toward it, cruise speed (0 once within ``distance`` horizontally:
+    the drone hovers while it climbs or descends the rest of the way), and the altitude
+    ``max(z_d, min(z, z_d + slope * d))`` (``z_d``: the destination's altitude, ``d``: the
+    horizontal distance to it): a higher destination is climbed to at once; toward a lower
+    one the drone holds its altitude until it meets the glide path of ``slope`` down to it,
+    then follows that path (so it does not reach the ground before its refuelling slot).
+    """
 
     type_name = "Action_Navigate_To_Destination_3D_A"
-    ports = (SPEED, DISTANCE)
+    ports = (SPEED, DISTANCE, SLOPE)
     keys = DESTINATION_3D
     speed: float
     distance: float
+    slope: float
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         bb = agents.blackboard
@@ -84,15 +102,18 @@ class ActionNavigateToDestination3DA(Leaf):
         agents.requested_heading = bearing(agents.x, agents.y, to_x, to_y)
         dx = agents.x - to_x
         dy = agents.y - to_y
-        over = dx * dx + dy * dy <= self.distance * self.distance
-        agents.requested_speed = choose(over, 0.0, self.speed)
-        agents.requested_altitude = bb.z_current_destination_position
+        squared = dx * dx + dy * dy
+        agents.requested_speed = choose(squared <= self.distance * self.distance, 0.0, self.speed)
+        to_z = bb.z_current_destination_position
+        glide = to_z + self.slope * _sqrt(squared)
+        agents.requested_altitude = maximum(to_z, minimum(agents.z, glide))
         return RUNNING
 
     def kernel(self, world: World) -> LeafKernel:
         heading = Later(bearing_of_one, ("x", "y", *DESTINATION), "requested_heading")
-        names = ("x", "y", *DESTINATION_3D, "requested_speed", "requested_altitude")
-        return LeafKernel(k.navigate_3d, names, (self.speed, self.distance), later=heading)
+        names = ("x", "y", "z", *DESTINATION_3D, "requested_speed", "requested_altitude")
+        constants = (self.speed, self.distance, self.slope)
+        return LeafKernel(k.navigate_3d, names, constants, later=heading)
 
 
 @register_leaf
@@ -109,6 +130,24 @@ class ActionRequestAltitudeS(Leaf):
 
     def kernel(self, world: World) -> LeafKernel:
         return LeafKernel(k.request_altitude, ("requested_altitude",), (self.altitude,))
+
+
+@register_leaf
+class ActionLandA(Leaf):
+    """Land where the drone is: request speed 0 (keeping the heading) and altitude 0;
+    RUNNING until on the ground (z = 0), then SUCCESS."""
+
+    type_name = "Action_Land_A"
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        agents.requested_speed = 0.0
+        agents.requested_heading = agents.heading
+        agents.requested_altitude = 0.0
+        return status_if(agents.z <= 0.0, SUCCESS, RUNNING)
+
+    def kernel(self, world: World) -> LeafKernel:
+        names = ("z", "heading", "requested_speed", "requested_heading", "requested_altitude")
+        return LeafKernel(k.land, names)
 
 
 def _set_destination(agents: AgentView, x: Any, y: Any, z: Any) -> int:
