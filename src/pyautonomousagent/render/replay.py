@@ -15,6 +15,9 @@ large arrays base64-encoded:
   :mod:`pyautonomousagent.bt.status`);
 - ``values``: float64 state, blackboard and model values per frame, traced agent and column
   (exact), with the active behaviour as a node index;
+- ``altitude``: where the run records column ``z`` (the 3-D drone), uint16 altitudes per
+  frame and agent, scaled like the positions; the page colours each agent by it and adds it
+  to its label (None otherwise);
 - ``changing_marks``: the mission's marks that change during the run
   (:meth:`Mission.frame_marks`, e.g. vacuum's cleaned area), each once with the frame
   intervals where it shows.
@@ -40,7 +43,7 @@ import numpy as np
 
 from pyautonomousagent.bt.status import NAMES
 from pyautonomousagent.recording import Recorder, node_list
-from pyautonomousagent.render.animation import frame_rows
+from pyautonomousagent.render.animation import ALTITUDE, altitude_range, frame_rows
 from pyautonomousagent.render.events import placed_events
 from pyautonomousagent.render.marks import Mark
 
@@ -120,6 +123,7 @@ def replay_data(
         "names": list(recorder.names),
         "iterations": recorder.iterations[rows].tolist(),
         "positions": _positions(recorder, rows),
+        "altitude": _altitudes(recorder, rows),
         "traced": [int(i) for i in traced],
         "nodes": node_list(recorder.nodes),
         "status_names": {str(k): v for k, v in NAMES.items()},
@@ -174,6 +178,20 @@ def _positions(recorder: Recorder, rows: np.ndarray) -> dict[str, Any]:
         out["step"].append(step)
     out["data"] = _b64(np.stack(codes, axis=2))
     return out
+
+
+def _altitudes(recorder: Recorder, rows: np.ndarray) -> dict[str, Any] | None:
+    """The altitude of every agent at ``rows`` as uint16 (frames, N), base64, with its
+    ``offset``, ``step`` and ``top`` (the colour scale's top, world units); None where the
+    run records no altitude."""
+    scale = altitude_range(recorder)
+    if scale is None:
+        return None
+    low, high = scale
+    step = (high - low) / 65535
+    values = recorder.columns[ALTITUDE][rows].astype(np.float64)
+    codes = np.clip(np.rint((values - low) / step), 0, 65535).astype("<u2")
+    return {"offset": low, "step": step, "top": high, "data": _b64(codes)}
 
 
 def _b64(array: np.ndarray) -> str:
