@@ -4,11 +4,13 @@ SIMD levels), the 3-D leaves on both engines, and the 3-D gathering."""
 
 from __future__ import annotations
 
+import base64
 import json
 import os
 import subprocess
 import sys
 
+import matplotlib
 import numpy as np
 import pytest
 
@@ -20,6 +22,8 @@ from pyautonomousagent.models.drone3d import (
     advance_vertical,
     climb_control,
 )
+from pyautonomousagent.render.animation import FramePainter
+from pyautonomousagent.render.replay import replay_data
 from pyautonomousagent.testing import check_leaf
 from tests.test_simd_levels import _enabled_avx512
 
@@ -206,3 +210,27 @@ def test_patrol_3d_engines_agree_with_and_without_avx512():
     without = _digests_3d(" ".join(features))
     assert len(set(without.values())) == 1, without  # the engines agree without AVX-512
     assert without == here  # and give the same bits on both SIMD levels
+
+
+def test_animation_and_replay_show_the_altitude():
+    scenario = load("gathering-3d").with_overrides(iterations=700)
+    recorder = Simulation.create(scenario, engine="batched").run(progress=False).recorder
+    z = recorder.column("z")
+    row = 700  # drones hover at 20, 35, 10 and 25 units
+    painter = FramePainter(recorder, scenario)
+    assert painter.altitude == (0.0, z.max())
+    assert [painter._label(a, row) for a in range(4)] == ["1 z=20", "2 z=35", "3 z=10", "4 z=25"]
+    painter.render(row)
+    colours = painter.bodies.get_facecolors()[:, :3]
+    expected = matplotlib.colormaps["viridis"](z[row] / z.max())[:, :3]
+    assert np.allclose(colours, expected)  # coloured by altitude, the highest yellow
+    data = replay_data(recorder, scenario.world, scenario.name)
+    altitude = data["altitude"]
+    codes = np.frombuffer(base64.b64decode(altitude["data"]), dtype="<u2").reshape(-1, 4)
+    frames = np.asarray(data["iterations"])
+    decoded = altitude["offset"] + codes * altitude["step"]
+    assert np.allclose(decoded, z[frames], atol=altitude["step"])
+    flat = load("gathering").with_overrides(iterations=5)
+    flat_recorder = Simulation.create(flat, engine="batched").run(progress=False).recorder
+    assert replay_data(flat_recorder, flat.world, flat.name)["altitude"] is None
+    assert FramePainter(flat_recorder, flat).altitude is None
