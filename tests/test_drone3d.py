@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 
 from pyautonomousagent import Simulation, jit, load
+from pyautonomousagent.bt.leaf import Leaf, leaf_type
+from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.missions.drones3d import leaves as leaves3d
 from pyautonomousagent.models.drone3d import (
     Drone3D,
@@ -24,6 +26,7 @@ from pyautonomousagent.models.drone3d import (
 )
 from pyautonomousagent.render.animation import FramePainter
 from pyautonomousagent.render.replay import replay_data
+from pyautonomousagent.state import AgentView
 from pyautonomousagent.testing import check_leaf
 from tests.test_simd_levels import _enabled_avx512
 
@@ -234,3 +237,61 @@ def test_animation_and_replay_show_the_altitude():
     flat_recorder = Simulation.create(flat, engine="batched").run(progress=False).recorder
     assert replay_data(flat_recorder, flat.world, flat.name)["altitude"] is None
     assert FramePainter(flat_recorder, flat).altitude is None
+
+
+def _one_drone(**values: float) -> tuple[Simulation, AgentView]:
+    """A one-drone patrol-3d run (not stepped) with the given columns and blackboard keys."""
+    sim = Simulation.create(load("patrol-3d").with_overrides(agents=1), engine="batched")
+    for key, value in values.items():
+        target = sim.swarm.columns if key in sim.swarm.columns else sim.swarm.blackboard
+        target[key][:] = value
+    return sim, sim.swarm.agent(0)
+
+
+def _leaf(name: str, **ports: float) -> Leaf:
+    defaults = {"destination_tolerance": 0.5, "reference_speed": 0.1, "descent_slope": 0.4,
+                "cruise_altitude": 20.0}  # fmt: skip
+    return leaf_type(name).create(ports, defaults, where=f"test {name}")
+
+
+def test_navigate_3d_glides_down_and_climbs_at_once():
+    # 30 units east of a destination on the ground, at 20 units: the glide path is at
+    # 0 + 0.4 * 30 = 12 below 20, so the drone requests 12 (it has met the path)
+    sim, drone = _one_drone(x=30.0, y=0.0, z=20.0, x_current_destination_position=0.0,
+                            y_current_destination_position=0.0,
+                            z_current_destination_position=0.0)  # fmt: skip
+    leaf = _leaf("Action_Navigate_To_Destination_3D_A")
+    assert leaf.evaluate(drone, sim.world) == RUNNING
+    assert drone.requested_altitude == pytest.approx(12.0, abs=1e-12)
+    assert drone.requested_speed == 0.1 and drone.requested_heading == 270.0  # due west
+    # 100 units away the path is at 40, above 20: hold 20
+    drone.x = 100.0
+    leaf.evaluate(drone, sim.world)
+    assert drone.requested_altitude == 20.0
+    # a destination above: climb to it at once, whatever the distance
+    sim.swarm.blackboard["z_current_destination_position"][:] = 35.0
+    leaf.evaluate(drone, sim.world)
+    assert drone.requested_altitude == 35.0
+    # within 0.5 horizontally: hover (speed 0) and descend the rest of the way
+    drone.x, drone.y = 0.3, 0.3  # 0.42 away
+    leaf.evaluate(drone, sim.world)
+    assert drone.requested_speed == 0.0
+
+
+def test_destination_reached_3d_is_a_cylinder_and_land_waits_for_the_ground():
+    sim, drone = _one_drone(x=0.3, y=0.4, z=10.4, x_current_destination_position=0.0,
+                            y_current_destination_position=0.0,
+                            z_current_destination_position=10.0)  # fmt: skip
+    reached = _leaf("Condition_Destination_Reached_3D")
+    assert reached.evaluate(drone, sim.world) == SUCCESS  # 0.5 across, 0.4 below: inside
+    drone.z = 10.6
+    assert reached.evaluate(drone, sim.world) == FAILURE  # 0.6 above
+    land = _leaf("Action_Land_A")
+    drone.heading = 123.0
+    assert land.evaluate(drone, sim.world) == RUNNING
+    assert (drone.requested_speed, drone.requested_altitude) == (0.0, 0.0)
+    assert drone.requested_heading == 123.0
+    drone.z = 0.0
+    assert land.evaluate(drone, sim.world) == SUCCESS
+    request = _leaf("Action_Request_Altitude_S")
+    assert request.evaluate(drone, sim.world) == SUCCESS and drone.requested_altitude == 20.0

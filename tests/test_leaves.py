@@ -42,7 +42,11 @@ COVERED = {
 }
 #: Mission packages whose leaves are tested in their mission's own test file
 #: (tests/test_vacuum.py, tests/test_radiation_search.py).
-OWN_TESTS = ("pyautonomousagent.missions.vacuum", "pyautonomousagent.missions.radiation_search")
+OWN_TESTS = (
+    "pyautonomousagent.missions.vacuum",
+    "pyautonomousagent.missions.radiation_search",
+    "pyautonomousagent.missions.drones3d",  # tests/test_drone3d.py
+)
 
 
 def make(type_name: str, **params) -> Leaf:
