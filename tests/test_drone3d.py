@@ -27,7 +27,7 @@ from pyautonomousagent.models.drone3d import (
 from pyautonomousagent.render.animation import FramePainter
 from pyautonomousagent.render.replay import replay_data
 from pyautonomousagent.state import AgentView
-from pyautonomousagent.testing import check_leaf
+from pyautonomousagent.testing import check_engines_agree, check_leaf
 from tests.test_simd_levels import _enabled_avx512
 
 ENGINES = ("pytrees", "batched", *(("compiled",) if jit.available() else ()))
@@ -295,3 +295,17 @@ def test_destination_reached_3d_is_a_cylinder_and_land_waits_for_the_ground():
     assert land.evaluate(drone, sim.world) == SUCCESS
     request = _leaf("Action_Request_Altitude_S")
     assert request.evaluate(drone, sim.world) == SUCCESS and drone.requested_altitude == 20.0
+
+
+@pytest.mark.skipif(not jit.available(), reason="numba is not installed")
+def test_the_compiled_tick_steps_alike_too():
+    # Simulation.step() ticks the compiled tree iteration by iteration (no fused loop):
+    # every node status after every tick and every column equal to the batched engine's
+    engines = ("batched", "compiled")
+    assert check_engines_agree(None, "patrol-3d", 1, engines, agents=3, iterations=900) == 900
+    assert (
+        check_engines_agree(
+            None, "gathering-3d", 1, engines, iterations=700, gathering_iteration=300
+        )
+        == 700
+    )
