@@ -79,10 +79,10 @@ class X8PatrolMission(PatrolMission):
     description = "X8 UAVs patrol, and land at their base's runway to refuel"
     parameters: ClassVar[tuple[Param, ...]] = (
         *PatrolMission.parameters,
-        Param("approach_speed", 18.0, "m/s", "airspeed requested on final", minimum=0.0),
-        Param("glide_slope", 5.0, "degrees", "glide path angle toward the aim point",
+        Param("approach_speed", 15.0, "m/s", "airspeed requested on final", minimum=0.0),
+        Param("glide_slope", 3.0, "degrees", "glide path angle toward the aim point",
               minimum=0.5, maximum=15.0),
-        Param("approach_distance", 350.0, "m",
+        Param("approach_distance", 450.0, "m",
               "distance of the approach fix before the aim point", minimum=0.0),
         Param("approach_altitude", 20.0, "m",
               "highest altitude of the glide path (the cruise altitude)", minimum=0.0),
