@@ -213,7 +213,7 @@ def test_the_kernel_and_the_numpy_code_land_with_the_same_bits(monkeypatch):
     ("runway", "says"),
     [
         ({"x": 1200, "y": 500, "heading": 270}, "world.runway must be inside the world"),
-        ({"x": 100, "y": 500, "heading": 270}, "its approach fix"),
+        ({"x": 900, "y": 500, "heading": 270}, "its approach fix"),
         ({"x": 500, "y": 500}, "world.runway"),
         ({"x": 500, "y": "north", "heading": 270}, "world.runway.y"),
     ],
