@@ -1,7 +1,8 @@
 """The built-in missions, each in its own folder with its scenario files and tree files.
 
 - ``gathering`` (the paper's Fig. 6) and ``patrol`` (Fig. 12; also flown by the Skywalker X8
-  in ``x8-patrol``) share the paper's drones (:mod:`pyautonomousagent.missions.drones`);
+  in ``x8-patrol``, whose mission of the same name lands to refuel) share the paper's drones
+  (:mod:`pyautonomousagent.missions.drones`);
 - ``vacuum``: the paper's Fig. 2 robot with a sonar;
 - ``radiation-search``: drones that wander, find a radiation source and call the others.
 

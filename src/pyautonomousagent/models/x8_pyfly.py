@@ -168,7 +168,7 @@ class X8PyFly(X8Model):
         moving = self.moving(moving)
         for i in np.flatnonzero(moving):
             if self.aircraft[i].state["Va"].value == 0.0:  # at rest, as the ground leaves it
-                self._nudge(i)
+                self._nudge(int(i))
             ok, info = self.aircraft[i].step(self.commands[i].copy())
             if not ok:
                 raise FlightEnvelopeError(f"agent {i}: PyFly stopped the step: {info}")
