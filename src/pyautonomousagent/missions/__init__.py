@@ -24,6 +24,7 @@ _SCENARIO_FILES = {
     "gathering": "gathering/gathering.yaml",
     "patrol": "patrol/patrol.yaml",
     "x8-patrol": "patrol/x8-patrol.yaml",
+    "x8-landing": "patrol/x8-landing.yaml",
     "vacuum": "vacuum/vacuum.yaml",
     "radiation-search": "radiation_search/radiation-search.yaml",
 }
