@@ -18,6 +18,7 @@ import yaml
 pytest.importorskip("pyfly", reason="needs the [x8] extra (pyfly-fixed-wing)")
 
 from pyautonomousagent import Simulation, load  # noqa: E402
+from pyautonomousagent.bt.status import RUNNING, SUCCESS  # noqa: E402
 from pyautonomousagent.cli import main  # noqa: E402
 from pyautonomousagent.models import x8_dynamics as dyn  # noqa: E402
 from pyautonomousagent.models import x8_modes as modes  # noqa: E402
@@ -129,6 +130,59 @@ def test_touching_the_ground_ends_a_flight_and_a_stop_parks():
     landed = modes.after_contact(phase, np.arange(4), contact)
     assert landed.tolist() == [True, True, False, False]
     assert phase.tolist() == [modes.ROLLOUT, modes.ROLLOUT, modes.PARKED, modes.GROUND_ROLL]
+
+
+# --- the leaves ---------------------------------------------------------------------------
+
+
+def leaf_states(sim: Simulation) -> dict[str, list[float]]:
+    s, bb = sim.swarm.columns, sim.swarm.blackboard
+    keys = ["requested_heading", "requested_speed", "requested_altitude", "autopilot_mode"]
+    return {k: s[k].tolist() for k in keys} | {"leg": bb["approach_leg"].tolist()}
+
+
+@pytest.mark.parametrize("type_name", ["Action_Land_A", "Action_Take_Off_A"])
+def test_landing_leaves_give_the_same_bits_per_agent_for_all_and_compiled(type_name):
+    from pyautonomousagent.bt.leaf import leaf_type
+
+    sim = Simulation.create(load("x8-patrol").with_overrides(agents=4), engine="batched")
+    s = sim.swarm.columns
+    s["x"][:], s["y"][:] = [100.0, 930.0, 560.0, 480.0], [900.0, 480.0, 505.0, 500.0]
+    s["heading"][:] = [10.0, 250.0, 271.0, 269.0]
+    s[modes.PHASE_COLUMN][:] = [modes.FLIGHT, modes.FLIGHT, modes.APPROACH, modes.PARKED]
+    sim.swarm.blackboard["approach_leg"][:] = [0, 0, 1, 1]
+    node = leaf_type(type_name).create({}, vars(sim.scenario.parameters), where="test")
+    start = {k: v.copy() for k, v in s.items()}, sim.swarm.blackboard["approach_leg"].copy()
+
+    def reset() -> None:
+        for k, v in start[0].items():
+            s[k][:] = v
+        sim.swarm.blackboard["approach_leg"][:] = start[1]
+
+    statuses = np.asarray(node.evaluate(sim.swarm.agents(), sim.world)).tolist()
+    together = leaf_states(sim)
+    reset()
+    alone = [int(node.evaluate(sim.swarm.agent(a), sim.world)) for a in range(4)]
+    assert alone == statuses and leaf_states(sim) == together
+    reset()
+    kernel = node.kernel(sim.world)
+    arrays = [s[n] if n in s else sim.swarm.blackboard[n] for n in kernel.names]
+    compiled = [int(kernel.function(a, *arrays, *kernel.constants)) for a in range(4)]
+    assert compiled == statuses and leaf_states(sim) == together
+    if type_name == "Action_Land_A":  # far: to the fix; near it and on final: land; parked
+        assert statuses == [RUNNING, RUNNING, RUNNING, SUCCESS]
+        assert together["autopilot_mode"] == [modes.CRUISE, modes.LAND, modes.LAND, modes.LAND]
+        assert together["leg"] == [0, 1, 1, 0]
+        assert together["requested_speed"][:3] == [22.0, 15.0, 15.0]
+        glide = math.tan(math.radians(3.0)) * math.hypot(60.0, 5.0)
+        assert together["requested_altitude"][2] == pytest.approx(glide)
+        west_by_south = 270.0 - math.degrees(math.atan2(5.0, 60.0))  # from (560, 505)
+        assert together["requested_heading"][2] == pytest.approx(west_by_south)
+    else:  # flying: done; else take off straight ahead
+        assert statuses == [SUCCESS, SUCCESS, RUNNING, RUNNING]
+        assert together["autopilot_mode"] == [modes.CRUISE, modes.CRUISE, modes.TAKE_OFF,
+                                              modes.TAKE_OFF]  # fmt: skip
+        assert together["requested_heading"] == [10.0, 250.0, 271.0, 269.0]
 
 
 # --- whole cycles -------------------------------------------------------------------------
