@@ -192,7 +192,7 @@ def observe(state: np.ndarray) -> Flight:
     return Flight(
         north=state[dyn.PN],
         east=state[dyn.PE],
-        altitude=-state[dyn.PD],
+        altitude=0.0 - state[dyn.PD],  # +0.0 on the ground, not -0.0
         airspeed=np.sqrt(u * u + v * v + w * w),
         course=course,
         roll=roll,
@@ -234,7 +234,7 @@ class X8Model:
         self._overrides = modes.overrides(
             self.phase, None, np.zeros(n), np.zeros(n), self.modes
         )  # all FLIGHT: no override
-        self._quiet = True  # every aircraft in FLIGHT, no mode requested: _overrides holds
+        self._quiet = True  # every aircraft in FLIGHT: no override, none parked
 
     def columns(self) -> dict[str, np.ndarray]:
         """Recorded beside the swarm: altitude (m), airspeed (m/s), roll and pitch (deg)."""
@@ -284,7 +284,7 @@ class X8Model:
         self.strikes[rows[struck]] += 1
         self.touchdown_sink[rows[landed]] = contact.sink[landed]
         self.touchdown_speed[rows[landed]] = contact.speed[landed]
-        self._quiet = False
+        self._quiet = not self.phase.any()  # FLIGHT is 0
         return rows
 
     def references(self, s: dict[str, np.ndarray]) -> modes.Overrides:
@@ -294,7 +294,9 @@ class X8Model:
             return self._overrides
         f = self.flight
         modes.transitions(self.phase, mode, f.altitude, f.airspeed, self.modes)
-        self._quiet = False
+        self._quiet = not self.phase.any()  # FLIGHT is 0
+        if self._quiet:
+            return self._overrides
         return modes.overrides(
             self.phase, s.get(modes.ALTITUDE_COLUMN), f.altitude, f.climb, self.modes
         )

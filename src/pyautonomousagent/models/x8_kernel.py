@@ -301,7 +301,7 @@ def _observe_one(y: np.ndarray, flight: np.ndarray, i: int, w: np.ndarray) -> No
     north = w[ROT + 0] * u + w[ROT + 1] * v + w[ROT + 2] * ww
     east = w[ROT + 3] * u + w[ROT + 4] * v + w[ROT + 5] * ww
     s = _clip(2 * (e0 * e2 - e1 * e3), -1.0, 1.0)
-    flight[0, i], flight[1, i], flight[2, i] = y[7], y[8], -y[9]
+    flight[0, i], flight[1, i], flight[2, i] = y[7], y[8], 0.0 - y[9]
     flight[3, i] = math.sqrt(u * u + v * v + ww * ww)
     flight[4, i] = atan2(east, north)
     flight[5, i] = atan2(2 * (e0 * e1 + e2 * e3), e0 * e0 + e3 * e3 - e1 * e1 - e2 * e2)

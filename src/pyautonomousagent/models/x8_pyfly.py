@@ -207,7 +207,7 @@ class X8PyFly(X8Model):
         return Flight(
             north=north,
             east=east,
-            altitude=-down,
+            altitude=0.0 - down,
             airspeed=airspeed,
             course=np.arctan2(velocity[1], velocity[0]),
             roll=roll,
