@@ -17,7 +17,7 @@ import yaml
 
 pytest.importorskip("pyfly", reason="needs the [x8] extra (pyfly-fixed-wing)")
 
-from pyautonomousagent import Simulation, load  # noqa: E402
+from pyautonomousagent import Simulation, jit, load  # noqa: E402
 from pyautonomousagent.bt.status import RUNNING, SUCCESS  # noqa: E402
 from pyautonomousagent.cli import main  # noqa: E402
 from pyautonomousagent.models import x8_dynamics as dyn  # noqa: E402
@@ -225,7 +225,10 @@ def test_pyfly_flies_the_cycle_as_the_vectorised_model_does():
     assert abs(sink[0] - sink[1]) < 0.01, sink
 
 
-@pytest.mark.parametrize("engine", ["pytrees", "compiled"])
+NEEDS_NUMBA = pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
+
+
+@pytest.mark.parametrize("engine", ["pytrees", pytest.param("compiled", marks=NEEDS_NUMBA)])
 def test_engines_make_the_same_cycle_as_the_batched_engine(engine):
     """Same implementation (vectorised), same bits: decisions and data."""
     scenario = short(agents=2)
