@@ -248,12 +248,16 @@ class X8Model:
 
     def write(self, s: dict[str, np.ndarray], moving: np.ndarray | None = None) -> None:
         """Fill the swarm's x, y, speed and heading columns from ``self.flight`` (and the
-        phase column, where the mission declares it)."""
+        phase column, where the mission declares it). At rest (airspeed 0, on the ground)
+        there is no course: the heading column keeps the last one."""
         f = self.flight
         s["x"][:] = f.east
         s["y"][:] = f.north
         s["speed"][:] = f.airspeed if moving is None else np.where(moving, f.airspeed, 0.0)
-        s["heading"][:] = np.mod(np.degrees(f.course), 360.0)
+        heading = np.mod(np.degrees(f.course), 360.0)
+        s["heading"][:] = (
+            heading if self._quiet else np.where(f.airspeed == 0.0, s["heading"], heading)
+        )
         if modes.PHASE_COLUMN in s:
             s[modes.PHASE_COLUMN][:] = self.phase
 
