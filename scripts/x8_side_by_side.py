@@ -21,6 +21,18 @@ at most 10 UAVs PyFly's reference model (20 iterations), in this process.
 
 times each phase of the batched engine's loop (microseconds per iteration, 4000 iterations)
 for ``x8-patrol`` and the 2-D ``patrol``, in this process.
+
+    python scripts/x8_side_by_side.py --cycle
+
+flies the ``x8-landing`` scenario (one landing, refuelling and take-off) with PyFly and with
+the vectorised model and prints their largest differences and the iteration each phase
+begins in, in this process.
+
+    python scripts/x8_side_by_side.py --landing-cost [--agents 1,4,100]
+
+times the batched engine's loop (20,000 iterations, recording every 100th) on x8-patrol as it
+is (landing to refuel) and as the paper flew it (the patrol tree, refuelling in flight at
+40 %, airspeed floor 18 m/s), in this process.
 """
 
 from __future__ import annotations
@@ -122,15 +134,74 @@ def phase_microseconds(scenario: str, agents: int) -> dict[str, float]:
     return {name: seconds / 4000 * 1e6 for name, seconds in totals.items()}
 
 
+def cycle() -> None:
+    """x8-landing with both implementations: differences and phase changes."""
+    from pyautonomousagent import Simulation, load
+    from pyautonomousagent.models.x8_modes import PHASES
+
+    traces = {}
+    for implementation in ("pyfly", "vectorised"):
+        scenario = load("x8-landing")
+        sim = Simulation.create(scenario, engine="pytrees", implementation=implementation)
+        trace = np.empty((5, scenario.iterations))
+        start = time.perf_counter()
+        for i in range(scenario.iterations):
+            sim.step()
+            f = sim.model.flight
+            trace[:, i] = f.east[0], f.north[0], f.altitude[0], f.airspeed[0], sim.model.phase[0]
+        traces[implementation] = trace
+        sink = sim.model.touchdown_sink[0]
+        print(f"{implementation:>10}: {time.perf_counter() - start:.1f} s, touchdown sink "
+              f"{sink:.4f} m/s at {sim.model.touchdown_speed[0]:.3f} m/s")  # fmt: skip
+    a, b = traces["pyfly"], traces["vectorised"]
+    print(f"largest differences: position {np.hypot(a[0] - b[0], a[1] - b[1]).max():.2e} m, "
+          f"altitude {np.abs(a[2] - b[2]).max():.2e} m, airspeed "
+          f"{np.abs(a[3] - b[3]).max():.2e} m/s")  # fmt: skip
+    for phase, name in enumerate(PHASES):
+        begins = [int(np.argmax(t[4] == phase)) if (t[4] == phase).any() else -1 for t in (a, b)]
+        print(f"{name:>12} begins at iteration: PyFly {begins[0]}, vectorised {begins[1]}")
+
+
+def landing_cost(agents: int, iterations: int = 20_000) -> dict[str, float]:
+    """Loop seconds per iteration of x8-patrol, landing and as the paper flew it."""
+    from pyautonomousagent import Simulation, load
+    from pyautonomousagent.simulation.scenario import Scenario, to_mapping
+
+    data = to_mapping(load("x8-patrol"))
+    data["tree"] = "patrol"
+    data["parameters"]["low_energy_threshold"] = 40
+    data["x8"]["min_airspeed"] = 18
+    cases = {"in flight (paper)": Scenario.from_mapping(data), "landing": load("x8-patrol")}
+    out = {}
+    for name, scenario in cases.items():
+        scenario = scenario.with_overrides(agents=agents, iterations=iterations)
+        sim = Simulation.create(scenario, engine="batched", record_every=100)
+        start = time.perf_counter()
+        sim.run(progress=False)
+        out[name] = (time.perf_counter() - start) / iterations
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--baseline", type=Path, help="the other tree's src/")
     parser.add_argument("--model", action="store_true", help="time the X8 model alone")
     parser.add_argument("--phases", action="store_true", help="time the loop's phases")
+    parser.add_argument("--cycle", action="store_true", help="PyFly vs vectorised: one landing")
+    parser.add_argument("--landing-cost", action="store_true", help="landing vs in-flight refuel")
     parser.add_argument("--agents", default="1,10,100")
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--pyfly-iterations", type=int, default=400)
     args = parser.parse_args()
+    if args.cycle:
+        cycle()
+        return
+    if args.landing_cost:
+        for agents in (int(a) for a in args.agents.split(",")):
+            us = {k: v * 1e6 for k, v in landing_cost(agents).items()}
+            parts = ", ".join(f"{k} {v:.0f} us/it" for k, v in us.items())
+            print(f"{agents:>5} UAVs: {parts}", flush=True)
+        return
     if args.phases:
         for agents in (int(a) for a in args.agents.split(",")):
             for scenario in ("x8-patrol", "patrol"):

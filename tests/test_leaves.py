@@ -41,11 +41,13 @@ COVERED = {
     "Action_Repair_Damage_A",
 }
 #: Mission packages whose leaves are tested in their mission's own test file
-#: (tests/test_vacuum.py, tests/test_radiation_search.py).
+#: (tests/test_vacuum.py, tests/test_radiation_search.py, tests/test_x8_landing.py,
+#: tests/test_drone3d.py).
 OWN_TESTS = (
     "pyautonomousagent.missions.vacuum",
     "pyautonomousagent.missions.radiation_search",
-    "pyautonomousagent.missions.drones3d",  # tests/test_drone3d.py
+    "pyautonomousagent.missions.patrol.x8",
+    "pyautonomousagent.missions.drones3d",
 )
 
 

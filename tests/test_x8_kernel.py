@@ -120,17 +120,19 @@ def test_x8_patrol_records_the_same_bits_compiled_and_not(monkeypatch):
         assert np.array_equal(compiled.column(key), reference.column(key)), key
 
 
-#: Run in a subprocess: an x8-patrol run's records, digested.
+#: Run in a subprocess: the records of an x8-patrol run and of a landing cycle (x8-landing
+#: through touchdown, roll-out, refuelling, take-off roll and rotation), digested.
 DIGEST = """
 import hashlib, sys
 import numpy as np
 from pyautonomousagent import Simulation, load
-scenario = load("x8-patrol").with_overrides(agents=5, iterations=300)
-sim = Simulation.create(scenario, seed=1, engine="batched").run(progress=False)
-assert sim.model.compiled == (sys.argv[1] == "compiled"), sim.model.compiled
 h = hashlib.sha256()
-for key in sorted(sim.recorder.columns):
-    h.update(key.encode() + np.ascontiguousarray(sim.recorder.column(key)).tobytes())
+for name, agents, iterations in (("x8-patrol", 5, 300), ("x8-landing", 2, 2600)):
+    scenario = load(name).with_overrides(agents=agents, iterations=iterations)
+    sim = Simulation.create(scenario, seed=1, engine="batched").run(progress=False)
+    assert sim.model.compiled == (sys.argv[1] == "compiled"), sim.model.compiled
+    for key in sorted(sim.recorder.columns):
+        h.update(key.encode() + np.ascontiguousarray(sim.recorder.column(key)).tobytes())
 print(h.hexdigest())
 """
 

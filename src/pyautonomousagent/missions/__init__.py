@@ -1,7 +1,8 @@
 """The built-in missions, each in its own folder with its scenario files and tree files.
 
 - ``gathering`` (the paper's Fig. 6) and ``patrol`` (Fig. 12; also flown by the Skywalker X8
-  in ``x8-patrol``) share the paper's drones (:mod:`pyautonomousagent.missions.drones`);
+  in ``x8-patrol``, whose mission of the same name lands to refuel) share the paper's drones
+  (:mod:`pyautonomousagent.missions.drones`);
 - ``gathering-3d`` and ``patrol-3d``: the same missions flown by the 3-D drone
   (:mod:`pyautonomousagent.missions.drones3d`, docs/drone3d.md);
 - ``vacuum``: the paper's Fig. 2 robot with a sonar;
@@ -32,6 +33,7 @@ _SCENARIO_FILES = {
     "gathering": "gathering/gathering.yaml",
     "patrol": "patrol/patrol.yaml",
     "x8-patrol": "patrol/x8-patrol.yaml",
+    "x8-landing": "patrol/x8-landing.yaml",
     "vacuum": "vacuum/vacuum.yaml",
     "radiation-search": "radiation_search/radiation-search.yaml",
     "gathering-3d": "drones3d/gathering-3d.yaml",

@@ -109,6 +109,7 @@ class Guidance:
         altitude: np.ndarray,
         requested_heading: np.ndarray,
         requested_speed: np.ndarray,
+        target: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Roll and pitch references (rad) and the airspeed reference (m/s), each (N,).
 
@@ -117,10 +118,11 @@ class Guidance:
             altitude: altitude above the origin (m), shape (N,).
             requested_heading: the tree's requested heading (degrees clockwise from north).
             requested_speed: the tree's requested speed (m/s).
+            target: the altitude to hold (m), (N,); by default ``self.altitude``.
         """
         course_error = wrap_angle(requested_heading * (math.pi / 180.0) - course)
         roll = self.course.update(course_error)
-        pitch = self.height.update(self.altitude - altitude)
+        pitch = self.height.update((self.altitude if target is None else target) - altitude)
         return roll, pitch, np.maximum(requested_speed, self.min_airspeed)
 
 

@@ -11,13 +11,18 @@ in m/s (in still air, the speed the autopilot holds). The model records ``altitu
 Each iteration the loop calls :meth:`X8Model.advance` (Phase 2: integrate one time step with
 the commands of the last Phase 4) and :meth:`X8Model.control` (Phase 4: the autopilot turns
 the tree's requested heading and speed into surface and throttle commands). An agent with no
-energy is treated as grounded: its state is held and its speed column reads 0 (landing is not
-modelled; the patrol refuels at 40 % and never gets there).
+energy is treated as grounded: its state is held and its speed column reads 0.
+
+Take-off and landing (:mod:`~pyautonomousagent.models.x8_modes`): where the mission declares
+the columns, the tree requests a mode (cruise, land, take off) and the glide path's altitude;
+the model runs a phase machine per aircraft, puts it on the ground after each step where it
+reaches it, and holds it where it stopped while parked.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import astuple, dataclass
 
 import numpy as np
@@ -26,6 +31,7 @@ from pyautonomousagent import jit
 from pyautonomousagent.arrays import arctan2
 from pyautonomousagent.models import x8_dynamics as dyn
 from pyautonomousagent.models import x8_kernel as kernel
+from pyautonomousagent.models import x8_modes as modes
 from pyautonomousagent.models.autopilot import (
     AttitudeController,
     Guidance,
@@ -55,6 +61,12 @@ class X8Settings:
         course_kp, course_ki, course_kd, max_roll: course PID (rad -> rad; limit in degrees).
         altitude_kp, altitude_ki, altitude_kd, max_pitch: altitude PID (m -> rad; degrees).
             ``altitude_kp`` is 0.1 rad/m, not the notebook's 1.0 (docs/x8.md).
+        flare_height (m), flare_time (s), touchdown_sink (m/s), flare_pitch (deg),
+            flare_gain (deg per m/s), max_flare_pitch (deg): the flare
+            (:func:`x8_modes.overrides`).
+        rotation_speed (m/s), rotation_pitch (deg), climb_out_margin (m): the take-off.
+        friction_rolling, friction_braking: Coulomb friction on the take-off roll and on the
+            roll-out; max_ground_pitch (deg): the largest pitch on the ground.
     """
 
     altitude: float = 20.0
@@ -72,6 +84,37 @@ class X8Settings:
     altitude_ki: float = 1e-4
     altitude_kd: float = 0.01
     max_pitch: float = 30.0
+    flare_height: float = 3.0
+    flare_time: float = 1.0
+    touchdown_sink: float = 0.3
+    flare_pitch: float = 2.0
+    flare_gain: float = 6.0
+    max_flare_pitch: float = 12.0
+    rotation_speed: float = 14.0
+    rotation_pitch: float = 10.0
+    climb_out_margin: float = 2.0
+    friction_rolling: float = 0.04
+    friction_braking: float = 0.4
+    max_ground_pitch: float = 12.0
+
+    def mode_settings(self) -> modes.ModeSettings:
+        """The take-off and landing phases' settings, angles in radians."""
+        rad = math.radians
+        return modes.ModeSettings(
+            altitude=self.altitude,
+            flare_height=self.flare_height,
+            flare_time=self.flare_time,
+            touchdown_sink=self.touchdown_sink,
+            flare_pitch=rad(self.flare_pitch),
+            flare_gain=rad(self.flare_gain),
+            max_flare_pitch=rad(self.max_flare_pitch),
+            rotation_speed=self.rotation_speed,
+            rotation_pitch=rad(self.rotation_pitch),
+            climb_out_margin=self.climb_out_margin,
+            friction_rolling=self.friction_rolling,
+            friction_braking=self.friction_braking,
+            max_ground_pitch=rad(self.max_ground_pitch),
+        )
 
     def gains(self) -> GuidanceGains:
         """The guidance PIDs' gains and limits."""
@@ -97,6 +140,7 @@ class Flight:
         course: course over ground, rad clockwise from north, in (-pi, pi].
         roll, pitch: Euler angles (rad).
         p, q: roll and pitch rates (rad/s).
+        climb: vertical speed, up (m/s).
     """
 
     north: np.ndarray
@@ -108,6 +152,7 @@ class Flight:
     pitch: np.ndarray
     p: np.ndarray
     q: np.ndarray
+    climb: np.ndarray
 
 
 def initial_state(
@@ -139,6 +184,7 @@ def observe(state: np.ndarray) -> Flight:
     rot = dyn.rotation(state[dyn.QUATERNION])
     north = rot[0, 0] * u + rot[0, 1] * v + rot[0, 2] * w  # ground velocity, m/s
     east = rot[1, 0] * u + rot[1, 1] * v + rot[1, 2] * w
+    down = rot[2, 0] * u + rot[2, 1] * v + rot[2, 2] * w
     s = np.minimum(np.maximum(2 * (e0 * e2 - e1 * e3), -1.0), 1.0)  # sin(pitch)
     y = np.array([east, 2 * (e0 * e1 + e2 * e3), s])
     x = np.array([north, e0 * e0 + e3 * e3 - e1 * e1 - e2 * e2, np.sqrt((1.0 - s) * (1.0 + s))])
@@ -146,13 +192,14 @@ def observe(state: np.ndarray) -> Flight:
     return Flight(
         north=state[dyn.PN],
         east=state[dyn.PE],
-        altitude=-state[dyn.PD],
+        altitude=0.0 - state[dyn.PD],  # +0.0 on the ground, not -0.0
         airspeed=np.sqrt(u * u + v * v + w * w),
         course=course,
         roll=roll,
         pitch=pitch,
         p=state[dyn.P],
         q=state[dyn.Q],
+        climb=-down,
     )
 
 
@@ -174,6 +221,20 @@ class X8Model:
             settings.gains(), settings.altitude, settings.min_airspeed, settings.dt, n
         )
         self.flight: Flight
+        self.modes = settings.mode_settings()
+        #: Each aircraft's phase (:mod:`x8_modes`), (N,) int64.
+        self.phase = np.full(n, modes.FLIGHT, dtype=np.int64)
+        #: Touchdowns from the air (from FLARE, APPROACH or FLIGHT) and ground strikes (from
+        #: APPROACH or FLIGHT: the ground met without a flare) per aircraft, (N,) int64.
+        self.touchdowns = np.zeros(n, dtype=np.int64)
+        self.strikes = np.zeros(n, dtype=np.int64)
+        #: Sink rate (m/s) and speed (m/s) at each aircraft's latest touchdown, (N,).
+        self.touchdown_sink = np.zeros(n)
+        self.touchdown_speed = np.zeros(n)
+        self._overrides = modes.overrides(
+            self.phase, None, np.zeros(n), np.zeros(n), self.modes
+        )  # all FLIGHT: no override
+        self._quiet = True  # every aircraft in FLIGHT: no override, none parked
 
     def columns(self) -> dict[str, np.ndarray]:
         """Recorded beside the swarm: altitude (m), airspeed (m/s), roll and pitch (deg)."""
@@ -186,26 +247,101 @@ class X8Model:
         }
 
     def write(self, s: dict[str, np.ndarray], moving: np.ndarray | None = None) -> None:
-        """Fill the swarm's x, y, speed and heading columns from ``self.flight``."""
+        """Fill the swarm's x, y, speed and heading columns from ``self.flight`` (and the
+        phase column, where the mission declares it). At rest (airspeed 0, on the ground)
+        there is no course: the heading column keeps the last one."""
         f = self.flight
         s["x"][:] = f.east
         s["y"][:] = f.north
         s["speed"][:] = f.airspeed if moving is None else np.where(moving, f.airspeed, 0.0)
-        s["heading"][:] = np.mod(np.degrees(f.course), 360.0)
+        heading = np.mod(np.degrees(f.course), 360.0)
+        s["heading"][:] = (
+            heading if self._quiet else np.where(f.airspeed == 0.0, s["heading"], heading)
+        )
+        if modes.PHASE_COLUMN in s:
+            s[modes.PHASE_COLUMN][:] = self.phase
+
+    def moving(self, moving: np.ndarray) -> np.ndarray:
+        """The aircraft that fly this step: ``moving`` and not parked."""
+        if self._quiet:
+            return moving
+        return np.asarray(moving, dtype=bool) & (self.phase != modes.PARKED)
+
+    def land(self, state: np.ndarray, moving: np.ndarray) -> np.ndarray:
+        """The ground (:func:`x8_modes.ground_contact`) for the moving aircraft of ``state``
+        (STATES, N) at or below it, in place; their phases and touchdown records updated.
+
+        Returns:
+            The rows put on the ground, (K,) int.
+        """
+        rows = np.flatnonzero(moving & (state[dyn.PD] >= 0.0))
+        if rows.size == 0:
+            return rows
+        b = state[:, rows]
+        mu = modes.friction(self.phase[rows], self.modes)
+        contact = modes.ground_contact(b, mu, self.modes.max_ground_pitch)
+        state[:, rows] = b
+        was = self.phase[rows]
+        landed = modes.after_contact(self.phase, rows, contact)
+        struck = landed & (was != modes.FLARE)
+        self.touchdowns[rows[landed]] += 1
+        self.strikes[rows[struck]] += 1
+        self.touchdown_sink[rows[landed]] = contact.sink[landed]
+        self.touchdown_speed[rows[landed]] = contact.speed[landed]
+        self._quiet = not self.phase.any()  # FLIGHT is 0
+        return rows
+
+    def references(self, s: dict[str, np.ndarray]) -> modes.Overrides:
+        """Phase 4's changes of phase and what the phases impose (:mod:`x8_modes`)."""
+        mode = s.get(modes.MODE_COLUMN)
+        if self._quiet and (mode is None or not mode.any()):
+            return self._overrides
+        f = self.flight
+        modes.transitions(self.phase, mode, f.altitude, f.airspeed, self.modes)
+        self._quiet = not self.phase.any()  # FLIGHT is 0
+        if self._quiet:
+            return self._overrides
+        return modes.overrides(
+            self.phase, s.get(modes.ALTITUDE_COLUMN), f.altitude, f.climb, self.modes
+        )
+
+    def settle(self, o: modes.Overrides) -> None:
+        """After the commands: clear the integrators (and the previous errors) of the PIDs
+        whose output a phase overrides, so that none winds up on the ground."""
+        if self._quiet:
+            return
+        roll, pitch, throttle = ~np.isnan(o.roll), ~np.isnan(o.pitch), ~np.isnan(o.throttle)
+        for pid, held in ((self.guidance.course, roll), (self.guidance.height, pitch)):
+            pid.integral[held] = 0.0
+            pid.previous[held] = np.nan
+        self._clear_attitude(throttle, roll, self.phase == modes.PARKED)
+
+    def _clear_attitude(self, airspeed: np.ndarray, roll: np.ndarray, pitch: np.ndarray) -> None:
+        """Zero the attitude PID's airspeed, roll and pitch integrators where given."""
+        raise NotImplementedError
 
     def control(self, s: dict[str, np.ndarray]) -> None:
-        """Phase 4: the autopilot's commands for the requested heading and speed."""
+        """Phase 4: the autopilot's commands for the requested heading and speed, and the
+        phase's overrides."""
         f = self.flight
-        refs = self.guidance.references(
-            f.course, f.altitude, s["requested_heading"], s["requested_speed"]
+        o = self.references(s)
+        roll, pitch, airspeed = self.guidance.references(
+            f.course, f.altitude, s["requested_heading"], s["requested_speed"], o.altitude
         )
-        self._attitude(refs)
+        roll = np.where(np.isnan(o.roll), roll, o.roll)
+        pitch = np.where(np.isnan(o.pitch), pitch, o.pitch)
+        self._attitude((roll, pitch, airspeed), o.throttle)
+        self.settle(o)
 
     def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None:
         """Phase 2: fly one time step (the agents where ``moving``) and update ``s``."""
         raise NotImplementedError
 
-    def _attitude(self, refs: tuple[np.ndarray, np.ndarray, np.ndarray]) -> None:
+    def _attitude(
+        self, refs: tuple[np.ndarray, np.ndarray, np.ndarray], throttle: np.ndarray
+    ) -> None:
+        """The commands for the references; ``throttle`` overrides the airspeed PID's where
+        not NaN."""
         raise NotImplementedError
 
 
@@ -261,8 +397,8 @@ class X8Vectorised(X8Model):
         self._gains = kernel.pack_gains(self.guidance, self.attitude, self.constants)
         empty = np.zeros(0)
         kernel.control(
-            np.zeros((kernel.FLIGHT_ROWS, 0)), empty, empty, np.zeros((7, 0)), self._gains,
-            np.zeros((3, 0)),
+            np.zeros((kernel.FLIGHT_ROWS, 0)), empty, empty, (empty, empty, empty, empty),
+            np.zeros((7, 0)), self._gains, np.zeros((3, 0)),
         )  # fmt: skip
         if not self._kernel_agrees():
             log.warning(
@@ -306,15 +442,21 @@ class X8Vectorised(X8Model):
         kernel.advance(state, self.commands, moving, self._packed, k.aero, k.inertia, new, flight)
 
     def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None:
-        """Phase 2: one time step of ``settings.dt`` for the agents where ``moving``."""
+        """Phase 2: one time step of ``settings.dt`` for the agents where ``moving`` (and not
+        parked), then the ground."""
+        moving = np.asarray(self.moving(moving), dtype=bool)
         if self.agent_by_agent:
             new, self._flight = np.empty_like(self.state), np.empty_like(self._flight)
-            self._advance(self.state, np.asarray(moving, dtype=bool), new, self._flight)
+            self._advance(self.state, moving, new, self._flight)
             self.state = new
+            rows = self.land(new, moving)
+            if rows.size:
+                self._flight[:, rows] = astuple(observe(new[:, rows]))
             self.flight = Flight(*self._flight)
         else:
             new = dyn.step(self.state, self.commands, self.constants)
             self.state = new if moving.all() else np.where(moving, new, self.state)
+            self.land(self.state, moving)
             self.flight = observe(self.state)
         self.write(s, moving)
 
@@ -323,15 +465,26 @@ class X8Vectorised(X8Model):
         if not self.agent_by_agent:
             super().control(s)
             return
+        o = self.references(s)
         heading, speed = s["requested_heading"], s["requested_speed"]
-        kernel.control(self._flight, heading, speed, self._pids, self._gains, self.commands)
+        kernel.control(
+            self._flight, heading, speed, (o.altitude, o.roll, o.pitch, o.throttle),
+            self._pids, self._gains, self.commands,
+        )  # fmt: skip
+        self.settle(o)
 
-    def _attitude(self, refs: tuple[np.ndarray, np.ndarray, np.ndarray]) -> None:
+    def _clear_attitude(self, airspeed: np.ndarray, roll: np.ndarray, pitch: np.ndarray) -> None:
+        for row, held in enumerate((airspeed, roll, pitch)):
+            self.attitude.integral[row][held] = 0.0
+
+    def _attitude(
+        self, refs: tuple[np.ndarray, np.ndarray, np.ndarray], throttle: np.ndarray
+    ) -> None:
         f = self.flight
-        elevator, aileron, throttle = self.attitude.commands(
+        elevator, aileron, pid_throttle = self.attitude.commands(
             refs, f.roll, f.pitch, f.airspeed, f.p, f.q
         )
         self.commands[: dyn.CMD_ELEVON_L + 1] = dyn.elevon_commands(
             elevator, aileron, self.constants
         )
-        self.commands[dyn.CMD_THROTTLE] = throttle
+        self.commands[dyn.CMD_THROTTLE] = np.where(np.isnan(throttle), pid_throttle, throttle)

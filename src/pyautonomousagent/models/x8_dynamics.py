@@ -334,7 +334,7 @@ def _forces_moments(
     airspeed2 = uw2 + v * v
     airspeed = np.maximum(np.sqrt(airspeed2), k.params.airspeed_min)
     inv_2v = 0.5 / airspeed
-    uw = np.sqrt(uw2)
+    uw = np.maximum(np.sqrt(uw2), k.params.airspeed_min)  # at rest: alpha 0, no force
     sa, ca = w / uw, u / uw  # sin, cos of alpha
     sb = v / airspeed  # sin(beta)
     cb = np.sqrt(1 - sb * sb)

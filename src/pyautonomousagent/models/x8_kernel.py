@@ -27,7 +27,7 @@ from pyautonomousagent.models import x8_dynamics as dyn
 from pyautonomousagent.models.autopilot import AttitudeController, Guidance
 
 #: Rows of the flight array that :func:`advance` fills (the fields of ``x8.Flight``).
-FLIGHT_ROWS = 9
+FLIGHT_ROWS = 10
 _HS = dyn._HALF_SIGN[:, :, 0].copy()  # (3, 4): +-0.5
 _PERM = dyn._PERM
 _EXP = dyn.EXP_SERIES
@@ -117,7 +117,7 @@ def _features(
     airspeed2 = uw2 + v * v
     airspeed = _max(math.sqrt(airspeed2), c[VMIN])
     inv_2v = 0.5 / airspeed
-    uw = math.sqrt(uw2)
+    uw = _max(math.sqrt(uw2), c[VMIN])
     alpha = atan2(ww, u)
     sa, ca = ww / uw, u / uw
     sb = v / airspeed
@@ -301,12 +301,13 @@ def _observe_one(y: np.ndarray, flight: np.ndarray, i: int, w: np.ndarray) -> No
     north = w[ROT + 0] * u + w[ROT + 1] * v + w[ROT + 2] * ww
     east = w[ROT + 3] * u + w[ROT + 4] * v + w[ROT + 5] * ww
     s = _clip(2 * (e0 * e2 - e1 * e3), -1.0, 1.0)
-    flight[0, i], flight[1, i], flight[2, i] = y[7], y[8], -y[9]
+    flight[0, i], flight[1, i], flight[2, i] = y[7], y[8], 0.0 - y[9]
     flight[3, i] = math.sqrt(u * u + v * v + ww * ww)
     flight[4, i] = atan2(east, north)
     flight[5, i] = atan2(2 * (e0 * e1 + e2 * e3), e0 * e0 + e3 * e3 - e1 * e1 - e2 * e2)
     flight[6, i] = atan2(s, math.sqrt((1.0 - s) * (1.0 + s)))
     flight[7, i], flight[8, i] = y[4], y[5]
+    flight[9, i] = -(w[ROT + 6] * u + w[ROT + 7] * v + w[ROT + 8] * ww)
 
 
 @njit
@@ -329,7 +330,8 @@ def advance(
         c: :func:`pack_constants`; aero, inertia: ``Constants.aero`` (6, 16), ``.inertia`` (3, 7).
         new: receives the new state, (STATES, N).
         flight: receives ``x8.observe`` of the new state, (FLIGHT_ROWS, N): north, east,
-            altitude (m), airspeed (m/s), course, roll, pitch (rad), p, q (rad/s).
+            altitude (m), airspeed (m/s), course, roll, pitch (rad), p, q (rad/s), climb
+            (m/s).
     """
     w, y, out = np.empty(WORK), np.empty(18), np.empty(18)
     for i in range(state.shape[1]):
@@ -387,6 +389,7 @@ def control(
     flight: np.ndarray,
     heading: np.ndarray,
     speed: np.ndarray,
+    overrides: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     pids: np.ndarray,
     g: np.ndarray,
     commands: np.ndarray,
@@ -397,16 +400,23 @@ def control(
         flight: (FLIGHT_ROWS, N), as :func:`advance` fills it.
         heading, speed: the requested heading (degrees clockwise from north) and speed
             (m/s), (N,).
+        overrides: ``x8_modes.Overrides``' altitude (m), roll, pitch (rad) and throttle,
+            each (N,); NaN where the PIDs decide.
         pids: controller state, (7, N), updated: course integral and previous error,
             altitude integral and previous error, integrals of the airspeed, roll and pitch
             errors.
         g: :func:`pack_gains`.
         commands: receives the actuator set points, (COMMANDS, N).
     """
+    target, roll_o, pitch_o, throttle_o = overrides
     for i in range(flight.shape[1]):
         error = _mod(heading[i] * (math.pi / 180.0) - flight[4, i] + math.pi, 2 * math.pi)
         roll_ref = _pid(error - math.pi, pids, 0, i, g, C_KP)
-        pitch_ref = _pid(g[ALT_REF] - flight[2, i], pids, 2, i, g, A_KP)
+        pitch_ref = _pid(target[i] - flight[2, i], pids, 2, i, g, A_KP)
+        if not math.isnan(roll_o[i]):
+            roll_ref = roll_o[i]
+        if not math.isnan(pitch_o[i]):
+            pitch_ref = pitch_o[i]
         errors = (
             flight[3, i] - _max(speed[i], g[V_MIN]),
             flight[5, i] - roll_ref,
@@ -422,3 +432,5 @@ def control(
         commands[0, i] = _clip(elevator - aileron, g[ELEVON_MIN], g[ELEVON_MAX])
         commands[1, i] = _clip(elevator + aileron, g[ELEVON_MIN], g[ELEVON_MAX])
         commands[2, i] = _clip(throttle, 0.0, 1.0)
+        if not math.isnan(throttle_o[i]):
+            commands[2, i] = throttle_o[i]

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from pyautonomousagent.models import x8_dynamics as dyn
 from pyautonomousagent.models.x8 import TURBULENCE_INTENSITIES, Flight, X8Model, X8Settings
 from pyautonomousagent.models.x8_dynamics import body_to_ned
 from pyautonomousagent.models.x8_params import CONFIG_FILE, PARAMETER_FILE, pyfly_file
@@ -89,6 +90,39 @@ def _start(settings: X8Settings, x: float, y: float, heading: float) -> dict[str
     }
 
 
+#: PyFly's names of the airframe's 13 states, in the rows of :mod:`x8_dynamics` (after the
+#: quaternion).
+_AIRFRAME = ["omega_p", "omega_q", "omega_r", "position_n", "position_e", "position_d"]
+_AIRFRAME += ["velocity_u", "velocity_v", "velocity_w"]
+
+
+def airframe(aircraft: Any) -> np.ndarray:
+    """A PyFly simulator's airframe state as the rows E0..W of :mod:`x8_dynamics`, (13,)."""
+    values = list(aircraft.state["attitude"].value) + aircraft.get_states_vector(_AIRFRAME)
+    return np.array(values, dtype=float)
+
+
+def set_airframe(aircraft: Any, b: np.ndarray) -> None:
+    """Replace the latest airframe state of a PyFly simulator with ``b`` (13,), and the
+    Euler angles and air data PyFly derives from it."""
+    attitude = aircraft.state["attitude"]
+    attitude.quaternion = np.array(b[dyn.QUATERNION])
+    attitude.history[-1] = attitude.quaternion
+    angles = attitude.as_euler_angle()
+    values = dict(zip(_AIRFRAME, b[4:13].tolist(), strict=True))
+    values.update(roll=angles["roll"], pitch=angles["pitch"], yaw=angles["yaw"])
+    theta = [angles["roll"], angles["pitch"], angles["yaw"]]
+    velocity = np.array(b[dyn.VELOCITY])
+    at_rest = not velocity.any()  # PyFly's sideslip asin(v / Va) is 0 / 0 there
+    air = (0.0, 0.0, 0.0) if at_rest else aircraft._calculate_airspeed_factors(theta, velocity)
+    values.update(zip(["Va", "alpha", "beta"], air, strict=True))
+    for name, value in values.items():
+        var = aircraft.state[name]
+        var.value = value
+        if var.history:
+            var.history[-1] = value
+
+
 def _trim_history(aircraft: Any) -> None:
     """Keep only the latest entry of every history PyFly holds (in place)."""
     for var in aircraft.state.values():
@@ -120,6 +154,8 @@ class X8PyFly(X8Model):
         self.pids = [PIDController(settings.dt) for _ in range(n)]
         self.commands = np.zeros((n, 3))  # elevator, aileron (rad), throttle per agent
         self.steps = 0
+        #: PyFly's airspeed floor (m/s), the configuration's ``Va`` ``value_min``.
+        self.airspeed_floor = float(self.aircraft[0].state["Va"].value_min) if n else 1e-6
         self.flight = self._observe()
         self.write(s)
 
@@ -129,16 +165,37 @@ class X8PyFly(X8Model):
         Raises:
             FlightEnvelopeError: PyFly refused a step (a state left its constraints).
         """
+        moving = self.moving(moving)
         for i in np.flatnonzero(moving):
+            if self.aircraft[i].state["Va"].value == 0.0:  # at rest, as the ground leaves it
+                self._nudge(int(i))
             ok, info = self.aircraft[i].step(self.commands[i].copy())
             if not ok:
                 raise FlightEnvelopeError(f"agent {i}: PyFly stopped the step: {info}")
+        self._ground(np.asarray(moving, dtype=bool))
         self.steps += 1
         if self.steps % HISTORY_KEPT == 0:
             for aircraft in self.aircraft:
                 _trim_history(aircraft)
         self.flight = self._observe()
         self.write(s, moving)
+
+    def _nudge(self, i: int) -> None:
+        """Start aircraft i from PyFly's airspeed floor (1e-6 m/s forward) rather than rest,
+        where PyFly's sideslip would be 0 / 0."""
+        b = airframe(self.aircraft[i])
+        b[dyn.U] = self.airspeed_floor
+        set_airframe(self.aircraft[i], b)
+
+    def _ground(self, moving: np.ndarray) -> None:
+        """The ground (:meth:`X8Model.land`) applied to PyFly's states."""
+        down = np.array([a.state["position_d"].value for a in self.aircraft], dtype=float)
+        if not (moving & (down >= 0.0)).any():
+            return
+        state = np.zeros((dyn.STATES, len(self.aircraft)))
+        state[dyn.BODY] = np.array([airframe(a) for a in self.aircraft]).T
+        for i in self.land(state, moving):
+            set_airframe(self.aircraft[i], state[dyn.BODY, i])
 
     def _observe(self) -> Flight:
         names = ["position_n", "position_e", "position_d", "Va", "roll", "pitch", "omega_p"]
@@ -150,16 +207,19 @@ class X8PyFly(X8Model):
         return Flight(
             north=north,
             east=east,
-            altitude=-down,
+            altitude=0.0 - down,
             airspeed=airspeed,
             course=np.arctan2(velocity[1], velocity[0]),
             roll=roll,
             pitch=pitch,
             p=p,
             q=q,
+            climb=-velocity[2],
         )
 
-    def _attitude(self, refs: tuple[np.ndarray, np.ndarray, np.ndarray]) -> None:
+    def _attitude(
+        self, refs: tuple[np.ndarray, np.ndarray, np.ndarray], throttle: np.ndarray
+    ) -> None:
         f = self.flight
         roll_ref, pitch_ref, airspeed_ref = refs
         for i, pid in enumerate(self.pids):
@@ -167,3 +227,14 @@ class X8PyFly(X8Model):
             self.commands[i] = pid.get_action(
                 f.roll[i], f.pitch[i], f.airspeed[i], [f.p[i], f.q[i]]
             )
+            if not np.isnan(throttle[i]):
+                self.commands[i, 2] = throttle[i]
+
+    def _clear_attitude(self, airspeed: np.ndarray, roll: np.ndarray, pitch: np.ndarray) -> None:
+        for i, pid in enumerate(self.pids):
+            if airspeed[i]:
+                pid.int_va = 0
+            if roll[i]:
+                pid.int_roll = 0
+            if pitch[i]:
+                pid.int_pitch = 0

@@ -73,3 +73,8 @@ class PatrolMission(DroneMission):
     def marks(self) -> list[Mark]:
         """Slots R1.., the two patrol positions S1, S2."""
         return [*super().marks(), *self.surveillance_marks(self.scenario.objects.patrol_positions)]
+
+
+from pyautonomousagent.missions.patrol import x8  # noqa: E402  the X8's landing patrol
+
+__all__ = ["PatrolMission", "x8"]
