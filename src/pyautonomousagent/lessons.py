@@ -244,3 +244,79 @@ def _check_06(table: Any = None, best: Any = None) -> str:
                             "and average minimum_energy over the seeds.")  # fmt: skip
     return (f"{len(rows)} runs; the lowest mean minimum energy, {means[expected]:.1f} %, "
             f"is at energy_use = {expected}.")  # fmt: skip
+
+
+# --- Lesson 01: one drone -------------------------------------------------------------------
+
+
+def _coordinates(name: str, value: Any, length: int) -> np.ndarray:
+    """``value`` as ``length`` finite numbers, or ExerciseError."""
+    value = _given(name, value, f"{length} numbers")
+    try:
+        numbers = np.asarray(value, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ExerciseError(f"`{name}` should be {length} numbers, got {value!r}.") from None
+    if numbers.size != length or not np.isfinite(numbers).all():
+        raise ExerciseError(f"`{name}` should be {length} finite numbers, got {value!r}.")
+    return numbers
+
+
+@_lesson("01")
+def _check_01(position: Any = None) -> str:
+    from pyautonomousagent.models.drone2d import DroneParameters, advance
+
+    got = _coordinates("position", position, 2)
+    x, y, v, a = (np.array([value]) for value in (50.0, 50.0, 0.0, 0.0))
+    for _ in range(180):
+        x, y, v, a = advance(x, y, v, a, np.array([0.01]), np.array([2.0]), DroneParameters())
+    expected = np.array([x[0], y[0]])
+    if not np.allclose(got, expected, atol=1e-6):
+        off = float(np.hypot(*(got - expected)))
+        raise ExerciseError(
+            f"Not quite: ({got[0]:.4f}, {got[1]:.4f}) is {off:.3g} units from where the drone "
+            "is.\nHint: start at rest, heading 0; apply u_v = 0.01 and u_a = 2 on all 180 "
+            "iterations; advance keeps the speed at most max_speed (0.1)."
+        )
+    return f"After 180 iterations the drone is at ({got[0]:.4f}, {got[1]:.4f})."
+
+
+# --- Lesson 03: the blackboard and the datalink ---------------------------------------------
+
+
+def gathering_order_receivers(datalink_range: float) -> list[str]:
+    """Names of the drones that receive drone1's gathering order (iteration 5000 of the
+    gathering scenario, seed 0) when the datalink's range is ``datalink_range``."""
+    from pyautonomousagent.scenarios import load
+    from pyautonomousagent.simulation.run import Simulation
+
+    scenario = load("gathering").with_overrides(datalink_range=datalink_range)
+    sim = Simulation.create(scenario, seed=0)
+    while sim.world.iteration < scenario.parameters.gathering_iteration:
+        sim.step()
+    receivers = [
+        i for d in sim.inbox if d.messages.type == "gathering" for i in d.pairs(sim.swarm.size)[0]
+    ]
+    return [sim.swarm.names[int(i)] for i in receivers]
+
+
+@_lesson("03")
+def _check_03(heard: Any = None) -> str:
+    heard = _given("heard", heard, "a list of drone names, e.g. ['drone2']")
+    if isinstance(heard, str) or not isinstance(heard, Sequence):
+        raise ExerciseError(f"`heard` should be a list of drone names, got {heard!r}.")
+    names = [str(h) for h in heard]
+    known = {"drone1", "drone2", "drone3", "drone4"}
+    if not set(names) <= known:
+        wrong = sorted(set(names) - known)[0]
+        raise ExerciseError(
+            f"{wrong!r} is not a drone of the gathering scenario ({sorted(known)})."
+        )
+    expected = gathering_order_receivers(25.0)
+    if sorted(names) != sorted(expected):
+        raise ExerciseError(
+            f"Not quite: at range 25 the gathering order does not reach exactly {names}.\n"
+            "Hint: step to iteration 5000 (`while sim.world.iteration < 5000: sim.step()`), "
+            "then look at the 'gathering' delivery in `sim.inbox`; the sender never receives "
+            "its own message."
+        )
+    return f"At range 25 the gathering order reaches {', '.join(sorted(names)) or 'no one'}."
