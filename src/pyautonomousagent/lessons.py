@@ -458,3 +458,43 @@ def _check_04(leaf_type: Any = None, scenario: Any = None) -> str:
                             "Hint: use only array expressions and success_if, no `if` on a "
                             "drone's value.") from None  # fmt: skip
     return f"{name} is right for every drone and tick, and both engines agree on it."
+
+
+# --- Lesson 08: the Skywalker X8 ------------------------------------------------------------
+
+
+def x8_climb_time(altitude: float, within: float = 1.0, iterations: int = 3000) -> float:
+    """Seconds from launch until one X8 of scenario x8-patrol (seed 0, batched engine) sent to
+    ``altitude`` metres is first within ``within`` metres of it (NaN if never)."""
+    from pyautonomousagent.scenarios import load
+    from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.simulation.scenario import to_mapping
+
+    base = load("x8-patrol")
+    scenario = base.with_overrides(
+        agents=1, iterations=iterations, x8={**to_mapping(base)["x8"], "altitude": altitude}
+    )
+    run = Simulation.create(scenario, seed=0).run(progress=False)
+    heights = run.recorder.column("altitude")[:, 0]
+    close = np.flatnonzero(np.abs(heights - altitude) <= within)
+    if close.size == 0:
+        return float("nan")
+    return float(run.recorder.iterations[close[0]] * 0.01)
+
+
+@_lesson("08")
+def _check_08(climb_time: Any = None) -> str:
+    got = _given("climb_time", climb_time, "a time in seconds")
+    try:
+        seconds = float(got)
+    except (TypeError, ValueError):
+        raise ExerciseError(f"`climb_time` should be a number of seconds, got {got!r}.") from None
+    expected = x8_climb_time(60.0)
+    if not abs(seconds - expected) < 0.005:
+        hint = "later" if seconds < expected else "earlier"
+        raise ExerciseError(
+            f"Not quite: the X8 is not first within 1 m of 60 m at {seconds:g} s (it is {hint}).\n"
+            "Hint: seconds_flown, altitude = fly(altitude=60); then the first seconds_flown "
+            "where abs(altitude - 60) <= 1 (np.argmax of that condition)."
+        )
+    return f"The X8 first comes within 1 m of 60 m after {expected:.2f} s."
