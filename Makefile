@@ -34,8 +34,9 @@ $(VENV)/.installed-lessons: pyproject.toml | $(BIN)/python
 	touch $@ $(VENV)/.installed
 
 # JupyterLab on lesson 01 (Ctrl-C stops it); e.g. LAB_ARGS=--no-browser on a machine without one.
+# As root (a container), JupyterLab wants --allow-root.
 lessons: $(VENV)/.installed-lessons
-	$(BIN)/jupyter lab notebooks/01_one_drone.ipynb $(LAB_ARGS)
+	$(BIN)/jupyter lab notebooks/01_one_drone.ipynb $$([ "$$(id -u)" = 0 ] && echo --allow-root) $(LAB_ARGS)
 
 # The replay's browser test drives Debian's chromium; install it when missing and we can (root).
 browser:
