@@ -75,7 +75,7 @@ class TickTable:
         rows = []
         for k, (name, depth) in enumerate(zip(self.names, self.depths, strict=True)):
             cells = "".join(
-                f'<td style="background:{STATUS_COLOURS[row[k]]};text-align:center">{row[k]}</td>'
+                f'<td style="background:{STATUS_COLOURS[row[k]]};text-align:center;padding:2px 8px">{row[k]}</td>'
                 for row in self.statuses
             )
             label = "&nbsp;" * 4 * depth + html.escape(name)
