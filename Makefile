@@ -1,13 +1,14 @@
 # Two commands do all the set-up from a fresh clone:
 #   make demo   installs into .venv (with the [fast] extra) and runs the gathering scenario
 #               on the compiled engine into runs/gathering/
+#   make lessons  installs JupyterLab (the [lessons] extra) and opens lesson 01 of notebooks/
 #   make test   installs the test dependencies (and the [x8], [dask], [video] and [fast] extras, and
 #               chromium when missing) into .venv and runs the suite
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test lint clean browser
+.PHONY: demo lessons test lint clean browser
 
 $(BIN)/python:
 	$(PYTHON) -c 'import sys; sys.exit("Python >= 3.11 is needed" if sys.version_info < (3, 11) else 0)'
@@ -26,6 +27,16 @@ $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 # that later runs of it, with any parameters, take the compiled engine by themselves (auto).
 demo: $(VENV)/.installed
 	$(BIN)/pyaa run gathering --out runs/gathering --overwrite --engine compiled
+	@echo "Next: the lessons. 'make lessons' opens lesson 01 (notebooks/01_one_drone.ipynb) in JupyterLab."
+
+$(VENV)/.installed-lessons: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[fast,lessons]"
+	touch $@ $(VENV)/.installed
+
+# JupyterLab on lesson 01 (Ctrl-C stops it); e.g. LAB_ARGS=--no-browser on a machine without one.
+# As root (a container), JupyterLab wants --allow-root.
+lessons: $(VENV)/.installed-lessons
+	$(BIN)/jupyter lab notebooks/01_one_drone.ipynb $$([ "$$(id -u)" = 0 ] && echo --allow-root) $(LAB_ARGS)
 
 # The replay's browser test drives Debian's chromium; install it when missing and we can (root).
 browser:
