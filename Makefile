@@ -1,13 +1,15 @@
 # Two commands do all the set-up from a fresh clone:
 #   make demo   installs into .venv (with the [fast] extra) and runs the gathering scenario
 #               on the compiled engine into runs/gathering/
-#   make test   installs the test dependencies (and the [x8], [dask], [video] and [fast] extras, and
-#               chromium when missing) into .venv and runs the suite
+#   make docs   installs the [docs] extra (and the extras the lessons use) and builds the
+#               documentation site into site/ (lessons executed, warnings as errors, links checked)
+#   make test   installs the test dependencies (and the [docs], [x8], [dask], [video] and
+#               [fast] extras, and chromium when missing) into .venv and runs the suite
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test lint clean browser
+.PHONY: demo docs test lint clean browser
 
 $(BIN)/python:
 	$(PYTHON) -c 'import sys; sys.exit("Python >= 3.11 is needed" if sys.version_info < (3, 11) else 0)'
@@ -19,13 +21,21 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[test,x8,dask,video,fast]"
+	$(BIN)/python -m pip install --quiet -e ".[test,docs,x8,dask,video,fast]"
+	touch $@ $(VENV)/.installed $(VENV)/.installed-docs
+
+$(VENV)/.installed-docs: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[docs,x8,dask,fast]"
 	touch $@ $(VENV)/.installed
 
 # The compiled engine compiles the gathering tree once (seconds; numba's cache keeps it), so
 # that later runs of it, with any parameters, take the compiled engine by themselves (auto).
 demo: $(VENV)/.installed
 	$(BIN)/pyaa run gathering --out runs/gathering --overwrite --engine compiled
+
+# The documentation site: executes the lessons, builds with sphinx -W, checks the links.
+docs: $(VENV)/.installed-docs
+	$(BIN)/python scripts/build_docs.py --out site
 
 # The replay's browser test drives Debian's chromium; install it when missing and we can (root).
 browser:
@@ -48,4 +58,4 @@ lint: $(VENV)/.installed-test
 	$(BIN)/mypy src
 
 clean:
-	rm -rf $(VENV) runs .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) runs site .pytest_cache .mypy_cache .ruff_cache
