@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -118,3 +119,15 @@ def on_channel(link: Datalink) -> list[tuple]:
                 None if targets is None else [int(t) for t in targets],
             ))  # fmt: skip
     return out
+
+
+@pytest.fixture(scope="session")
+def executed_lessons(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A folder holding every lesson notebook executed top to bottom from a fresh kernel
+    (same file names, outputs included; the exercise cells replaced by the reference
+    solutions of tests/lesson_solutions/), run once per test session."""
+    from tests.lesson_runner import execute_lessons
+
+    dest = tmp_path_factory.mktemp("lessons")
+    execute_lessons(dest)
+    return dest

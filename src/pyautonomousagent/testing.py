@@ -7,7 +7,9 @@
 - :func:`check_leaf`: prove a leaf type gives the same results on both engines when it is
   ticked for all, most or few of the agents;
 - :func:`scoped_registrations`: whatever a test registers (leaves, missions, scenarios, motion
-  models, engines, mission files) is gone after the block.
+  models, engines, mission files) is gone after the block;
+- :func:`check_exercise` and :func:`tick_table` (from :mod:`pyautonomousagent.lessons`): the
+  lesson notebooks' exercise checks and per-tick status tables.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from pyautonomousagent.bt.status import FAILURE, SUCCESS
 from pyautonomousagent.bt.trees import TREES
 from pyautonomousagent.datalink import Datalink
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES
+from pyautonomousagent.lessons import ExerciseError, check_exercise, tick_table
 from pyautonomousagent.scenarios import SCENARIOS, load
 from pyautonomousagent.simulation import phases
 from pyautonomousagent.simulation.mission import MISSIONS
@@ -37,11 +40,14 @@ from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
 __all__ = [
+    "ExerciseError",
     "Harness",
     "check_engines_agree",
+    "check_exercise",
     "check_leaf",
     "make_harness",
     "scoped_registrations",
+    "tick_table",
 ]
 
 
