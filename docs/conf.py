@@ -82,6 +82,9 @@ html_theme_options = {
     "footer_end": ["sphinx-version"],
 }
 html_show_sourcelink = False
+# Light or dark as the reader's system says (the theme's switch changes it); set, not left
+# empty, so the theme's script has a mode to start from.
+html_context = {"default_mode": "auto"}
 
 
 def _exact_annotation_references(app: object, doctree: nodes.document) -> None:

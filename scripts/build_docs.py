@@ -28,22 +28,16 @@ from html.parser import HTMLParser
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
 
+import nbformat
+
 ROOT = Path(__file__).resolve().parents[1]
-NOTEBOOKS = ROOT / "notebooks"
+sys.path.insert(0, str(ROOT))
+# The lessons are executed as the test suite executes them (fresh kernels, reference
+# solutions in the exercise cells): one piece of code for that job.
+from tests.lesson_runner import execute_lessons, lesson_paths, tagged  # noqa: E402
 
-
-def lesson_paths() -> list[Path]:
-    """The lessons: ``notebooks/NN_*.ipynb`` in their numbered order."""
-    return sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb"))
-
-
-def execute_lessons(folder: Path) -> None:
-    """Execute every lesson from a fresh kernel into ``folder`` (same file names), as the
-    test suite does (``tests/lesson_runner.py``)."""
-    sys.path.insert(0, str(ROOT))
-    from tests.lesson_runner import execute_lessons as run_all
-
-    run_all(folder)
+#: The cell tag MyST-NB folds behind a "show code" button: the exercise's answer.
+FOLDED = "hide-input"
 
 
 def stage(folder: Path, executed: Path) -> Path:
@@ -61,7 +55,11 @@ def stage(folder: Path, executed: Path) -> Path:
         done = executed / path.name
         if not done.exists():
             raise SystemExit(f"build_docs: {done}: lesson {path.name} was not executed")
-        shutil.copy2(done, lessons / path.name)
+        notebook = nbformat.read(done, as_version=4)
+        for cell in tagged(notebook, "exercise"):  # the answer, folded: try it first
+            tags = notebook.cells[cell].setdefault("metadata", {}).setdefault("tags", [])
+            tags.append(FOLDED)
+        nbformat.write(notebook, lessons / path.name)
     return source
 
 
