@@ -121,6 +121,7 @@ def check_links(site: Path) -> tuple[list[str], list[str]]:
     anchor that page holds; external ones are only checked for form.
 
     Returns (problems, external links): each problem is ``page: link: reason``."""
+    site = site.resolve()
     pages = {path: _parse(path) for path in site_pages(site)}
     problems: list[str] = []
     external: set[str] = set()
@@ -137,7 +138,7 @@ def check_links(site: Path) -> tuple[list[str], list[str]]:
             target = (path.parent / unquote(parts.path)).resolve() if parts.path else path
             if target.is_dir():
                 target = target / "index.html"
-            if not target.is_relative_to(site.resolve()) or not target.exists():
+            if not target.is_relative_to(site) or not target.exists():
                 problems.append(f"{where}: no such file")
                 continue
             if parts.fragment and target.suffix == ".html":
@@ -175,7 +176,8 @@ def main(argv: Iterable[str] | None = None) -> int:
     )
     parser.add_argument("--keep-stage", type=Path, help="stage the sources here and keep them")
     args = parser.parse_args(None if argv is None else list(argv))
-    result, seconds = build(args.out.resolve(), args.executed, args.keep_stage)
+    args.out = args.out.resolve()
+    result, seconds = build(args.out, args.executed, args.keep_stage)
     if result.returncode != 0:
         sys.stderr.write(result.stdout + result.stderr)
         print(f"build_docs: sphinx-build failed (warnings are errors): {args.out}")
