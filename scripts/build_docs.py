@@ -162,9 +162,14 @@ def build(
             executed = folder / "executed"
             execute_lessons(executed)
         source = stage(folder / "stage", executed)
+        # Built beside the sources, then moved: MyST-NB writes its scratch folder
+        # (jupyter_execute/) beside the output folder.
+        html = folder / "html"
+        result = sphinx_build(source, html)
         if out.exists():
             shutil.rmtree(out)
-        result = sphinx_build(source, out)
+        if result.returncode == 0:
+            shutil.move(html, out)
     return result, time.perf_counter() - start
 
 
