@@ -1,6 +1,7 @@
 # Two commands do all the set-up from a fresh clone:
 #   make demo   installs into .venv (with the [fast] extra) and runs the gathering scenario
 #               on the compiled engine into runs/gathering/
+#   make lessons  installs JupyterLab (the [lessons] extra) and opens lesson 01 of notebooks/
 #   make docs   installs the [docs] extra (and the extras the lessons use) and builds the
 #               documentation site into site/ (lessons executed, warnings as errors, links checked)
 #   make test   installs the test dependencies (and the [docs], [x8], [dask], [video] and
@@ -9,7 +10,7 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo docs test lint clean browser
+.PHONY: demo lessons docs test lint clean browser
 
 $(BIN)/python:
 	$(PYTHON) -c 'import sys; sys.exit("Python >= 3.11 is needed" if sys.version_info < (3, 11) else 0)'
@@ -32,6 +33,15 @@ $(VENV)/.installed-docs: pyproject.toml | $(BIN)/python
 # that later runs of it, with any parameters, take the compiled engine by themselves (auto).
 demo: $(VENV)/.installed
 	$(BIN)/pyaa run gathering --out runs/gathering --overwrite --engine compiled
+	@echo "Next: the lessons. 'make lessons' opens lesson 01 (notebooks/01_one_drone.ipynb) in JupyterLab."
+
+$(VENV)/.installed-lessons: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[fast,lessons]"
+	touch $@ $(VENV)/.installed
+
+# JupyterLab on lesson 01 (Ctrl-C stops it); e.g. LAB_ARGS=--no-browser on a machine without one.
+lessons: $(VENV)/.installed-lessons
+	$(BIN)/jupyter lab notebooks/01_one_drone.ipynb $(LAB_ARGS)
 
 # The documentation site: executes the lessons, builds with sphinx -W, checks the links.
 docs: $(VENV)/.installed-docs

@@ -244,3 +244,257 @@ def _check_06(table: Any = None, best: Any = None) -> str:
                             "and average minimum_energy over the seeds.")  # fmt: skip
     return (f"{len(rows)} runs; the lowest mean minimum energy, {means[expected]:.1f} %, "
             f"is at energy_use = {expected}.")  # fmt: skip
+
+
+# --- Lesson 01: one drone -------------------------------------------------------------------
+
+
+def _coordinates(name: str, value: Any, length: int) -> np.ndarray:
+    """``value`` as ``length`` finite numbers, or ExerciseError."""
+    value = _given(name, value, f"{length} numbers")
+    try:
+        numbers = np.asarray(value, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ExerciseError(f"`{name}` should be {length} numbers, got {value!r}.") from None
+    if numbers.size != length or not np.isfinite(numbers).all():
+        raise ExerciseError(f"`{name}` should be {length} finite numbers, got {value!r}.")
+    return numbers
+
+
+@_lesson("01")
+def _check_01(position: Any = None) -> str:
+    from pyautonomousagent.models.drone2d import DroneParameters, advance
+
+    got = _coordinates("position", position, 2)
+    x, y, v, a = (np.array([value]) for value in (50.0, 50.0, 0.0, 0.0))
+    for _ in range(180):
+        x, y, v, a = advance(x, y, v, a, np.array([0.01]), np.array([2.0]), DroneParameters())
+    expected = np.array([x[0], y[0]])
+    if not np.allclose(got, expected, atol=1e-6):
+        off = float(np.hypot(*(got - expected)))
+        raise ExerciseError(
+            f"Not quite: ({got[0]:.4f}, {got[1]:.4f}) is {off:.3g} units from where the drone "
+            "is.\nHint: start at rest, heading 0; apply u_v = 0.01 and u_a = 2 on all 180 "
+            "iterations; advance keeps the speed at most max_speed (0.1)."
+        )
+    return f"After 180 iterations the drone is at ({got[0]:.4f}, {got[1]:.4f})."
+
+
+# --- Lesson 03: the blackboard and the datalink ---------------------------------------------
+
+
+def gathering_order_receivers(datalink_range: float) -> list[str]:
+    """Names of the drones that receive drone1's gathering order (iteration 5000 of the
+    gathering scenario, seed 0) when the datalink's range is ``datalink_range``."""
+    from pyautonomousagent.scenarios import load
+    from pyautonomousagent.simulation.run import Simulation
+
+    scenario = load("gathering").with_overrides(datalink_range=datalink_range)
+    sim = Simulation.create(scenario, seed=0)
+    while sim.world.iteration < scenario.parameters.gathering_iteration:
+        sim.step()
+    receivers = [
+        i for d in sim.inbox if d.messages.type == "gathering" for i in d.pairs(sim.swarm.size)[0]
+    ]
+    return [sim.swarm.names[int(i)] for i in receivers]
+
+
+@_lesson("03")
+def _check_03(heard: Any = None) -> str:
+    heard = _given("heard", heard, "a list of drone names, e.g. ['drone2']")
+    if isinstance(heard, str) or not isinstance(heard, Sequence):
+        raise ExerciseError(f"`heard` should be a list of drone names, got {heard!r}.")
+    names = [str(h) for h in heard]
+    known = {"drone1", "drone2", "drone3", "drone4"}
+    if not set(names) <= known:
+        wrong = sorted(set(names) - known)[0]
+        raise ExerciseError(
+            f"{wrong!r} is not a drone of the gathering scenario ({sorted(known)})."
+        )
+    expected = gathering_order_receivers(25.0)
+    if sorted(names) != sorted(expected):
+        raise ExerciseError(
+            f"Not quite: at range 25 the gathering order does not reach exactly {names}.\n"
+            "Hint: step to iteration 5000 (`while sim.world.iteration < 5000: sim.step()`), "
+            "then look at the 'gathering' delivery in `sim.inbox`; the sender never receives "
+            "its own message."
+        )
+    return f"At range 25 the gathering order reaches {', '.join(sorted(names)) or 'no one'}."
+
+
+# --- Lesson 05: tree files ------------------------------------------------------------------
+
+
+def l05_expected_tree() -> Node:
+    """Lesson 05's answer: the gathering tree with the last branch cruising at 0.05."""
+    from dataclasses import replace
+
+    from pyautonomousagent.bt.trees import gathering_tree
+
+    def slow(node: Node) -> Node:
+        if node.name == "action_navigate_to_destination_a_2":
+            return replace(node, params={**node.params, "speed": 0.05})
+        return replace(node, children=tuple(slow(child) for child in node.children))
+
+    return slow(gathering_tree())
+
+
+@_lesson("05")
+def _check_05(tree_file: Any = None) -> str:
+    from pathlib import Path
+
+    from pyautonomousagent.bt.files import load_tree
+    from pyautonomousagent.scenarios import load
+    from pyautonomousagent.simulation.run import Simulation
+
+    path = Path(_given("tree_file", tree_file, "the name of your YAML tree file"))
+    if path.suffix not in (".yaml", ".yml"):
+        raise ExerciseError(f"{path} is not a YAML file: save your tree as slow.yaml.")
+    if not path.is_file():
+        raise ExerciseError(f"There is no file {path} here: write it first (Path.write_text).")
+    try:
+        tree = load_tree(path)
+    except Exception as error:  # the file's mistake, in its own words
+        raise ExerciseError(f"Your file does not load: {error}") from None
+    scenario = load("gathering").with_overrides(iterations=600)
+    got, expected = (
+        Simulation.create(scenario, seed=0, tree=t).run(progress=False).recorder
+        for t in (tree, l05_expected_tree())
+    )
+    for key in ("x", "y", "speed", "energy"):
+        if not np.array_equal(got.column(key), expected.column(key)):
+            raise ExerciseError(
+                f"Not quite: with {path} the drones' {key} is not what it should be.\n"
+                "Hint: only the last branch's Action_Navigate_To_Destination_A gets `speed: "
+                "0.05`; the refuelling branch's navigate action keeps the scenario's speed."
+            )
+    return f"{path} makes the drones cruise at 0.05 units per iteration to their positions."
+
+
+# --- Lesson 07: swarms at scale -------------------------------------------------------------
+
+
+def smallest_compiled_swarm(iterations: int) -> int:
+    """The fewest agents for which the batched loop's estimate reaches the seconds from which
+    engine "auto" compiles (:data:`~pyautonomousagent.simulation.run.AUTO_COMPILE_SECONDS`)."""
+    from pyautonomousagent.simulation.run import AUTO_COMPILE_SECONDS, batched_seconds
+
+    low, high = 1, 10**12
+    while low < high:
+        middle = (low + high) // 2
+        if batched_seconds(middle, iterations) >= AUTO_COMPILE_SECONDS:
+            high = middle
+        else:
+            low = middle + 1
+    return low
+
+
+@_lesson("07")
+def _check_07(agents: Any = None) -> str:
+    got = _given("agents", agents, "a whole number of drones")
+    if isinstance(got, bool) or not float(got).is_integer():
+        raise ExerciseError(f"`agents` should be a whole number of drones, got {got!r}.")
+    expected = smallest_compiled_swarm(4000)
+    if int(got) != expected:
+        side = "too few: the estimate is still below" if got < expected else "more than needed:"
+        raise ExerciseError(
+            f"Not quite: {int(got):,d} drones is {side} the smallest swarm that reaches "
+            "AUTO_COMPILE_SECONDS.\nHint: batched_seconds(agents, 4000) is 4000 * (a + agents "
+            "* b); find the first whole number of agents where it is >= AUTO_COMPILE_SECONDS."
+        )
+    return f"From {expected:,d} drones a 4000-iteration run is worth compiling."
+
+
+# --- Lesson 04: your own mission ------------------------------------------------------------
+
+
+@_lesson("04")
+def _check_04(leaf_type: Any = None, scenario: Any = None) -> str:
+    from pyautonomousagent.bt.leaf import LEAF_TYPES, Leaf
+    from pyautonomousagent.bt.spec import inverter, leaf, reactive_sequence
+    from pyautonomousagent.bt.status import FAILURE, SUCCESS
+    from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.testing import check_leaf
+
+    name = "Condition_Shelter_Near"
+    leaf_type = _given("ConditionShelterNear", leaf_type, "your leaf class")
+    if not (isinstance(leaf_type, type) and issubclass(leaf_type, Leaf)):
+        raise ExerciseError(f"`ConditionShelterNear` should be a class derived from Leaf, "
+                            f"got {leaf_type!r}.")  # fmt: skip
+    if getattr(leaf_type, "type_name", None) != name:
+        raise ExerciseError(f"Give your leaf `type_name = {name!r}`.")
+    if LEAF_TYPES.get(name) is not leaf_type:
+        raise ExerciseError("Your leaf is not registered: put `@register_leaf` above the class.")
+    scenario = _given("scenario", scenario, "the lesson's scenario")
+    distance = 30.0
+    probe = reactive_sequence(
+        "probe_tree",
+        inverter("not_near", leaf(name, "probe", distance=distance)),
+        leaf("Action_Navigate_To_Destination_A"),
+    )
+    try:
+        sim = Simulation.create(scenario.with_overrides(iterations=700), tree=probe,
+                                engine="pytrees")  # fmt: skip
+        row = [node.name for node in probe.walk()].index("probe")
+        for _ in range(700):
+            sim.step()
+            got = sim.engine.node_statuses()[row]
+            near = sim.swarm.columns["shelter_distance"] <= distance
+            if not np.array_equal(got, np.where(near, SUCCESS, FAILURE)):
+                agent = int(np.flatnonzero(got != np.where(near, SUCCESS, FAILURE))[0])
+                d = float(sim.swarm.columns["shelter_distance"][agent])
+                raise ExerciseError(
+                    f"Not quite: at iteration {sim.world.iteration}, {sim.swarm.names[agent]}'s "
+                    f"nearest shelter is {d:.2f} units away and the port distance is {distance}, "
+                    f"but your leaf returned {NAMES[int(got[agent])]}.\nHint: "
+                    "success_if(agents.shelter_distance <= self.distance)."
+                )
+        check_leaf(leaf_type, scenario, agents=6, iterations=40, distance=distance)
+    except ExerciseError:
+        raise
+    except Exception as error:  # the leaf's own mistake, in one line
+        first = str(error).splitlines()[0] if str(error) else ""
+        raise ExerciseError(f"Your leaf fails when ticked: {type(error).__name__}: {first}\n"
+                            "Hint: use only array expressions and success_if, no `if` on a "
+                            "drone's value.") from None  # fmt: skip
+    return f"{name} is right for every drone and tick, and both engines agree on it."
+
+
+# --- Lesson 08: the Skywalker X8 ------------------------------------------------------------
+
+
+def x8_climb_time(altitude: float, within: float = 1.0, iterations: int = 3000) -> float:
+    """Seconds from launch until one X8 of scenario x8-patrol (seed 0, batched engine) sent to
+    ``altitude`` metres is first within ``within`` metres of it (NaN if never)."""
+    from pyautonomousagent.scenarios import load
+    from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.simulation.scenario import to_mapping
+
+    base = load("x8-patrol")
+    scenario = base.with_overrides(
+        agents=1, iterations=iterations, x8={**to_mapping(base)["x8"], "altitude": altitude}
+    )
+    run = Simulation.create(scenario, seed=0).run(progress=False)
+    heights = run.recorder.column("altitude")[:, 0]
+    close = np.flatnonzero(np.abs(heights - altitude) <= within)
+    if close.size == 0:
+        return float("nan")
+    return float(run.recorder.iterations[close[0]] * 0.01)
+
+
+@_lesson("08")
+def _check_08(climb_time: Any = None) -> str:
+    got = _given("climb_time", climb_time, "a time in seconds")
+    try:
+        seconds = float(got)
+    except (TypeError, ValueError):
+        raise ExerciseError(f"`climb_time` should be a number of seconds, got {got!r}.") from None
+    expected = x8_climb_time(60.0)
+    if not abs(seconds - expected) < 0.005:
+        hint = "later" if seconds < expected else "earlier"
+        raise ExerciseError(
+            f"Not quite: the X8 is not first within 1 m of 60 m at {seconds:g} s (it is {hint}).\n"
+            "Hint: seconds_flown, altitude = fly(altitude=60); then the first seconds_flown "
+            "where abs(altitude - 60) <= 1 (np.argmax of that condition)."
+        )
+    return f"The X8 first comes within 1 m of 60 m after {expected:.2f} s."
