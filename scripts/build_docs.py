@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 # The lessons are executed as the test suite executes them (fresh kernels, reference
 # solutions in the exercise cells): one piece of code for that job.
-from tests.lesson_runner import execute_lessons, lesson_paths, tagged  # noqa: E402
+from tests.lesson_runner import errors, execute_lessons, lesson_paths, tagged  # noqa: E402
 
 #: The cell tag MyST-NB folds behind a "show code" button: the exercise's answer.
 FOLDED = "hide-input"
@@ -56,6 +56,8 @@ def stage(folder: Path, executed: Path) -> Path:
         if not done.exists():
             raise SystemExit(f"build_docs: {done}: lesson {path.name} was not executed")
         notebook = nbformat.read(done, as_version=4)
+        if errors(notebook):  # the site shows no traceback
+            raise SystemExit(f"build_docs: lesson {path.name} failed: {errors(notebook)[0]}")
         for cell in tagged(notebook, "exercise"):  # the answer, folded: try it first
             tags = notebook.cells[cell].setdefault("metadata", {}).setdefault("tags", [])
             tags.append(FOLDED)

@@ -107,6 +107,24 @@ def test_the_link_check_finds_a_broken_link_and_anchor(
     assert external == ["https://x y"]
 
 
+def test_a_lesson_that_failed_is_refused(executed_lessons: Path, tmp_path: Path) -> None:
+    """The site never shows a traceback: a lesson with an error output stops the build."""
+    broken = tmp_path / "executed"
+    broken.mkdir()
+    lessons = sorted(executed_lessons.glob("*.ipynb"))
+    for path in lessons:
+        notebook = nbformat.read(path, as_version=4)
+        if path == lessons[0]:
+            cell = next(c for c in notebook.cells if c.cell_type == "code")
+            cell.outputs = [nbformat.v4.new_output("error", ename="ValueError", evalue="boom")]
+        nbformat.write(notebook, broken / path.name)
+    command = [sys.executable, str(SCRIPT), "--executed", str(broken), "--out", str(tmp_path / "s")]
+    done = subprocess.run(command, capture_output=True, text=True, check=False)
+    assert done.returncode != 0
+    assert f"lesson {lessons[0].name} failed: ValueError: boom" in done.stdout + done.stderr
+    assert not (tmp_path / "s").exists()
+
+
 class _Tables(HTMLParser):
     """The text of every cell of every ``pyaa-tick-table`` in an HTML fragment."""
 
