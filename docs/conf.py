@@ -6,6 +6,7 @@ puts the executed lessons in ``lessons/`` and runs ``sphinx-build -W`` (warnings
 
 from __future__ import annotations
 
+import inspect
 import os
 import sys
 from pathlib import Path
@@ -28,16 +29,14 @@ release = __version__
 extensions = [
     "myst_nb",  # Markdown pages (MyST) and notebooks with their stored outputs
     "sphinx.ext.autodoc",
-    "sphinx.ext.autosummary",
     "sphinx.ext.napoleon",  # the Args:/Returns: sections some docstrings use
     "sphinx.ext.intersphinx",
 ]
 
 # Pages: the Markdown in this folder, the lessons (notebooks) and the generated API pages.
-# ".rst" first: autosummary writes the API pages (reST) with the first suffix.
+# The API pages are reST (automodule), the others Markdown (MyST) and notebooks.
 source_suffix = {".rst": "restructuredtext", ".md": "myst-nb", ".ipynb": "myst-nb"}
 exclude_patterns = ["_build", "README.md", "**/.ipynb_checkpoints"]
-templates_path = ["_templates"]
 root_doc = "index"
 
 # MyST: heading anchors as GitHub makes them, so the links docs/*.md use on GitHub
@@ -50,8 +49,8 @@ myst_enable_extensions = ["colon_fence", "deflist"]
 nb_execution_mode = "off"
 nb_merge_streams = True
 
-# API reference from the docstrings (reST roles, some Google-style sections).
-autosummary_generate = True
+# API reference from the docstrings (reST roles, some Google-style sections); the build
+# script writes one page per module into api/.
 # A module documents what it defines: the names a package re-exports (its __all__) are
 # documented once, in the module that defines them.
 autodoc_default_options = {"members": True, "show-inheritance": True, "ignore-module-all": True}
@@ -100,5 +99,23 @@ def _exact_annotation_references(app: object, doctree: nodes.document) -> None:
             del ref["refspecific"]
 
 
+def _exported_names(
+    app: Sphinx, what: str, name: str, obj: object, options: object, lines: list[str]
+) -> None:
+    """A package's page lists the names it exports (its ``__all__``), each linked to the
+    module that defines and documents it (``ignore-module-all`` documents them only there)."""
+    refs = []
+    for exported in getattr(obj, "__all__", []) if what == "module" else []:
+        value = getattr(obj, exported, None)
+        home, qualname = getattr(value, "__module__", None), getattr(value, "__qualname__", None)
+        defined = inspect.isclass(value) or inspect.isfunction(value)
+        if defined and isinstance(home, str) and isinstance(qualname, str) and home != name:
+            role = "class" if isinstance(value, type) else "func"
+            refs.append(f":{role}:`~{home}.{qualname}`")
+    if refs:
+        lines += ["", "Exported here (documented where each is defined): " + ", ".join(refs) + "."]
+
+
 def setup(app: Sphinx) -> None:
     app.connect("doctree-read", _exact_annotation_references)
+    app.connect("autodoc-process-docstring", _exported_names)

@@ -6,10 +6,10 @@ Usage (``make docs`` runs the first)::
     python scripts/build_docs.py --executed DIR --out OUT       # lessons executed already
 
 The site's sources are ``docs/`` (Markdown pages and ``conf.py``), the lessons in
-``notebooks/`` and the docstrings in ``src/``. Nothing is written into the source tree: ``docs/``
-and the README are staged in a temporary folder, with the executed lessons in its
-``docs/lessons/`` and the generated API pages in ``docs/api/``, and Sphinx builds from there with
-every warning an error. Then every internal link and anchor of the built site is checked
+``notebooks/`` and the docstrings in ``src/``. Nothing is written into the source tree:
+``docs/`` and the README are staged in a temporary folder, with the executed lessons in its
+``docs/lessons/`` and the API pages (one per module) in ``docs/api/``, and Sphinx builds from
+there with every warning an error. Then every internal link and anchor of the built site is checked
 (``check_links``); external links are checked for form only (the build has no network).
 Exit code 0 when the site is built and its links hold; 1 otherwise, with the reasons.
 """
@@ -40,6 +40,35 @@ from tests.lesson_runner import errors, execute_lessons, lesson_paths, tagged  #
 FOLDED = "hide-input"
 
 
+def module_names() -> list[str]:
+    """Every module of the package, found in ``src/`` (``pyautonomousagent``, ``...bt``,
+    ``...bt.leaf``, ...), in order."""
+    src = ROOT / "src"
+    names = []
+    for path in sorted((src / "pyautonomousagent").rglob("*.py")):
+        parts = path.relative_to(src).with_suffix("").parts
+        parts = parts[:-1] if parts[-1] == "__init__" else parts
+        if not any(part.startswith("_") for part in parts):
+            names.append(".".join(parts))
+    return sorted(names)
+
+
+def write_api_pages(folder: Path) -> None:
+    """One page per module, ``folder/NAME.rst``: the module's docstring and members
+    (autodoc), and a table of contents of its submodules.
+
+    Written here rather than by autosummary's recursion, which takes the package attribute of
+    the same name for the module (``pyautonomousagent.bt.leaf`` is also a function)."""
+    folder.mkdir(parents=True)
+    names = module_names()
+    for name in names:
+        children = [n for n in names if n.rpartition(".")[0] == name]
+        lines = [name, "=" * len(name), "", f".. automodule:: {name}", ""]
+        if children:
+            lines += [".. toctree::", "   :maxdepth: 1", "", *(f"   {n}" for n in children), ""]
+        (folder / f"{name}.rst").write_text("\n".join(lines), encoding="utf-8")
+
+
 def stage(folder: Path, executed: Path) -> Path:
     """Copy ``docs/`` and the README into ``folder``, the executed lessons into
     ``folder/docs/lessons``; return the Sphinx source folder (``folder/docs``)."""
@@ -47,6 +76,7 @@ def stage(folder: Path, executed: Path) -> Path:
     shutil.copytree(
         ROOT / "docs", source, ignore=shutil.ignore_patterns("_build", "lessons", "api")
     )
+    write_api_pages(source / "api")
     shutil.copy2(ROOT / "README.md", folder / "README.md")
     shutil.copytree(ROOT / "examples", folder / "examples")
     lessons = source / "lessons"

@@ -79,6 +79,9 @@ def test_pages_are_generated_from_their_sources_not_copied(site: Path) -> None:
     assert "make demo" in start and "runs/gathering/states.parquet" in start
     testing = _text(site / "api" / "pyautonomousagent.testing.html")
     assert "check_engines_agree" in testing and "Test tools for a user" in testing
+    # A module shadowed by a package attribute of its name (bt.leaf, the function) still
+    # gets its own page: the module's docstring, not the function's.
+    assert "What a leaf node is" in _text(site / "api" / "pyautonomousagent.bt.leaf.html")
     first_line = (ROOT / "docs" / "missions.md").read_text().splitlines()[0].lstrip("# ")
     assert first_line in _text(site / "missions.html")
 
