@@ -6,6 +6,7 @@ puts the executed lessons in ``lessons/`` and runs ``sphinx-build -W`` (warnings
 
 from __future__ import annotations
 
+import importlib
 import inspect
 import os
 import sys
@@ -14,6 +15,7 @@ from pathlib import Path
 from docutils import nodes
 from sphinx import addnodes
 from sphinx.application import Sphinx
+from sphinx.environment import BuildEnvironment
 
 #: The repository: the package is documented from its source, not from an installed copy.
 ROOT = Path(os.environ.get("PYAA_REPO", Path(__file__).resolve().parents[1]))
@@ -116,6 +118,48 @@ def _exported_names(
         lines += ["", "Exported here (documented where each is defined): " + ", ".join(refs) + "."]
 
 
+def _lookup(dotted: str) -> object | None:
+    """The package's object of that dotted name (``pyautonomousagent.bt.Leaf``), or None."""
+    parts = dotted.split(".")
+    for cut in range(len(parts), 0, -1):
+        try:
+            value: object = importlib.import_module(".".join(parts[:cut]))
+        except ImportError:
+            continue
+        for part in parts[cut:]:
+            value = getattr(value, part, None)
+        return value
+    return None
+
+
+def _canonical_reference(
+    app: Sphinx, env: BuildEnvironment, node: addnodes.pending_xref, contnode: nodes.Element
+) -> nodes.Element | None:
+    """A reference to a re-exported name (``:class:`Leaf``` in ``pyautonomousagent.bt``)
+    links to where the object is defined and documented (``pyautonomousagent.bt.leaf.Leaf``)."""
+    if node.get("refdomain") != "py":
+        return None
+    target, module = node["reftarget"], node.get("py:module")
+    for dotted in (target, f"{module}.{target}") if module else (target,):
+        if not dotted.startswith("pyautonomousagent."):
+            continue
+        value = _lookup(dotted)
+        home, qualname = getattr(value, "__module__", None), getattr(value, "__qualname__", None)
+        if isinstance(home, str) and isinstance(qualname, str):
+            canonical = f"{home}.{qualname}"
+            if canonical != dotted:
+                ref = node.deepcopy()
+                ref["reftarget"] = canonical
+                ref.attributes.pop("refspecific", None)
+                domain = env.get_domain("py")
+                kind = node["reftype"]
+                return domain.resolve_xref(
+                    env, node["refdoc"], app.builder, kind, canonical, ref, contnode
+                )
+    return None
+
+
 def setup(app: Sphinx) -> None:
     app.connect("doctree-read", _exact_annotation_references)
     app.connect("autodoc-process-docstring", _exported_names)
+    app.connect("missing-reference", _canonical_reference)
