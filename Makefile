@@ -40,8 +40,9 @@ $(VENV)/.installed-lessons: pyproject.toml | $(BIN)/python
 	touch $@ $(VENV)/.installed
 
 # JupyterLab on lesson 01 (Ctrl-C stops it); e.g. LAB_ARGS=--no-browser on a machine without one.
+# As root (a container), JupyterLab wants --allow-root.
 lessons: $(VENV)/.installed-lessons
-	$(BIN)/jupyter lab notebooks/01_one_drone.ipynb $(LAB_ARGS)
+	$(BIN)/jupyter lab notebooks/01_one_drone.ipynb $$([ "$$(id -u)" = 0 ] && echo --allow-root) $(LAB_ARGS)
 
 # The documentation site: executes the lessons, builds with sphinx -W, checks the links.
 docs: $(VENV)/.installed-docs

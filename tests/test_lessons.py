@@ -2,16 +2,22 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import numpy as np
+import pyarrow.compute as pc
 import pytest
 
 from pyautonomousagent.lessons import (
     CHECKS,
     ExerciseError,
     l02_tree,
+    l05_expected_tree,
     scripted,
     tick_table,
+    x8_climb_time,
 )
-from pyautonomousagent.testing import check_exercise
+from pyautonomousagent.testing import check_exercise, scoped_registrations
 
 
 def test_tick_table_shows_a_reactive_sequence_halting_its_action() -> None:
@@ -70,3 +76,119 @@ def test_every_lesson_has_a_check() -> None:
     assert set(CHECKS) >= {"02", "06"}
     with pytest.raises(ValueError, match="no exercise for lesson 9"):
         check_exercise(9)
+
+
+# --- the other lessons' checks: missing and wrong answers fail with a hint ------------------
+
+
+@pytest.mark.parametrize(
+    ("lesson", "answers", "message"),
+    [
+        (1, {}, "Not answered yet: set `position`"),
+        (1, {"position": (50.0, "north")}, "should be 2 numbers"),
+        (1, {"position": (50.0, 68.0)}, "Not quite: .* units from where the drone is"),
+        (3, {}, "Not answered yet: set `heard`"),
+        (3, {"heard": "drone3"}, "should be a list of drone names"),
+        (3, {"heard": ["drone9"]}, "'drone9' is not a drone"),
+        (3, {"heard": ["drone2", "drone3", "drone4"]}, "does not reach exactly"),
+        (4, {}, "Not answered yet: set `ConditionShelterNear`"),
+        (4, {"leaf_type": 3}, "should be a class derived from Leaf"),
+        (5, {}, "Not answered yet: set `tree_file`"),
+        (5, {"tree_file": "slow.xml"}, "is not a YAML file"),
+        (5, {"tree_file": "no-such-file.yaml"}, "There is no file"),
+        (6, {}, "Not answered yet: set `table`"),
+        (6, {"table": [1, 2]}, "should be a sweep's results table"),
+        (7, {}, "Not answered yet: set `agents`"),
+        (7, {"agents": 2.5}, "should be a whole number"),
+        (7, {"agents": 55_000}, "still below AUTO_COMPILE_SECONDS"),
+        (7, {"agents": 60_000}, "fewer drones already reach"),
+        (8, {}, "Not answered yet: set `climb_time`"),
+        (8, {"climb_time": "soon"}, "should be a number of seconds"),
+    ],
+)
+def test_checks_refuse_missing_and_wrong_answers(
+    lesson: int, answers: dict[str, object], message: str, tmp_path: Path, monkeypatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ExerciseError, match=message):
+        check_exercise(lesson, **answers)
+
+
+def test_check_01_right_answer(capsys: pytest.CaptureFixture[str]) -> None:
+    from pyautonomousagent.models.drone2d import DroneParameters, advance
+
+    x, y, v, a = (np.array([value]) for value in (50.0, 50.0, 0.0, 0.0))
+    for _ in range(180):
+        x, y, v, a = advance(x, y, v, a, np.array([0.01]), np.array([2.0]), DroneParameters())
+    check_exercise(1, position=[float(x[0]), float(y[0])])
+    assert "Well done" in capsys.readouterr().out
+
+
+def test_check_05_wrong_file_and_a_file_that_does_not_load(tmp_path: Path, monkeypatch) -> None:
+    from pyautonomousagent.bt import save_tree
+    from pyautonomousagent.bt.trees import gathering_tree
+
+    monkeypatch.chdir(tmp_path)
+    save_tree(gathering_tree(), "unchanged.yaml")  # forgot the edit
+    with pytest.raises(ExerciseError, match="the drones' x is not what it should be"):
+        check_exercise(5, tree_file="unchanged.yaml")
+    Path("broken.yaml").write_text("trees: [\n")
+    with pytest.raises(ExerciseError, match="Your file does not load: broken.yaml"):
+        check_exercise(5, tree_file="broken.yaml")
+    save_tree(l05_expected_tree(), "slow.yaml")
+    check_exercise(5, tree_file="slow.yaml")
+
+
+def test_check_06_wrong_best(tmp_path: Path) -> None:
+    from pyautonomousagent.experiments import Experiment, sweep
+
+    experiment = Experiment.from_mapping({
+        "scenario": "patrol", "iterations": 300, "set": {"agents": 2},
+        "vary": {"energy_use": [0.1, 0.2, 0.3]}, "seeds": 3, "measures": ["minimum_energy"],
+    })  # fmt: skip
+    table = sweep(experiment, tmp_path / "sweep", backend="serial", progress=False).table
+    with pytest.raises(ExerciseError, match="does not have the lowest mean minimum energy"):
+        check_exercise(6, table=table, best=0.1)
+    check_exercise(6, table=table, best=0.3)
+    few = table.filter(pc.not_equal(table["energy_use"], 0.3))
+    with pytest.raises(ExerciseError, match="at least 3 values"):
+        check_exercise(6, table=few, best=0.2)
+
+
+def test_check_08_wrong_time() -> None:
+    pytest.importorskip("pyfly")
+    right = x8_climb_time(60.0)
+    assert 0 < right < 30
+    with pytest.raises(ExerciseError, match="it is later"):
+        check_exercise(8, climb_time=right - 0.5)
+
+
+def test_check_04_a_wrong_leaf_in_the_lessons_mission(executed_lessons: Path) -> None:
+    from pyautonomousagent import load
+    from pyautonomousagent.bt import Leaf, Port, register_leaf, success_if
+
+    folder = executed_lessons / "work" / "04" / "shelter"
+    with scoped_registrations():
+        scenario = load(str(folder / "scenario.yaml"))  # registers the lesson's mission
+
+        @register_leaf
+        class ConditionShelterNear(Leaf):
+            type_name = "Condition_Shelter_Near"
+            ports = (Port("distance", float, None, 0.0, "world units"),)
+
+            def evaluate(self, agents, world):  # type: ignore[no-untyped-def]
+                return success_if(agents.shelter_distance >= self.distance)  # backwards
+
+        with pytest.raises(ExerciseError, match="but your leaf returned"):
+            check_exercise(4, leaf_type=ConditionShelterNear, scenario=scenario)
+
+        @register_leaf
+        class Branching(Leaf):
+            type_name = "Condition_Shelter_Near"
+            ports = (Port("distance", float, None, 0.0, "world units"),)
+
+            def evaluate(self, agents, world):  # type: ignore[no-untyped-def]
+                return 1 if agents.shelter_distance <= self.distance else 2  # `if` on arrays
+
+        with pytest.raises(ExerciseError, match="Your leaf fails when ticked"):
+            check_exercise(4, leaf_type=Branching, scenario=scenario)

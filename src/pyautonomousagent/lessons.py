@@ -396,11 +396,15 @@ def _check_07(agents: Any = None) -> str:
         raise ExerciseError(f"`agents` should be a whole number of drones, got {got!r}.")
     expected = smallest_compiled_swarm(4000)
     if int(got) != expected:
-        side = "too few: the estimate is still below" if got < expected else "more than needed:"
+        where = (
+            "the estimate is still below AUTO_COMPILE_SECONDS"
+            if got < expected
+            else "that is more than needed: fewer drones already reach AUTO_COMPILE_SECONDS"
+        )
         raise ExerciseError(
-            f"Not quite: {int(got):,d} drones is {side} the smallest swarm that reaches "
-            "AUTO_COMPILE_SECONDS.\nHint: batched_seconds(agents, 4000) is 4000 * (a + agents "
-            "* b); find the first whole number of agents where it is >= AUTO_COMPILE_SECONDS."
+            f"Not quite: with {int(got):,d} drones {where}.\nHint: batched_seconds(agents, 4000)"
+            " is 4000 * (a + agents * b); find the first whole number of agents where it is >= "
+            "AUTO_COMPILE_SECONDS."
         )
     return f"From {expected:,d} drones a 4000-iteration run is worth compiling."
 
