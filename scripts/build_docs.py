@@ -229,6 +229,8 @@ def main(argv: Iterable[str] | None = None) -> int:
         f"build_docs: {pages} pages in {seconds:.0f} s, no warnings; internal links and anchors"
         f" hold; {len(external)} external links (form checked): {args.out / 'index.html'}"
     )
+    for link in external:
+        print(f"  external: {link}")
     return 0
 
 
