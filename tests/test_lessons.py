@@ -168,27 +168,22 @@ def test_check_04_a_wrong_leaf_in_the_lessons_mission(executed_lessons: Path) ->
     from pyautonomousagent.bt import Leaf, Port, register_leaf, success_if
 
     folder = executed_lessons / "work" / "04" / "shelter"
-    with scoped_registrations():
-        scenario = load(str(folder / "scenario.yaml"))  # registers the lesson's mission
 
-        @register_leaf
-        class ConditionShelterNear(Leaf):
-            type_name = "Condition_Shelter_Near"
-            ports = (Port("distance", float, None, 0.0, "world units"),)
+    class Backwards(Leaf):
+        type_name = "Condition_Shelter_Near"
+        ports = (Port("distance", float, None, 0.0, "world units"),)
 
-            def evaluate(self, agents, world):  # type: ignore[no-untyped-def]
-                return success_if(agents.shelter_distance >= self.distance)  # backwards
+        def evaluate(self, agents, world):  # type: ignore[no-untyped-def]
+            return success_if(agents.shelter_distance >= self.distance)  # backwards
 
-        with pytest.raises(ExerciseError, match="but your leaf returned"):
-            check_exercise(4, leaf_type=ConditionShelterNear, scenario=scenario)
+    class Branching(Backwards):
+        def evaluate(self, agents, world):  # type: ignore[no-untyped-def]
+            return 1 if agents.shelter_distance <= self.distance else 2  # `if` on arrays
 
-        @register_leaf
-        class Branching(Leaf):
-            type_name = "Condition_Shelter_Near"
-            ports = (Port("distance", float, None, 0.0, "world units"),)
-
-            def evaluate(self, agents, world):  # type: ignore[no-untyped-def]
-                return 1 if agents.shelter_distance <= self.distance else 2  # `if` on arrays
-
-        with pytest.raises(ExerciseError, match="Your leaf fails when ticked"):
-            check_exercise(4, leaf_type=Branching, scenario=scenario)
+    for leaf_type, message in ((Backwards, "but your leaf returned"),
+                               (Branching, "Your leaf fails when ticked")):  # fmt: skip
+        with scoped_registrations():
+            scenario = load(str(folder / "scenario.yaml"))  # registers the lesson's mission
+            register_leaf(leaf_type)
+            with pytest.raises(ExerciseError, match=message):
+                check_exercise(4, leaf_type=leaf_type, scenario=scenario)

@@ -22,8 +22,6 @@ MAX_OUTPUT_LINES = 40
 def test_lesson_runs_and_its_check_passes(path: Path, executed_lessons: Path) -> None:
     notebook = nbformat.read(executed_lessons / path.name, as_version=4)
     assert not errors(notebook), errors(notebook)
-    if path.name not in LESSONS:
-        return  # the old notebook, until the series replaces it
     (check,) = tagged(notebook, "check")
     text = "".join(o.get("text", "") for o in notebook.cells[check].outputs)
     assert "Well done" in text, f"{path.name}: the check cell printed {text!r}"
