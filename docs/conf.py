@@ -32,7 +32,6 @@ extensions = [
     "myst_nb",  # Markdown pages (MyST) and notebooks with their stored outputs
     "sphinx.ext.autodoc",
     "sphinx.ext.napoleon",  # the Args:/Returns: sections some docstrings use
-    "sphinx.ext.intersphinx",
 ]
 
 # Pages: the Markdown in this folder, the lessons (notebooks) and the generated API pages.
@@ -68,9 +67,6 @@ napoleon_numpy_docstring = False
 napoleon_use_ivar = True
 napoleon_attr_annotations = False
 napoleon_custom_sections = [("Class attributes", "Attributes")]
-
-# No network when building: intersphinx reads no inventories, the references stay as text.
-intersphinx_mapping: dict[str, tuple[str, str | None]] = {}
 
 html_theme = "pydata_sphinx_theme"
 html_title = "pyAutonomousAgent"
