@@ -52,13 +52,13 @@ def site(executed_lessons: Path, tmp_path_factory: pytest.TempPathFactory) -> Pa
 
 
 def test_every_page_is_built(site: Path) -> None:
-    pages = {"index", "getting-started", "lessons", "howto", "guide", "api", "about-this-site"}
+    pages = {"index", "getting-started", "course", "howto", "guide", "api", "about-this-site"}
     pages |= {p.stem for p in (ROOT / "docs").glob("*.md") if p.name != "README.md"}
     missing = [p for p in sorted(pages) if not (site / f"{p}.html").exists()]
     assert missing == []
     lessons = [p.stem for p in lesson_paths()]
     assert lessons and all((site / "lessons" / f"{name}.html").exists() for name in lessons)
-    index = (site / "lessons.html").read_text()
+    index = (site / "course.html").read_text()
     assert all(f'href="lessons/{name}.html"' in index for name in lessons)
     modules = [
         m.name for m in pkgutil.walk_packages(pyautonomousagent.__path__, "pyautonomousagent.")

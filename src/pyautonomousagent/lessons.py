@@ -30,6 +30,7 @@ STATUS_COLOURS = {
     "RUNNING": "#fff3c4",
     "INVALID": "#eeeeee",
 }
+CELL_STYLE = "text-align:center;padding:2px 8px"
 
 
 class ExerciseError(AssertionError):
@@ -75,7 +76,7 @@ class TickTable:
         rows = []
         for k, (name, depth) in enumerate(zip(self.names, self.depths, strict=True)):
             cells = "".join(
-                f'<td style="background:{STATUS_COLOURS[row[k]]};text-align:center">{row[k]}</td>'
+                f'<td style="background:{STATUS_COLOURS[row[k]]};{CELL_STYLE}">{row[k]}</td>'
                 for row in self.statuses
             )
             label = "&nbsp;" * 4 * depth + html.escape(name)
