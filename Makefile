@@ -2,13 +2,15 @@
 #   make demo   installs into .venv (with the [fast] extra) and runs the gathering scenario
 #               on the compiled engine into runs/gathering/
 #   make lessons  installs JupyterLab (the [lessons] extra) and opens lesson 01 of notebooks/
-#   make test   installs the test dependencies (and the [x8], [dask], [video] and [fast] extras, and
-#               chromium when missing) into .venv and runs the suite
+#   make docs   installs the [docs] extra (and the extras the lessons use) and builds the
+#               documentation site into site/ (lessons executed, warnings as errors, links checked)
+#   make test   installs the test dependencies (and the [docs], [x8], [dask], [video] and
+#               [fast] extras, and chromium when missing) into .venv and runs the suite
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo lessons test lint clean browser
+.PHONY: demo lessons docs test lint clean browser
 
 $(BIN)/python:
 	$(PYTHON) -c 'import sys; sys.exit("Python >= 3.11 is needed" if sys.version_info < (3, 11) else 0)'
@@ -20,7 +22,11 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[test,x8,dask,video,fast]"
+	$(BIN)/python -m pip install --quiet -e ".[test,docs,x8,dask,video,fast]"
+	touch $@ $(VENV)/.installed $(VENV)/.installed-docs
+
+$(VENV)/.installed-docs: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --quiet -e ".[docs,x8,dask,fast]"
 	touch $@ $(VENV)/.installed
 
 # The compiled engine compiles the gathering tree once (seconds; numba's cache keeps it), so
@@ -37,6 +43,10 @@ $(VENV)/.installed-lessons: pyproject.toml | $(BIN)/python
 # As root (a container), JupyterLab wants --allow-root.
 lessons: $(VENV)/.installed-lessons
 	$(BIN)/jupyter lab notebooks/01_one_drone.ipynb $$([ "$$(id -u)" = 0 ] && echo --allow-root) $(LAB_ARGS)
+
+# The documentation site: executes the lessons, builds with sphinx -W, checks the links.
+docs: $(VENV)/.installed-docs
+	$(BIN)/python scripts/build_docs.py --out site
 
 # The replay's browser test drives Debian's chromium; install it when missing and we can (root).
 browser:
@@ -59,4 +69,4 @@ lint: $(VENV)/.installed-test
 	$(BIN)/mypy src
 
 clean:
-	rm -rf $(VENV) runs .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) runs site .pytest_cache .mypy_cache .ruff_cache

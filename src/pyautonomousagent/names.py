@@ -1,4 +1,4 @@
-"""Agent names ``PREFIX1 .. PREFIXN``, made when asked instead of held as N strings.
+"""Agent names ``PREFIX1`` to ``PREFIXN``, made when asked instead of held as N strings.
 
 A list of 20 million names such as ``"drone12345678"`` takes about 1.4 GB of memory with
 the dictionary that finds an agent's row by its name (about 70 bytes a string and 60 an

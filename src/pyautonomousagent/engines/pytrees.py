@@ -245,7 +245,8 @@ def _quiet(cls: type) -> type:
 
 
 BehaviourFactory = Callable[..., AgentBehaviour]
-#: Hand-written py_trees behaviours: type name -> class taking (name, agent, world, **params).
+#: Hand-written py_trees behaviours: type name -> class taking
+#: ``(name, agent, world, **params)``.
 BEHAVIOUR_TYPES: Registry[BehaviourFactory] = Registry("hand-written behaviour")
 
 

@@ -75,7 +75,7 @@ _HALF_SIGN = (
 _A, _B = np.array([1, 2, 0], dtype=np.intp), np.array([2, 0, 1], dtype=np.intp)
 
 #: The exponential's constants: log2(e); ln 2 split in a head with 32 significant bits (so
-#: ``k * LN2_HI`` is exact for |k| < 2**21) and the rest; 1/n!, n = 0..13.
+#: ``k * LN2_HI`` is exact for ``|k| < 2**21``) and the rest; 1/n!, n = 0..13.
 LOG2E = 1.0 / math.log(2.0)
 LN2_HI = math.floor(math.log(2.0) * 2.0**32) / 2.0**32
 LN2_LO = float(Decimal(2).ln(Context(prec=40)) - Decimal(LN2_HI))
