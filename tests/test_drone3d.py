@@ -161,7 +161,7 @@ def test_gathering_3d_gathers_at_the_senders_altitude_on_every_engine_alike():
         (leaves3d.ConditionDestinationReached3D, "patrol-3d", {"distance": 30.0}),
         (leaves3d.ActionNavigateToDestination3DA, "patrol-3d", {"distance": 20.0}),
         (leaves3d.ActionRequestAltitudeS, "patrol-3d", {"altitude": 7.5}),
-        (leaves3d.ActionLandA, "patrol-3d", {}),
+        (leaves3d.ActionLand3DA, "patrol-3d", {}),
         (leaves3d.ActionSetDestinationEqualToSurveillance3DS, "gathering-3d", {}),
         (leaves3d.ActionSetDestinationEqualToRefueling3DS, "gathering-3d", {}),
         (leaves3d.ActionSetDestinationEqualToOtherSurveillance3DS, "patrol-3d", {}),
@@ -286,7 +286,7 @@ def test_destination_reached_3d_is_a_cylinder_and_land_waits_for_the_ground():
     assert reached.evaluate(drone, sim.world) == SUCCESS  # 0.5 across, 0.4 below: inside
     drone.z = 10.6
     assert reached.evaluate(drone, sim.world) == FAILURE  # 0.6 above
-    land = _leaf("Action_Land_A")
+    land = _leaf("Action_Land_3D_A")
     drone.heading = 123.0
     assert land.evaluate(drone, sim.world) == RUNNING
     assert (drone.requested_speed, drone.requested_altitude) == (0.0, 0.0)

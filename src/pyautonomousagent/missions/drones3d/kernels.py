@@ -80,7 +80,7 @@ def patrol_position_3d(a: int, index: np.ndarray, to_x: np.ndarray, to_y: np.nda
 @njit(inline="always")
 def land(a: int, z: np.ndarray, heading: np.ndarray, requested_speed: np.ndarray,
          requested_heading: np.ndarray, requested_altitude: np.ndarray) -> int:  # fmt: skip
-    """Action_Land_A."""
+    """Action_Land_3D_A."""
     requested_speed[a] = 0.0
     requested_heading[a] = heading[a]
     requested_altitude[a] = 0.0

@@ -133,11 +133,11 @@ class ActionRequestAltitudeS(Leaf):
 
 
 @register_leaf
-class ActionLandA(Leaf):
+class ActionLand3DA(Leaf):
     """Land where the drone is: request speed 0 (keeping the heading) and altitude 0;
     RUNNING until on the ground (z = 0), then SUCCESS."""
 
-    type_name = "Action_Land_A"
+    type_name = "Action_Land_3D_A"
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         agents.requested_speed = 0.0
