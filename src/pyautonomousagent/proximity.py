@@ -1,0 +1,304 @@
+"""Points near each other, in 2 or 3 dimensions, found on a uniform grid (a cell list).
+
+Transport-level geometry, like the datalink: it knows points, not agents or missions. A
+:class:`CellList` buckets N points by the cell of a uniform grid (cells ``width`` wide on
+every axis) in O(N) time and memory: each cell's integer coordinates are hashed into one of
+about 2N buckets, and the points are counting-sorted by bucket. A query then looks only at
+the 3**d cells around a point (a cell's points are told from other cells' points of the same
+bucket by their cell coordinates), so finding every pair within ``width`` costs time
+proportional to the points plus the pairs in neighbouring cells, not N**2, however large or
+sparse the world: no array grows with the world's area.
+
+Used by the datalink (:func:`pyautonomousagent.datalink.grid_pairs`: receivers in range of
+senders) and by a mission's proximity sensing (:meth:`CellList.near`: every point's nearest
+neighbour within a range and the pairs closer than a radius, in one pass).
+
+Distances are compared squared (``dx*dx + dy*dy [+ dz*dz]``: correctly rounded operations,
+the same bits compiled or not, on every CPU); a reported distance is the square root of that
+sum (also correctly rounded). The loops are compiled with numba where available
+(:mod:`pyautonomousagent.jit`), else run as plain Python (the reference, slow for big N).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from pyautonomousagent.jit import njit
+
+#: A cell is this much wider than the distance asked for, so that two points within that
+#: distance always lie in neighbouring cells despite the rounding of ``(x - low) / width``.
+MARGIN = 1e-9
+_LOW31 = 0x7FFFFFFF
+
+
+@njit(inline="always")
+def _hash(cell: np.ndarray, extent: np.ndarray, mask: int) -> int:
+    """The bucket of the cell with integer coordinates ``cell`` (shape (d,)): its row-major
+    number modulo the table's size, so that cells next to each other along x share or
+    neighbour buckets (and their points lie near each other in memory)."""
+    h = 0
+    for k in range(cell.shape[0] - 1, -1, -1):
+        h = (h * extent[k] + ((cell[k] + 1) & _LOW31)) & mask
+    return h
+
+
+@njit(inline="always")
+def _cell(value: float, low: float, width: float) -> int:
+    """The cell number of coordinate ``value`` along one axis: 1 for the lowest point's
+    cell, so that every point's neighbours have numbers >= 0 (clamped far outside)."""
+    c = math.floor((value - low) / width) + 1.0
+    return int(min(max(c, -1.0), 2.0**40))
+
+
+@njit
+def _build(
+    points: np.ndarray, width: float, mask: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The grid: its lowest corner (d,), cells per axis (d,), the points' cells (d, N) and
+    coordinates (d, N) in bucket order, their indices in that order (N,), and each bucket's
+    first position in it (mask + 2,)."""
+    d, n = points.shape
+    low = np.zeros(d)
+    extent = np.ones(d, dtype=np.int64)
+    for k in range(d):
+        lowest, highest = math.inf, -math.inf
+        for i in range(n):
+            lowest = min(lowest, points[k, i])
+            highest = max(highest, points[k, i])
+        if n:
+            low[k] = lowest
+            extent[k] = min(int(math.floor((highest - lowest) / width)) + 3, _LOW31)
+    cells = np.empty((d, n), dtype=np.int64)
+    buckets = np.empty(n, dtype=np.int64)
+    starts = np.zeros(mask + 2, dtype=np.int64)
+    for i in range(n):
+        for k in range(d):
+            cells[k, i] = _cell(points[k, i], low[k], width)
+        b = _hash(cells[:, i], extent, mask)
+        buckets[i] = b
+        starts[b + 1] += 1
+    for b in range(mask + 1):
+        starts[b + 1] += starts[b]
+    order = np.empty(n, dtype=np.int64)
+    fill = starts[:-1].copy()
+    for i in range(n):  # stable: a bucket's points in ascending order
+        b = buckets[i]
+        order[fill[b]] = i
+        fill[b] += 1
+    sorted_cells = np.empty((d, n), dtype=np.int64)
+    sorted_points = np.empty((d, n))
+    for s in range(n):
+        for k in range(d):
+            sorted_cells[k, s] = cells[k, order[s]]
+            sorted_points[k, s] = points[k, order[s]]
+    return low, extent, sorted_cells, sorted_points, order, starts
+
+
+@njit(inline="always")
+def _rows(centre: np.ndarray, offset: int, cell: np.ndarray, extent: np.ndarray, mask: int,
+          starts: np.ndarray, spans: np.ndarray) -> int:  # fmt: skip
+    """The bucket spans holding the three cells x - 1, x, x + 1 of row ``offset`` (0 ..
+    3**(d-1) - 1: the offsets -1, 0, 1 along the other axes) around cell ``centre``: one
+    span where their buckets follow each other, else three. Puts the row's cell x - 1 into
+    ``cell`` and the spans (start, end) into ``spans``; returns their number."""
+    cell[0] = centre[0] - 1
+    for k in range(1, centre.shape[0]):
+        cell[k] = centre[k] + offset % 3 - 1
+        offset //= 3
+    b = _hash(cell, extent, mask)
+    if b + 2 <= mask:
+        spans[0, 0] = starts[b]
+        spans[0, 1] = starts[b + 3]
+        return 1
+    for delta in range(3):
+        spans[delta, 0] = starts[(b + delta) & mask]
+        spans[delta, 1] = starts[((b + delta) & mask) + 1]
+    return 3
+
+
+@njit(inline="always")
+def _in_row(cells: np.ndarray, t: int, cell: np.ndarray) -> bool:
+    """Whether point ``t``'s cell is one of the three cells from ``cell`` (x - 1) along x."""
+    dx = cells[0, t] - cell[0]
+    if dx < 0 or dx > 2:
+        return False
+    for k in range(1, cell.shape[0]):
+        if cells[k, t] != cell[k]:
+            return False
+    return True
+
+
+@njit
+def _near(
+    points: np.ndarray,
+    cells: np.ndarray,
+    order: np.ndarray,
+    starts: np.ndarray,
+    extent: np.ndarray,
+    mask: int,
+    range2: float,
+    radius2: float,
+    nearest: np.ndarray,
+    nearest2: np.ndarray,
+    pairs: np.ndarray,
+    pairs2: np.ndarray,
+) -> int:
+    """Each point's nearest other point with squared distance <= ``range2`` (lowest index
+    among equals; -1 and inf for none) into ``nearest``, ``nearest2``; the pairs i < j with
+    squared distance < ``radius2`` into ``pairs`` (2, capacity) and ``pairs2``, as many as
+    fit. Returns the number of such pairs (more than the capacity: call again, bigger).
+    ``points`` and ``cells`` are in bucket order (``order`` gives the indices)."""
+    d, n = points.shape
+    centre = np.empty(d, dtype=np.int64)
+    cell = np.empty(d, dtype=np.int64)
+    spans = np.empty((3, 2), dtype=np.int64)
+    count = 0
+    capacity = pairs.shape[1]
+    for s in range(n):
+        i = order[s]
+        for k in range(d):
+            centre[k] = cells[k, s]
+        best, best_j = math.inf, -1
+        for row in range(3 ** (d - 1)):
+            for span in range(_rows(centre, row, cell, extent, mask, starts, spans)):
+                for t in range(spans[span, 0], spans[span, 1]):
+                    j = order[t]
+                    if j == i or not _in_row(cells, t, cell):
+                        continue
+                    d2 = 0.0
+                    for k in range(d):
+                        delta = points[k, t] - points[k, s]
+                        d2 += delta * delta
+                    if d2 <= range2 and (d2 < best or (d2 == best and j < best_j)):
+                        best, best_j = d2, j
+                    if j > i and d2 < radius2:
+                        if count < capacity:
+                            pairs[0, count] = i
+                            pairs[1, count] = j
+                            pairs2[count] = d2
+                        count += 1
+        nearest[i] = best_j
+        nearest2[i] = best
+    return count
+
+
+@njit
+def _candidates(
+    query: np.ndarray,
+    low: np.ndarray,
+    width: float,
+    cells: np.ndarray,
+    order: np.ndarray,
+    starts: np.ndarray,
+    extent: np.ndarray,
+    mask: int,
+    out: np.ndarray,
+) -> int:
+    """The (query row, point) pairs whose cells neighbour each other into ``out`` (2,
+    capacity), as many as fit; returns how many there are."""
+    d, m = query.shape
+    centre = np.empty(d, dtype=np.int64)
+    cell = np.empty(d, dtype=np.int64)
+    spans = np.empty((3, 2), dtype=np.int64)
+    count = 0
+    capacity = out.shape[1]
+    for q in range(m):
+        for k in range(d):
+            centre[k] = _cell(query[k, q], low[k], width)
+        for row in range(3 ** (d - 1)):
+            for span in range(_rows(centre, row, cell, extent, mask, starts, spans)):
+                for t in range(spans[span, 0], spans[span, 1]):
+                    if _in_row(cells, t, cell):
+                        if count < capacity:
+                            out[0, count] = q
+                            out[1, count] = order[t]
+                        count += 1
+    return count
+
+
+@dataclass(frozen=True)
+class Near:
+    """What :meth:`CellList.near` found.
+
+    Attributes:
+        nearest: each point's nearest other point within the range, shape (N,) int64 (the
+            lowest index among equally near ones), -1 for none.
+        distance: the distance to it (world units), shape (N,); inf for none.
+        first, second: the pairs closer than the radius, first < second, shape (P,) int64,
+            sorted by first then second.
+        pair_distance: their distances (world units), shape (P,).
+    """
+
+    nearest: np.ndarray
+    distance: np.ndarray
+    first: np.ndarray
+    second: np.ndarray
+    pair_distance: np.ndarray
+
+
+class CellList:
+    """Points bucketed on a uniform grid, for queries within ``reach`` of them.
+
+    Args:
+        coordinates: the points' coordinates, one array of shape (N,) per axis (x, y or
+            x, y, z), world units.
+        reach: the largest distance queries ask for (world units, >= 0); cells are that
+            wide (plus :data:`MARGIN`).
+    """
+
+    def __init__(self, coordinates: Sequence[np.ndarray], reach: float) -> None:
+        self.points = np.ascontiguousarray(np.array(coordinates, dtype=np.float64, ndmin=2))
+        self.reach = float(reach)
+        self.width = self.reach * (1.0 + MARGIN) if self.reach > 0.0 else 1.0
+        n = self.points.shape[1]
+        self.mask = (1 << max(1, (2 * n - 1).bit_length())) - 1  # about 2N buckets
+        built = _build(self.points, self.width, self.mask)
+        self.low, self.extent, self.cells, self.sorted_points, self.order, self.starts = built
+
+    @property
+    def size(self) -> int:
+        """The number of points N."""
+        return int(self.points.shape[1])
+
+    def near(self, range_: float, radius: float) -> Near:
+        """In one pass: every point's nearest neighbour within ``range_`` (distance <=
+        range_) and every pair closer than ``radius`` (distance < radius); both at most
+        ``reach``. Time: O(N + pairs in neighbouring cells)."""
+        if max(range_, radius) > self.reach:
+            raise ValueError(f"near: range {range_} and radius {radius} must be <= {self.reach}")
+        n = self.size
+        nearest = np.empty(n, dtype=np.int64)
+        nearest2 = np.empty(n)
+        capacity = 64
+        while True:
+            pairs = np.empty((2, capacity), dtype=np.int64)
+            pairs2 = np.empty(capacity)
+            count = _near(self.sorted_points, self.cells, self.order, self.starts, self.extent,
+                          self.mask,
+                          range_ * range_, radius * radius, nearest, nearest2, pairs,
+                          pairs2)  # fmt: skip
+            if count <= capacity:
+                break
+            capacity = count
+        by = np.lexsort((pairs[1, :count], pairs[0, :count]))
+        return Near(
+            nearest, np.sqrt(nearest2), pairs[0, by], pairs[1, by], np.sqrt(pairs2[:count][by])
+        )
+
+    def candidates(self, coordinates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """(query row, point) of every query point and grid point in neighbouring cells: a
+        superset of the pairs within ``reach`` (filter them by distance). Shape (P,) each,
+        unordered."""
+        query = np.ascontiguousarray(np.array(coordinates, dtype=np.float64, ndmin=2))
+        capacity = max(64, 4 * query.shape[1])
+        while True:
+            out = np.empty((2, capacity), dtype=np.int64)
+            count = _candidates(query, self.low, self.width, self.cells, self.order,
+                                self.starts, self.extent, self.mask, out)  # fmt: skip
+            if count <= capacity:
+                return out[0, :count], out[1, :count]
+            capacity = count
