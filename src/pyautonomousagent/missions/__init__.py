@@ -3,7 +3,9 @@
 - ``gathering`` (the paper's Fig. 6) and ``patrol`` (Fig. 12; also flown by the Skywalker X8
   in ``x8-patrol``) share the paper's drones (:mod:`pyautonomousagent.missions.drones`);
 - ``vacuum``: the paper's Fig. 2 robot with a sonar;
-- ``radiation-search``: drones that wander, find a radiation source and call the others.
+- ``radiation-search``: drones that wander, find a radiation source and call the others;
+- ``crowded``: groups of drones share surveillance positions and collide (``crowded-avoid``:
+  with collision avoidance in the tree).
 
 Each is written with the public API only (:mod:`pyautonomousagent.simulation.mission`,
 :mod:`pyautonomousagent.bt.leaf`); importing this package registers them and their scenarios.
@@ -14,10 +16,10 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
-from pyautonomousagent.missions import drones, gathering, patrol, radiation_search, vacuum
+from pyautonomousagent.missions import crowded, drones, gathering, patrol, radiation_search, vacuum
 from pyautonomousagent.scenarios import register
 
-__all__ = ["drones", "gathering", "patrol", "radiation_search", "vacuum"]
+__all__ = ["crowded", "drones", "gathering", "patrol", "radiation_search", "vacuum"]
 
 _SCENARIO_FILES = {
     "gathering": "gathering/gathering.yaml",
@@ -25,6 +27,8 @@ _SCENARIO_FILES = {
     "x8-patrol": "patrol/x8-patrol.yaml",
     "vacuum": "vacuum/vacuum.yaml",
     "radiation-search": "radiation_search/radiation-search.yaml",
+    "crowded": "crowded/crowded.yaml",
+    "crowded-avoid": "crowded/crowded-avoid.yaml",
 }
 for _name, _file in _SCENARIO_FILES.items():
     register(_name, Path(str(resources.files(__name__) / _file)))
