@@ -57,6 +57,8 @@ class Collisions:
         self.radius = float(radius)
         self.range = float(sensor_range)
         self.touching = np.zeros(0, dtype=np.int64)  # pair keys first * N + second, sorted
+        if self.active:  # compile (or load from numba's cache) now, in the run's set-up
+            CellList((np.zeros(2), np.ones(2)), 1.0).near(1.0, 1.0)
 
     @property
     def active(self) -> bool:
