@@ -290,4 +290,3 @@ def test_bench_compare_refuses_bad_variants(capsys):
     line = refused(["bench", "crowded", "--compare", "x:collision_radius"], capsys)
     assert "KEY=VALUE" in line
     assert bench.parse_parameters("a=1, b=x") == {"a": 1, "b": "x"}
-

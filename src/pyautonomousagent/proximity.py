@@ -126,7 +126,7 @@ def _in_row(cells: np.ndarray, t: int, cell: np.ndarray) -> bool:
     dx = cells[0, t] - cell[0]
     if dx < 0 or dx > 2:
         return False
-    for k in range(1, cell.shape[0]):
+    for k in range(1, cell.shape[0]):  # noqa: SIM110  (numba: no all() of a generator)
         if cells[k, t] != cell[k]:
             return False
     return True

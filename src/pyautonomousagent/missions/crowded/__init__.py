@@ -33,7 +33,9 @@ from pyautonomousagent.world import World
 log = logging.getLogger("pyautonomousagent")
 
 
-def layout(agents: int, group_size: int, spacing: float, slot_radius: float) -> tuple[np.ndarray, np.ndarray]:
+def layout(
+    agents: int, group_size: int, spacing: float, slot_radius: float
+) -> tuple[np.ndarray, np.ndarray]:
     """Where the drones refuel and what they watch, shape (N, 2) each, world units.
 
     Drone k (0-based) belongs to group ``k // group_size``; group g's surveillance position
