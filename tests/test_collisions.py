@@ -17,15 +17,19 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pyautonomousagent import bench, jit
+from pyautonomousagent.bt.leaf import leaf_type
+from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.cli import main
 from pyautonomousagent.datalink import grid_pairs
 from pyautonomousagent.missions.crowded.collisions import Collisions
 from pyautonomousagent.proximity import CellList
 from pyautonomousagent.scenarios import load
 from pyautonomousagent.simulation import Simulation
+from pyautonomousagent.testing import check_leaf
 from tests.test_bad_inputs import refused
 from tests.test_simd_levels import _enabled_avx512
 
+DEFAULTS = vars(load("crowded").parameters)
 CROWDED = Path(load("crowded").tree).parent / "crowded.yaml"
 
 # ------------------------------------------------------------------ the grid against all pairs
@@ -189,6 +193,36 @@ def test_radius_and_range_zero_switch_detection_off():
     sim = Simulation.create(load("crowded").with_overrides(iterations=400, **off))
     sim.run(progress=False)
     assert not _collisions(sim) and sim.swarm.columns["damage"].max() == 0.0
+
+
+# ------------------------------------------------------------------------------ leaves
+
+
+def statuses(result, n: int) -> list[int]:
+    return [int(v) for v in np.broadcast_to(result, (n,))]
+
+
+def test_avoid_turns_away_and_stands_still_while_the_neighbour_is_ahead():
+    avoid = leaf_type("Action_Avoid_Collision").create({"speed": 0.1}, DEFAULTS, where="test")
+    risk = leaf_type("Condition_Collision_Risk").create({"distance": 2.0}, DEFAULTS, where="t")
+    sim = Simulation.create(load("crowded").with_overrides(agents=4, iterations=1))
+    s = sim.swarm.columns
+    s["heading"][:] = [0.0, 0.0, 350.0, 180.0]
+    s["neighbour_bearing"][:] = [80.0, 100.0, 200.0, 10.0]  # ahead, behind, behind, behind
+    s["neighbour_distance"][:] = [1.0, 1.99, 2.0, 3.0]
+    view = sim.swarm.agents(np.arange(4))
+    assert avoid.evaluate(view, sim.world) == RUNNING
+    assert s["requested_speed"].tolist() == [0.0, 0.1, 0.1, 0.1]
+    assert s["requested_heading"].tolist() == [260.0, 280.0, 20.0, 190.0]
+    assert statuses(risk.evaluate(view, sim.world), 4) == [SUCCESS, SUCCESS, FAILURE, FAILURE]
+    one = sim.swarm.agents(0)  # one agent (the py_trees engine's call): the same decisions
+    s["requested_speed"][:] = -1.0
+    assert avoid.evaluate(one, sim.world) == RUNNING and s["requested_speed"][0] == 0.0
+
+
+@pytest.mark.parametrize("type_name", ["Condition_Collision_Risk", "Action_Avoid_Collision"])
+def test_the_proximity_leaves_run_alike_on_both_engines(type_name):
+    assert check_leaf(leaf_type(type_name), "crowded", agents=12, iterations=300) == 300
 
 
 # ------------------------------------------------------------------ engines, SIMD levels

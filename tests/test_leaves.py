@@ -41,8 +41,12 @@ COVERED = {
     "Action_Repair_Damage_A",
 }
 #: Mission packages whose leaves are tested in their mission's own test file
-#: (tests/test_vacuum.py, tests/test_radiation_search.py).
-OWN_TESTS = ("pyautonomousagent.missions.vacuum", "pyautonomousagent.missions.radiation_search")
+#: (tests/test_vacuum.py, tests/test_radiation_search.py, tests/test_collisions.py).
+OWN_TESTS = (
+    "pyautonomousagent.missions.vacuum",
+    "pyautonomousagent.missions.radiation_search",
+    "pyautonomousagent.missions.crowded",
+)
 
 
 def make(type_name: str, **params) -> Leaf:

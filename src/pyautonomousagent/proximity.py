@@ -3,7 +3,7 @@
 Transport-level geometry, like the datalink: it knows points, not agents or missions. A
 :class:`CellList` buckets N points by the cell of a uniform grid (cells ``width`` wide on
 every axis) in O(N) time and memory: each cell's integer coordinates are hashed into one of
-about 2N buckets, and the points are counting-sorted by bucket. A query then looks only at
+2N to 4N buckets, and the points are counting-sorted by bucket. A query then looks only at
 the 3**d cells around a point (a cell's points are told from other cells' points of the same
 bucket by their cell coordinates), so finding every pair within ``width`` costs time
 proportional to the points plus the pairs in neighbouring cells, not N**2, however large or
@@ -132,6 +132,54 @@ def _in_row(cells: np.ndarray, t: int, cell: np.ndarray) -> bool:
     return True
 
 
+@njit(inline="always")
+def _scan(
+    s: int,
+    points: np.ndarray,
+    cells: np.ndarray,
+    order: np.ndarray,
+    starts: np.ndarray,
+    extent: np.ndarray,
+    mask: int,
+    range2: float,
+    radius2: float,
+    centre: np.ndarray,
+    cell: np.ndarray,
+    spans: np.ndarray,
+    pairs: np.ndarray,
+    pairs2: np.ndarray,
+    first: int,
+) -> tuple[int, float, int]:
+    """The neighbours of point ``s`` (bucket order): its nearest other point within
+    ``range2`` (index -1 for none; the lowest index among equals) and squared distance, and
+    how many points j > i lie closer than ``radius2`` (written to ``pairs``, ``pairs2`` from
+    column ``first`` when ``first`` >= 0)."""
+    d = points.shape[0]
+    i = order[s]
+    for k in range(d):
+        centre[k] = cells[k, s]
+    best, best_j, count = math.inf, -1, 0
+    for row in range(3 ** (d - 1)):
+        for span in range(_rows(centre, row, cell, extent, mask, starts, spans)):
+            for t in range(spans[span, 0], spans[span, 1]):
+                j = order[t]
+                if j == i or not _in_row(cells, t, cell):
+                    continue
+                d2 = 0.0
+                for k in range(d):
+                    delta = points[k, t] - points[k, s]
+                    d2 += delta * delta
+                if d2 <= range2 and (d2 < best or (d2 == best and j < best_j)):
+                    best, best_j = d2, j
+                if j > i and d2 < radius2:
+                    if first >= 0:
+                        pairs[0, first + count] = i
+                        pairs[1, first + count] = j
+                        pairs2[first + count] = d2
+                    count += 1
+    return best_j, best, count
+
+
 @njit
 def _near(
     points: np.ndarray,
@@ -142,48 +190,56 @@ def _near(
     mask: int,
     range2: float,
     radius2: float,
+    none: float,
     nearest: np.ndarray,
-    nearest2: np.ndarray,
-    pairs: np.ndarray,
-    pairs2: np.ndarray,
-) -> int:
+    distance: np.ndarray,
+    close: np.ndarray,
+) -> None:
     """Each point's nearest other point with squared distance <= ``range2`` (lowest index
-    among equals; -1 and inf for none) into ``nearest``, ``nearest2``; the pairs i < j with
-    squared distance < ``radius2`` into ``pairs`` (2, capacity) and ``pairs2``, as many as
-    fit. Returns the number of such pairs (more than the capacity: call again, bigger).
-    ``points`` and ``cells`` are in bucket order (``order`` gives the indices)."""
+    among equals) and its distance into ``nearest``, ``distance`` (-1 and ``none`` for
+    none), and, per point in bucket order, how many points of higher index lie closer than
+    ``radius2`` into ``close``. ``points`` and ``cells`` are in bucket order (``order``
+    gives the indices). One core: on a machine shared with NumPy's work, threads that wait
+    for the next parallel loop slow the rest of the iteration more than they save here."""
     d, n = points.shape
     centre = np.empty(d, dtype=np.int64)
     cell = np.empty(d, dtype=np.int64)
     spans = np.empty((3, 2), dtype=np.int64)
-    count = 0
-    capacity = pairs.shape[1]
+    unused = np.empty((2, 0), dtype=np.int64)
     for s in range(n):
+        best_j, best, count = _scan(s, points, cells, order, starts, extent, mask, range2,
+                                    radius2, centre, cell, spans, unused, distance, -1)  # fmt: skip
         i = order[s]
-        for k in range(d):
-            centre[k] = cells[k, s]
-        best, best_j = math.inf, -1
-        for row in range(3 ** (d - 1)):
-            for span in range(_rows(centre, row, cell, extent, mask, starts, spans)):
-                for t in range(spans[span, 0], spans[span, 1]):
-                    j = order[t]
-                    if j == i or not _in_row(cells, t, cell):
-                        continue
-                    d2 = 0.0
-                    for k in range(d):
-                        delta = points[k, t] - points[k, s]
-                        d2 += delta * delta
-                    if d2 <= range2 and (d2 < best or (d2 == best and j < best_j)):
-                        best, best_j = d2, j
-                    if j > i and d2 < radius2:
-                        if count < capacity:
-                            pairs[0, count] = i
-                            pairs[1, count] = j
-                            pairs2[count] = d2
-                        count += 1
         nearest[i] = best_j
-        nearest2[i] = best
-    return count
+        distance[i] = math.sqrt(best) if best_j >= 0 else none
+        close[s] = count
+
+
+@njit
+def _pairs(
+    points: np.ndarray,
+    cells: np.ndarray,
+    order: np.ndarray,
+    starts: np.ndarray,
+    extent: np.ndarray,
+    mask: int,
+    radius2: float,
+    close: np.ndarray,
+    pairs: np.ndarray,
+    pairs2: np.ndarray,
+) -> None:
+    """The pairs i < j closer than ``radius2`` into ``pairs`` (2, P) and their squared
+    distances into ``pairs2``, for the points that :func:`_near` found some for."""
+    d, n = points.shape
+    centre = np.empty(d, dtype=np.int64)
+    cell = np.empty(d, dtype=np.int64)
+    spans = np.empty((3, 2), dtype=np.int64)
+    first = 0
+    for s in range(n):
+        if close[s]:
+            _scan(s, points, cells, order, starts, extent, mask, math.inf, radius2, centre,
+                  cell, spans, pairs, pairs2, first)  # fmt: skip
+            first += close[s]
 
 
 @njit
@@ -227,7 +283,8 @@ class Near:
     Attributes:
         nearest: each point's nearest other point within the range, shape (N,) int64 (the
             lowest index among equally near ones), -1 for none.
-        distance: the distance to it (world units), shape (N,); inf for none.
+        distance: the distance to it (world units), shape (N,); ``none`` (inf unless
+            asked otherwise) where there is none.
         first, second: the pairs closer than the radius, first < second, shape (P,) int64,
             sorted by first then second.
         pair_distance: their distances (world units), shape (P,).
@@ -255,7 +312,7 @@ class CellList:
         self.reach = float(reach)
         self.width = self.reach * (1.0 + MARGIN) if self.reach > 0.0 else 1.0
         n = self.points.shape[1]
-        self.mask = (1 << max(1, (2 * n - 1).bit_length())) - 1  # about 2N buckets
+        self.mask = (1 << max(1, (2 * n - 1).bit_length())) - 1  # 2N to 4N buckets
         built = _build(self.points, self.width, self.mask)
         self.low, self.extent, self.cells, self.sorted_points, self.order, self.starts = built
 
@@ -264,30 +321,26 @@ class CellList:
         """The number of points N."""
         return int(self.points.shape[1])
 
-    def near(self, range_: float, radius: float) -> Near:
+    def near(self, range_: float, radius: float, none: float = math.inf) -> Near:
         """In one pass: every point's nearest neighbour within ``range_`` (distance <=
-        range_) and every pair closer than ``radius`` (distance < radius); both at most
-        ``reach``. Time: O(N + pairs in neighbouring cells)."""
+        range_; distance ``none`` where there is none) and every pair closer than ``radius``
+        (distance < radius); both at most ``reach``. Time: O(N + pairs in neighbouring
+        cells)."""
         if max(range_, radius) > self.reach:
             raise ValueError(f"near: range {range_} and radius {radius} must be <= {self.reach}")
         n = self.size
         nearest = np.empty(n, dtype=np.int64)
-        nearest2 = np.empty(n)
-        capacity = 64
-        while True:
-            pairs = np.empty((2, capacity), dtype=np.int64)
-            pairs2 = np.empty(capacity)
-            count = _near(self.sorted_points, self.cells, self.order, self.starts, self.extent,
-                          self.mask,
-                          range_ * range_, radius * radius, nearest, nearest2, pairs,
-                          pairs2)  # fmt: skip
-            if count <= capacity:
-                break
-            capacity = count
-        by = np.lexsort((pairs[1, :count], pairs[0, :count]))
-        return Near(
-            nearest, np.sqrt(nearest2), pairs[0, by], pairs[1, by], np.sqrt(pairs2[:count][by])
-        )
+        distance = np.empty(n)
+        close = np.empty(n, dtype=np.int64)
+        grid = (self.sorted_points, self.cells, self.order, self.starts, self.extent, self.mask)
+        _near(*grid, range_ * range_, radius * radius, none, nearest, distance, close)
+        total = int(close.sum())
+        pairs = np.empty((2, total), dtype=np.int64)
+        pairs2 = np.empty(total)
+        if total:
+            _pairs(*grid, radius * radius, close, pairs, pairs2)
+        by = np.lexsort((pairs[1], pairs[0]))
+        return Near(nearest, distance, pairs[0, by], pairs[1, by], np.sqrt(pairs2[by]))
 
     def candidates(self, coordinates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         """(query row, point) of every query point and grid point in neighbouring cells: a

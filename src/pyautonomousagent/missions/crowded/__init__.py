@@ -140,8 +140,9 @@ class CrowdedMission(DroneMission):
             return powered
         s = sim.swarm.columns
         reading = self.collisions.sense((s["x"], s["y"]))
-        np.copyto(s["neighbour_distance"], reading.distance, where=powered)
-        np.copyto(s["neighbour_bearing"], reading.bearing, where=powered)
+        everyone = bool(powered.all())  # then a plain copy: cheaper than a masked one
+        np.copyto(s["neighbour_distance"], reading.distance, where=True if everyone else powered)
+        np.copyto(s["neighbour_bearing"], reading.bearing, where=True if everyone else powered)
         if reading.first.size:
             self._collided(sim, reading.first, reading.second, reading.pair_distance)
         return powered

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pyautonomousagent.arrays import bearing
+from pyautonomousagent.jit import njit
+from pyautonomousagent.kernels import bearing
 from pyautonomousagent.proximity import CellList
 
 
@@ -72,20 +73,26 @@ class Collisions:
             coordinates: x, y (and z) of every agent, world units, shape (N,) each.
         """
         grid = CellList(coordinates, max(self.radius, self.range))
-        near = grid.near(self.range, self.radius)
-        found = np.flatnonzero(near.nearest >= 0)
-        other = near.nearest[found]
-        x, y = coordinates[0], coordinates[1]
-        heading = np.zeros(self.agents)
-        heading[found] = bearing(x[found], y[found], x[other], y[other])
-        distance = np.full(self.agents, self.range)
-        distance[found] = near.distance[found]
+        near = grid.near(self.range, self.radius, none=self.range)
+        heading = np.empty(self.agents)
+        bearings(coordinates[0], coordinates[1], near.nearest, heading)
+        distance = near.distance
         keys = near.first * self.agents + near.second
         new = ~_members(keys, self.touching)
         self.touching = keys
         return Reading(
             distance, heading, near.first[new], near.second[new], near.pair_distance[new]
         )
+
+
+@njit
+def bearings(x: np.ndarray, y: np.ndarray, nearest: np.ndarray, out: np.ndarray) -> None:
+    """``out[i]``: the bearing from agent i to agent ``nearest[i]`` (degrees clockwise from
+    north, :func:`pyautonomousagent.kernels.bearing`, the bits of
+    :func:`pyautonomousagent.arrays.bearing`), 0 where ``nearest[i]`` is -1; shape (N,)."""
+    for i in range(x.size):
+        j = nearest[i]
+        out[i] = bearing(x[i], y[i], x[j], y[j]) if j >= 0 else 0.0
 
 
 def _members(keys: np.ndarray, sorted_keys: np.ndarray) -> np.ndarray:
