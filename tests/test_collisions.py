@@ -17,11 +17,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from pyautonomousagent import bench, jit
+from pyautonomousagent.arrays import bearing
 from pyautonomousagent.bt.leaf import leaf_type
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.cli import main
 from pyautonomousagent.datalink import grid_pairs
-from pyautonomousagent.missions.crowded.collisions import Collisions
+from pyautonomousagent.missions.crowded.collisions import Collisions, bearings
 from pyautonomousagent.proximity import CellList
 from pyautonomousagent.scenarios import load
 from pyautonomousagent.simulation import Simulation
@@ -137,6 +138,17 @@ def test_the_proximity_sensor_reads_distance_and_bearing_clockwise_from_north():
     reading = track.sense((np.array([0.0, 0.0, 3.0]), np.array([0.0, 2.0, 0.0])))
     assert reading.distance.tolist() == [2.0, 2.0, 3.0]
     assert reading.bearing.tolist() == [0.0, 180.0, 270.0]  # north, south, west
+
+
+def test_the_sensor_bearings_are_the_bits_of_arrays_bearing():
+    rng = np.random.default_rng(4)
+    x, y = rng.normal(size=(2, 5000)) * rng.choice([1e-3, 1.0, 1e3], size=(2, 5000))
+    nearest = rng.integers(-1, 5000, size=5000)
+    out = np.empty(5000)
+    bearings(x, y, nearest, out)
+    found = nearest >= 0
+    expected = bearing(x[found], y[found], x[nearest[found]], y[nearest[found]])
+    assert np.array_equal(out[found], expected) and not out[~found].any()
 
 
 def _collisions(sim: Simulation) -> list[dict]:
