@@ -75,10 +75,10 @@ class CrowdedMission(DroneMission):
               "nearest-neighbour distance below which Condition_Collision_Risk holds "
               "(at most proximity_range)", minimum=0.0),
         Param("group_size", 6, "drones", "drones sharing one surveillance position", minimum=1),
-        Param("point_spacing", 40.0, "world units",
+        Param("point_spacing", 60.0, "world units",
               "distance between neighbouring surveillance positions (a square lattice)",
               minimum=1e-9),
-        Param("slot_radius", 10.0, "world units",
+        Param("slot_radius", 20.0, "world units",
               "radius of the circle of a group's refuelling slots around its position",
               minimum=0.0),
     )  # fmt: skip
