@@ -133,8 +133,16 @@ def _in_row(cells: np.ndarray, t: int, cell: np.ndarray) -> bool:
 
 
 @njit(inline="always")
-def _scan(
-    s: int,
+def _offer(slot: int, d2: float, j: int, best2: np.ndarray, best: np.ndarray) -> None:
+    """Make point ``j`` at squared distance ``d2`` the nearest of ``slot`` if it is nearer
+    than the one kept, or as near with a lower index."""
+    if d2 < best2[slot] or (d2 == best2[slot] and j < best[slot]):
+        best2[slot] = d2
+        best[slot] = j
+
+
+@njit
+def _forward(
     points: np.ndarray,
     cells: np.ndarray,
     order: np.ndarray,
@@ -143,41 +151,62 @@ def _scan(
     mask: int,
     range2: float,
     radius2: float,
-    centre: np.ndarray,
-    cell: np.ndarray,
-    spans: np.ndarray,
+    best2: np.ndarray,
+    best: np.ndarray,
+    close: np.ndarray,
     pairs: np.ndarray,
     pairs2: np.ndarray,
-    first: int,
-) -> tuple[int, float, int]:
-    """The neighbours of point ``s`` (bucket order): its nearest other point within
-    ``range2`` (index -1 for none; the lowest index among equals) and squared distance, and
-    how many points j > i lie closer than ``radius2`` (written to ``pairs``, ``pairs2`` from
-    column ``first`` when ``first`` >= 0)."""
-    d = points.shape[0]
-    i = order[s]
-    for k in range(d):
-        centre[k] = cells[k, s]
-    best, best_j, count = math.inf, -1, 0
-    for row in range(3 ** (d - 1)):
-        for span in range(_rows(centre, row, cell, extent, mask, starts, spans)):
-            for t in range(spans[span, 0], spans[span, 1]):
-                j = order[t]
-                if j == i or not _in_row(cells, t, cell):
-                    continue
-                d2 = 0.0
-                for k in range(d):
-                    delta = points[k, t] - points[k, s]
-                    d2 += delta * delta
-                if d2 <= range2 and (d2 < best or (d2 == best and j < best_j)):
-                    best, best_j = d2, j
-                if j > i and d2 < radius2:
-                    if first >= 0:
-                        pairs[0, first + count] = i
-                        pairs[1, first + count] = j
-                        pairs2[first + count] = d2
-                    count += 1
-    return best_j, best, count
+    fill: bool,
+) -> None:
+    """Every pair of points once, from the point of the pair that comes first: each point
+    looks at the later points of its own cell and at the cells after it (x + 1 in its row,
+    and the rows whose first offset other than 0, counted from the last axis, is +1), half
+    the neighbourhood. Without ``fill``: each point's nearest within ``range2`` into
+    ``best2``, ``best`` (squared distance, index; inf and -1 before) and, per point, the
+    pairs closer than ``radius2`` it found into ``close``; with ``fill``: those pairs
+    (lower index first) and squared distances into ``pairs``, ``pairs2``, for the points
+    whose ``close`` is not 0. All arrays per point are in bucket order."""
+    d, n = points.shape
+    centre = np.empty(d, dtype=np.int64)
+    cell = np.empty(d, dtype=np.int64)
+    spans = np.empty((3, 2), dtype=np.int64)
+    rows = 3 ** (d - 1)
+    own = (rows - 1) // 2  # the row of offsets 0: the later rows are the cells after it
+    written = 0
+    for s in range(n):
+        if fill and close[s] == 0:
+            continue
+        i = order[s]
+        for k in range(d):
+            centre[k] = cells[k, s]
+        count = 0
+        for row in range(own, rows):
+            for span in range(_rows(centre, row, cell, extent, mask, starts, spans)):
+                for t in range(spans[span, 0], spans[span, 1]):
+                    if not _in_row(cells, t, cell):
+                        continue
+                    if row == own:
+                        dx = cells[0, t] - centre[0]
+                        if dx < 0 or (dx == 0 and t <= s):
+                            continue
+                    d2 = 0.0
+                    for k in range(d):
+                        delta = points[k, t] - points[k, s]
+                        d2 += delta * delta
+                    j = order[t]
+                    if not fill and d2 <= range2:
+                        _offer(s, d2, j, best2, best)
+                        _offer(t, d2, i, best2, best)
+                    if d2 < radius2:
+                        if fill:
+                            pairs[0, written + count] = min(i, j)
+                            pairs[1, written + count] = max(i, j)
+                            pairs2[written + count] = d2
+                        count += 1
+        if fill:
+            written += count
+        else:
+            close[s] = count
 
 
 @njit
@@ -197,22 +226,20 @@ def _near(
 ) -> None:
     """Each point's nearest other point with squared distance <= ``range2`` (lowest index
     among equals) and its distance into ``nearest``, ``distance`` (-1 and ``none`` for
-    none), and, per point in bucket order, how many points of higher index lie closer than
-    ``radius2`` into ``close``. ``points`` and ``cells`` are in bucket order (``order``
-    gives the indices). One core: on a machine shared with NumPy's work, threads that wait
-    for the next parallel loop slow the rest of the iteration more than they save here."""
-    d, n = points.shape
-    centre = np.empty(d, dtype=np.int64)
-    cell = np.empty(d, dtype=np.int64)
-    spans = np.empty((3, 2), dtype=np.int64)
+    none), and, per point in bucket order, how many pairs closer than ``radius2`` it is
+    the first of into ``close`` (:func:`_forward`). ``points`` and ``cells`` are in bucket
+    order (``order`` gives the indices). One core: on a machine shared with NumPy's work,
+    threads waiting for the next parallel loop slow the rest more than they save here."""
+    n = points.shape[1]
+    best2 = np.full(n, math.inf)
+    best = np.full(n, -1, dtype=np.int64)
     unused = np.empty((2, 0), dtype=np.int64)
+    _forward(points, cells, order, starts, extent, mask, range2, radius2, best2, best, close,
+             unused, best2, False)  # fmt: skip
     for s in range(n):
-        best_j, best, count = _scan(s, points, cells, order, starts, extent, mask, range2,
-                                    radius2, centre, cell, spans, unused, distance, -1)  # fmt: skip
         i = order[s]
-        nearest[i] = best_j
-        distance[i] = math.sqrt(best) if best_j >= 0 else none
-        close[s] = count
+        nearest[i] = best[s]
+        distance[i] = math.sqrt(best2[s]) if best[s] >= 0 else none
 
 
 @njit
@@ -228,18 +255,12 @@ def _pairs(
     pairs: np.ndarray,
     pairs2: np.ndarray,
 ) -> None:
-    """The pairs i < j closer than ``radius2`` into ``pairs`` (2, P) and their squared
-    distances into ``pairs2``, for the points that :func:`_near` found some for."""
-    d, n = points.shape
-    centre = np.empty(d, dtype=np.int64)
-    cell = np.empty(d, dtype=np.int64)
-    spans = np.empty((3, 2), dtype=np.int64)
-    first = 0
-    for s in range(n):
-        if close[s]:
-            _scan(s, points, cells, order, starts, extent, mask, math.inf, radius2, centre,
-                  cell, spans, pairs, pairs2, first)  # fmt: skip
-            first += close[s]
+    """The pairs closer than ``radius2`` (lower index first) into ``pairs`` (2, P) and
+    their squared distances into ``pairs2``, for the points :func:`_near` counted some for."""
+    unused = np.empty(0)
+    unused_best = np.empty(0, dtype=np.int64)
+    _forward(points, cells, order, starts, extent, mask, 0.0, radius2, unused, unused_best,
+             close, pairs, pairs2, True)  # fmt: skip
 
 
 @njit
