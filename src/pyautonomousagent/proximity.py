@@ -98,17 +98,31 @@ def _build(
     return low, extent, sorted_cells, sorted_points, order, starts
 
 
+@njit
+def _row_offsets(d: int) -> np.ndarray:
+    """The rows of the 3**d cells around a cell, shape (3**(d-1), d): each row's offset
+    from the cell along every axis, -1 along x (the row's first cell), -1, 0 or 1 along the
+    others (the last axis varying slowest)."""
+    rows = 3 ** (d - 1)
+    offsets = np.empty((rows, d), dtype=np.int64)
+    for row in range(rows):
+        offsets[row, 0] = -1
+        rest = row
+        for k in range(1, d):
+            offsets[row, k] = rest % 3 - 1
+            rest //= 3
+    return offsets
+
+
 @njit(inline="always")
-def _rows(centre: np.ndarray, offset: int, cell: np.ndarray, extent: np.ndarray, mask: int,
-          starts: np.ndarray, spans: np.ndarray) -> int:  # fmt: skip
-    """The bucket spans holding the three cells x - 1, x, x + 1 of row ``offset`` (0 ..
-    3**(d-1) - 1: the offsets -1, 0, 1 along the other axes) around cell ``centre``: one
-    span where their buckets follow each other, else three. Puts the row's cell x - 1 into
-    ``cell`` and the spans (start, end) into ``spans``; returns their number."""
-    cell[0] = centre[0] - 1
-    for k in range(1, centre.shape[0]):
-        cell[k] = centre[k] + offset % 3 - 1
-        offset //= 3
+def _rows(centre: np.ndarray, offset: np.ndarray, cell: np.ndarray, extent: np.ndarray,
+          mask: int, starts: np.ndarray, spans: np.ndarray) -> int:  # fmt: skip
+    """The bucket spans holding the three cells x - 1, x, x + 1 of the row ``offset`` (a
+    row of :func:`_row_offsets`) around cell ``centre``: one span where their buckets follow
+    each other, else three. Puts the row's cell x - 1 into ``cell`` and the spans (start,
+    end) into ``spans``; returns their number."""
+    for k in range(centre.shape[0]):
+        cell[k] = centre[k] + offset[k]
     b = _hash(cell, extent, mask)
     if b + 2 <= mask:
         spans[0, 0] = starts[b]
@@ -170,7 +184,8 @@ def _forward(
     centre = np.empty(d, dtype=np.int64)
     cell = np.empty(d, dtype=np.int64)
     spans = np.empty((3, 2), dtype=np.int64)
-    rows = 3 ** (d - 1)
+    offsets = _row_offsets(d)
+    rows = offsets.shape[0]
     own = (rows - 1) // 2  # the row of offsets 0: the later rows are the cells after it
     written = 0
     for s in range(n):
@@ -181,7 +196,7 @@ def _forward(
             centre[k] = cells[k, s]
         count = 0
         for row in range(own, rows):
-            for span in range(_rows(centre, row, cell, extent, mask, starts, spans)):
+            for span in range(_rows(centre, offsets[row], cell, extent, mask, starts, spans)):
                 for t in range(spans[span, 0], spans[span, 1]):
                     if not _in_row(cells, t, cell):
                         continue
@@ -283,11 +298,12 @@ def _candidates(
     spans = np.empty((3, 2), dtype=np.int64)
     count = 0
     capacity = out.shape[1]
+    offsets = _row_offsets(d)
     for q in range(m):
         for k in range(d):
             centre[k] = _cell(query[k, q], low[k], width)
-        for row in range(3 ** (d - 1)):
-            for span in range(_rows(centre, row, cell, extent, mask, starts, spans)):
+        for row in range(offsets.shape[0]):
+            for span in range(_rows(centre, offsets[row], cell, extent, mask, starts, spans)):
                 for t in range(spans[span, 0], spans[span, 1]):
                     if _in_row(cells, t, cell):
                         if count < capacity:
