@@ -11,7 +11,7 @@ sparse the world: no array grows with the world's area.
 
 Used by the datalink (:func:`pyautonomousagent.datalink.grid_pairs`: receivers in range of
 senders) and by a mission's proximity sensing (:meth:`CellList.near`: every point's nearest
-neighbour within a range and the pairs closer than a radius, in one pass).
+neighbour within a range and the pairs closer than a radius, together).
 
 Distances are compared squared (``dx*dx + dy*dy [+ dz*dz]``: correctly rounded operations,
 the same bits compiled or not, on every CPU); a reported distance is the square root of that
@@ -359,9 +359,10 @@ class CellList:
         return int(self.points.shape[1])
 
     def near(self, range_: float, radius: float, none: float = math.inf) -> Near:
-        """In one pass: every point's nearest neighbour within ``range_`` (distance <=
-        range_; distance ``none`` where there is none) and every pair closer than ``radius``
-        (distance < radius); both at most ``reach``. Time: O(N + pairs in neighbouring
+        """Every point's nearest neighbour within ``range_`` (distance <= range_; distance
+        ``none`` where there is none) and every pair closer than ``radius`` (distance <
+        radius), both at most ``reach``: one pass over the points (each pair looked at once),
+        and a second over the few that found a pair. Time: O(N + pairs in neighbouring
         cells)."""
         if max(range_, radius) > self.reach:
             raise ValueError(f"near: range {range_} and radius {radius} must be <= {self.reach}")
