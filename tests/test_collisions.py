@@ -109,6 +109,34 @@ def test_datalink_grid_pairs_are_the_pairs_in_range(swarm):
     assert len(expected) == receivers.size  # no pair twice
 
 
+#: Run in a subprocess with and without numba: the grid's answers on fixed swarms.
+PLAIN = """
+import json, numpy as np
+from pyautonomousagent.proximity import CellList
+rng = np.random.default_rng(8)
+out = []
+for d in (2, 3):
+    points = np.round(rng.uniform(0, 6, size=(d, 300)) * 4) / 4
+    near = CellList(points, 1.0).near(1.0, 0.5)
+    q, p = CellList(points, 1.0).candidates(points[:, :40])
+    out.append([near.nearest.tolist(), near.distance.tolist(), near.first.tolist(),
+                near.second.tolist(), sorted(zip(q.tolist(), p.tolist()))])
+print(json.dumps(out))
+"""
+
+
+def test_the_grid_gives_the_same_answers_compiled_or_not():
+    src = Path(__file__).parent.parent / "src"
+    path = os.pathsep.join([str(src.resolve()), os.environ.get("PYTHONPATH", "")])
+    runs = [
+        subprocess.run([sys.executable, "-c", PLAIN], capture_output=True, text=True,
+                       env={**os.environ, "PYTHONPATH": path, "PYAA_NO_JIT": flag}, timeout=600)
+        for flag in ("0", "1")
+    ]  # fmt: skip
+    assert all(r.returncode == 0 for r in runs), runs[0].stderr[-2000:] + runs[1].stderr[-2000:]
+    assert json.loads(runs[0].stdout) == json.loads(runs[1].stdout)
+
+
 def test_a_sparse_world_needs_no_array_of_its_area():
     x = np.array([0.0, 1e9, 1e9 + 0.5, -3e8])
     near = CellList((x, np.zeros(4), x), 1.0).near(1.0, 1.0)
