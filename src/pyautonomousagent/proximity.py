@@ -67,34 +67,35 @@ def _build(
     for k in range(d):
         lowest, highest = math.inf, -math.inf
         for i in range(n):
-            lowest = min(lowest, points[k, i])
-            highest = max(highest, points[k, i])
+            v = points[k, i]
+            lowest = v if v < lowest else lowest
+            highest = v if v > highest else highest
         if n:
             low[k] = lowest
             extent[k] = min(int(math.floor((highest - lowest) / width)) + 3, _LOW31)
-    cells = np.empty((d, n), dtype=np.int64)
     buckets = np.empty(n, dtype=np.int64)
     starts = np.zeros(mask + 2, dtype=np.int64)
+    cell = np.empty(d, dtype=np.int64)
     for i in range(n):
         for k in range(d):
-            cells[k, i] = _cell(points[k, i], low[k], width)
-        b = _hash(cells[:, i], extent, mask)
+            cell[k] = _cell(points[k, i], low[k], width)
+        b = _hash(cell, extent, mask)
         buckets[i] = b
         starts[b + 1] += 1
     for b in range(mask + 1):
         starts[b + 1] += starts[b]
     order = np.empty(n, dtype=np.int64)
-    fill = starts[:-1].copy()
-    for i in range(n):  # stable: a bucket's points in ascending order
-        b = buckets[i]
-        order[fill[b]] = i
-        fill[b] += 1
     sorted_cells = np.empty((d, n), dtype=np.int64)
     sorted_points = np.empty((d, n))
-    for s in range(n):
+    fill = starts[:-1].copy()
+    for i in range(n):  # stable: a bucket's points in ascending order
+        s = fill[buckets[i]]
+        fill[buckets[i]] = s + 1
+        order[s] = i
         for k in range(d):
-            sorted_cells[k, s] = cells[k, order[s]]
-            sorted_points[k, s] = points[k, order[s]]
+            v = points[k, i]
+            sorted_points[k, s] = v
+            sorted_cells[k, s] = _cell(v, low[k], width)
     return low, extent, sorted_cells, sorted_points, order, starts
 
 
