@@ -56,18 +56,19 @@ def _cell(value: float, low: float, width: float) -> int:
 
 @njit
 def _build(
-    points: np.ndarray, width: float, mask: int
+    axes: tuple[np.ndarray, ...], width: float, mask: int
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The grid: its lowest corner (d,), cells per axis (d,), the points' cells (d, N) and
-    coordinates (d, N) in bucket order, their indices in that order (N,), and each bucket's
-    first position in it (mask + 2,)."""
-    d, n = points.shape
+    """The grid of the points whose coordinates ``axes`` holds (one array (N,) per axis):
+    its lowest corner (d,), cells per axis (d,), the points' cells (d, N) and coordinates
+    (d, N) in bucket order, their indices in that order (N,), and each bucket's first
+    position in it (mask + 2,)."""
+    d, n = len(axes), axes[0].shape[0]
     low = np.zeros(d)
     extent = np.ones(d, dtype=np.int64)
     for k in range(d):
         lowest, highest = math.inf, -math.inf
         for i in range(n):
-            v = points[k, i]
+            v = axes[k][i]
             lowest = v if v < lowest else lowest
             highest = v if v > highest else highest
         if n:
@@ -78,7 +79,7 @@ def _build(
     cell = np.empty(d, dtype=np.int64)
     for i in range(n):
         for k in range(d):
-            cell[k] = _cell(points[k, i], low[k], width)
+            cell[k] = _cell(axes[k][i], low[k], width)
         b = _hash(cell, extent, mask)
         buckets[i] = b
         starts[b + 1] += 1
@@ -93,7 +94,7 @@ def _build(
         fill[buckets[i]] = s + 1
         order[s] = i
         for k in range(d):
-            v = points[k, i]
+            v = axes[k][i]
             sorted_points[k, s] = v
             sorted_cells[k, s] = _cell(v, low[k], width)
     return low, extent, sorted_cells, sorted_points, order, starts
@@ -346,18 +347,20 @@ class CellList:
     """
 
     def __init__(self, coordinates: Sequence[np.ndarray], reach: float) -> None:
-        self.points = np.ascontiguousarray(np.array(coordinates, dtype=np.float64, ndmin=2))
+        axes = tuple(np.ascontiguousarray(c, dtype=np.float64) for c in coordinates)
+        if not axes or any(a.shape != axes[0].shape or a.ndim != 1 for a in axes):
+            raise ValueError("CellList: one array of shape (N,) per axis")
         self.reach = float(reach)
         self.width = self.reach * (1.0 + MARGIN) if self.reach > 0.0 else 1.0
-        n = self.points.shape[1]
+        n = axes[0].size
         self.mask = (1 << max(1, (2 * n - 1).bit_length())) - 1  # 2N to 4N buckets
-        built = _build(self.points, self.width, self.mask)
+        built = _build(axes, self.width, self.mask)
         self.low, self.extent, self.cells, self.sorted_points, self.order, self.starts = built
 
     @property
     def size(self) -> int:
         """The number of points N."""
-        return int(self.points.shape[1])
+        return int(self.order.size)
 
     def near(self, range_: float, radius: float, none: float = math.inf) -> Near:
         """Every point's nearest neighbour within ``range_`` (distance <= range_; distance
