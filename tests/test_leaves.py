@@ -42,12 +42,13 @@ COVERED = {
 }
 #: Mission packages whose leaves are tested in their mission's own test file
 #: (tests/test_vacuum.py, tests/test_radiation_search.py, tests/test_x8_landing.py,
-#: tests/test_drone3d.py).
+#: tests/test_drone3d.py, tests/test_collisions.py).
 OWN_TESTS = (
     "pyautonomousagent.missions.vacuum",
     "pyautonomousagent.missions.radiation_search",
     "pyautonomousagent.missions.patrol.x8",
     "pyautonomousagent.missions.drones3d",
+    "pyautonomousagent.missions.crowded",
 )
 
 

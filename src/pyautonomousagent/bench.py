@@ -22,7 +22,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from pyautonomousagent.simulation import Simulation
@@ -73,6 +73,8 @@ class Case:
     full_iterations: int | None = None
     scaled: bool = False
     save: bool = False
+    variant: str = ""
+    parameters: str = ""
 
 
 @dataclass(frozen=True)
@@ -121,7 +123,9 @@ def run_case_here(case: Case) -> dict[str, float]:
     from pyautonomousagent.simulation import Simulation
 
     full = max(case.full_iterations or case.iterations, case.iterations)
-    scenario = load(case.scenario).with_overrides(agents=case.agents, iterations=full)
+    scenario = load(case.scenario).with_overrides(
+        agents=case.agents, iterations=full, **parse_parameters(case.parameters)
+    )
     engine, implementation = BENCH_ENGINES[case.engine]
     start = time.perf_counter()
     sim = Simulation.create(
@@ -263,6 +267,54 @@ def table(results: Sequence[Result], reference: str) -> str:
             f"{'' if paper is None else f'{paper:.2f}':>8} {r.setup:>7.3f} {r.loop or 0.0:>8.3f} "
             f"{_seconds(r.write):>7} {_seconds(r.views):>7}"
         )
+    return "\n".join(lines)
+
+
+def parse_parameters(text: str) -> dict[str, Any]:
+    """``"a=1,b=x"`` -> ``{"a": 1, "b": "x"}`` (values read as YAML scalars); "" -> {}.
+
+    Raises:
+        ValueError: a part is not ``KEY=VALUE``.
+    """
+    from pyautonomousagent.inputs import load_yaml
+
+    values = {}
+    for part in filter(None, (p.strip() for p in text.split(","))):
+        key, sep, value = part.partition("=")
+        if not sep or not key.strip() or not value.strip():
+            raise ValueError(f"expected KEY=VALUE, got {part!r}")
+        values[key.strip()] = load_yaml(value, f"--compare {key.strip()}")
+    return values
+
+
+def compare_table(results: Sequence[Result]) -> str:
+    """Variants of the same cases side by side (``pyaa bench --compare``): per agents,
+    engine and variant, the best (least) loop seconds and peak memory of its repeats, and
+    their ratios to the first variant's (``with / without``); every repeat's loop seconds."""
+    groups: dict[tuple[int, str, int], dict[str, list[Result]]] = {}
+    for r in results:
+        key = (r.case.agents, r.case.engine, r.case.record_every)
+        groups.setdefault(key, {}).setdefault(r.case.variant, []).append(r)
+    head = (
+        f"{'agents':>8} {'engine':>8} {'variant':>10} {'best loop s':>11} {'ratio':>6} "
+        f"{'peak MB':>8} {'ratio':>6}  loop s of each repeat"
+    )
+    lines = [head, "-" * len(head)]
+    for (agents, engine, _), variants in groups.items():
+        base: tuple[float, float] | None = None
+        for variant, runs in variants.items():
+            done = [r for r in runs if r.loop is not None and r.peak_mb is not None]
+            if not done:
+                lines.append(f"{agents:>8} {engine:>8} {variant:>10}  failed: {runs[0].error}")
+                continue
+            loop = min(r.loop or 0.0 for r in done)
+            peak = min(r.peak_mb or 0.0 for r in done)
+            base = base or (loop, peak)
+            each = " ".join(f"{r.loop:.3f}" for r in done)
+            lines.append(
+                f"{agents:>8} {engine:>8} {variant:>10} {loop:>11.3f} {loop / base[0]:>6.2f} "
+                f"{peak:>8.0f} {peak / base[1]:>6.2f}  {each}"
+            )
     return "\n".join(lines)
 
 

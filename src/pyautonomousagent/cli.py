@@ -6,6 +6,7 @@ import argparse
 import difflib
 import json
 import sys
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
@@ -217,6 +218,18 @@ def _add_bench(sub: Any) -> None:
         metavar="K",
         help="run the reference engine K iterations only and scale its time (marked ~)",
     )
+    bench.add_argument(
+        "--compare",
+        action="append",
+        metavar="NAME:KEY=VALUE[,KEY=VALUE...]",
+        help="measure every case in variants with these parameter values (repeat the option; "
+        "NAME: alone is the scenario as it is): the variants alternate (A B A B ...) "
+        "--repeat times; the table gives each one's best loop time and peak memory and their "
+        "ratios to the first variant's",
+    )
+    bench.add_argument(
+        "--repeat", type=int, default=1, metavar="R", help="measure every case R times"
+    )
     bench.add_argument("--json", action="store_true", help="print JSON instead of a table")
     bench.add_argument("--timeout", type=float, help="give up on a case after this many seconds")
     bench.add_argument(
@@ -276,22 +289,29 @@ def bench_command(args: argparse.Namespace) -> int:
     if args.stress:
         return _stress(args, engines, bench)
     short = args.reference_iterations
+    variants = _bench_variants(args, scenario, bench)
     results = []
-    for every in args.record_every or [1]:
-        for agents in args.agents:
-            for engine in engines:
-                scaled = bool(short) and engine == engines[0] and short < args.iterations
-                its = short if scaled else args.iterations
-                case = bench.Case(
-                    args.scenario, engine, agents, its, every, args.iterations, scaled, args.save
-                )
-                print(
-                    f"measuring {engine} with {agents} agents x {its} iterations, record every "
-                    f"{every} ...",
-                    file=sys.stderr,
-                    flush=True,
-                )
-                results.append(bench.measure(case, args.timeout))
+    for _ in range(args.repeat):
+        for every in args.record_every or [1]:
+            for agents in args.agents:
+                for engine in engines:
+                    for name, parameters in variants:
+                        scaled = bool(short) and engine == engines[0] and short < args.iterations
+                        its = short if scaled else args.iterations
+                        case = bench.Case(
+                            args.scenario, engine, agents, its, every, args.iterations, scaled,
+                            args.save, name, parameters,
+                        )  # fmt: skip
+                        print(
+                            f"measuring {engine}{' ' + name if name else ''} with {agents} "
+                            f"agents x {its} iterations, record every {every} ...",
+                            file=sys.stderr,
+                            flush=True,
+                        )
+                        results.append(bench.measure(case, args.timeout))
+    if args.compare and not args.json:
+        print(bench.compare_table(results))
+        return 0
     if args.json:
         ratios = bench.speedups(results, engines[0])
         rows = [
@@ -314,6 +334,26 @@ def bench_command(args: argparse.Namespace) -> int:
     else:
         print(bench.table(results, engines[0]))
     return 0
+
+
+def _bench_variants(
+    args: argparse.Namespace, scenario: Scenario, bench: Any
+) -> list[tuple[str, str]]:
+    """``--compare`` as (name, "KEY=VALUE,...") pairs, each checked against the scenario
+    (one variant, the scenario as it is, without the option); ``--repeat`` checked."""
+    if args.repeat < 1:
+        raise ScenarioError(f"--repeat must be a whole number >= 1, got {args.repeat}")
+    variants = []
+    for text in args.compare or [":"]:
+        name, sep, parameters = text.partition(":")
+        if not sep or not name.strip() and args.compare:
+            raise ScenarioError(f"--compare needs NAME:KEY=VALUE[,...], got {shown(text)}")
+        try:
+            scenario.with_overrides(**bench.parse_parameters(parameters))
+        except ValueError as error:
+            raise ScenarioError(f"--compare {name}: {error}") from None
+        variants.append((name.strip(), parameters))
+    return variants
 
 
 def _bench_defaults(args: argparse.Namespace, scenario: Scenario, paper: Mapping[str, Any]) -> None:
@@ -433,6 +473,9 @@ def run(args: argparse.Namespace) -> int:
         record_every=args.record_every,
         trace=_trace_spec(args),
     )
+    why = getattr(sim.engine, "why_not_fused", lambda sim: "")(sim)
+    if why and not args.quiet:
+        print(f"pyaa: the compiled engine ticks the tree only, not whole iterations: {why}")
     out = check_target(args.out or default_folder(scenario.name), args.overwrite)
     with streaming(sim, out, args.format) as stream:
         status = simulate(sim, progress)
@@ -541,10 +584,13 @@ def _read_run_tables(folder: Path) -> tuple[Any, Any]:
 def _print_summary(sim: Simulation, written: list[Path]) -> None:
     alerts = sum(1 for e in sim.events if e["event"] == "alert")
     messages = sum(1 for e in sim.events if e["event"] == "message")
+    others = Counter(e["event"] for e in sim.events if e["event"] not in ("alert", "message"))
+    more = "".join(f", {count} {kind}(s)" for kind, count in sorted(others.items()))
     n, its = sim.swarm.size, sim.scenario.iterations
     print(
         f"{sim.scenario.name}: {n} agents x {its} iterations on {sim.engine.name} in "
         f"{sim.timings['simulate']:.2f} s; {messages} recorded message(s), {alerts} alert(s)"
+        f"{more}"
     )
     print(f"  time: {timings_line(sim.timings)}")
     for path in written:

@@ -15,8 +15,8 @@ engines deliver the same messages in the same order.
 
 Cost: when every agent lies within range of every other (the usual case of a long-range
 link), a broadcast is recorded once, not once per receiver (O(N) time and memory). Otherwise
-receivers are found on a uniform grid of cells one range wide, in time proportional to the
-pairs in range, not N^2.
+receivers are found on a uniform grid of cells one range wide
+(:mod:`pyautonomousagent.proximity`), in time proportional to the pairs in range, not N^2.
 """
 
 from __future__ import annotations
@@ -26,6 +26,8 @@ from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
+
+from pyautonomousagent.proximity import CellList
 
 
 @dataclass
@@ -347,7 +349,8 @@ def _canonical(messages: Messages) -> Messages:
 def grid_pairs(
     sx: np.ndarray, sy: np.ndarray, rows: np.ndarray, x: np.ndarray, y: np.ndarray, reach: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """All (receiver, message row) pairs within ``reach``, found on a grid of cells ``reach`` wide.
+    """All (receiver, message row) pairs within ``reach``, found on a grid of cells ``reach``
+    wide (:class:`~pyautonomousagent.proximity.CellList` of the receivers).
 
     Args:
         sx, sy: message (sender) positions, shape (M,).
@@ -362,30 +365,10 @@ def grid_pairs(
     if rows.size == 0:
         empty = np.zeros(0, dtype=np.int64)
         return empty, empty
-    x0, y0 = min(x.min(), sx[rows].min()), min(y.min(), sy[rows].min())
-    cell_x = np.floor((x - x0) / reach).astype(np.int64)
-    cell_y = np.floor((y - y0) / reach).astype(np.int64)
-    width = int(max(cell_x.max(), np.floor((sx[rows] - x0) / reach).max())) + 3
-    cell = (cell_y + 1) * width + cell_x + 1
-    by_cell = np.argsort(cell, kind="stable")
-    sorted_cells = cell[by_cell]
-    mx = np.floor((sx[rows] - x0) / reach).astype(np.int64)
-    my = np.floor((sy[rows] - y0) / reach).astype(np.int64)
-    found_receivers, found_rows = [], []
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
-            target = (my + dy + 1) * width + mx + dx + 1
-            lo = np.searchsorted(sorted_cells, target, "left")
-            hi = np.searchsorted(sorted_cells, target, "right")
-            counts = hi - lo
-            owner = np.repeat(np.arange(rows.size), counts)
-            offset = np.arange(owner.size) - np.repeat(np.cumsum(counts) - counts, counts)
-            receivers = by_cell[lo[owner] + offset]
-            message = rows[owner]
-            near = np.hypot(x[receivers] - sx[message], y[receivers] - sy[message]) <= reach
-            found_receivers.append(receivers[near])
-            found_rows.append(message[near])
-    return np.concatenate(found_receivers), np.concatenate(found_rows)
+    found, receivers = CellList((x, y), reach).candidates((sx[rows], sy[rows]))
+    message = rows[found]
+    near = np.hypot(x[receivers] - sx[message], y[receivers] - sy[message]) <= reach
+    return receivers[near], message[near]
 
 
 def message_events(

@@ -257,6 +257,19 @@ class CompiledEngine:
         """Whether :meth:`loop` can run ``sim``'s iterations (from its start)."""
         return self._fusable(sim) is not None
 
+    def why_not_fused(self, sim: Simulation) -> str:
+        """Why :meth:`loop` cannot run ``sim``'s iterations from its start (then each
+        iteration runs Phases 2 and 4-6 in NumPy and ticks the compiled tree), or ""."""
+        if self._fusable(sim) is not None:
+            return ""
+        if sim.mission.compiled_sensors(sim) is None:
+            return f"mission {sim.mission.name!r}'s sensors (Phase 2) have no compiled form"
+        if not isinstance(sim.model, Drone2D):
+            return f"the motion model {sim.model.name!r} has no compiled form"
+        if self.layout.outboxes and self._messaging(sim) is None:
+            return "a message type the tree sends has no compiled handler"
+        return "the C library's sin/cos do not give NumPy's bits on this CPU"
+
     def _marker(self, sim: Simulation, fused: Fused) -> Path:
         """The file saying that the fused function ``sim``'s loop calls is in numba's cache."""
         function = self._function(fused, min(sim.scenario.iterations, 500))

@@ -170,8 +170,14 @@ class DroneMission(Mission):
     def compiled_sensors(self, sim: Simulation) -> SensorKernel | None:
         """:meth:`sense` for one drone (``kernels.drain_energy``) while no radiation source
         is active; None otherwise, or where a subclass senses otherwise."""
-        sources = sim.world.objects.radiation_sources
-        if type(self).sense is not DroneMission.sense or any(s.active for s in sources):
+        if type(self).sense is not DroneMission.sense:
+            return None
+        return self.drone_sensors(sim)
+
+    def drone_sensors(self, sim: Simulation) -> SensorKernel | None:
+        """:meth:`DroneMission.sense` compiled (``kernels.drain_energy``) while no radiation
+        source is active, else None; for subclasses that sense more only at times."""
+        if any(source.active for source in sim.world.objects.radiation_sources):
             return None
         return SensorKernel(
             drain_energy_of_one, ("energy",), (self.params.energy_use,), self._stopped

@@ -1,0 +1,185 @@
+"""Crowded surveillance: groups of drones share one surveillance position each, so they meet
+there and may collide; the proximity sensor and its leaves let them avoid each other.
+
+Scenarios ``crowded`` (the gathering drones' tree without avoidance: drones collide) and
+``crowded-avoid`` (the same with ``Condition_Collision_Risk`` and ``Action_Avoid_Collision``
+first: no collision). Collisions raise the damage level and are events of the run
+(:mod:`pyautonomousagent.missions.crowded.collisions`, docs/data.md).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from typing import Any, ClassVar
+
+import numpy as np
+
+from pyautonomousagent.kernels import SensorKernel
+from pyautonomousagent.missions.crowded import leaves  # noqa: F401  (registers them)
+from pyautonomousagent.missions.crowded.collisions import Collisions, collisions_per_agent
+from pyautonomousagent.missions.drones.mission import (
+    SLOT_COLOUR,
+    DroneMission,
+    read_radiation_sources,
+)
+from pyautonomousagent.render.marks import Mark
+from pyautonomousagent.simulation import Param, Simulation, WorldObject, register_mission
+from pyautonomousagent.simulation.params import Reader
+from pyautonomousagent.simulation.scenario import Scenario
+from pyautonomousagent.state import Swarm
+from pyautonomousagent.world import World
+
+log = logging.getLogger("pyautonomousagent")
+
+
+def layout(
+    agents: int, group_size: int, spacing: float, slot_radius: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where the drones refuel and what they watch, shape (N, 2) each, world units.
+
+    Drone k (0-based) belongs to group ``k // group_size``; group g's surveillance position
+    is cell g of a square lattice of ``ceil(sqrt(groups))`` columns, ``spacing`` apart,
+    starting at (spacing / 2, spacing / 2); its drones' refuelling slots lie evenly on a
+    circle of ``slot_radius`` around it (the first due north, then clockwise).
+    """
+    k = np.arange(agents)
+    group, member = k // group_size, k % group_size
+    groups = -(-agents // group_size)
+    columns = max(1, math.isqrt(groups - 1) + 1) if groups else 1
+    points = np.column_stack(
+        ((group % columns + 0.5) * spacing, (group // columns + 0.5) * spacing)
+    )
+    angle = member * (2.0 * np.pi / group_size)
+    slots = points + slot_radius * np.column_stack((np.sin(angle), np.cos(angle)))
+    return slots, points
+
+
+@register_mission
+class CrowdedMission(DroneMission):
+    """The paper's drones, in groups that share a surveillance position, with collisions
+    and a proximity sensor."""
+
+    name = "crowded"
+    description = "groups of drones share surveillance positions; collisions raise damage"
+    parameters: ClassVar[tuple[Param, ...]] = (
+        *DroneMission.parameters,
+        Param("collision_radius", 0.5, "world units",
+              "agents closer than this collide (on entry); 0: no collision detection",
+              minimum=0.0),
+        Param("collision_damage", 10.0, "percent per collision",
+              "damage each agent of a colliding pair takes", minimum=0.0, maximum=100.0),
+        Param("proximity_range", 3.0, "world units",
+              "the proximity sensor's range (nearest neighbour); 0: no sensor", minimum=0.0),
+        Param("collision_risk_distance", 2.0, "world units",
+              "nearest-neighbour distance below which Condition_Collision_Risk holds "
+              "(at most proximity_range)", minimum=0.0),
+        Param("group_size", 6, "drones", "drones sharing one surveillance position", minimum=1),
+        Param("point_spacing", 60.0, "world units",
+              "distance between neighbouring surveillance positions (a square lattice)",
+              minimum=1e-9),
+        Param("slot_radius", 20.0, "world units",
+              "radius of the circle of a group's refuelling slots around its position",
+              minimum=0.0),
+    )  # fmt: skip
+    world_objects: ClassVar[tuple[WorldObject, ...]] = (
+        WorldObject("radiation_sources", read_radiation_sources, (),
+                    "radiation sources {x, y, range, active}: level 100 (1 - d / range) %"),
+    )  # fmt: skip
+    columns: ClassVar[dict[str, Any]] = {
+        **DroneMission.columns,
+        "neighbour_distance": np.float64,
+        "neighbour_bearing": np.float64,
+        "collisions": np.int64,
+    }
+    meanings: ClassVar[dict[str, tuple[str, str]]] = {
+        **DroneMission.meanings,
+        "damage": ("percent", "accumulated damage (radiation and collisions), 0 to 100"),
+        "neighbour_distance": ("world unit", "proximity sensor: distance to the nearest other "
+                               "agent; proximity_range when none is within it"),
+        "neighbour_bearing": ("degree", "proximity sensor: bearing to the nearest other agent, "
+                              "clockwise from north; 0 when none is within range"),
+        "collisions": ("", "collisions of this agent so far (counted on entry into the radius)"),
+    }  # fmt: skip
+
+    @classmethod
+    def check(cls, scenario: Scenario, reader: Reader) -> None:
+        """The risk distance lies within the sensor's range."""
+        p = scenario.parameters
+        if p.collision_risk_distance > p.proximity_range:
+            raise reader.fail(
+                "parameters.collision_risk_distance",
+                f"at most proximity_range ({p.proximity_range:g} world units)",
+                p.collision_risk_distance,
+            )
+
+    def _layout(self) -> tuple[np.ndarray, np.ndarray]:
+        p = self.params
+        return layout(self.scenario.agents, p.group_size, p.point_spacing, p.slot_radius)
+
+    def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
+        """Drones full of energy on their slots, at rest; destination: the group's position."""
+        from pyautonomousagent.missions.drones.shared_data import SharedData
+
+        self.shared = SharedData(swarm.size)
+        slots, points = self._layout()
+        s, bb = swarm.columns, swarm.blackboard
+        s["x"][:], s["y"][:] = slots[:, 0], slots[:, 1]
+        s["energy"][:] = 100.0
+        bb["x_refueling_position"][:], bb["y_refueling_position"][:] = slots.T
+        self.set_surveillance(swarm, points)
+        p = self.params
+        self.collisions = Collisions(swarm.size, p.collision_radius, p.proximity_range)
+        s["neighbour_distance"][:] = p.proximity_range
+
+    def sense(self, sim: Simulation) -> np.ndarray:
+        """The drones' sensors, then the proximity sensor and collisions (each colliding
+        agent's damage rises by ``collision_damage`` per new collision; an event each)."""
+        powered = super().sense(sim)
+        if not self.collisions.active:
+            return powered
+        s = sim.swarm.columns
+        reading = self.collisions.sense((s["x"], s["y"]))
+        everyone = bool(powered.all())  # then a plain copy: cheaper than a masked one
+        np.copyto(s["neighbour_distance"], reading.distance, where=True if everyone else powered)
+        np.copyto(s["neighbour_bearing"], reading.bearing, where=True if everyone else powered)
+        if reading.first.size:
+            self._collided(sim, reading.first, reading.second, reading.pair_distance)
+        return powered
+
+    def _collided(
+        self, sim: Simulation, first: np.ndarray, second: np.ndarray, distance: np.ndarray
+    ) -> None:
+        """Damage, counts and one ``collision`` event per new colliding pair."""
+        s, names = sim.swarm.columns, sim.swarm.names
+        counts = collisions_per_agent(first, second, sim.swarm.size)
+        hit = np.flatnonzero(counts)
+        s["collisions"][hit] += counts[hit]
+        damage = s["damage"][hit] + counts[hit] * self.params.collision_damage
+        s["damage"][hit] = np.minimum(damage, 100.0)
+        t = sim.world.iteration
+        for a, b, d in zip(first.tolist(), second.tolist(), distance.tolist(), strict=True):
+            sim.events.append(
+                {"iteration": t, "event": "collision", "agent": names[a], "other": names[b],
+                 "distance": d, "message": f"collided with {names[b]} ({d:.3g} world units)"}
+            )  # fmt: skip
+        log.debug("iteration %d: %d collision(s)", t, first.size)
+
+    def compiled_sensors(self, sim: Simulation) -> SensorKernel | None:
+        """The drones' compiled sensors where nothing is sensed or detected (collision
+        radius and sensor range 0); else None: the proximity sensor needs the whole swarm
+        at once, so the compiled engine ticks the tree and leaves Phase 2 to :meth:`sense`."""
+        if self.collisions.active:
+            return None
+        return self.drone_sensors(sim)
+
+    def marks(self) -> list[Mark]:
+        """The groups' refuelling slots (small light-blue circles) and positions S1.."""
+        slots, points = self._layout()
+        size = 0.015 * max(self.scenario.world)
+        marks = [
+            Mark("circle", float(x), float(y), "", size=size, colour=SLOT_COLOUR, fill=True,
+                 legend="refuelling slot")
+            for x, y in slots[: 64 * self.params.group_size]
+        ]  # fmt: skip
+        return [*marks, *self.surveillance_marks(points[:: self.params.group_size][:64])]

@@ -1,0 +1,399 @@
+"""Points near each other, in 2 or 3 dimensions, found on a uniform grid (a cell list).
+
+Transport-level geometry, like the datalink: it knows points, not agents or missions. A
+:class:`CellList` buckets N points by the cell of a uniform grid (cells ``width`` wide on
+every axis) in O(N) time and memory: each cell's integer coordinates are hashed into one of
+2N to 4N buckets, and the points are counting-sorted by bucket. A query then looks only at
+the 3**d cells around a point (a cell's points are told from other cells' points of the same
+bucket by their cell coordinates), so finding every pair within ``width`` costs time
+proportional to the points plus the pairs in neighbouring cells, not N**2, however large or
+sparse the world: no array grows with the world's area.
+
+Used by the datalink (:func:`pyautonomousagent.datalink.grid_pairs`: receivers in range of
+senders) and by a mission's proximity sensing (:meth:`CellList.near`: every point's nearest
+neighbour within a range and the pairs closer than a radius, together).
+
+Distances are compared squared (``dx*dx + dy*dy [+ dz*dz]``: correctly rounded operations,
+the same bits compiled or not, on every CPU); a reported distance is the square root of that
+sum (also correctly rounded). The loops are compiled with numba where available
+(:mod:`pyautonomousagent.jit`), else run as plain Python (the reference, slow for big N).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from pyautonomousagent.jit import njit
+
+#: A cell is this much wider than the distance asked for, so that two points within that
+#: distance always lie in neighbouring cells despite the rounding of ``(x - low) / width``.
+MARGIN = 1e-9
+_LOW31 = 0x7FFFFFFF
+
+
+@njit(inline="always")
+def _hash(cell: np.ndarray, extent: np.ndarray, mask: int) -> int:
+    """The bucket of the cell with integer coordinates ``cell`` (shape (d,)): its row-major
+    number modulo the table's size, so that cells next to each other along x share or
+    neighbour buckets (and their points lie near each other in memory)."""
+    h = 0
+    for k in range(cell.shape[0] - 1, -1, -1):
+        h = (h * extent[k] + ((cell[k] + 1) & _LOW31)) & mask
+    return h
+
+
+@njit(inline="always")
+def _cell(value: float, low: float, width: float) -> int:
+    """The cell number of coordinate ``value`` along one axis: 1 for the lowest point's
+    cell, so that every point's neighbours have numbers >= 0 (clamped far outside)."""
+    c = math.floor((value - low) / width) + 1.0
+    return int(min(max(c, -1.0), 2.0**40))
+
+
+@njit
+def _build(
+    axes: tuple[np.ndarray, ...], width: float, mask: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The grid of the points whose coordinates ``axes`` holds (one array (N,) per axis):
+    its lowest corner (d,), cells per axis (d,), the points' cells (d, N) and coordinates
+    (d, N) in bucket order, their indices in that order (N,), and each bucket's first
+    position in it (mask + 2,)."""
+    d, n = len(axes), axes[0].shape[0]
+    low = np.zeros(d)
+    extent = np.ones(d, dtype=np.int64)
+    for k in range(d):
+        lowest, highest = math.inf, -math.inf
+        for i in range(n):
+            v = axes[k][i]
+            lowest = v if v < lowest else lowest
+            highest = v if v > highest else highest
+        if n:
+            low[k] = lowest
+            extent[k] = min(int(math.floor((highest - lowest) / width)) + 3, _LOW31)
+    buckets = np.empty(n, dtype=np.int64)
+    starts = np.zeros(mask + 2, dtype=np.int64)
+    cell = np.empty(d, dtype=np.int64)
+    for i in range(n):
+        for k in range(d):
+            cell[k] = _cell(axes[k][i], low[k], width)
+        b = _hash(cell, extent, mask)
+        buckets[i] = b
+        starts[b + 1] += 1
+    for b in range(mask + 1):
+        starts[b + 1] += starts[b]
+    order = np.empty(n, dtype=np.int64)
+    sorted_cells = np.empty((d, n), dtype=np.int64)
+    sorted_points = np.empty((d, n))
+    fill = starts[:-1].copy()
+    for i in range(n):  # stable: a bucket's points in ascending order
+        s = fill[buckets[i]]
+        fill[buckets[i]] = s + 1
+        order[s] = i
+        for k in range(d):
+            v = axes[k][i]
+            sorted_points[k, s] = v
+            sorted_cells[k, s] = _cell(v, low[k], width)
+    return low, extent, sorted_cells, sorted_points, order, starts
+
+
+@njit
+def _row_offsets(d: int) -> np.ndarray:
+    """The rows of the 3**d cells around a cell, shape (3**(d-1), d): each row's offset
+    from the cell along every axis, -1 along x (the row's first cell), -1, 0 or 1 along the
+    others (the last axis varying slowest)."""
+    rows = 3 ** (d - 1)
+    offsets = np.empty((rows, d), dtype=np.int64)
+    for row in range(rows):
+        offsets[row, 0] = -1
+        rest = row
+        for k in range(1, d):
+            offsets[row, k] = rest % 3 - 1
+            rest //= 3
+    return offsets
+
+
+@njit(inline="always")
+def _rows(centre: np.ndarray, offset: np.ndarray, cell: np.ndarray, extent: np.ndarray,
+          mask: int, starts: np.ndarray, spans: np.ndarray) -> int:  # fmt: skip
+    """The bucket spans holding the three cells x - 1, x, x + 1 of the row ``offset`` (a
+    row of :func:`_row_offsets`) around cell ``centre``: one span where their buckets follow
+    each other, else three. Puts the row's cell x - 1 into ``cell`` and the spans (start,
+    end) into ``spans``; returns their number."""
+    for k in range(centre.shape[0]):
+        cell[k] = centre[k] + offset[k]
+    b = _hash(cell, extent, mask)
+    if b + 2 <= mask:
+        spans[0, 0] = starts[b]
+        spans[0, 1] = starts[b + 3]
+        return 1
+    for delta in range(3):
+        spans[delta, 0] = starts[(b + delta) & mask]
+        spans[delta, 1] = starts[((b + delta) & mask) + 1]
+    return 3
+
+
+@njit(inline="always")
+def _in_row(cells: np.ndarray, t: int, cell: np.ndarray) -> bool:
+    """Whether point ``t``'s cell is one of the three cells from ``cell`` (x - 1) along x."""
+    dx = cells[0, t] - cell[0]
+    if dx < 0 or dx > 2:
+        return False
+    for k in range(1, cell.shape[0]):  # noqa: SIM110  (numba: no all() of a generator)
+        if cells[k, t] != cell[k]:
+            return False
+    return True
+
+
+@njit(inline="always")
+def _offer(slot: int, d2: float, j: int, best2: np.ndarray, best: np.ndarray) -> None:
+    """Make point ``j`` at squared distance ``d2`` the nearest of ``slot`` if it is nearer
+    than the one kept, or as near with a lower index."""
+    if d2 < best2[slot] or (d2 == best2[slot] and j < best[slot]):
+        best2[slot] = d2
+        best[slot] = j
+
+
+@njit
+def _forward(
+    points: np.ndarray,
+    cells: np.ndarray,
+    order: np.ndarray,
+    starts: np.ndarray,
+    extent: np.ndarray,
+    mask: int,
+    range2: float,
+    radius2: float,
+    best2: np.ndarray,
+    best: np.ndarray,
+    close: np.ndarray,
+    pairs: np.ndarray,
+    pairs2: np.ndarray,
+    fill: bool,
+) -> None:
+    """Every pair of points once, from the point of the pair that comes first: each point
+    looks at the later points of its own cell and at the cells after it (x + 1 in its row,
+    and the rows whose first offset other than 0, counted from the last axis, is +1), half
+    the neighbourhood. Without ``fill``: each point's nearest within ``range2`` into
+    ``best2``, ``best`` (squared distance, index; inf and -1 before) and, per point, the
+    pairs closer than ``radius2`` it found into ``close``; with ``fill``: those pairs
+    (lower index first) and squared distances into ``pairs``, ``pairs2``, for the points
+    whose ``close`` is not 0. All arrays per point are in bucket order."""
+    d, n = points.shape
+    centre = np.empty(d, dtype=np.int64)
+    cell = np.empty(d, dtype=np.int64)
+    spans = np.empty((3, 2), dtype=np.int64)
+    offsets = _row_offsets(d)
+    rows = offsets.shape[0]
+    own = (rows - 1) // 2  # the row of offsets 0: the later rows are the cells after it
+    written = 0
+    for s in range(n):
+        if fill and close[s] == 0:
+            continue
+        i = order[s]
+        for k in range(d):
+            centre[k] = cells[k, s]
+        count = 0
+        for row in range(own, rows):
+            for span in range(_rows(centre, offsets[row], cell, extent, mask, starts, spans)):
+                for t in range(spans[span, 0], spans[span, 1]):
+                    if not _in_row(cells, t, cell):
+                        continue
+                    if row == own:
+                        dx = cells[0, t] - centre[0]
+                        if dx < 0 or (dx == 0 and t <= s):
+                            continue
+                    d2 = 0.0
+                    for k in range(d):
+                        delta = points[k, t] - points[k, s]
+                        d2 += delta * delta
+                    j = order[t]
+                    if not fill and d2 <= range2:
+                        _offer(s, d2, j, best2, best)
+                        _offer(t, d2, i, best2, best)
+                    if d2 < radius2:
+                        if fill:
+                            pairs[0, written + count] = min(i, j)
+                            pairs[1, written + count] = max(i, j)
+                            pairs2[written + count] = d2
+                        count += 1
+        if fill:
+            written += count
+        else:
+            close[s] = count
+
+
+@njit
+def _near(
+    points: np.ndarray,
+    cells: np.ndarray,
+    order: np.ndarray,
+    starts: np.ndarray,
+    extent: np.ndarray,
+    mask: int,
+    range2: float,
+    radius2: float,
+    none: float,
+    nearest: np.ndarray,
+    distance: np.ndarray,
+    close: np.ndarray,
+) -> None:
+    """Each point's nearest other point with squared distance <= ``range2`` (lowest index
+    among equals) and its distance into ``nearest``, ``distance`` (-1 and ``none`` for
+    none), and, per point in bucket order, how many pairs closer than ``radius2`` it is
+    the first of into ``close`` (:func:`_forward`). ``points`` and ``cells`` are in bucket
+    order (``order`` gives the indices). One core: on a machine shared with NumPy's work,
+    threads waiting for the next parallel loop slow the rest more than they save here."""
+    n = points.shape[1]
+    best2 = np.full(n, math.inf)
+    best = np.full(n, -1, dtype=np.int64)
+    unused = np.empty((2, 0), dtype=np.int64)
+    _forward(points, cells, order, starts, extent, mask, range2, radius2, best2, best, close,
+             unused, best2, False)  # fmt: skip
+    for s in range(n):
+        i = order[s]
+        nearest[i] = best[s]
+        distance[i] = math.sqrt(best2[s]) if best[s] >= 0 else none
+
+
+@njit
+def _pairs(
+    points: np.ndarray,
+    cells: np.ndarray,
+    order: np.ndarray,
+    starts: np.ndarray,
+    extent: np.ndarray,
+    mask: int,
+    radius2: float,
+    close: np.ndarray,
+    pairs: np.ndarray,
+    pairs2: np.ndarray,
+) -> None:
+    """The pairs closer than ``radius2`` (lower index first) into ``pairs`` (2, P) and
+    their squared distances into ``pairs2``, for the points :func:`_near` counted some for."""
+    unused = np.empty(0)
+    unused_best = np.empty(0, dtype=np.int64)
+    _forward(points, cells, order, starts, extent, mask, 0.0, radius2, unused, unused_best,
+             close, pairs, pairs2, True)  # fmt: skip
+
+
+@njit
+def _candidates(
+    query: np.ndarray,
+    low: np.ndarray,
+    width: float,
+    cells: np.ndarray,
+    order: np.ndarray,
+    starts: np.ndarray,
+    extent: np.ndarray,
+    mask: int,
+    out: np.ndarray,
+) -> int:
+    """The (query row, point) pairs whose cells neighbour each other into ``out`` (2,
+    capacity), as many as fit; returns how many there are."""
+    d, m = query.shape
+    centre = np.empty(d, dtype=np.int64)
+    cell = np.empty(d, dtype=np.int64)
+    spans = np.empty((3, 2), dtype=np.int64)
+    count = 0
+    capacity = out.shape[1]
+    offsets = _row_offsets(d)
+    for q in range(m):
+        for k in range(d):
+            centre[k] = _cell(query[k, q], low[k], width)
+        for row in range(offsets.shape[0]):
+            for span in range(_rows(centre, offsets[row], cell, extent, mask, starts, spans)):
+                for t in range(spans[span, 0], spans[span, 1]):
+                    if _in_row(cells, t, cell):
+                        if count < capacity:
+                            out[0, count] = q
+                            out[1, count] = order[t]
+                        count += 1
+    return count
+
+
+@dataclass(frozen=True)
+class Near:
+    """What :meth:`CellList.near` found.
+
+    Attributes:
+        nearest: each point's nearest other point within the range, shape (N,) int64 (the
+            lowest index among equally near ones), -1 for none.
+        distance: the distance to it (world units), shape (N,); ``none`` (inf unless
+            asked otherwise) where there is none.
+        first, second: the pairs closer than the radius, first < second, shape (P,) int64,
+            sorted by first then second.
+        pair_distance: their distances (world units), shape (P,).
+    """
+
+    nearest: np.ndarray
+    distance: np.ndarray
+    first: np.ndarray
+    second: np.ndarray
+    pair_distance: np.ndarray
+
+
+class CellList:
+    """Points bucketed on a uniform grid, for queries within ``reach`` of them.
+
+    Args:
+        coordinates: the points' coordinates, one array of shape (N,) per axis (x, y or
+            x, y, z), world units.
+        reach: the largest distance queries ask for (world units, >= 0); cells are that
+            wide (plus :data:`MARGIN`).
+    """
+
+    def __init__(self, coordinates: Sequence[np.ndarray], reach: float) -> None:
+        axes = tuple(np.ascontiguousarray(c, dtype=np.float64) for c in coordinates)
+        if not axes or any(a.shape != axes[0].shape or a.ndim != 1 for a in axes):
+            raise ValueError("CellList: one array of shape (N,) per axis")
+        self.reach = float(reach)
+        self.width = self.reach * (1.0 + MARGIN) if self.reach > 0.0 else 1.0
+        n = axes[0].size
+        self.mask = (1 << max(1, (2 * n - 1).bit_length())) - 1  # 2N to 4N buckets
+        built = _build(axes, self.width, self.mask)
+        self.low, self.extent, self.cells, self.sorted_points, self.order, self.starts = built
+
+    @property
+    def size(self) -> int:
+        """The number of points N."""
+        return int(self.order.size)
+
+    def near(self, range_: float, radius: float, none: float = math.inf) -> Near:
+        """Every point's nearest neighbour within ``range_`` (distance <= range_; distance
+        ``none`` where there is none) and every pair closer than ``radius`` (distance <
+        radius), both at most ``reach``: one pass over the points (each pair looked at once),
+        and a second over the few that found a pair. Time: O(N + pairs in neighbouring
+        cells)."""
+        if max(range_, radius) > self.reach:
+            raise ValueError(f"near: range {range_} and radius {radius} must be <= {self.reach}")
+        n = self.size
+        nearest = np.empty(n, dtype=np.int64)
+        distance = np.empty(n)
+        close = np.empty(n, dtype=np.int64)
+        grid = (self.sorted_points, self.cells, self.order, self.starts, self.extent, self.mask)
+        _near(*grid, range_ * range_, radius * radius, none, nearest, distance, close)
+        total = int(close.sum())
+        pairs = np.empty((2, total), dtype=np.int64)
+        pairs2 = np.empty(total)
+        if total:
+            _pairs(*grid, radius * radius, close, pairs, pairs2)
+        by = np.lexsort((pairs[1], pairs[0]))
+        return Near(nearest, distance, pairs[0, by], pairs[1, by], np.sqrt(pairs2[by]))
+
+    def candidates(self, coordinates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        """(query row, point) of every query point and grid point in neighbouring cells: a
+        superset of the pairs within ``reach`` (filter them by distance). Shape (P,) each,
+        unordered."""
+        query = np.ascontiguousarray(np.array(coordinates, dtype=np.float64, ndmin=2))
+        capacity = max(64, 4 * query.shape[1])
+        while True:
+            out = np.empty((2, capacity), dtype=np.int64)
+            count = _candidates(query, self.low, self.width, self.cells, self.order,
+                                self.starts, self.extent, self.mask, out)  # fmt: skip
+            if count <= capacity:
+                return out[0, :count], out[1, :count]
+            capacity = count
