@@ -55,7 +55,8 @@ def test_scenario_round_trip_and_x8_settings_are_checked():
         bad = {**data, "x8": {**data["x8"], key: value}}
         with pytest.raises(ScenarioError, match=re.escape(message)):
             Scenario.from_mapping(bad, source="x8")
-    with pytest.raises(ScenarioError, match=r"unknown motion model 'x9' \(known: drone2d, x8\)"):
+    known = r"unknown motion model 'x9' \(known: drone2d, drone3d, x8\)"
+    with pytest.raises(ScenarioError, match=known):
         Scenario.from_mapping({**data, "model": "x9"}, source="x8")
     with pytest.raises(ScenarioError, match="unknown key 'x8'"):  # drone2d has no settings
         Scenario.from_mapping({**data, "model": "drone2d"}, source="x8")

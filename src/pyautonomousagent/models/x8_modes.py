@@ -3,7 +3,7 @@
 The behaviour tree asks for a mode in the swarm column :data:`MODE_COLUMN` (``CRUISE``,
 ``LAND`` or ``TAKE_OFF``; a mission that declares the column lets its leaves write it) and,
 while landing, for the glide path's altitude in :data:`ALTITUDE_COLUMN` (m). The model runs a
-phase machine per aircraft and reports the phase in :data:`PHASE_COLUMN` (where declared):
+phase machine per aircraft and reports the phase in :data:`PHASE_COLUMN` (where declared)::
 
     FLIGHT --LAND--> APPROACH --h <= flare_height--> FLARE --contact--> ROLLOUT
       ^                                                                   | ground speed 0
