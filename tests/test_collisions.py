@@ -28,7 +28,7 @@ from pyautonomousagent.scenarios import load
 from pyautonomousagent.simulation import Simulation
 from pyautonomousagent.testing import check_leaf
 from tests.test_bad_inputs import refused
-from tests.test_simd_levels import _enabled_avx512
+from tests.test_simd_levels import _enabled_avx512, simd_digests
 
 DEFAULTS = vars(load("crowded").parameters)
 CROWDED = Path(load("crowded").tree).parent / "crowded.yaml"
@@ -285,22 +285,8 @@ print(json.dumps(digests))
 """
 
 
-def _digests(disable: str = "") -> dict[str, str]:
-    env = dict(os.environ)
-    env.pop("NPY_DISABLE_CPU_FEATURES", None)
-    if disable:
-        env["NPY_DISABLE_CPU_FEATURES"] = disable
-    src = Path(__file__).parent.parent / "src"
-    env["PYTHONPATH"] = os.pathsep.join([str(src.resolve()), env.get("PYTHONPATH", "")])
-    done = subprocess.run(
-        [sys.executable, "-c", COMPARE], env=env, capture_output=True, text=True, timeout=900
-    )
-    assert done.returncode == 0, done.stderr[-2000:]
-    return json.loads(done.stdout.strip().splitlines()[-1])
-
-
 def test_engines_agree_on_crowded_with_and_without_avx512():
-    here = _digests()
+    here = simd_digests(COMPARE)
     engines = 3 if jit.available() else 2
     for name in ("crowded", "crowded-avoid"):
         runs = {k: v for k, v in here.items() if k.startswith(name + "/") and "collisions" not in k}
@@ -309,7 +295,7 @@ def test_engines_agree_on_crowded_with_and_without_avx512():
     features = _enabled_avx512()
     if not features:
         pytest.skip("this CPU has no AVX-512: only one SIMD level to test")
-    without = _digests(" ".join(features))
+    without = simd_digests(COMPARE, " ".join(features))
     for name in ("crowded", "crowded-avoid"):  # engines alike on the other level too
         runs = {k: v for k, v in without.items() if k.startswith(name + "/") and "coll" not in k}
         assert len(runs) == engines and len(set(runs.values())) == 1, runs

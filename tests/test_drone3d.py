@@ -6,9 +6,6 @@ from __future__ import annotations
 
 import base64
 import json
-import os
-import subprocess
-import sys
 
 import matplotlib
 import numpy as np
@@ -28,7 +25,7 @@ from pyautonomousagent.render.animation import FramePainter
 from pyautonomousagent.render.replay import replay_data
 from pyautonomousagent.state import AgentView
 from pyautonomousagent.testing import check_engines_agree, check_leaf
-from tests.test_simd_levels import _enabled_avx512
+from tests.test_simd_levels import _enabled_avx512, simd_digests
 
 ENGINES = ("pytrees", "batched", *(("compiled",) if jit.available() else ()))
 
@@ -190,27 +187,13 @@ print(json.dumps(digests))
 """
 
 
-def _digests_3d(disable: str = "") -> dict[str, str]:
-    env = dict(os.environ)
-    env.pop("NPY_DISABLE_CPU_FEATURES", None)
-    if disable:
-        env["NPY_DISABLE_CPU_FEATURES"] = disable
-    src = os.path.join(os.path.dirname(__file__), "..", "src")
-    env["PYTHONPATH"] = os.pathsep.join([os.path.abspath(src), env.get("PYTHONPATH", "")])
-    done = subprocess.run(
-        [sys.executable, "-c", COMPARE_3D], env=env, capture_output=True, text=True, timeout=600
-    )
-    assert done.returncode == 0, done.stderr[-2000:]
-    return json.loads(done.stdout.strip().splitlines()[-1])
-
-
 def test_patrol_3d_engines_agree_with_and_without_avx512():
-    here = _digests_3d()
+    here = simd_digests(COMPARE_3D)
     assert len(here) >= 2 and len(set(here.values())) == 1, here
     features = _enabled_avx512()
     if not features:
         pytest.skip("this CPU has no AVX-512: only one SIMD level to test")
-    without = _digests_3d(" ".join(features))
+    without = simd_digests(COMPARE_3D, " ".join(features))
     assert len(set(without.values())) == 1, without  # the engines agree without AVX-512
     assert without == here  # and give the same bits on both SIMD levels
 

@@ -54,18 +54,37 @@ def _enabled_avx512() -> list[str]:
     return [name for name in AVX512_FEATURES if features.get(name)]
 
 
-def _digests(disable: str = "") -> dict[str, str]:
-    env = dict(os.environ)
-    env.pop("NPY_DISABLE_CPU_FEATURES", None)
+def run_at_simd_level(
+    script: str, disable: str = "", args: tuple[str, ...] = (), env: dict[str, str] | None = None
+) -> str:
+    """Run ``python -c script`` with the NumPy features ``disable`` names switched off (none:
+    this CPU's own level) and this checkout's ``src`` first on the path; its standard output."""
+    environment = {**os.environ, **(env or {})}
+    environment.pop("NPY_DISABLE_CPU_FEATURES", None)
     if disable:
-        env["NPY_DISABLE_CPU_FEATURES"] = disable
+        environment["NPY_DISABLE_CPU_FEATURES"] = disable
     src = os.path.join(os.path.dirname(__file__), "..", "src")
-    env["PYTHONPATH"] = os.pathsep.join([os.path.abspath(src), env.get("PYTHONPATH", "")])
+    environment["PYTHONPATH"] = os.pathsep.join(
+        [os.path.abspath(src), environment.get("PYTHONPATH", "")]
+    )
     done = subprocess.run(
-        [sys.executable, "-c", COMPARE], env=env, capture_output=True, text=True, timeout=600
+        [sys.executable, "-c", script, *args],
+        env=environment,
+        capture_output=True,
+        text=True,
+        timeout=900,
     )
     assert done.returncode == 0, done.stderr[-2000:]
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return done.stdout
+
+
+def simd_digests(script: str, disable: str = "") -> dict[str, str]:
+    """The JSON object ``script`` prints last, run at the SIMD level ``disable`` leaves."""
+    return json.loads(run_at_simd_level(script, disable).strip().splitlines()[-1])
+
+
+def _digests(disable: str = "") -> dict[str, str]:
+    return simd_digests(COMPARE, disable)
 
 
 def test_arctan2_gives_the_same_bits_for_scalars_and_arrays():

@@ -7,10 +7,6 @@ With numba installed the kernel is compiled; with ``PYAA_NO_JIT=1`` it runs as p
 from __future__ import annotations
 
 import math
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,7 +18,7 @@ from pyautonomousagent.arrays import arctan2  # noqa: E402
 from pyautonomousagent.models import x8_dynamics as dyn  # noqa: E402
 from pyautonomousagent.models import x8_kernel as kernel  # noqa: E402
 from pyautonomousagent.models.x8 import PYTHON_KERNEL_AGENTS, X8Settings, X8Vectorised  # noqa: E402
-from tests.test_simd_levels import _enabled_avx512  # noqa: E402
+from tests.test_simd_levels import _enabled_avx512, run_at_simd_level  # noqa: E402
 
 #: Agents and iterations of the model comparison: compiled, or plain Python (slow).
 AGENTS, ITERATIONS = (40, 1500) if jit.available() else (4, 60)
@@ -138,17 +134,8 @@ print(h.hexdigest())
 
 
 def _digest(mode: str, disable: str = "") -> str:
-    env = {k: v for k, v in os.environ.items() if k not in ("NPY_DISABLE_CPU_FEATURES",)}
-    env["PYAA_NO_JIT"] = "1" if mode == "numpy" else "0"
-    if disable:
-        env["NPY_DISABLE_CPU_FEATURES"] = disable
-    src = str(Path(__file__).resolve().parent.parent / "src")
-    env["PYTHONPATH"] = os.pathsep.join([src, env.get("PYTHONPATH", "")])
-    done = subprocess.run(
-        [sys.executable, "-c", DIGEST, mode], env=env, capture_output=True, text=True, timeout=300
-    )
-    assert done.returncode == 0, done.stderr[-2000:]
-    return done.stdout.strip().splitlines()[-1]
+    env = {"PYAA_NO_JIT": "1" if mode == "numpy" else "0"}
+    return run_at_simd_level(DIGEST, disable, (mode,), env).strip().splitlines()[-1]
 
 
 @pytest.mark.skipif(not jit.available(), reason="needs numba (the [fast] extra)")

@@ -363,7 +363,7 @@ class CellList:
         return int(self.order.size)
 
     def near(self, range_: float, radius: float, none: float = math.inf) -> Near:
-        """Every point's nearest neighbour within ``range_`` (distance <= range_; distance
+        """Every point's nearest neighbour within ``range_`` (distance <= ``range_``; distance
         ``none`` where there is none) and every pair closer than ``radius`` (distance <
         radius), both at most ``reach``: one pass over the points (each pair looked at once),
         and a second over the few that found a pair. Time: O(N + pairs in neighbouring

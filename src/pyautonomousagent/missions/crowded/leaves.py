@@ -3,7 +3,7 @@
 They read the proximity sensor's columns (``neighbour_distance``, ``neighbour_bearing``:
 :mod:`pyautonomousagent.missions.crowded.collisions`), written with array expressions for the
 py_trees and batched engines and as kernels for the compiled engine (same operations, same
-bits: ``+ - ``, comparisons).
+bits: ``+``, ``-``, comparisons).
 """
 
 from __future__ import annotations
