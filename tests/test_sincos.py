@@ -70,7 +70,7 @@ def test_one_agent_few_and_many_give_the_same_bits(monkeypatch: pytest.MonkeyPat
     pairs = [sincos_degrees(v) for v in a[::7].tolist()]
     assert np.array_equal(bits([p[0] for p in pairs]), bits(sine[::7]))
     assert np.array_equal(bits([p[1] for p in pairs]), bits(cosine[::7]))
-    few_s, few_c = sincos_degrees(a[:arrays.SMALL])  # the scalar path, element by element
+    few_s, few_c = sincos_degrees(a[: arrays.SMALL])  # the scalar path, element by element
     assert np.array_equal(bits(few_s), bits(sine[: arrays.SMALL]))
     assert np.array_equal(bits(few_c), bits(cosine[: arrays.SMALL]))
     monkeypatch.setattr(arrays, "CHUNK", 1000)  # in pieces
