@@ -4,6 +4,7 @@ run through numba's CUDA simulator against the batched engine, bit for bit."""
 from __future__ import annotations
 
 import ast
+import json
 import os
 import subprocess
 import sys
@@ -149,3 +150,18 @@ def test_on_the_device_the_gpu_engine_gives_the_batched_engines_bits(seed: int) 
     assert np.array_equal(a.recorder.traces, b.recorder.traces)
     assert np.array_equal(a.recorder.behaviour, b.recorder.behaviour)
     assert a.events == b.events
+
+
+@needs_numba
+def test_bench_reports_the_gpu_engines_parts() -> None:
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
+    command = [sys.executable, "-m", "pyautonomousagent.cli", "bench", "patrol", "--agents", "3",
+               "--iterations", "10", "--engines", "gpu", "--json"]  # fmt: skip
+    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    (row,) = json.loads(done.stdout)
+    assert row["error"] == "" and row["engine"] == "gpu"
+    parts = row["gpu_s"]
+    assert set(parts) == {"compile", "kernel", "copy_back"}
+    assert 0.0 < parts["compile"] <= row["setup_s"]
+    assert 0.0 < parts["kernel"] + parts["copy_back"] <= row["loop_s"]
