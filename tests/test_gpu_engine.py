@@ -10,11 +10,12 @@ import subprocess
 import sys
 import textwrap
 import types
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from pyautonomousagent import Simulation, cli, jit, load
+from pyautonomousagent import Simulation, cli, jit, load, runs
 from pyautonomousagent.engines import gpu
 from pyautonomousagent.engines.compiled_source import Constants
 from pyautonomousagent.engines.gpu_source import kernel_module_source
@@ -165,3 +166,22 @@ def test_bench_reports_the_gpu_engines_parts() -> None:
     assert set(parts) == {"compile", "kernel", "copy_back"}
     assert 0.0 < parts["compile"] <= row["setup_s"]
     assert 0.0 < parts["kernel"] + parts["copy_back"] <= row["loop_s"]
+
+
+@needs_numba
+def test_a_gpu_runs_folder_names_the_device_and_verifies(tmp_path: Path) -> None:
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
+    out = tmp_path / "run"
+    command = [sys.executable, "-m", "pyautonomousagent.cli", "run", "patrol", "--engine", "gpu",
+               "--agents", "3", "--iterations", "12", "--out", str(out), "--no-gif",
+               "--quiet"]  # fmt: skip
+    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    summary = runs.verify(out)
+    assert summary["engine"] == "gpu"
+    assert summary["device"]["name"] == "numba CUDA simulator"
+    batched = tmp_path / "batched"
+    command[command.index("gpu")] = "batched"
+    command[command.index(str(out))] = str(batched)
+    assert subprocess.run(command, env=env, capture_output=True, timeout=600).returncode == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in batched.iterdir())

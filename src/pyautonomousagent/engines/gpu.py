@@ -168,6 +168,24 @@ class GpuEngine(CompiledEngine):
             raise RuntimeError("engine gpu: the kernel's PTX has fused multiply-adds")
         self.timings = {"compile": time.perf_counter() - start, "kernel": 0.0, "copy_back": 0.0}
 
+    def device(self) -> dict[str, str]:
+        """What ran the kernel, for ``run.json``: the device's name, the CUDA driver's
+        version, CuPy's and numba's ("numba CUDA simulator" under the simulator)."""
+        import numba
+
+        if simulating():
+            return {"name": "numba CUDA simulator", "numba": numba.__version__}
+        import cupy
+        from numba import cuda
+
+        driver = int(cupy.cuda.runtime.driverGetVersion())
+        return {
+            "name": cuda.get_current_device().name.decode(),
+            "driver": f"{driver // 1000}.{driver % 1000 // 10}",
+            "cupy": cupy.__version__,
+            "numba": numba.__version__,
+        }
+
     def ready(self, sim: Simulation) -> bool:
         """Never: "auto" does not pick the GPU engine."""
         return False
