@@ -98,9 +98,10 @@ SIMULATED = textwrap.dedent(
     from pyautonomousagent import Simulation, load
 
     agents, iterations, every = (int(v) for v in sys.argv[1:4])
+    scenario_name, energy_use = sys.argv[4], float(sys.argv[5])
     for seed in (1, 2, 3):
-        scenario = load("patrol").with_overrides(
-            agents=agents, iterations=iterations, energy_use=float(sys.argv[4]))
+        scenario = load(scenario_name).with_overrides(
+            agents=agents, iterations=iterations, energy_use=energy_use)
         a, b = (Simulation.create(scenario, seed=seed, engine=e, record_every=every).run(
             progress=False) for e in ("batched", "gpu"))
         assert b.engine.name == "gpu" and b.engine.timings["kernel"] > 0.0
@@ -125,13 +126,19 @@ SIMULATED = textwrap.dedent(
 
 
 @needs_numba
-@pytest.mark.parametrize(("every", "energy_use"), [(1, 0.05), (7, 2.0)])
-def test_the_simulated_kernel_gives_the_batched_engines_bits(every: int, energy_use: float) -> None:
-    """5 drones x 60 iterations, 3 seeds; at 2 energy a step they run dry at iteration 50
-    (they stop, alerts are raised)."""
+@pytest.mark.parametrize(
+    ("scenario", "every", "energy_use"),
+    [("patrol", 1, 0.05), ("patrol", 7, 2.0), ("patrol-3d", 1, 0.05), ("patrol-3d", 5, 2.0)],
+)
+def test_the_simulated_kernel_gives_the_batched_engines_bits(
+    scenario: str, every: int, energy_use: float
+) -> None:
+    """5 drones x 60 iterations, 3 seeds, the 2-D and the 3-D drone; at 2 energy a step they
+    run dry at iteration 50 (they stop, alerts are raised)."""
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
+    arguments = ["5", "60", str(every), scenario, str(energy_use)]
     done = subprocess.run(
-        [sys.executable, "-c", SIMULATED, "5", "60", str(every), str(energy_use)],
+        [sys.executable, "-c", SIMULATED, *arguments],
         env=env, capture_output=True, text=True, timeout=600,
     )  # fmt: skip
     assert done.returncode == 0, done.stdout + done.stderr
