@@ -192,3 +192,21 @@ def test_a_gpu_runs_folder_names_the_device_and_verifies(tmp_path: Path) -> None
     command[command.index(str(out))] = str(batched)
     assert subprocess.run(command, env=env, capture_output=True, timeout=600).returncode == 0
     assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in batched.iterdir())
+
+
+@needs_numba
+@pytest.mark.parametrize(
+    ("scenario", "why"),
+    [
+        ("gathering", "engine gpu: only runs whose tree sends no messages"),
+        ("radiation-search", "the compiled engine cannot run this tree: leaf"),
+    ],
+)
+def test_a_run_the_kernel_cannot_do_is_refused_in_one_line(scenario: str, why: str) -> None:
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
+    command = [sys.executable, "-m", "pyautonomousagent.cli", "run", scenario, "--engine", "gpu",
+               "--iterations", "5", "--no-gif", "--quiet", "--out", "/nonexistent"]  # fmt: skip
+    done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 2
+    (line,) = done.stderr.strip().splitlines()
+    assert line.startswith(f"pyaa: error: {why}")

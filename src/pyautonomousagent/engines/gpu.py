@@ -199,13 +199,19 @@ class GpuEngine(CompiledEngine):
                 model.u_speed, model.u_heading, u_climb]  # fmt: skip
 
     def loop(self, sim: Simulation, count: int, typical: int | None = None) -> int:
-        """Run ``count`` whole iterations on the device (0 compiles only); return ``count``.
-        The records of these iterations are copied back into the recorder, the state into
-        the swarm's arrays."""
+        """Run ``count`` whole iterations on the device (0 compiles only); return ``count``,
+        or 0 where the run cannot be fused now (the simulation then steps the iteration on
+        the CPU, the compiled engine's ``tick``, and the state goes to the device again
+        after it). The records of these iterations are copied back into the recorder, the
+        state into the swarm's arrays."""
         from numba import cuda
 
         if self._kernel is None:
             self.prepare(sim)
+        fused = self._fusable(sim)
+        if fused is None or fused.messaging is not None:  # e.g. a radiation source came on
+            self._device = None  # the CPU steps this iteration: send the state again after
+            return 0
         recorder, model = sim.recorder, sim.model
         assert isinstance(model, Drone2D | Drone3D)
         start, every = sim.world.iteration, recorder.every
