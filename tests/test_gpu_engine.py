@@ -120,6 +120,19 @@ SIMULATED = textwrap.dedent(
         if a.events != b.events:
             print("differ", seed, "events")
             sys.exit(1)
+        # a third of the run, three single steps (a launch each), the rest: the same bits
+        c = Simulation.create(scenario, seed=seed, engine="gpu", record_every=every)
+        c.run(progress=False, iterations=iterations // 3)
+        for _ in range(3):
+            c.step()
+        c.run(progress=False)
+        if not all(np.array_equal(np.asarray(ra.columns[k]), np.asarray(c.recorder.columns[k]))
+                   for k in ra.columns):
+            print("differ", seed, "after stepping")
+            sys.exit(1)
+        if a.events != c.events:
+            print("differ", seed, "events")
+            sys.exit(1)
     print("same")
     """
 )

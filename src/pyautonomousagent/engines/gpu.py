@@ -140,7 +140,9 @@ class GpuEngine(CompiledEngine):
         super().__init__(tree, swarm, world, defaults)
         self._kernel: Any = None
         self._sensors: Any = None
+        self._kernel_constants: tuple[np.ndarray, np.ndarray] = (np.zeros(1), np.zeros(1, int))
         self._device: list[Any] | None = None
+        self._synced = -1  # the iteration the device's state is of (-1: none sent)
         self.timings: dict[str, float] = {"compile": 0.0, "kernel": 0.0, "copy_back": 0.0}
 
     def prepare(self, sim: Simulation) -> None:
@@ -159,7 +161,7 @@ class GpuEngine(CompiledEngine):
         self._sensors = fused.sensors
         layout = replace(self.layout, constants=Constants(), vertical=fused.vertical)
         source = kernel_module_source(self.program, self.kernels, layout, fused.sensors)
-        self._constants = layout.constants.arrays()
+        self._kernel_constants = layout.constants.arrays()  # the CPU tick's may differ
         self.kernel_source = source
         self._kernel = load_kernel(source)
         with no_fma():
@@ -195,7 +197,7 @@ class GpuEngine(CompiledEngine):
         model = sim.model
         assert isinstance(model, Drone2D | Drone3D)
         u_climb = model.u_climb if isinstance(model, Drone3D) else np.zeros(1)
-        return [self.status, self.current, self.pending, *self._constants, *self.arrays,
+        return [self.status, self.current, self.pending, *self._kernel_constants, *self.arrays,
                 model.u_speed, model.u_heading, u_climb]  # fmt: skip
 
     def loop(self, sim: Simulation, count: int, typical: int | None = None) -> int:
@@ -210,15 +212,14 @@ class GpuEngine(CompiledEngine):
             self.prepare(sim)
         fused = self._fusable(sim)
         if fused is None or fused.messaging is not None:  # e.g. a radiation source came on
-            self._device = None  # the CPU steps this iteration: send the state again after
-            return 0
+            return 0  # the CPU steps this iteration; the state goes to the device again after
         recorder, model = sim.recorder, sim.model
         assert isinstance(model, Drone2D | Drone3D)
         start, every = sim.world.iteration, recorder.every
         row0 = start // every + 1  # the first record these iterations can write
         rows = (start + count) // every - start // every
         state = self._state(sim)
-        if self._device is None:
+        if self._device is None or self._synced != start:  # new, or stepped on the CPU since
             self._device = [cuda.to_device(array) for array in state]
         n = self.swarm.size
         traced_at = np.full(n, -1, dtype=np.int64)
@@ -248,6 +249,7 @@ class GpuEngine(CompiledEngine):
             recorder.behaviour[row0 : row0 + rows] = behaviour.copy_to_host()
         for host, device in zip(state, self._device, strict=True):
             device.copy_to_host(host)  # the state, for what reads it between calls
+        self._synced = start + count
         self.timings["copy_back"] += time.perf_counter() - copied
         if count:
             self._after(sim, self._sensors, start, count, stopped.copy_to_host())
