@@ -7,7 +7,8 @@ use only IEEE operations that are correctly rounded on every CPU (``+ - * /``, c
 ``abs``), so the two engines compute the same bits on every machine and SIMD level.
 Library functions such as ``atan2`` are not: NumPy's AVX-512 ``arctan2`` differs from
 ``math.atan2`` by one ulp on about 8 % of inputs, so :func:`bearing` computes its arctangent
-from those operations alone, with one body for scalars and arrays.
+from those operations alone, with one body for scalars and arrays; :func:`sincos_degrees`
+does the same for the motion's sine and cosine (a GPU's ``sin``/``cos`` differ too).
 """
 
 from __future__ import annotations
