@@ -167,13 +167,6 @@ def test_a_run_that_cannot_be_fused_ticks_compiled_every_iteration() -> None:
     assert_same_runs(run("batched", **overrides), sim)
 
 
-@needs_numba
-def test_compiled_sines_are_numpys_on_this_cpu() -> None:
-    from pyautonomousagent.engines.compiled_runtime import trig_agrees_with_numpy
-
-    assert trig_agrees_with_numpy()  # else the engine would not fuse the motion model
-
-
 def counted_run(engine: str, scenario: str = "gathering", **overrides: object):
     """A run, and how many of its iterations the compiled engine fused."""
     sim = Simulation.create(load(scenario).with_overrides(**overrides), seed=5, engine=engine)

@@ -48,6 +48,7 @@ BENCH_ENGINES: dict[str, tuple[str, str | None]] = {
     "pytrees": ("pytrees", None),
     "batched": ("batched", None),
     "compiled": ("compiled", None),
+    "gpu": ("gpu", None),
     "auto": ("auto", None),
     "pyfly": ("pytrees", "pyfly"),
 }
@@ -93,6 +94,9 @@ class Result:
     write: float | None = None
     views: float | None = None
     write_thread: float | None = None
+    #: The GPU engine's parts (seconds): "compile" (in set-up), "kernel" and "copy_back"
+    #: (in the loop); None for the other engines.
+    gpu: dict[str, float] | None = None
 
     @property
     def loop(self) -> float | None:
@@ -116,7 +120,7 @@ class Result:
         return self.setup + loop
 
 
-def run_case_here(case: Case) -> dict[str, float]:
+def run_case_here(case: Case) -> dict[str, Any]:
     """Run ``case`` in this process; its seconds (set-up and loop), set-up seconds, and peak
     memory (MB); with ``case.save`` also the seconds of writing the data and the views."""
     from pyautonomousagent.scenarios import load
@@ -136,10 +140,13 @@ def run_case_here(case: Case) -> dict[str, float]:
         implementation=implementation,
     )
     setup = time.perf_counter() - start
+    parts = getattr(sim.engine, "timings", None)  # the GPU engine's compile, kernel, copy-back
     if not case.save:
         sim.run(progress=False, iterations=case.iterations)
-        return {"seconds": time.perf_counter() - start, "setup": setup, "peak_mb": peak_rss_mb()}
-    return {"setup": setup, **saved_timings(sim, case.iterations, start)}
+        figures = {"seconds": time.perf_counter() - start, "setup": setup, "peak_mb": peak_rss_mb()}
+    else:
+        figures = {"setup": setup, **saved_timings(sim, case.iterations, start)}
+    return {**figures, "gpu": dict(parts)} if isinstance(parts, dict) else figures
 
 
 def saved_timings(sim: Simulation, iterations: int, start: float) -> dict[str, float]:
@@ -207,6 +214,7 @@ def measure(case: Case, timeout: float | None = None, budget_mb: float | None = 
         write=figures.get("write"),
         views=figures.get("views"),
         write_thread=figures.get("write_thread"),
+        gpu=figures.get("gpu"),
     )
 
 

@@ -325,6 +325,7 @@ def bench_command(args: argparse.Namespace) -> int:
                 "write_s": r.write,
                 "write_thread_s": r.write_thread,
                 "views_s": r.views,
+                **({"gpu_s": r.gpu} if r.gpu is not None else {}),  # compile, kernel, copy-back
                 f"speedup_vs_{engines[0]}": ratios.get(r.case),
                 "error": r.error,
             }

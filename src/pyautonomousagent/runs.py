@@ -319,6 +319,9 @@ def summarise(
         },
         "files": [file_record(folder / path.name) for path in saved.files],
     }
+    device = getattr(sim.engine, "device", None)  # the GPU engine's device, driver, CuPy
+    if callable(device):
+        summary["device"] = device()
     if saved.note:
         summary["note"] = saved.note
     return summary

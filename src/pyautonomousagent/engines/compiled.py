@@ -8,10 +8,9 @@ remembered children are the batched engine's arrays, updated by the same rules, 
 engines give the same bits.
 
 Where the run allows it (the mission's sensors have a compiled form, the motion model is the
-2-D or the 3-D drone, and the C library's ``sin``/``cos`` give NumPy's bits on this CPU:
-:func:`trig_agrees_with_numpy`), :meth:`CompiledEngine.loop` runs whole iterations, Phases 2
-to 6, in one compiled call. A tree that sends no message runs ``CHUNK`` agents at a time over
-many iterations, on every core. A tree that sends messages runs iteration by iteration, its
+2-D or the 3-D drone), :meth:`CompiledEngine.loop` runs whole iterations, Phases 2 to 6, in
+one compiled call. A tree that sends no message runs ``CHUNK`` agents at a time over many
+iterations, on every core. A tree that sends messages runs iteration by iteration, its
 messages handled by the mission's compiled handlers (``MessageType.kernel``) while they reach
 every agent; a delivery that reaches only some, or a recorded message type, is handed to the
 datalink in Python. Elsewhere the simulation calls :meth:`CompiledEngine.tick` once per
@@ -37,7 +36,6 @@ from pyautonomousagent import jit
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, leaf_type, make_leaf
 from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_entries
 from pyautonomousagent.engines.batched import Program, compile_tree
-from pyautonomousagent.engines.compiled_runtime import trig_agrees_with_numpy
 from pyautonomousagent.engines.compiled_source import (
     CHUNK,
     Constants,
@@ -195,8 +193,6 @@ class CompiledEngine:
         self._fused: Fused | None = None
         self._constants: tuple[np.ndarray, np.ndarray] = Constants().arrays()
         self._inboxes: list[tuple[np.ndarray, np.ndarray]] | None = None
-        self._trig = np.full((6, swarm.size), np.nan)  # 2 x (heading, its sine and cosine)
-        self._trig_agrees: bool | None = None  # compiled sin/cos give NumPy's bits
         self._no_climb = np.zeros(0)  # the fused loop's u_w argument for the 2-D drone
 
     def _sends(self, node: int) -> Sends:
@@ -308,7 +304,7 @@ class CompiledEngine:
         records = self._records(recorder, count)  # the columns, then the active behaviour
         arguments = (
             self.status, self.current, self.pending, *self._constants, *self.arrays,
-            model.u_speed, model.u_heading, u_climb, self._trig, *records[:-1], recorder.traces,
+            model.u_speed, model.u_heading, u_climb, *records[:-1], recorder.traces,
             traced_at, records[-1], recorder._leaf_rows.astype(np.int64), stopped,
             p.max_speed, p.speed_step, p.turn_step,
         )  # fmt: skip
@@ -409,10 +405,6 @@ class CompiledEngine:
             return None
         types = messaging.types if messaging is not None else ()
         if any(not d.to_all or d.messages.type not in types for d in sim.inbox):
-            return None
-        if self._trig_agrees is None:
-            self._trig_agrees = trig_agrees_with_numpy()
-        if not self._trig_agrees:
             return None
         model = sim.model
         if isinstance(model, Drone3D):

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from pyautonomousagent.bt.status import INVALID, RUNNING
@@ -53,24 +51,3 @@ def record_statuses(
         if code != INVALID:
             found = leaf_rows[p]
     behaviour[row, a] = found
-
-
-@njit
-def _sines(radians: np.ndarray, sines: np.ndarray, cosines: np.ndarray) -> None:
-    for i in range(radians.shape[0]):
-        sines[i] = math.sin(radians[i])
-        cosines[i] = math.cos(radians[i])
-
-
-def trig_agrees_with_numpy(samples: int = 20_000) -> bool:
-    """Whether compiled ``sin``/``cos`` (the C library's) give NumPy's bits on ``samples``
-    headings spread over [0, 360) degrees and on every whole degree (radians: degrees *
-    (pi / 180)). NumPy may use SIMD kernels of its own on some CPUs (e.g. a vector math
-    library on AVX-512), which round differently; where this check fails, the compiled
-    engine leaves the motion model to NumPy (it does not fuse the loop)."""
-    degrees = np.concatenate([np.arange(360.0), np.linspace(0.0, 360.0, samples, endpoint=False)])
-    degrees = np.concatenate([degrees, np.random.default_rng(13).uniform(0.0, 360.0, samples)])
-    radians = degrees * (math.pi / 180.0)
-    sines, cosines = np.empty_like(radians), np.empty_like(radians)
-    _sines(radians, sines, cosines)
-    return bool(np.array_equal(sines, np.sin(radians)) and np.array_equal(cosines, np.cos(radians)))

@@ -290,32 +290,16 @@ def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:
 
 def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
     """Phase 2 for agent ``a``: the sensors, then the 2-D drone's step (and the 3-D drone's
-    altitude, :func:`_vertical_motion`). ``cache`` keeps the
-    sine and cosine of the agent's last two headings (rows 0-2 the latest, 3-5 the one
-    before: a drone on course turns back and forth between two headings), so that the same
-    inputs give the same bits without calling ``sin`` and ``cos`` again."""
+    altitude, :func:`_vertical_motion`). The sine and cosine are
+    :func:`~pyautonomousagent.kernels.sincos_degrees`, the NumPy path's operations: the same
+    bits on every CPU, and in a GPU kernel compiled without FMA contraction."""
     c = {name: layout.array(name) for name in layout.names}
     x, y, v, h = c["x"], c["y"], c["speed"], c["heading"]
     lines = f"""moving = {_sensor_call(sensors, layout)}
 if moving:
     heading = {h}[a]
     speed = {v}[a]
-    if heading == cache[0, a]:
-        sine = cache[1, a]
-        cosine = cache[2, a]
-    elif heading == cache[3, a]:
-        sine = cache[4, a]
-        cosine = cache[5, a]
-    else:
-        rad = heading * DEGREE
-        sine = math.sin(rad)
-        cosine = math.cos(rad)
-        cache[3, a] = cache[0, a]
-        cache[4, a] = cache[1, a]
-        cache[5, a] = cache[2, a]
-        cache[0, a] = heading
-        cache[1, a] = sine
-        cache[2, a] = cosine
+    sine, cosine = sincos_degrees(heading)
     {x}[a] = {x}[a] + speed * sine
     {y}[a] = {y}[a] + speed * cosine
     {v}[a] = np_minimum(np_maximum(speed + us[a], 0.0), max_speed)
@@ -382,7 +366,7 @@ def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, inde
 
 #: The arguments of the fused functions from the node statuses on (see
 #: :func:`block_function`).
-_FUSED_ARGS = """st, cur, pend, kf, ki, {arrays}, us, uh, uc, cache,
+_FUSED_ARGS = """st, cur, pend, kf, ki, {arrays}, us, uh, uc,
            {records}, traces, traced_at, behaviour, leaf_rows, stopped_at,
            max_speed, speed_step, turn_step"""
 
@@ -395,11 +379,11 @@ def block_function(
     parallel: bool,
 ) -> str:
     """``block_serial``/``block_parallel(t0, count, every, chunk, st, cur, pend, kf, ki, arrays...,
-    us, uh, uc, cache (6, N), records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
+    us, uh, uc, records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
     max_speed, speed_step, turn_step) -> count``: iterations ``t0 + 1 .. t0 + count`` of
     Phases 2 (sensors, motion), 3, 4 and 6 for every agent, ``chunk`` agents at a time (no
     agent hears another: the tree sends no message). ``us``, ``uh``, ``uc``: the control
-    signals u_v, u_a and (3-D drone) u_w, shape (N,); ``cache``: see :func:`_motion`."""
+    signals u_v, u_a and (3-D drone) u_w, shape (N,)."""
     records = ", ".join(f"r{j}" for j in range(len(layout.names)))
     store = "\n".join(
         f"                r{j}[row, first:last] = c{j}[first:last]"
@@ -534,7 +518,7 @@ def message_block_function(
     parallel: bool,
 ) -> str:
     """``block_messages_serial``/``block_messages_parallel(t0, count, every, chunk, st, cur,
-    pend, kf, ki, arrays..., outboxes..., us, uh, uc, cache, records..., traces, traced_at,
+    pend, kf, ki, arrays..., outboxes..., us, uh, uc, records..., traces, traced_at,
     behaviour, leaf_rows, stopped_at, max_speed, speed_step, turn_step, reach, order, counts,
     lowest, inboxes..., handler state...) -> iterations done``: up to ``count`` whole
     iterations, Phase by Phase over every agent (``chunk`` agents at a time, on every core
@@ -607,9 +591,7 @@ from numba import njit, prange
 from numpy import uint64 as U  # agent rows as unsigned: no check for negative indices
 
 from pyautonomousagent.engines.compiled_runtime import halt, record_statuses
-from pyautonomousagent.kernels import np_maximum, np_minimum, np_sign, wrap_degrees
-
-DEGREE = math.pi / 180.0
+from pyautonomousagent.kernels import np_maximum, np_minimum, np_sign, sincos_degrees, wrap_degrees
 """
 
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pyautonomousagent.arrays import wrap_degrees
+from pyautonomousagent.arrays import sincos_degrees, wrap_degrees
 
 
 @dataclass(frozen=True)
@@ -64,10 +64,12 @@ def next_position(
     Args:
         x, y: position, world units, shape (N,).
         speed: world units per iteration, shape (N,).
-        heading: degrees clockwise from north, shape (N,).
+        heading: degrees clockwise from north, [0, 360), shape (N,) (sine and cosine from
+            :func:`~pyautonomousagent.arrays.sincos_degrees`: the same bits on every engine,
+            CPU and GPU).
     """
-    rad = heading * (np.pi / 180.0)
-    return x + speed * np.sin(rad), y + speed * np.cos(rad)
+    sine, cosine = sincos_degrees(heading)
+    return x + speed * sine, y + speed * cosine
 
 
 def heading_error(requested: np.ndarray, current: np.ndarray) -> np.ndarray:

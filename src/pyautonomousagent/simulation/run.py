@@ -19,6 +19,7 @@ from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.datalink import Datalink, Delivery
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.compiled import CompiledEngine, compilable
+from pyautonomousagent.engines.gpu import GpuEngine
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, PyTreesEngine
 from pyautonomousagent.inputs import shown
 from pyautonomousagent.names import agent_index
@@ -122,6 +123,7 @@ ENGINES: Registry[type[Engine]] = Registry("engine")
 ENGINES.register("pytrees", PyTreesEngine)
 ENGINES.register("batched", BatchedEngine)
 ENGINES.register("compiled", CompiledEngine)
+ENGINES.register("gpu", GpuEngine)  # needs numba-cuda and a device (engines/gpu.py)
 
 
 #: Seconds of batched loop from which "auto" compiles: compiling a tree takes 5-30 s the
