@@ -8,7 +8,8 @@ use only IEEE operations that are correctly rounded on every CPU (``+ - * /``, c
 Library functions such as ``atan2`` are not: NumPy's AVX-512 ``arctan2`` differs from
 ``math.atan2`` by one ulp on about 8 % of inputs, so :func:`bearing` computes its arctangent
 from those operations alone, with one body for scalars and arrays; :func:`sincos_degrees`
-does the same for the motion's sine and cosine (a GPU's ``sin``/``cos`` differ too).
+does the same for the motion's sine and cosine (a GPU's ``sin``/``cos`` differ too), and
+:func:`hypot` for distances.
 """
 
 from __future__ import annotations
@@ -231,6 +232,19 @@ SMALL = 8
 #: Arrays longer than this are computed by :func:`bearing` in pieces of this many agents:
 #: its ~10 temporaries then take 5 MB, not 80 bytes per agent (1.6 GB at 20 million agents).
 CHUNK = 1 << 16
+
+
+def hypot(dx: Any, dy: Any) -> Any:
+    """``sqrt(dx * dx + dy * dy)``: the length of (dx, dy), for one value or arrays.
+
+    Used instead of ``numpy.hypot``/``math.hypot`` wherever a decision reads a distance (the
+    datalink's range, sensors): those are library functions whose last bit differs between
+    libm, NumPy's SIMD code and a GPU, while ``* + sqrt`` are correctly rounded everywhere.
+    (It overflows for lengths above about 1e154 world units, far beyond any world.)
+    """
+    if isinstance(dx, np.ndarray) or isinstance(dy, np.ndarray):
+        return np.sqrt(dx * dx + dy * dy)
+    return math.sqrt(dx * dx + dy * dy)
 
 
 def bearing(x: Any, y: Any, to_x: Any, to_y: Any) -> Any:

@@ -27,6 +27,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from pyautonomousagent.arrays import hypot
 from pyautonomousagent.proximity import CellList
 
 
@@ -199,9 +200,7 @@ class Datalink:
         parts = [grid_pairs(messages.x, messages.y, np.flatnonzero(broadcast), x, y, self.range)]
         for row in np.flatnonzero(~broadcast):
             targets = messages.receiver_lists[messages.lists[row]]
-            near = (
-                np.hypot(x[targets] - messages.x[row], y[targets] - messages.y[row]) <= self.range
-            )
+            near = hypot(x[targets] - messages.x[row], y[targets] - messages.y[row]) <= self.range
             parts.append((targets[near], np.full(int(near.sum()), row, dtype=np.int64)))
         receivers = np.concatenate([p[0] for p in parts])
         rows = np.concatenate([p[1] for p in parts])
@@ -216,10 +215,10 @@ class Datalink:
             total = sum(xs) + sum(ys)
             if total == total:  # no NaN (NumPy's max and min propagate it, Python's not)
                 extent_x, extent_y = max(xs) - min(xs), max(ys) - min(ys)
-                return bool(np.hypot(extent_x, extent_y) <= self.range)
+                return bool(hypot(extent_x, extent_y) <= self.range)
         points = np.concatenate((x, messages.x, y, messages.y)).reshape(2, -1)  # xs; ys
         extent = points.max(axis=1) - points.min(axis=1)
-        return bool(np.hypot(extent[0], extent[1]) <= self.range)
+        return bool(hypot(extent[0], extent[1]) <= self.range)
 
 
 #: Up to this many agents and messages, delivery checks them in Python: cheaper than NumPy's
@@ -367,7 +366,7 @@ def grid_pairs(
         return empty, empty
     found, receivers = CellList((x, y), reach).candidates((sx[rows], sy[rows]))
     message = rows[found]
-    near = np.hypot(x[receivers] - sx[message], y[receivers] - sy[message]) <= reach
+    near = hypot(x[receivers] - sx[message], y[receivers] - sy[message]) <= reach
     return receivers[near], message[near]
 
 

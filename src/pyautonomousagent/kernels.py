@@ -198,6 +198,12 @@ def arctan2(y: float, x: float) -> float:
 
 
 @njit(inline="always")
+def hypot(dx: float, dy: float) -> float:
+    """:func:`pyautonomousagent.arrays.hypot` of one pair: ``sqrt(dx * dx + dy * dy)``."""
+    return math.sqrt(dx * dx + dy * dy)
+
+
+@njit(inline="always")
 def bearing(x: float, y: float, to_x: float, to_y: float) -> float:
     """:func:`pyautonomousagent.arrays.bearing` of one agent: degrees clockwise from north,
     [0, 360)."""

@@ -563,7 +563,7 @@ def {name}(t0, count, every, chunk, {_FUSED_ARGS.format(arrays=layout.arrays, re
         done += 1
 {_collect(messaging, layout)}
         if j > 0:
-            if bad or not math.hypot(high_x - low_x, high_y - low_y) <= reach:
+            if bad or not hypot(high_x - low_x, high_y - low_y) <= reach:
                 return done
             if {deliver_here}:
                 return done
@@ -591,7 +591,9 @@ from numba import njit, prange
 from numpy import uint64 as U  # agent rows as unsigned: no check for negative indices
 
 from pyautonomousagent.engines.compiled_runtime import halt, record_statuses
-from pyautonomousagent.kernels import np_maximum, np_minimum, np_sign, sincos_degrees, wrap_degrees
+from pyautonomousagent.kernels import (
+    hypot, np_maximum, np_minimum, np_sign, sincos_degrees, wrap_degrees,
+)
 """
 
 

@@ -9,6 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pyautonomousagent.arrays import hypot
+
 
 @dataclass(frozen=True)
 class RadiationSource:
@@ -38,7 +40,7 @@ def radiation_level(
     level = np.zeros(np.shape(x))
     for source in sources:
         if source.active:
-            distance = np.hypot(x - source.x, y - source.y)
+            distance = hypot(x - source.x, y - source.y)
             level += np.where(distance < source.range, 100.0 * (1.0 - distance / source.range), 0.0)
     return np.minimum(level, 100.0)
 

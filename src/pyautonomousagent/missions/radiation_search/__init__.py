@@ -32,6 +32,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from pyautonomousagent.arrays import hypot
 from pyautonomousagent.mission import (
     Delivery,
     Mark,
@@ -86,7 +87,7 @@ def read_positions(reader: Reader, data: Any, path: str) -> tuple[Point, ...]:
 def radiation_level(x: np.ndarray, y: np.ndarray, source: Source) -> np.ndarray:
     """The level read at (x, y), shape (N,): ``100 (1 - d / range)`` percent within the range
     of the source (d: distance to it), 0 outside."""
-    distance = np.hypot(x - source.x, y - source.y)
+    distance = hypot(x - source.x, y - source.y)
     return np.where(distance < source.range, 100.0 * (1.0 - distance / source.range), 0.0)
 
 
