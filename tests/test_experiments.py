@@ -249,6 +249,7 @@ def test_grid_ranges_samples_and_run_keys() -> None:
         ({"vary": {"seed": [1, 2]}}, "parameter 'seed' is a result column"),
         ({"vary": {"agents": {"from": 1, "to": 10**7, "step": 1}}}, "at most 1000000"),
         ({"record_every": 0}, "record_every must be a whole number >= 1"),
+        ({"set": {"iterations": 9}}, "iterations given twice, as 'iterations' and in 'set'"),
         (
             {"vary": {"agents": list(range(1, 1001)), "refuel_rate": list(range(1001))}},
             "at most 1000000 runs",
@@ -275,6 +276,7 @@ def test_bad_experiments_are_refused_in_one_line(change: dict, message: str) -> 
         ({"measures": [{"low": "mean(enrgy)"}]}, "unknown column 'enrgy' (did you mean"),
         ({"scenario": "patrl"}, "did you mean 'patrol'"),
         ({"vary": {"tree": ["nothere.xml"]}}, "tree: no file 'nothere.xml'"),
+        ({"iterations": None, "set": {"iterations": "x"}}, "iterations must be a whole number"),
     ],
 )
 def test_sweep_checks_against_the_scenario_before_running(tmp_path, change, message) -> None:
@@ -282,6 +284,11 @@ def test_sweep_checks_against_the_scenario_before_running(tmp_path, change, mess
     with pytest.raises(ExperimentError, match=message.replace("(", r"\(")):
         sweep(experiment, tmp_path / "out", "serial")
     assert not (tmp_path / "out").exists()
+
+
+def test_iterations_may_be_set_in_set(tmp_path) -> None:
+    experiment = Experiment.from_mapping({**TINY, "iterations": None, "set": {"iterations": 7}})
+    assert base_scenario(experiment).iterations == 7
 
 
 def test_the_worked_example_file_is_valid() -> None:

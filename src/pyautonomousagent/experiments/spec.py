@@ -235,6 +235,11 @@ class _Reader:
                 raise ExperimentError(f"{self.source}: unknown key {key!r}{hint}")
         if "scenario" not in data:
             raise ExperimentError(f"{self.source}: missing key 'scenario' (a scenario name)")
+        fixed = self.mapping(data.get("set") or {}, "set")
+        if "iterations" in fixed and data.get("iterations") is not None:
+            raise ExperimentError(
+                f"{self.source}: iterations given twice, as 'iterations' and in 'set'; keep one"
+            )
         vary = self.vary(data.get("vary") or {})
         sample = self.sample(data["sample"]) if data.get("sample") is not None else None
         if not vary and not sample:
@@ -247,7 +252,7 @@ class _Reader:
             sample=sample,
             seeds=self.seeds(data.get("seeds", 1)),
             measures=self.measures(data.get("measures")),
-            fixed=self.mapping(data.get("set") or {}, "set"),
+            fixed=fixed,
             iterations=self.whole(data["iterations"], "iterations", 1)
             if data.get("iterations") is not None
             else None,

@@ -80,7 +80,7 @@ def base_scenario(experiment: Experiment) -> Any:
 
     try:
         scenario = load(experiment.scenario)
-        return scenario.with_overrides(iterations=experiment.iterations, **experiment.fixed)
+        return scenario.with_overrides(**{"iterations": experiment.iterations, **experiment.fixed})
     except ScenarioError as error:
         raise ExperimentError(f"experiment {experiment.name!r}: {error}") from None
 
