@@ -1,0 +1,18 @@
+#!/bin/bash
+# Wheels for a GPU machine without registry access (such as the project's lent H100/H200,
+# which ship numba, numba-cuda, CuPy for CUDA 13, NumPy, pyarrow, matplotlib and PyYAML):
+# the project's own wheel and the dependencies such a machine lacks (py_trees and pydot).
+# Run here, from the repository's root; then on the GPU machine, from a copy of the
+# repository holding .whl/:
+#   python3 -m pip install -q --no-index --no-deps --target /tmp/site .whl/*.whl
+#   export PYTHONPATH=/tmp/site; PATH=/tmp/site/bin:$PATH bash scripts/gpu_figures.sh
+set -e
+DEST=${1:-.whl}
+PYTHON=${PYTHON:-python3}
+VERSION=${DEVICE_PYTHON:-3.12}
+mkdir -p "$DEST"
+"$PYTHON" -m pip download -q --no-deps --only-binary=:all: --python-version "$VERSION" \
+    --implementation cp --platform manylinux2014_x86_64 -d "$DEST" \
+    "py_trees==2.6.0" "pydot==4.0.1"
+"$PYTHON" -m pip wheel -q --no-deps -w "$DEST" .
+ls "$DEST"
