@@ -2,7 +2,7 @@
 
 Drones (``drone1``, ``drone2``, ...; motion model ``drone2d``) start on their start positions
 and wander: a new random heading every ``wander_period`` iterations (drawn with
-:meth:`~pyautonomousagent.bt.Leaf.uniform`, so a seed gives the same flight on both engines),
+:meth:`~pyautonomousagent.bt.Leaf.uniform`, so a seed gives the same flight on every engine),
 turning back toward the centre near the world's edge. Each reads a radiation sensor; the
 first to read more than ``radiation_threshold`` percent broadcasts a ``found`` message with
 its position (a message type of this mission, recorded as an event) and stays there. A
