@@ -7,7 +7,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from pyautonomousagent import Simulation, load
+from pyautonomousagent import Simulation, jit, load
 from pyautonomousagent.bt import leaf, sequence
 from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, AgentBehaviour, register_behaviour
@@ -69,6 +69,22 @@ def test_scenarios_give_the_same_data(scenario: str, overrides: dict[str, object
     assert reference.events == batched.events
     for key, expected in reference.recorder.columns.items():
         assert np.array_equal(batched.recorder.columns[key], expected), key  # the same bits
+
+
+@pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
+def test_radiation_search_gives_the_same_data_on_every_cpu_engine() -> None:
+    """py_trees, batched and compiled (fused) through the detection (iteration 256)."""
+    scenario = load("radiation-search").with_overrides(iterations=300)
+    runs = [
+        Simulation.create(scenario, seed=7, engine=engine).run(progress=False)
+        for engine in ("pytrees", "batched", "compiled")
+    ]
+    assert [e["type"] for e in runs[0].events if e["event"] == "message"] == ["found"]
+    for other in runs[1:]:
+        assert other.events == runs[0].events, other.engine.name
+        assert np.array_equal(other.recorder.traces, runs[0].recorder.traces)
+        for key, expected in runs[0].recorder.columns.items():
+            assert np.array_equal(other.recorder.columns[key], expected), (other.engine.name, key)
 
 
 def test_scenario_status_traces_are_identical() -> None:

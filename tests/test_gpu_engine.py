@@ -215,7 +215,7 @@ def test_a_gpu_runs_folder_names_the_device_and_verifies(tmp_path: Path) -> None
     ("scenario", "why"),
     [
         ("gathering", "engine gpu: only runs whose tree sends no messages"),
-        ("radiation-search", "the compiled engine cannot run this tree: leaf"),
+        ("radiation-search", "engine gpu: only runs whose tree sends no messages"),
     ],
 )
 def test_a_run_the_kernel_cannot_do_is_refused_in_one_line(scenario: str, why: str) -> None:

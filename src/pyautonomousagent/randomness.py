@@ -6,6 +6,10 @@ counter-based generator does not depend on order: the number an agent draws is a
 function of (seed, stream, agent row, iteration, draw), computed with the SplitMix64 mixing
 function on 64-bit unsigned integers. One agent and a thousand agents go through the same
 NumPy integer operations, so both engines get the same bits on every CPU.
+
+:func:`bits_of_one` and :func:`uniform_of_one` are the same operations on one agent for
+compiled kernels (numba, and numba-cuda on a device: plain uint64 arithmetic, which wraps
+modulo 2**64 there as in NumPy).
 """
 
 from __future__ import annotations
@@ -16,10 +20,14 @@ from typing import Any
 
 import numpy as np
 
+from pyautonomousagent.jit import njit
+
 _GAMMA = np.uint64(0x9E3779B97F4A7C15)
 _M1 = np.uint64(0xBF58476D1CE4E5B9)
 _M2 = np.uint64(0x94D049BB133111EB)
 _TO_UNIT = 2.0**-53
+_S11, _S27, _S30, _S31, _S32 = (np.uint64(k) for k in (11, 27, 30, 31, 32))
+_ONE = np.uint64(1)
 
 
 def _mix(z: Any) -> Any:
@@ -74,3 +82,47 @@ class CounterRandom:
         unit = (self.bits(stream, rows, iteration, draw) >> np.uint64(11)) * _TO_UNIT
         values = low + (high - low) * unit
         return float(values[0]) if np.ndim(rows) == 0 else values
+
+
+@njit(inline="always")
+def _mix_one(z: np.uint64) -> np.uint64:
+    """:func:`_mix` of one uint64 (every constant a uint64: numba would make a mixed
+    uint64/int64 operation a float64 one)."""
+    z = (z ^ (z >> _S30)) * _M1
+    z = (z ^ (z >> _S27)) * _M2
+    return z ^ (z >> _S31)
+
+
+@njit(inline="always")
+def bits_of_one(
+    seed_high: int, seed_low: int, stream: int, row: int, iteration: int, draw: int
+) -> np.uint64:
+    """:meth:`CounterRandom.bits` of one agent row, operation for operation: 64 random bits.
+
+    The seed comes as its two 32-bit halves (``seed >> 32`` and ``seed & 0xFFFFFFFF``, see
+    :func:`seed_halves`): a compiled kernel's integer constants are int64, too small for a
+    64-bit seed. All arguments are whole numbers >= 0.
+    """
+    z = (np.uint64(seed_high) << _S32) | np.uint64(seed_low)
+    z = _mix_one(z + _GAMMA * np.uint64(stream))
+    z = _mix_one(z + _GAMMA * np.uint64(iteration))
+    z = _mix_one(z + _GAMMA * np.uint64(draw))
+    return _mix_one(z + _GAMMA * (np.uint64(row) + _ONE))
+
+
+@njit(inline="always")
+def uniform_of_one(
+    seed_high: int, seed_low: int, stream: int, row: int, iteration: int,
+    low: float, high: float, draw: int,
+) -> float:  # fmt: skip
+    """:meth:`CounterRandom.uniform` of one agent row (see :func:`bits_of_one`): a number in
+    [low, high), the same bits."""
+    unit = (bits_of_one(seed_high, seed_low, stream, row, iteration, draw) >> _S11) * _TO_UNIT
+    return low + (high - low) * unit
+
+
+def seed_halves(seed: int) -> tuple[int, int]:
+    """A run's seed as it is keyed (its low 64 bits), in two 32-bit halves, high first: the
+    form :func:`bits_of_one` takes."""
+    key = seed & 0xFFFFFFFFFFFFFFFF
+    return key >> 32, key & 0xFFFFFFFF

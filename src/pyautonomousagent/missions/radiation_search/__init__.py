@@ -2,7 +2,7 @@
 
 Drones (``drone1``, ``drone2``, ...; motion model ``drone2d``) start on their start positions
 and wander: a new random heading every ``wander_period`` iterations (drawn with
-:meth:`~pyautonomousagent.bt.Leaf.uniform`, so a seed gives the same flight on both engines),
+:meth:`~pyautonomousagent.bt.Leaf.uniform`, so a seed gives the same flight on every engine),
 turning back toward the centre near the world's edge. Each reads a radiation sensor; the
 first to read more than ``radiation_threshold`` percent broadcasts a ``found`` message with
 its position (a message type of this mission, recorded as an event) and stays there. A
@@ -11,7 +11,12 @@ next Phase 2) stores the position on its blackboard and flies there; drones alre
 a position keep theirs. The tree is ``radiation-search.xml``.
 
 Written only with the public API (:mod:`pyautonomousagent.mission`,
-:mod:`pyautonomousagent.bt`, :mod:`pyautonomousagent.arrays`):
+:mod:`pyautonomousagent.bt`, :mod:`pyautonomousagent.arrays`), and, for the compiled engine,
+its documented kernel API (:mod:`pyautonomousagent.kernels`, ``randomness.uniform_of_one``
+and ``jit.njit``, as the drone missions use them): every leaf has a ``kernel``, the sensor a
+``compiled_sensors`` form and ``found`` a ``HandlerKernel`` (``kernels.py``), so the compiled
+engine runs whole iterations fused (it stops after an iteration that sends ``found``, a
+recorded type, for Python to deliver it and record the events).
 
 - world objects (``world:``): ``radiation_source`` ``{x, y, range}`` (level
   ``100 (1 - d / range)`` percent at distance d < range, else 0) and ``start_positions``,
@@ -33,6 +38,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from pyautonomousagent.arrays import hypot
+from pyautonomousagent.kernels import HandlerKernel, SensorKernel
 from pyautonomousagent.mission import (
     Delivery,
     Mark,
@@ -50,7 +56,11 @@ from pyautonomousagent.mission import (
     register_mission,
 )
 from pyautonomousagent.missions.radiation_search import leaves
-from pyautonomousagent.missions.radiation_search.leaves import FOUND
+from pyautonomousagent.missions.radiation_search.kernels import (
+    radiation_reading,
+    store_found_everyone,
+)
+from pyautonomousagent.missions.radiation_search.leaves import FOUND, REPORTED
 
 __all__ = ["FOUND", "RadiationSearchMission", "Source", "leaves", "radiation_level"]
 
@@ -156,11 +166,18 @@ class RadiationSearchMission(Mission):
         s["radiation"][:] = radiation_level(s["x"], s["y"], self.scenario.objects.radiation_source)
         return None
 
+    def compiled_sensors(self, sim: Simulation) -> SensorKernel:
+        """:meth:`sense` for one drone (``kernels.radiation_reading``)."""
+        source = self.scenario.objects.radiation_source
+        constants = (float(source.x), float(source.y), float(source.range))
+        return SensorKernel(radiation_reading, ("x", "y", "radiation"), constants)
+
     def message_types(self) -> list[MessageType]:
         """``found`` (recorded): receivers store the reported position."""
         return [
             MessageType(FOUND, self.store_reported_position, recorded=True,
-                        doc="x, y: where the sender detected the source"),
+                        doc="x, y: where the sender detected the source",
+                        kernel=HandlerKernel(store_found_everyone, ("x", "y"), REPORTED)),
         ]  # fmt: skip
 
     def store_reported_position(self, sim: Simulation, delivery: Delivery) -> None:

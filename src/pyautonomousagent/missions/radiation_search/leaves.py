@@ -1,8 +1,9 @@
 """The radiation-search drones' leaves: wander, detect, report ``found``, fly to the report.
 
 Written with array expressions on an :class:`~pyautonomousagent.mission.AgentView`, so the
-same code runs for one drone (py_trees engine) or many at once (batched engine). Suffix
-``_S``: synchronous (SUCCESS/FAILURE); suffix ``_A``: asynchronous (RUNNING).
+same code runs for one drone (py_trees engine) or many at once (batched engine); each leaf's
+``kernel`` is its form for one drone on the compiled engine (``kernels.py``). Suffix ``_S``:
+synchronous (SUCCESS/FAILURE); suffix ``_A``: asynchronous (RUNNING).
 """
 
 from __future__ import annotations
@@ -11,7 +12,11 @@ from typing import Any
 
 from pyautonomousagent.arrays import bearing, choose
 from pyautonomousagent.bt import RUNNING, SUCCESS, Leaf, Port, register_leaf, success_if
+from pyautonomousagent.kernels import ITERATION, Later, LeafKernel, Sends
+from pyautonomousagent.kernels import bearing as bearing_of_one
 from pyautonomousagent.mission import AgentView, World
+from pyautonomousagent.missions.radiation_search import kernels as k
+from pyautonomousagent.randomness import seed_halves
 
 FOUND = "found"
 """The message type a drone broadcasts when it detects the source: ``x``, ``y`` where."""
@@ -31,6 +36,9 @@ class ConditionRadiationAboveThreshold(Leaf):
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return success_if(agents.radiation > self.threshold)
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.above, ("radiation",), (self.threshold,))
+
 
 @register_leaf
 class ConditionSourceReported(Leaf):
@@ -41,6 +49,9 @@ class ConditionSourceReported(Leaf):
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return success_if(agents.blackboard.source_reported == 1)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.source_reported, ("source_reported",))
 
 
 @register_leaf
@@ -58,6 +69,9 @@ class ConditionAtReportedPosition(Leaf):
         dy = agents.y - bb.y_reported_position
         return success_if(dx * dx + dy * dy <= self.distance * self.distance)
 
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.at_reported_position, ("x", "y", *REPORTED[1:]), (self.distance,))
+
 
 @register_leaf
 class ActionReportSourceS(Leaf):
@@ -73,6 +87,9 @@ class ActionReportSourceS(Leaf):
         bb.x_reported_position = agents.x
         bb.y_reported_position = agents.y
         return SUCCESS
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.report_source, ("x", "y", *REPORTED), sends=Sends(FOUND, ("x", "y")))
 
 
 @register_leaf
@@ -92,6 +109,10 @@ class ActionFlyToReportedPositionA(Leaf):
         agents.requested_speed = self.speed
         return RUNNING
 
+    def kernel(self, world: World) -> LeafKernel:
+        heading = Later(bearing_of_one, ("x", "y", *REPORTED[1:]), "requested_heading")
+        return LeafKernel(k.fly, ("requested_speed",), (self.speed,), later=heading)
+
 
 @register_leaf
 class ActionHoverS(Leaf):
@@ -103,6 +124,9 @@ class ActionHoverS(Leaf):
         agents.requested_speed = 0.0
         agents.requested_heading = agents.heading
         return SUCCESS
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.hover, ("heading", "requested_speed", "requested_heading"))
 
 
 @register_leaf
@@ -134,3 +158,12 @@ class ActionWanderA(Leaf):
         agents.requested_heading = choose(near_edge, centre, heading)
         agents.requested_speed = self.speed
         return RUNNING
+
+    def kernel(self, world: World) -> LeafKernel:
+        m = float(self.margin)
+        constants = (
+            *seed_halves(world.random.seed), self.stream, self.period, m,
+            world.width - m, world.height - m, world.width / 2, world.height / 2, self.speed,
+        )  # fmt: skip
+        names = (ITERATION, "x", "y", "requested_speed", "requested_heading")
+        return LeafKernel(k.wander, names, constants)
