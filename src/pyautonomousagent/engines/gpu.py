@@ -27,6 +27,7 @@ import numpy as np
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.engines.compiled import CompiledEngine, load_source
 from pyautonomousagent.engines.compiled_source import Constants
+from pyautonomousagent.engines.gpu_records import RecordGroups
 from pyautonomousagent.engines.gpu_source import kernel_module_source
 from pyautonomousagent.inputs import InputError
 from pyautonomousagent.models.drone2d import Drone2D
@@ -42,6 +43,13 @@ INSTALL = "pip install 'pyautonomousagent[gpu]' (numba-cuda and CuPy for CUDA 13
 
 #: Threads per block of the kernel.
 THREADS = 256
+
+#: The parts of a run :attr:`GpuEngine.timings` gives, in seconds: "compile" (in set-up:
+#: generating and compiling the kernel, allocating the record groups), "kernel" (the kernels'
+#: device time), "copy_back" (the record groups' copies, device time, and handing them to the
+#: recorder, host time; under the simulator host times throughout) and "state" (copying the
+#: state to the device and back, host time).
+TIMINGS = ("compile", "kernel", "copy_back", "state")
 
 
 class GpuUnavailableError(InputError):
@@ -143,7 +151,9 @@ class GpuEngine(CompiledEngine):
         self._kernel_constants: tuple[np.ndarray, np.ndarray] = (np.zeros(1), np.zeros(1, int))
         self._device: list[Any] | None = None
         self._synced = -1  # the iteration the device's state is of (-1: none sent)
-        self.timings: dict[str, float] = {"compile": 0.0, "kernel": 0.0, "copy_back": 0.0}
+        self._host_synced = -1  # the iteration the state copied back is of
+        self._groups: RecordGroups | None = None
+        self.timings = dict.fromkeys(TIMINGS, 0.0)
 
     def prepare(self, sim: Simulation) -> None:
         """Compile the kernel before the loop.
@@ -164,11 +174,14 @@ class GpuEngine(CompiledEngine):
         self._kernel_constants = layout.constants.arrays()  # the CPU tick's may differ
         self.kernel_source = source
         self._kernel = load_kernel(source)
+        iterations = sim.scenario.iterations
+        self._groups = RecordGroups(sim.recorder, self.layout.names, iterations, self.timings,
+                                     on_device=not simulating())  # fmt: skip
         with no_fma():
             self.loop(sim, 0)
         if not fma_free(self._kernel):
             raise RuntimeError("engine gpu: the kernel's PTX has fused multiply-adds")
-        self.timings = {"compile": time.perf_counter() - start, "kernel": 0.0, "copy_back": 0.0}
+        self.timings.update(dict.fromkeys(TIMINGS, 0.0), compile=time.perf_counter() - start)
 
     def device(self) -> dict[str, str]:
         """What ran the kernel, for ``run.json``: the device's name, the CUDA driver's
@@ -192,6 +205,22 @@ class GpuEngine(CompiledEngine):
         """Never: "auto" does not pick the GPU engine."""
         return False
 
+    def bytes_per_drone_iteration(self, sim: Simulation) -> float:
+        """Bytes of device memory one drone-iteration moves, counted from the kernel's
+        arrays: the drone's state (node statuses, remembered children, columns, blackboard,
+        control signals) read and written once an iteration, and its record row (columns,
+        active behaviour, its share of the traces) written once every ``every`` iterations.
+        (One thread runs all a call's iterations of its drone, so caches may keep part of
+        the state: the figure is what the kernel would move without them.)"""
+        model = sim.model
+        assert isinstance(model, Drone2D | Drone3D) and self._groups is not None
+        arrays = [self.status, self.current, self.pending, *self.arrays]
+        arrays += [model.u_speed, model.u_heading]
+        if isinstance(model, Drone3D):
+            arrays.append(model.u_climb)
+        state = sum(array.nbytes for array in arrays) / self.swarm.size
+        return 2 * state + self._groups.row_bytes / self.swarm.size / sim.recorder.every
+
     def _state(self, sim: Simulation) -> list[Any]:
         """The state the kernel reads and writes, in argument order (host arrays)."""
         model = sim.model
@@ -201,56 +230,56 @@ class GpuEngine(CompiledEngine):
                 model.u_speed, model.u_heading, u_climb]  # fmt: skip
 
     def loop(self, sim: Simulation, count: int, typical: int | None = None) -> int:
-        """Run ``count`` whole iterations on the device (0 compiles only); return ``count``,
+        """Run up to ``count`` whole iterations on the device (0 compiles only; fewer where
+        their records would not fit in a group, :meth:`RecordGroups.fit`); return how many,
         or 0 where the run cannot be fused now (the simulation then steps the iteration on
-        the CPU, the compiled engine's ``tick``, and the state goes to the device again
-        after it). The records of these iterations are copied back into the recorder, the
-        state into the swarm's arrays."""
+        the CPU, the compiled engine's ``tick``: the records in flight and the state are
+        copied back first, and the state goes to the device again after it). The records
+        are copied back while the next call's iterations run (:mod:`.gpu_records`); the
+        state only by :meth:`sync`."""
         from numba import cuda
 
         if self._kernel is None:
             self.prepare(sim)
         fused = self._fusable(sim)
         if fused is None or fused.messaging is not None:  # e.g. a radiation source came on
+            self.sync(sim)
             return 0  # the CPU steps this iteration; the state goes to the device again after
         recorder, model = sim.recorder, sim.model
-        assert isinstance(model, Drone2D | Drone3D)
+        assert isinstance(model, Drone2D | Drone3D) and self._groups is not None
         start, every = sim.world.iteration, recorder.every
+        count = self._groups.fit(start, count)
         row0 = start // every + 1  # the first record these iterations can write
-        rows = (start + count) // every - start // every
-        state = self._state(sim)
         if self._device is None or self._synced != start:  # new, or stepped on the CPU since
-            self._device = [cuda.to_device(array) for array in state]
+            sent = time.perf_counter()
+            self._device = [cuda.to_device(array) for array in self._state(sim)]
+            self._host_synced = start
+            self.timings["state"] += time.perf_counter() - sent
         n = self.swarm.size
-        traced_at = np.full(n, -1, dtype=np.int64)
-        traced_at[recorder.traced] = np.arange(recorder.traced.size)
-        columns = [recorder.columns.dtypes[k] for k in self.layout.names]
-        group = [cuda.device_array((rows, n), dtype) for dtype in columns]
-        traces = cuda.device_array((rows, *recorder.traces.shape[1:]), np.int8)
-        behaviour = cuda.device_array((rows, n), np.int16)
-        stopped = cuda.to_device(np.full(n, -1, dtype=np.int64))
+        slot = self._groups.slot(sim)
         p = model.params
         arguments = (
-            *self._device, *group, traces, cuda.to_device(traced_at), behaviour,
-            cuda.to_device(recorder._leaf_rows.astype(np.int64)), stopped,
-            p.max_speed, p.speed_step, p.turn_step,
+            *self._device, *self._groups.arguments(slot), p.max_speed, p.speed_step, p.turn_step,
         )  # fmt: skip
         began = time.perf_counter()
         blocks = max(1, -(-n // THREADS))
-        self._kernel[blocks, THREADS](start, count, every, row0, *arguments)
-        cuda.synchronize()
-        copied = time.perf_counter()
-        self.timings["kernel"] += copied - began
-        if rows:
-            for name, device in zip(self.layout.names, group, strict=True):
-                recorder.columns[name][row0 : row0 + rows] = device.copy_to_host()
-            recorder.traces[row0 : row0 + rows] = traces.copy_to_host()
-            assert recorder.behaviour is not None
-            recorder.behaviour[row0 : row0 + rows] = behaviour.copy_to_host()
-        for host, device in zip(state, self._device, strict=True):
-            device.copy_to_host(host)  # the state, for what reads it between calls
-        self._synced = start + count
-        self.timings["copy_back"] += time.perf_counter() - copied
-        if count:
-            self._after(sim, self._sensors, start, count, stopped.copy_to_host())
+        self._kernel[blocks, THREADS, self._groups.stream](start, count, every, row0, *arguments)
+        self._groups.launched(slot, start, count, fused.sensors, time.perf_counter() - began)
+        self._synced = sim.world.iteration = start + count
         return count
+
+    def sync(self, sim: Simulation) -> None:
+        """Hand the records in flight over to the recorder and copy the state back into the
+        swarm's arrays (where a kernel ran since the last sync): at the end of
+        ``Simulation.run`` and ``step``, and before an iteration stepped on the CPU."""
+        if self._groups is not None:
+            self._groups.settle(sim)
+        if self._device is None or self._host_synced == self._synced:
+            return
+        began = time.perf_counter()
+        assert self._groups is not None  # made with the device's state, by prepare
+        for host, device in zip(self._state(sim), self._device, strict=True):
+            device.copy_to_host(host, stream=self._groups.stream)
+        self._groups.stream.synchronize()
+        self._host_synced = self._synced
+        self.timings["state"] += time.perf_counter() - began

@@ -301,6 +301,7 @@ class Simulation:
                 "scenario.with_overrides(iterations=...)"
             )
         if self._fused(1):
+            self._settle()
             return
         self.world.iteration += 1
         phases.estimate_state(self)
@@ -319,13 +320,16 @@ class Simulation:
             remaining = max(0, min(remaining, iterations))
         bar = Progress(remaining, f"{self.scenario.name} ({self.engine.name})", enabled=progress)
         done = 0
-        while done < remaining:
-            fused = self._fused(min(remaining - done, FUSED))
-            if not fused:
-                self.step()
-            done += fused or 1
-            if done % 50 == 0 or done == remaining or fused:
-                bar.update(done)
+        try:
+            while done < remaining:
+                fused = self._fused(min(remaining - done, FUSED))
+                if not fused:
+                    self.step()
+                done += fused or 1
+                if done % 50 == 0 or done == remaining or fused:
+                    bar.update(done)
+        finally:
+            self._settle()  # also on Ctrl-C: the records run so far, whole
         bar.close()
         self.timings["simulate"] = self.timings.get("simulate", 0.0) + time.perf_counter() - start
         return self
@@ -339,6 +343,13 @@ class Simulation:
         if done:
             phases.deliver_messages(self)
         return int(done)
+
+    def _settle(self) -> None:
+        """Have an engine that keeps work in flight (the GPU engine's records and state)
+        finish it: the recorder holds every iteration run, the swarm's arrays the state."""
+        sync = getattr(self.engine, "sync", None)
+        if sync is not None:
+            sync(self)
 
     def trace_table(self) -> pa.Table:
         """The traced agents' node statuses: one row per record and traced agent."""
