@@ -161,6 +161,124 @@ def test_the_simulated_kernel_gives_the_batched_engines_bits(
     assert done.stdout.strip().splitlines()[-1] == "same"
 
 
+#: Run under NUMBA_ENABLE_CUDASIM=1: many calls of the GPU engine's loop (``run.FUSED``
+#: iterations each, fewer where a group holds ``GROUP_BYTES``), compact records, traces,
+#: drones running dry; prints "same" and how many groups were in flight at most.
+IN_FLIGHT = textwrap.dedent(
+    """
+    import sys
+    import numpy as np
+    from pyautonomousagent import Simulation, load, recording
+    from pyautonomousagent.engines import gpu_records
+    from pyautonomousagent.simulation import run
+
+    every, fused, group_bytes = (int(v) for v in sys.argv[1:4])
+    recording.COMPACT_AGENTS = 1  # records kept compact, as for a large swarm
+    run.FUSED = fused
+    if group_bytes:
+        gpu_records.GROUP_BYTES = group_bytes
+    handed = []  # (groups still in flight, the engine's iteration, the group's last)
+    hand_over = gpu_records.RecordGroups._hand_over
+    def counted(self, sim, group):
+        handed.append((self.in_flight, sim.world.iteration, group.start + group.count))
+        hand_over(self, sim, group)
+    gpu_records.RecordGroups._hand_over = counted
+    scenario = load("patrol").with_overrides(agents=5, iterations=60, energy_use=2.0)
+    a = Simulation.create(scenario, seed=4, engine="batched", record_every=every)
+    b = Simulation.create(scenario, seed=4, engine="gpu", record_every=every)
+    a.run(progress=False, iterations=23)
+    b.run(progress=False, iterations=23)  # settles: records and state of 23 iterations
+    for sim in (a, b):
+        sim.mid = (sim.recorder.count, {k: v.copy() for k, v in sim.swarm.columns.items()})
+        sim.run(progress=False)
+    ra, rb = a.recorder, b.recorder
+    assert a.mid[0] == b.mid[0] == 23 // every + 1, (a.mid[0], b.mid[0])
+    assert ra.columns.stored == rb.columns.stored, (ra.columns.stored, rb.columns.stored)
+    assert len(ra.columns.stored) < len(ra.columns), "no column kept compact"
+    def bits(x):
+        x = np.asarray(x)
+        return x.view(np.uint64) if x.dtype == np.float64 else x
+    checks = [(k, ra.columns[k], rb.columns[k]) for k in ra.columns]
+    checks += [("traces", ra.traces, rb.traces), ("behaviour", ra.behaviour, rb.behaviour),
+               ("iterations", ra.iterations, rb.iterations), ("count", ra.count, rb.count)]
+    checks += [("mid " + k, a.mid[1][k], b.mid[1][k]) for k in a.mid[1]]
+    checks += [("end " + k, a.swarm.columns[k], b.swarm.columns[k]) for k in a.swarm.columns]
+    for name, x, y in checks:
+        assert np.shape(x) == np.shape(y) and np.array_equal(bits(x), bits(y)), name
+    assert a.events == b.events and any(e["event"] == "alert" for e in a.events)
+    late = max(now - last for _, now, last in handed)  # iterations run before a hand-over
+    print("same", max(flight for flight, _, _ in handed), late, len(handed))
+    """
+)
+
+
+@needs_numba
+@pytest.mark.parametrize(("every", "fused", "group_bytes"), [(1, 4, 0), (7, 20, 1), (1, 20, 1)])
+def test_record_groups_in_flight_give_the_batched_engines_records(
+    every: int, fused: int, group_bytes: int
+) -> None:
+    """5 drones x 60 iterations in calls of 4 or 20 iterations (one record a group where
+    ``group_bytes`` is 1): a group is handed to the recorder only after the next call's
+    kernel was launched; compact columns, traces, alerts, a run stopped at 23 and resumed."""
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
+    done = subprocess.run(
+        [sys.executable, "-c", IN_FLIGHT, str(every), str(fused), str(group_bytes)],
+        env=env, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    word, flight, late, groups = done.stdout.split()
+    assert word == "same"
+    assert int(flight) >= 1 and int(late) >= 1  # another group was launched meanwhile
+    assert int(groups) >= (60 // 7 if group_bytes else 60 // fused)
+
+
+#: Run under NUMBA_ENABLE_CUDASIM=1: a run folder written while the run goes (two records a
+#: Parquet row group), by the batched and the GPU engine, into ``argv[1]/ENGINE``.
+STREAMED = textwrap.dedent(
+    """
+    import sys
+    from pathlib import Path
+    from pyautonomousagent import Simulation, load, runs
+    from pyautonomousagent.simulation import run
+
+    run.FUSED = 6
+    scenario = load("patrol").with_overrides(agents=4, iterations=40, energy_use=3.0)
+    for engine in ("batched", "gpu"):
+        sim = Simulation.create(scenario, seed=5, engine=engine, record_every=2)
+        out = Path(sys.argv[1]) / engine
+        written = []  # (records written to Parquet, the engine's iteration) at each record
+        with runs.streaming(sim, out) as stream:
+            stream.block = 2
+            sim.recorder.listeners.append(
+                lambda count: written.append((stream.written, sim.world.iteration)))
+            status = runs.simulate(sim)
+            runs.save_run(sim, out, status=status, stream=stream, animation=False)
+        during = max(records for records, iteration in written if iteration < 40)
+        print(engine, during)
+    """
+)
+
+
+@needs_numba
+def test_the_gpu_engines_run_folder_is_streamed_as_the_batched_engines(tmp_path: Path) -> None:
+    import pyarrow.parquet as pq
+
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
+    done = subprocess.run(
+        [sys.executable, "-c", STREAMED, str(tmp_path)],
+        env=env, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    during = dict(line.split() for line in done.stdout.strip().splitlines())
+    assert int(during["gpu"]) >= 10  # records in Parquet before the run's last iteration
+    for name in ("states.parquet", "traces.parquet"):
+        a, b = (pq.read_table(tmp_path / e / name) for e in ("batched", "gpu"))
+        assert a.equals(b, check_metadata=True), name
+    states = pq.ParquetFile(tmp_path / "gpu" / "states.parquet")
+    assert states.metadata.num_row_groups == 11  # 21 records, two a row group
+    assert runs.verify(tmp_path / "gpu")["engine"] == "gpu"
+
+
 @needs_device
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_on_the_device_the_gpu_engine_gives_the_batched_engines_bits(seed: int) -> None:
@@ -180,15 +298,30 @@ def test_on_the_device_the_gpu_engine_gives_the_batched_engines_bits(seed: int) 
 def test_bench_reports_the_gpu_engines_parts() -> None:
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
     command = [sys.executable, "-m", "pyautonomousagent.cli", "bench", "patrol", "--agents", "3",
-               "--iterations", "10", "--engines", "gpu", "--json"]  # fmt: skip
+               "--iterations", "10", "--record-every", "5", "--engines", "gpu", "--save",
+               "--bandwidth", "2000", "--json"]  # fmt: skip
     done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     (row,) = json.loads(done.stdout)
     assert row["error"] == "" and row["engine"] == "gpu"
     parts = row["gpu_s"]
-    assert set(parts) == {"compile", "kernel", "copy_back"}
+    assert set(parts) == {"compile", "kernel", "copy_back", "state", "write"}
     assert 0.0 < parts["compile"] <= row["setup_s"]
-    assert 0.0 < parts["kernel"] + parts["copy_back"] <= row["loop_s"]
+    assert 0.0 < parts["kernel"] + parts["copy_back"] + parts["state"] <= row["loop_s"]
+    assert parts["write"] == row["write_s"] > 0.0
+    # patrol: 228 bytes of state a drone (docs/performance.md), read and written; a record
+    # row (21 columns, the active behaviour, the traces of the 3 drones) every 5 iterations
+    sim = Simulation.create(load("patrol").with_overrides(agents=3, iterations=10),
+                            engine="compiled", record_every=5)  # fmt: skip
+    engine = sim.engine
+    state = [engine.status, engine.current, engine.pending, *engine.arrays,
+             sim.model.u_speed, sim.model.u_heading]  # fmt: skip
+    row_bytes = sum(d.itemsize for d in sim.recorder.columns.dtypes.values()) * 3
+    row_bytes += 2 * 3 + sim.recorder.traces[0].nbytes
+    expected = 2 * sum(a.nbytes for a in state) / 3 + row_bytes / 3 / 5
+    assert row["bytes_per_drone_iteration"] == pytest.approx(expected)
+    rate = 3 * 10 / row["loop_s"]
+    assert row["bandwidth_fraction"] == pytest.approx(expected * rate / 2e12)
 
 
 @needs_numba

@@ -214,7 +214,7 @@ class GpuEngine(CompiledEngine):
         the state: the figure is what the kernel would move without them.)"""
         model = sim.model
         assert isinstance(model, Drone2D | Drone3D) and self._groups is not None
-        arrays = [self.status, self.current, self.pending, *self.arrays]
+        arrays: list[np.ndarray] = [self.status, self.current, self.pending, *self.arrays]
         arrays += [model.u_speed, model.u_heading]
         if isinstance(model, Drone3D):
             arrays.append(model.u_climb)
