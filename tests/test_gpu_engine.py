@@ -60,10 +60,52 @@ def test_without_cupy_or_a_device_run_says_so_in_one_line(
     assert "Traceback" not in err
 
 
-def test_auto_never_picks_the_gpu() -> None:
+@pytest.mark.parametrize("where", ["no device", "simulator"])
+def test_auto_never_picks_the_gpu_without_a_device_or_under_the_simulator(
+    where: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(gpu, "simulating", lambda: where == "simulator")
+    problem = "no CUDA device (stubbed)" if where == "no device" else None
+    monkeypatch.setattr(gpu, "gpu_problem", lambda: problem)
     tree = scenario_tree(load("patrol"))
     for agents, iterations in ((4, 100), (10**6, 1000), (10**8, 1000)):
         assert choose_engine(tree, agents, iterations) != "gpu"
+
+
+def _device_present(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Have :func:`gpu.auto_takes_gpu` see a device (no simulator, no problem)."""
+    monkeypatch.setattr(gpu, "simulating", lambda: False)
+    monkeypatch.setattr(gpu, "gpu_problem", lambda: None)
+
+
+@needs_numba
+def test_with_a_device_auto_picks_the_gpu_from_the_threshold_on(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    _device_present(monkeypatch)
+    tree = scenario_tree(load("patrol"))
+    least = gpu.AUTO_DRONE_ITERATIONS
+    assert choose_engine(tree, least // 1000, 1000) == "gpu"
+    assert choose_engine(tree, least, 1) == "gpu"
+    assert choose_engine(tree, least // 1000 - 1, 1000) != "gpu"
+    assert choose_engine(tree, 10**6, 100) != "gpu"  # 1e8 drone-iterations: the CPU's
+    gathering = load("gathering")  # the 4-drone teaching run
+    assert gathering.agents * gathering.iterations < least
+    assert choose_engine(scenario_tree(gathering), gathering.agents, gathering.iterations) != "gpu"
+
+
+@needs_numba
+def test_auto_takes_the_compiled_engine_where_the_kernel_cannot_run_the_run(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Gathering sends messages (not on the GPU yet): above the threshold, with a device,
+    auto builds the GPU engine, sees it cannot run the run, and takes the compiled one."""
+    _device_present(monkeypatch)
+    monkeypatch.setattr(gpu, "AUTO_DRONE_ITERATIONS", 40)
+    scenario = load("gathering").with_overrides(agents=4, iterations=10)
+    assert choose_engine(scenario_tree(scenario), 4, 10) == "gpu"
+    sim = Simulation.create(scenario, seed=1, engine="auto")
+    assert sim.engine.name == "compiled"
 
 
 def _kernel_source(agents: int = 4) -> str:

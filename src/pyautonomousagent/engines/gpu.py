@@ -83,6 +83,23 @@ def gpu_problem() -> str | None:
     return None
 
 
+#: Drone-iterations (agents x iterations) from which "auto" takes the GPU engine where a
+#: device is present (:func:`auto_takes_gpu`). Provisional: an estimate, not a measurement
+#: (the GPU's set-up, a CUDA compile of a few seconds, against the compiled engine's loop
+#: at about 5 ns a drone-iteration on a GPU machine's CPU cores), until
+#: ``scripts/gpu_figures.sh`` (its ``crossover`` step) measures where the GPU starts to win.
+AUTO_DRONE_ITERATIONS = 10**9
+
+
+def auto_takes_gpu(agents: int, iterations: int) -> bool:
+    """Whether "auto" takes the GPU engine for a run of ``agents`` x ``iterations``: at
+    least :data:`AUTO_DRONE_ITERATIONS`, a device present (:func:`gpu_problem` is None),
+    and not numba's CUDA simulator (a stand-in for tests, slower than any CPU engine)."""
+    if agents * iterations < AUTO_DRONE_ITERATIONS or simulating():
+        return False
+    return gpu_problem() is None
+
+
 def require_gpu() -> None:
     """Raise :class:`GpuUnavailableError` (one line with the install command) where
     :func:`gpu_problem` finds one."""
@@ -162,7 +179,7 @@ class GpuEngine(CompiledEngine):
             InputError: the run cannot be fused (messages, no compiled sensors, ...).
         """
         fused = self._fusable(sim)
-        if fused is None or fused.messaging is not None:
+        if fused is None or not self.runs(sim):
             raise InputError(
                 "engine gpu: only runs whose tree sends no messages and whose mission has "
                 "compiled sensors run on the GPU so far (e.g. patrol); use --engine compiled"
@@ -202,8 +219,16 @@ class GpuEngine(CompiledEngine):
         }
 
     def ready(self, sim: Simulation) -> bool:
-        """Never: "auto" does not pick the GPU engine."""
+        """False: "auto" picks the GPU engine by the run's size (:func:`auto_takes_gpu`),
+        not by what numba's cache holds (``CompiledEngine.ready``)."""
         return False
+
+    def runs(self, sim: Simulation) -> bool:
+        """Whether the kernel can run ``sim``'s iterations from its start (else
+        :meth:`prepare` refuses it): a tree that sends no messages, a mission with compiled
+        sensors, the 2-D or 3-D drone."""
+        fused = self._fusable(sim)
+        return fused is not None and fused.messaging is None
 
     def bytes_per_drone_iteration(self, sim: Simulation) -> float:
         """Bytes of device memory one drone-iteration moves, counted from the kernel's
