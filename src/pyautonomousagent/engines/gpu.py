@@ -176,7 +176,6 @@ class GpuEngine(CompiledEngine):
         require_gpu()
         super().__init__(tree, swarm, world, defaults)
         self._kernel: Any = None
-        self._sensors: Any = None
         self._kernel_constants: tuple[np.ndarray, np.ndarray] = (np.zeros(1), np.zeros(1, int))
         self._device: list[Any] | None = None
         self._synced = -1  # the iteration the device's state is of (-1: none sent)
@@ -197,7 +196,6 @@ class GpuEngine(CompiledEngine):
                 "compiled sensors run on the GPU so far (e.g. patrol); use --engine compiled"
             )
         start = time.perf_counter()
-        self._sensors = fused.sensors
         layout = replace(self.layout, constants=Constants(), vertical=fused.vertical)
         source = kernel_module_source(self.program, self.kernels, layout, fused.sensors)
         self._kernel_constants = layout.constants.arrays()  # the CPU tick's may differ
