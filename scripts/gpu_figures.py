@@ -6,6 +6,8 @@ python scripts/gpu_figures.py bandwidth      # measured device copy bandwidth, G
 python scripts/gpu_figures.py bytes          # bytes of state per drone (patrol)
 python scripts/gpu_figures.py rate FILE GBS  # drone-iterations/s of a bench JSON, vs GBS
 python scripts/gpu_figures.py memory N       # device memory of an N-drone patrol run
+python scripts/gpu_figures.py crossover [ITERATIONS EVERY REPEATS]
+                                             # smallest swarm where gpu beats compiled
 """
 
 from __future__ import annotations
@@ -78,10 +80,11 @@ def state_bytes() -> int:
 
 
 def rate(path: str, gbs: str) -> int:
-    """Each row's drone-iterations per second, and the state traffic it would take if every
-    iteration read and wrote each drone's state in device memory (above 100 % of the
-    bandwidth: the state stays in the caches between iterations, as one thread runs all the
-    iterations of its drone)."""
+    """Each row's drone-iterations per second, and the bytes per drone-iteration the bench
+    counted from the kernel's arrays (state read and written each iteration, records every
+    K) at that rate, against the measured bandwidth ``gbs`` (above 100 %: part of the state
+    stays in the caches between iterations, as one thread runs all the iterations of its
+    drone)."""
     with open(path) as file:
         rows = json.load(file)
     for row in rows:
@@ -89,13 +92,51 @@ def rate(path: str, gbs: str) -> int:
             print(f"{row['engine']} {row['agents']}: {row['error']}")
             continue
         per_second = row["agents"] * row["iterations"] / row["loop_s"]
-        moved = 2 * _state_bytes() * per_second / 1e9
+        moved = row["bytes_per_drone_iteration"] * per_second / 1e9
         print(
             f"{row['engine']} {row['agents']} x {row['iterations']}: "
             f"set-up {row['setup_s']:.2f} s, loop {row['loop_s']:.3f} s = "
-            f"{per_second:.3g} drone-iterations/s; parts {row.get('gpu_s')}; state traffic "
-            f"{moved:.0f} GB/s = {moved / float(gbs):.0%} of the measured {gbs} GB/s"
+            f"{per_second:.3g} drone-iterations/s; parts {row.get('gpu_s')}; "
+            f"{row['bytes_per_drone_iteration']:.0f} bytes/drone-iteration = {moved:.0f} GB/s "
+            f"= {moved / float(gbs):.0%} of the measured {gbs} GB/s"
         )
+    return 0
+
+
+def crossover(iterations: str = "1000", every: str = "100", repeats: str = "3") -> int:
+    """The smallest patrol swarm whose whole run (set-up, the CUDA compile included, and
+    loop) is faster on the GPU than on the compiled engine (all this machine's cores; its
+    cache warm): swarms doubled from 1000 until the GPU wins, then bisected to 5 %; each
+    size runs the two engines interleaved ``repeats`` times, each in a fresh process
+    (``pyaa bench``'s), and compares their best. Prints the value for
+    ``engines.gpu.AUTO_DRONE_ITERATIONS``."""
+    from pyautonomousagent.bench import Case, measure
+
+    its, k, r = int(iterations), int(every), int(repeats)
+
+    def gpu_wins(agents: int) -> bool:
+        best = {"compiled": float("inf"), "gpu": float("inf")}
+        for _ in range(r):
+            for engine in best:
+                result = measure(Case("patrol", engine, agents, its, k))
+                if result.seconds is None:
+                    raise SystemExit(f"crossover: {engine} at {agents} drones: {result.error}")
+                best[engine] = min(best[engine], result.seconds)
+        print(f"  {agents} drones x {its}: compiled {best['compiled']:.3f} s, "
+              f"gpu {best['gpu']:.3f} s (best of {r})", file=sys.stderr)  # fmt: skip
+        return best["gpu"] < best["compiled"]
+
+    low, high = 0, 1000  # the GPU loses at low (0: none tried), wins at high once found
+    while not gpu_wins(high):
+        low, high = high, high * 2
+        if high > 10**8:
+            print("crossover: the GPU did not win up to 100,000,000 drones")
+            return 1
+    while high - low > max(1, high // 20):
+        middle = (low + high) // 2
+        low, high = (low, middle) if gpu_wins(middle) else (middle, high)
+    print(f"crossover: {high} drones x {its} iterations (record every {k}); "
+          f"AUTO_DRONE_ITERATIONS = {high * its}")  # fmt: skip
     return 0
 
 
@@ -118,7 +159,7 @@ def memory(agents: str) -> int:
 
 def main(argv: list[str]) -> int:
     commands = {"check": check, "device": device, "bandwidth": bandwidth, "bytes": state_bytes,
-                "rate": rate, "memory": memory}  # fmt: skip
+                "rate": rate, "memory": memory, "crossover": crossover}  # fmt: skip
     if not argv or argv[0] not in commands:
         print(__doc__, file=sys.stderr)
         return 2

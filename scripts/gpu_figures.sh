@@ -16,12 +16,15 @@ python "$HERE/gpu_figures.py" bytes
 pyaa bench patrol --agents 1000 --iterations 10 --engines gpu,compiled > /dev/null
 pyaa bench gathering --engines compiled > /dev/null  # from here on, auto takes compiled for it
 # Patrol, 10,000,000 drones x 1000 iterations, record every 100 (goal: loop >= 1e10/s).
-pyaa bench patrol --agents 10000000 --iterations 1000 --record-every 100 --engines gpu,gpu --json > "$OUT/patrol-10M.json"
+pyaa bench patrol --agents 10000000 --iterations 1000 --record-every 100 --engines gpu,gpu --bandwidth "$BW" --json > "$OUT/patrol-10M.json"
 python "$HERE/gpu_figures.py" rate "$OUT/patrol-10M.json" "$BW"
 # 100,000,000 drones on the card (memory per drone).
 python "$HERE/gpu_figures.py" memory 100000000
 # 1,000,000 drones: the GPU against the compiled engine on all this machine's cores, and on 2.
 pyaa bench patrol --agents 1000000 --iterations 1000 --record-every 100 --engines compiled,gpu,compiled,gpu
 NUMBA_NUM_THREADS=2 taskset -c 0,1 pyaa bench patrol --agents 1000000 --iterations 1000 --record-every 100 --engines compiled,compiled
+# Where auto should take the GPU: the smallest patrol swarm (x 1000 iterations, record every
+# 100) whose whole run is faster on the GPU than on the compiled engine (all cores).
+python "$HERE/gpu_figures.py" crossover 1000 100 3
 # Gathering's 4-drone teaching run: auto must be no slower than the CPU engines (it keeps it off the GPU).
 pyaa bench gathering --engines batched,compiled,auto,batched,compiled,auto

@@ -60,10 +60,52 @@ def test_without_cupy_or_a_device_run_says_so_in_one_line(
     assert "Traceback" not in err
 
 
-def test_auto_never_picks_the_gpu() -> None:
+@pytest.mark.parametrize("where", ["no device", "simulator"])
+def test_auto_never_picks_the_gpu_without_a_device_or_under_the_simulator(
+    where: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(gpu, "simulating", lambda: where == "simulator")
+    problem = "no CUDA device (stubbed)" if where == "no device" else None
+    monkeypatch.setattr(gpu, "gpu_problem", lambda: problem)
     tree = scenario_tree(load("patrol"))
     for agents, iterations in ((4, 100), (10**6, 1000), (10**8, 1000)):
         assert choose_engine(tree, agents, iterations) != "gpu"
+
+
+def _device_present(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Have :func:`gpu.auto_takes_gpu` see a device (no simulator, no problem)."""
+    monkeypatch.setattr(gpu, "simulating", lambda: False)
+    monkeypatch.setattr(gpu, "gpu_problem", lambda: None)
+
+
+@needs_numba
+def test_with_a_device_auto_picks_the_gpu_from_the_threshold_on(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    _device_present(monkeypatch)
+    tree = scenario_tree(load("patrol"))
+    least = gpu.AUTO_DRONE_ITERATIONS
+    assert choose_engine(tree, least // 1000, 1000) == "gpu"
+    assert choose_engine(tree, least, 1) == "gpu"
+    assert choose_engine(tree, least // 1000 - 1, 1000) != "gpu"
+    assert choose_engine(tree, 10**6, 100) != "gpu"  # 1e8 drone-iterations: the CPU's
+    gathering = load("gathering")  # the 4-drone teaching run
+    assert gathering.agents * gathering.iterations < least
+    assert choose_engine(scenario_tree(gathering), gathering.agents, gathering.iterations) != "gpu"
+
+
+@needs_numba
+def test_auto_takes_the_compiled_engine_where_the_kernel_cannot_run_the_run(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Gathering sends messages (not on the GPU yet): above the threshold, with a device,
+    auto builds the GPU engine, sees it cannot run the run, and takes the compiled one."""
+    _device_present(monkeypatch)
+    monkeypatch.setattr(gpu, "AUTO_DRONE_ITERATIONS", 40)
+    scenario = load("gathering").with_overrides(agents=4, iterations=10)
+    assert choose_engine(scenario_tree(scenario), 4, 10) == "gpu"
+    sim = Simulation.create(scenario, seed=1, engine="auto")
+    assert sim.engine.name == "compiled"
 
 
 def _kernel_source(agents: int = 4) -> str:
@@ -161,6 +203,124 @@ def test_the_simulated_kernel_gives_the_batched_engines_bits(
     assert done.stdout.strip().splitlines()[-1] == "same"
 
 
+#: Run under NUMBA_ENABLE_CUDASIM=1: many calls of the GPU engine's loop (``run.FUSED``
+#: iterations each, fewer where a group holds ``GROUP_BYTES``), compact records, traces,
+#: drones running dry; prints "same" and how many groups were in flight at most.
+IN_FLIGHT = textwrap.dedent(
+    """
+    import sys
+    import numpy as np
+    from pyautonomousagent import Simulation, load, recording
+    from pyautonomousagent.engines import gpu_records
+    from pyautonomousagent.simulation import run
+
+    every, fused, group_bytes = (int(v) for v in sys.argv[1:4])
+    recording.COMPACT_AGENTS = 1  # records kept compact, as for a large swarm
+    run.FUSED = fused
+    if group_bytes:
+        gpu_records.GROUP_BYTES = group_bytes
+    handed = []  # (groups still in flight, the engine's iteration, the group's last)
+    hand_over = gpu_records.RecordGroups._hand_over
+    def counted(self, sim, group):
+        handed.append((self.in_flight, sim.world.iteration, group.start + group.count))
+        hand_over(self, sim, group)
+    gpu_records.RecordGroups._hand_over = counted
+    scenario = load("patrol").with_overrides(agents=5, iterations=60, energy_use=2.0)
+    a = Simulation.create(scenario, seed=4, engine="batched", record_every=every)
+    b = Simulation.create(scenario, seed=4, engine="gpu", record_every=every)
+    a.run(progress=False, iterations=23)
+    b.run(progress=False, iterations=23)  # settles: records and state of 23 iterations
+    for sim in (a, b):
+        sim.mid = (sim.recorder.count, {k: v.copy() for k, v in sim.swarm.columns.items()})
+        sim.run(progress=False)
+    ra, rb = a.recorder, b.recorder
+    assert a.mid[0] == b.mid[0] == 23 // every + 1, (a.mid[0], b.mid[0])
+    assert ra.columns.stored == rb.columns.stored, (ra.columns.stored, rb.columns.stored)
+    assert len(ra.columns.stored) < len(ra.columns), "no column kept compact"
+    def bits(x):
+        x = np.asarray(x)
+        return x.view(np.uint64) if x.dtype == np.float64 else x
+    checks = [(k, ra.columns[k], rb.columns[k]) for k in ra.columns]
+    checks += [("traces", ra.traces, rb.traces), ("behaviour", ra.behaviour, rb.behaviour),
+               ("iterations", ra.iterations, rb.iterations), ("count", ra.count, rb.count)]
+    checks += [("mid " + k, a.mid[1][k], b.mid[1][k]) for k in a.mid[1]]
+    checks += [("end " + k, a.swarm.columns[k], b.swarm.columns[k]) for k in a.swarm.columns]
+    for name, x, y in checks:
+        assert np.shape(x) == np.shape(y) and np.array_equal(bits(x), bits(y)), name
+    assert a.events == b.events and any(e["event"] == "alert" for e in a.events)
+    late = max(now - last for _, now, last in handed)  # iterations run before a hand-over
+    print("same", max(flight for flight, _, _ in handed), late, len(handed))
+    """
+)
+
+
+@needs_numba
+@pytest.mark.parametrize(("every", "fused", "group_bytes"), [(1, 4, 0), (7, 20, 1), (1, 20, 1)])
+def test_record_groups_in_flight_give_the_batched_engines_records(
+    every: int, fused: int, group_bytes: int
+) -> None:
+    """5 drones x 60 iterations in calls of 4 or 20 iterations (one record a group where
+    ``group_bytes`` is 1): a group is handed to the recorder only after the next call's
+    kernel was launched; compact columns, traces, alerts, a run stopped at 23 and resumed."""
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
+    done = subprocess.run(
+        [sys.executable, "-c", IN_FLIGHT, str(every), str(fused), str(group_bytes)],
+        env=env, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    word, flight, late, groups = done.stdout.split()
+    assert word == "same"
+    assert int(flight) >= 1 and int(late) >= 1  # another group was launched meanwhile
+    assert int(groups) >= (60 // 7 if group_bytes else 60 // fused)
+
+
+#: Run under NUMBA_ENABLE_CUDASIM=1: a run folder written while the run goes (two records a
+#: Parquet row group), by the batched and the GPU engine, into ``argv[1]/ENGINE``.
+STREAMED = textwrap.dedent(
+    """
+    import sys
+    from pathlib import Path
+    from pyautonomousagent import Simulation, load, runs
+    from pyautonomousagent.simulation import run
+
+    run.FUSED = 6
+    scenario = load("patrol").with_overrides(agents=4, iterations=40, energy_use=3.0)
+    for engine in ("batched", "gpu"):
+        sim = Simulation.create(scenario, seed=5, engine=engine, record_every=2)
+        out = Path(sys.argv[1]) / engine
+        written = []  # (records written to Parquet, the engine's iteration) at each record
+        with runs.streaming(sim, out) as stream:
+            stream.block = 2
+            sim.recorder.listeners.append(
+                lambda count: written.append((stream.written, sim.world.iteration)))
+            status = runs.simulate(sim)
+            runs.save_run(sim, out, status=status, stream=stream, animation=False)
+        during = max(records for records, iteration in written if iteration < 40)
+        print(engine, during)
+    """
+)
+
+
+@needs_numba
+def test_the_gpu_engines_run_folder_is_streamed_as_the_batched_engines(tmp_path: Path) -> None:
+    import pyarrow.parquet as pq
+
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
+    done = subprocess.run(
+        [sys.executable, "-c", STREAMED, str(tmp_path)],
+        env=env, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    during = dict(line.split() for line in done.stdout.strip().splitlines())
+    assert int(during["gpu"]) >= 10  # records in Parquet before the run's last iteration
+    for name in ("states.parquet", "traces.parquet"):
+        a, b = (pq.read_table(tmp_path / e / name) for e in ("batched", "gpu"))
+        assert a.equals(b, check_metadata=True), name
+    states = pq.ParquetFile(tmp_path / "gpu" / "states.parquet")
+    assert states.metadata.num_row_groups == 11  # 21 records, two a row group
+    assert runs.verify(tmp_path / "gpu")["engine"] == "gpu"
+
+
 @needs_device
 @pytest.mark.parametrize("seed", [1, 2, 3])
 def test_on_the_device_the_gpu_engine_gives_the_batched_engines_bits(seed: int) -> None:
@@ -180,15 +340,30 @@ def test_on_the_device_the_gpu_engine_gives_the_batched_engines_bits(seed: int) 
 def test_bench_reports_the_gpu_engines_parts() -> None:
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
     command = [sys.executable, "-m", "pyautonomousagent.cli", "bench", "patrol", "--agents", "3",
-               "--iterations", "10", "--engines", "gpu", "--json"]  # fmt: skip
+               "--iterations", "10", "--record-every", "5", "--engines", "gpu", "--save",
+               "--bandwidth", "2000", "--json"]  # fmt: skip
     done = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
     (row,) = json.loads(done.stdout)
     assert row["error"] == "" and row["engine"] == "gpu"
     parts = row["gpu_s"]
-    assert set(parts) == {"compile", "kernel", "copy_back"}
+    assert set(parts) == {"compile", "kernel", "copy_back", "state", "write"}
     assert 0.0 < parts["compile"] <= row["setup_s"]
-    assert 0.0 < parts["kernel"] + parts["copy_back"] <= row["loop_s"]
+    assert 0.0 < parts["kernel"] + parts["copy_back"] + parts["state"] <= row["loop_s"]
+    assert parts["write"] == row["write_s"] > 0.0
+    # patrol: 228 bytes of state a drone (docs/performance.md), read and written; a record
+    # row (21 columns, the active behaviour, the traces of the 3 drones) every 5 iterations
+    sim = Simulation.create(load("patrol").with_overrides(agents=3, iterations=10),
+                            engine="compiled", record_every=5)  # fmt: skip
+    engine = sim.engine
+    state = [engine.status, engine.current, engine.pending, *engine.arrays,
+             sim.model.u_speed, sim.model.u_heading]  # fmt: skip
+    row_bytes = sum(d.itemsize for d in sim.recorder.columns.dtypes.values()) * 3
+    row_bytes += 2 * 3 + sim.recorder.traces[0].nbytes
+    expected = 2 * sum(a.nbytes for a in state) / 3 + row_bytes / 3 / 5
+    assert row["bytes_per_drone_iteration"] == pytest.approx(expected)
+    rate = 3 * 10 / row["loop_s"]
+    assert row["bandwidth_fraction"] == pytest.approx(expected * rate / 2e12)
 
 
 @needs_numba

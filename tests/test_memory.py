@@ -116,3 +116,21 @@ def test_compact_and_full_records_give_the_same_table(monkeypatch, compact):
     monkeypatch.setattr(recording, "COMPACT_AGENTS", compact)
     again = to_table(Simulation.create(scenario).run(progress=False).recorder)
     assert again.equals(full, check_metadata=True)
+
+
+def test_a_group_of_records_is_stored_as_record_by_record(monkeypatch):
+    """``Recorder.store_group`` (the GPU engine's copied-back rows) keeps compact columns
+    compact, as ``record`` one record at a time does."""
+    monkeypatch.setattr(recording, "COMPACT_AGENTS", 1)
+    scenario = load("patrol").with_overrides(agents=6, iterations=8)
+    one = Simulation.create(scenario, seed=2, engine="batched").run(progress=False).recorder
+    group = Simulation.create(scenario, seed=2, engine="batched").recorder  # record 0 only
+    assert group.count == 1
+    rows = {k: one.columns.block(k, 1, 9) for k in one.columns}
+    group.store_group(1, rows, one.traces[1:9], one.behaviour_block(1, 9))
+    group.iterations[:], group.count = one.iterations, one.count
+    assert group.columns.stored == one.columns.stored != list(one.columns)
+    assert group._codes is not None and one._codes is not None
+    assert group._codes.stored == one._codes.stored
+    assert to_table(group).equals(to_table(one), check_metadata=True)
+    assert np.array_equal(group.traces, one.traces)

@@ -94,9 +94,14 @@ class Result:
     write: float | None = None
     views: float | None = None
     write_thread: float | None = None
-    #: The GPU engine's parts (seconds): "compile" (in set-up), "kernel" and "copy_back"
-    #: (in the loop); None for the other engines.
-    gpu: dict[str, float] | None = None
+    #: The GPU engine's parts (seconds; ``engines.gpu.TIMINGS``): "compile" (in set-up),
+    #: "kernel", "copy_back" and "state" (in the loop, partly overlapped), and "write" (the
+    #: data written after the loop, as ``write``; None without ``case.save``); None for the
+    #: other engines.
+    gpu: dict[str, float | None] | None = None
+    #: The GPU engine's bytes of device memory per drone-iteration
+    #: (``GpuEngine.bytes_per_drone_iteration``); None for the other engines.
+    bytes_per_drone_iteration: float | None = None
 
     @property
     def loop(self) -> float | None:
@@ -109,6 +114,14 @@ class Result:
         if self.seconds is None:
             return None
         return (self.seconds - self.setup) / (self.case.agents * self.case.iterations)
+
+    def bandwidth_fraction(self, gbps: float) -> float | None:
+        """The share of ``gbps`` (GB/s, e.g. the card's measured copy bandwidth) that the
+        loop's rate moves at :attr:`bytes_per_drone_iteration`; None where not measured."""
+        if self.bytes_per_drone_iteration is None or not self.loop:
+            return None
+        rate = self.case.agents * self.case.iterations / self.loop
+        return self.bytes_per_drone_iteration * rate / (gbps * 1e9)
 
     @property
     def full_seconds(self) -> float | None:
@@ -140,13 +153,23 @@ def run_case_here(case: Case) -> dict[str, Any]:
         implementation=implementation,
     )
     setup = time.perf_counter() - start
-    parts = getattr(sim.engine, "timings", None)  # the GPU engine's compile, kernel, copy-back
     if not case.save:
         sim.run(progress=False, iterations=case.iterations)
         figures = {"seconds": time.perf_counter() - start, "setup": setup, "peak_mb": peak_rss_mb()}
     else:
         figures = {"setup": setup, **saved_timings(sim, case.iterations, start)}
-    return {**figures, "gpu": dict(parts)} if isinstance(parts, dict) else figures
+    return {**figures, **gpu_figures(sim, figures.get("write"))}
+
+
+def gpu_figures(sim: Simulation, write: float | None) -> dict[str, Any]:
+    """The GPU engine's parts of a run (``"gpu"``: its timings and ``write``, the seconds
+    of writing the data after the loop, None where it was not saved) and its
+    ``"bytes_per_drone_iteration"``; {} for the other engines."""
+    parts = getattr(sim.engine, "timings", None)
+    per_drone = getattr(sim.engine, "bytes_per_drone_iteration", None)
+    if not isinstance(parts, dict) or per_drone is None:
+        return {}
+    return {"gpu": {**parts, "write": write}, "bytes_per_drone_iteration": per_drone(sim)}
 
 
 def saved_timings(sim: Simulation, iterations: int, start: float) -> dict[str, float]:
@@ -215,6 +238,7 @@ def measure(case: Case, timeout: float | None = None, budget_mb: float | None = 
         views=figures.get("views"),
         write_thread=figures.get("write_thread"),
         gpu=figures.get("gpu"),
+        bytes_per_drone_iteration=figures.get("bytes_per_drone_iteration"),
     )
 
 
@@ -274,6 +298,27 @@ def table(results: Sequence[Result], reference: str) -> str:
             f"{r.per_agent_iteration:>11.2e} {r.peak_mb:>8.0f} {ratio:>9} "
             f"{'' if paper is None else f'{paper:.2f}':>8} {r.setup:>7.3f} {r.loop or 0.0:>8.3f} "
             f"{_seconds(r.write):>7} {_seconds(r.views):>7}"
+        )
+    return "\n".join(lines)
+
+
+def gpu_table(results: Sequence[Result], gbps: float | None = None) -> str:
+    """One line per GPU case: its parts (compile, kernel, copy-back, state, write seconds),
+    bytes per drone-iteration, and the GB/s they make at the loop's rate, with their share
+    of ``gbps`` where given; "" without GPU cases."""
+    lines = []
+    for r in results:
+        if r.gpu is None or r.bytes_per_drone_iteration is None or not r.loop:
+            continue
+        parts = ", ".join(f"{k.replace('_', '-')} {_seconds(v)}" for k, v in r.gpu.items())
+        rate = r.case.agents * r.case.iterations / r.loop
+        moved = r.bytes_per_drone_iteration * rate / 1e9
+        share = r.bandwidth_fraction(gbps) if gbps else None
+        of = f" = {share:.1%} of {gbps:g} GB/s" if share is not None else ""
+        lines.append(
+            f"gpu {r.case.agents} x {r.case.iterations}: {parts} s; "
+            f"{r.bytes_per_drone_iteration:.0f} bytes/drone-iteration x {rate:.3g}/s = "
+            f"{moved:.3g} GB/s{of}"
         )
     return "\n".join(lines)
 

@@ -230,6 +230,13 @@ def _add_bench(sub: Any) -> None:
     bench.add_argument(
         "--repeat", type=int, default=1, metavar="R", help="measure every case R times"
     )
+    bench.add_argument(
+        "--bandwidth",
+        type=float,
+        metavar="GBPS",
+        help="the GPU's measured memory bandwidth in GB/s (scripts/gpu_figures.py bandwidth): "
+        "the GPU cases also give the share of it their bytes per drone-iteration make",
+    )
     bench.add_argument("--json", action="store_true", help="print JSON instead of a table")
     bench.add_argument("--timeout", type=float, help="give up on a case after this many seconds")
     bench.add_argument(
@@ -282,6 +289,8 @@ def bench_command(args: argparse.Namespace) -> int:
             raise ScenarioError(f"{flag} must be a whole number >= 1, got {value}")
     if args.timeout is not None and not (finite(args.timeout) and args.timeout > 0):
         raise ScenarioError(f"--timeout must be a number of seconds > 0, got {args.timeout}")
+    if args.bandwidth is not None and not (finite(args.bandwidth) and args.bandwidth > 0):
+        raise ScenarioError(f"--bandwidth must be GB/s > 0, got {args.bandwidth}")
     try:  # checked whether or not --stress uses it, so a typo is never ignored
         args.memory_budget_mb = bench.parse_size_mb(args.memory_budget)
     except ValueError as error:
@@ -325,7 +334,7 @@ def bench_command(args: argparse.Namespace) -> int:
                 "write_s": r.write,
                 "write_thread_s": r.write_thread,
                 "views_s": r.views,
-                **({"gpu_s": r.gpu} if r.gpu is not None else {}),  # compile, kernel, copy-back
+                **_gpu_row(r, args.bandwidth),
                 f"speedup_vs_{engines[0]}": ratios.get(r.case),
                 "error": r.error,
             }
@@ -334,7 +343,22 @@ def bench_command(args: argparse.Namespace) -> int:
         print(json.dumps(rows, indent=2))
     else:
         print(bench.table(results, engines[0]))
+        gpu = bench.gpu_table(results, args.bandwidth)
+        if gpu:
+            print(gpu)
     return 0
+
+
+def _gpu_row(result: Any, gbps: float | None) -> dict[str, Any]:
+    """A GPU case's fields of ``pyaa bench --json``: ``gpu_s`` (its parts, seconds),
+    ``bytes_per_drone_iteration`` and, given ``--bandwidth``, ``bandwidth_gbps`` and
+    ``bandwidth_fraction``; {} for the other engines."""
+    if result.gpu is None:
+        return {}
+    row = {"gpu_s": result.gpu, "bytes_per_drone_iteration": result.bytes_per_drone_iteration}
+    if gbps is not None:
+        row |= {"bandwidth_gbps": gbps, "bandwidth_fraction": result.bandwidth_fraction(gbps)}
+    return row
 
 
 def _bench_variants(

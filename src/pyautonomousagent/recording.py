@@ -181,6 +181,31 @@ class Recorder:
         for listener in self.listeners:
             listener(self.count)
 
+    def store_group(
+        self,
+        row0: int,
+        columns: Mapping[str, np.ndarray],
+        traces: np.ndarray,
+        behaviour: np.ndarray | None = None,
+    ) -> None:
+        """Store records ``row0`` .. ``row0 + rows - 1`` written elsewhere (e.g. by a GPU
+        kernel), as :meth:`record` stores them one by one (compact columns stay compact);
+        the bookkeeping (``iterations``, ``count``, listeners) is the caller's.
+
+        Args:
+            row0: the first record's number.
+            columns: every recorded column, name -> values of shape (rows, N).
+            traces: the traced agents' node statuses, shape (rows, nodes, K), int8.
+            behaviour: the active leaves, shape (rows, N), int16; required with a tree.
+        """
+        for key in self.columns:
+            self.columns.store_block(row0, key, columns[key])
+        self.traces[row0 : row0 + len(traces)] = traces
+        if self._codes is not None:
+            if behaviour is None:
+                raise ValueError("this recorder keeps traces: pass the active behaviours")
+            self._codes.store_block(row0, "behaviour", behaviour)
+
     def trace(self, agent: int | str) -> np.ndarray:
         """The node statuses of one traced agent (index or name), shape (records so far, nodes)."""
         index = self.names.index(agent) if isinstance(agent, str) else agent
@@ -332,6 +357,16 @@ class RecordedColumns(Mapping[str, np.ndarray]):
                 return
             full = self._stored(key, row)
         full[row] = values
+
+    def store_block(self, row0: int, key: str, values: np.ndarray) -> None:
+        """Record ``values`` (shape (rows, N)) as records ``row0``.. of column ``key``: at
+        once where it is stored in full, else record by record (:meth:`store`)."""
+        full = self._full.get(key)
+        if full is not None:
+            full[row0 : row0 + len(values)] = values
+            return
+        for r, row in enumerate(values):
+            self.store(row0 + r, key, row)
 
     def store_record(self, row: int, sources: Mapping[str, np.ndarray]) -> None:
         """Record ``sources[key]`` (shape (N,)) as record ``row`` of every column ``key``."""

@@ -397,7 +397,7 @@ class CompiledEngine:
             or not isinstance(sim.model, Drone2D | Drone3D)
             or sim.world.datalink.channel
             or list(recorder.columns) != list(self.layout.names)
-            or recorder.behaviour is None
+            or not recorder.wants_statuses  # (not .behaviour: it stores it in full)
         ):
             return None
         messaging = self._messaging(sim) if self.layout.outboxes else None

@@ -19,7 +19,7 @@ from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.datalink import Datalink, Delivery
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.compiled import CompiledEngine, compilable
-from pyautonomousagent.engines.gpu import GpuEngine
+from pyautonomousagent.engines.gpu import GpuEngine, auto_takes_gpu
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, PyTreesEngine
 from pyautonomousagent.inputs import shown
 from pyautonomousagent.names import agent_index
@@ -143,7 +143,11 @@ def batched_seconds(agents: int, iterations: int) -> float:
 
 def choose_engine(tree: Node, agents: int = 10**6, iterations: int = 4000) -> str:
     """The engine "auto" picks for a run of ``agents`` x ``iterations``: "pytrees" if a leaf
-    of ``tree`` is a hand-written py_trees behaviour; else "compiled" where the batched
+    of ``tree`` is a hand-written py_trees behaviour; else "gpu" where the tree compiles and
+    :func:`~pyautonomousagent.engines.gpu.auto_takes_gpu` (a device, a run at least
+    :data:`~pyautonomousagent.engines.gpu.AUTO_DRONE_ITERATIONS` drone-iterations; where the
+    kernel cannot run the run, :meth:`Simulation.create` takes "compiled" instead); else
+    "compiled" where the batched
     engine's loop would take at least :data:`AUTO_COMPILE_SECONDS` (:func:`batched_seconds`),
     numba is installed and the tree compiles (see
     :func:`~pyautonomousagent.engines.compiled.compilable`); else "batched".
@@ -151,6 +155,8 @@ def choose_engine(tree: Node, agents: int = 10**6, iterations: int = 4000) -> st
     fused loop was compiled before: ``CompiledEngine.ready``.)"""
     if any(node.type in BEHAVIOUR_TYPES for node in tree.leaves()):
         return "pytrees"
+    if auto_takes_gpu(agents, iterations) and not compilable(tree):
+        return "gpu"
     if batched_seconds(agents, iterations) < AUTO_COMPILE_SECONDS:
         return "batched"
     why = compilable(tree)
@@ -281,6 +287,9 @@ class Simulation:
         )
         if auto and engine == "batched" and not compilable(tree):
             _compiled_if_ready(sim, tree)
+        if auto and isinstance(sim.engine, GpuEngine) and not sim.engine.runs(sim):
+            log.debug("engine auto: compiled, not gpu: the kernel cannot run this run")
+            sim.engine = CompiledEngine(tree, swarm, world, vars(scenario.parameters))
         phases.record(sim)  # the initial state, iteration 0
         prepare = getattr(sim.engine, "prepare", None)  # e.g. compile before the loop
         if prepare is not None:
@@ -301,6 +310,7 @@ class Simulation:
                 "scenario.with_overrides(iterations=...)"
             )
         if self._fused(1):
+            self._settle()
             return
         self.world.iteration += 1
         phases.estimate_state(self)
@@ -319,13 +329,16 @@ class Simulation:
             remaining = max(0, min(remaining, iterations))
         bar = Progress(remaining, f"{self.scenario.name} ({self.engine.name})", enabled=progress)
         done = 0
-        while done < remaining:
-            fused = self._fused(min(remaining - done, FUSED))
-            if not fused:
-                self.step()
-            done += fused or 1
-            if done % 50 == 0 or done == remaining or fused:
-                bar.update(done)
+        try:
+            while done < remaining:
+                fused = self._fused(min(remaining - done, FUSED))
+                if not fused:
+                    self.step()
+                done += fused or 1
+                if done % 50 == 0 or done == remaining or fused:
+                    bar.update(done)
+        finally:
+            self._settle()  # also on Ctrl-C: the records run so far, whole
         bar.close()
         self.timings["simulate"] = self.timings.get("simulate", 0.0) + time.perf_counter() - start
         return self
@@ -339,6 +352,13 @@ class Simulation:
         if done:
             phases.deliver_messages(self)
         return int(done)
+
+    def _settle(self) -> None:
+        """Have an engine that keeps work in flight (the GPU engine's records and state)
+        finish it: the recorder holds every iteration run, the swarm's arrays the state."""
+        sync = getattr(self.engine, "sync", None)
+        if sync is not None:
+            sync(self)
 
     def trace_table(self) -> pa.Table:
         """The traced agents' node statuses: one row per record and traced agent."""

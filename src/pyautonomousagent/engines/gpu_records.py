@@ -1,0 +1,240 @@
+"""The GPU engine's records: groups of record rows copied back while the next iterations run.
+
+Each call of :meth:`~pyautonomousagent.engines.gpu.GpuEngine.loop` launches its kernel on
+:attr:`RecordGroups.stream` and has it write the records of its iterations into one
+:class:`Slot`: a group of rows on the device (the recorded columns, shape (rows, N) each; the
+traced agents' node statuses, (rows, nodes, K) int8; the active behaviour, (rows, N) int16)
+and the iteration at which each agent first stopped, (N,) int64. Right after the launch,
+:meth:`RecordGroups.launched` has a second stream, :attr:`RecordGroups.copies`, wait for the
+kernel (a CUDA event) and copy those rows into the slot's pinned host buffers, and returns
+at once: the host goes on to launch the next call's kernel into the other slot
+(:data:`SLOTS` of them, used in turn), so that copy runs while the next iterations do.
+
+The host waits for the device only where it must:
+
+- when a slot is needed again while its group is still in flight (:meth:`RecordGroups.slot`):
+  it waits for that group's copy (so, for its kernel) and hands it over;
+- at :meth:`RecordGroups.settle` (the end of ``Simulation.run`` and ``step``, and before an
+  iteration stepped on the CPU): every group in flight is handed over.
+
+Handing a group over (in order of iterations) stores its rows in the recorder
+(:meth:`~pyautonomousagent.recording.Recorder.store_group`: compact columns stay compact),
+then does the compiled engine's bookkeeping (``CompiledEngine._after``): the sensors' alerts
+of the agents that stopped, in order of iteration, the recorder's iterations and count, and
+its listeners, which hand finished records to the Parquet writer's thread
+(:class:`~pyautonomousagent.streaming.StatesStream`): so the kernel never waits on the disk.
+``sim.world.iteration`` is the engine's clock meanwhile (set at the launch), and the
+recorder's count lags it by the groups in flight.
+
+A group holds at most :data:`GROUP_BYTES` on the device (and as much pinned on the host):
+:meth:`RecordGroups.fit` shortens a call to the iterations whose records fit.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from pyautonomousagent.engines.compiled import CompiledEngine
+from pyautonomousagent.kernels import SensorKernel
+from pyautonomousagent.recording import Recorder
+
+if TYPE_CHECKING:
+    from pyautonomousagent.simulation.run import Simulation
+
+#: Slots of record rows, used in turn: one being written by a kernel while another is copied.
+SLOTS = 2
+
+#: Bytes of record rows a slot holds at most on the device (and as many pinned on the host):
+#: 1 GiB, so that two slots fit beside 100,000,000 drones' state on an 80 GB card. A call
+#: whose records would need more runs fewer iterations (at least one).
+GROUP_BYTES = 1 << 30
+
+
+@dataclass
+class Slot:
+    """One group of record rows on the device and its pinned host buffers (``capacity``
+    rows each), and the CUDA events that time and order its kernel and its copy.
+
+    Attributes:
+        device: the columns, then the traces, the active behaviour and ``stopped`` (the
+            iteration each agent first stopped at in the call, -1 if none), device arrays.
+        host: pinned host arrays of the same shapes and types.
+        events: "began", "ran" (the kernel's), "copying", "copied" (the copy's).
+    """
+
+    device: list[Any]
+    host: list[np.ndarray]
+    events: dict[str, Any]
+
+
+@dataclass
+class Group:
+    """A call's records in flight: its slot, iterations ``start + 1 .. start + count``,
+    records ``row0 .. row0 + rows - 1``, the sensors it ran (for their alerts), and the host
+    seconds its launch and its copy's enqueuing took (the simulator's timings)."""
+
+    slot: Slot
+    start: int
+    count: int
+    row0: int
+    rows: int
+    sensors: SensorKernel
+    launch_s: float
+    enqueue_s: float
+
+
+class RecordGroups:
+    """The record rows of a run on the GPU engine, copied back group by group (see the
+    module's docstring).
+
+    Args:
+        recorder: the run's recorder.
+        names: the recorded columns in the kernel's order (``Layout.names``).
+        iterations: the run's length, sizing the slots (at most the records of the run).
+        timings: where "kernel" and "copy_back" seconds are added (the engine's).
+        on_device: time the kernel and the copies with CUDA events (device seconds); False
+            under numba's CUDA simulator, whose events time nothing (host seconds instead).
+    """
+
+    def __init__(
+        self,
+        recorder: Recorder,
+        names: Sequence[str],
+        iterations: int,
+        timings: dict[str, float],
+        on_device: bool = True,
+    ) -> None:
+        from numba import cuda
+
+        self.recorder, self.names, self.timings = recorder, list(names), timings
+        self.on_device = on_device
+        self.stream = cuda.stream()  # the kernels'
+        self.copies = cuda.stream()  # the copies back
+        agents = len(recorder.names)
+        traced_at = np.full(agents, -1, dtype=np.int64)
+        traced_at[recorder.traced] = np.arange(recorder.traced.size)
+        self.traced_at = cuda.to_device(traced_at)
+        self.leaf_rows = cuda.to_device(recorder._leaf_rows.astype(np.int64))
+        self._no_stop = cuda.to_device(np.full(agents, -1, dtype=np.int64))
+        self._shapes = self._row_shapes(agents)
+        fitting = GROUP_BYTES // max(1, self.row_bytes)
+        self.capacity = max(1, min(iterations // recorder.every + 1, fitting))
+        self._slots: list[Slot] = []
+        self._next = 0
+        self._flight: deque[Group] = deque()
+
+    def _row_shapes(self, agents: int) -> list[tuple[tuple[int, ...], np.dtype]]:
+        """The shape of one record row and the type of each record array, in kernel order."""
+        r = self.recorder
+        shapes: list[tuple[tuple[int, ...], np.dtype]]
+        shapes = [((agents,), r.columns.dtypes[k]) for k in self.names]
+        shapes.append(((len(r.nodes), r.traced.size), np.dtype(np.int8)))
+        shapes.append(((agents,), np.dtype(np.int16)))
+        return shapes
+
+    @property
+    def row_bytes(self) -> int:
+        """Bytes of one record row on the device: columns, traces and active behaviour."""
+        return sum(int(np.prod(shape)) * dtype.itemsize for shape, dtype in self._shapes)
+
+    def fit(self, start: int, count: int) -> int:
+        """The most iterations, up to ``count``, from iteration ``start`` whose records fit
+        in a slot (:attr:`capacity` rows); at least one."""
+        every = self.recorder.every
+        return min(count, (start // every + self.capacity + 1) * every - 1 - start)
+
+    @property
+    def in_flight(self) -> int:
+        """Groups launched whose records the recorder does not hold yet."""
+        return len(self._flight)
+
+    def slot(self, sim: Simulation) -> Slot:
+        """The next slot, free: its group handed over first if it is still in flight (the
+        host waits for its copy); its ``stopped`` reset and its "began" event recorded on
+        :attr:`stream`, for the kernel launched next."""
+        if not self._slots:
+            self._slots = [self._new_slot() for _ in range(SLOTS)]
+        slot = self._slots[self._next]
+        self._next = (self._next + 1) % SLOTS
+        while any(group.slot is slot for group in self._flight):
+            self._hand_over(sim, self._flight.popleft())
+        slot.device[-1].copy_to_device(self._no_stop, stream=self.stream)
+        slot.events["began"].record(self.stream)
+        return slot
+
+    def _new_slot(self) -> Slot:
+        from numba import cuda
+
+        shapes = [((self.capacity, *shape), dtype) for shape, dtype in self._shapes]
+        shapes.append(((len(self.recorder.names),), np.dtype(np.int64)))  # stopped
+        device = [cuda.device_array(shape, dtype) for shape, dtype in shapes]
+        host = [cuda.pinned_array(shape, dtype) for shape, dtype in shapes]
+        events = {name: cuda.event() for name in ("began", "ran", "copying", "copied")}
+        return Slot(device, host, events)
+
+    def arguments(self, slot: Slot) -> tuple[Any, ...]:
+        """The kernel's record arguments for ``slot``: ``records..., traces, traced_at,
+        behaviour, leaf_rows, stopped_at`` (device arrays)."""
+        *columns, traces, behaviour, stopped = slot.device
+        return (*columns, traces, self.traced_at, behaviour, self.leaf_rows, stopped)
+
+    def launched(
+        self, slot: Slot, start: int, count: int, sensors: SensorKernel, launch_s: float
+    ) -> None:
+        """The kernel writing ``slot`` for iterations ``start + 1 .. start + count`` was
+        launched (in ``launch_s`` host seconds): queue the copy of its rows on
+        :attr:`copies`, after the kernel, and keep the group in flight. A call of no
+        iteration (compiling only) waits for the kernel and keeps nothing."""
+        if count == 0:
+            self.stream.synchronize()
+            return
+        every = self.recorder.every
+        row0, rows = start // every + 1, (start + count) // every - start // every
+        began = time.perf_counter()
+        events = slot.events
+        events["ran"].record(self.stream)
+        events["ran"].wait(self.copies)
+        events["copying"].record(self.copies)
+        for device, host in zip(slot.device[:-1], slot.host[:-1], strict=True):
+            if rows:
+                device[:rows].copy_to_host(host[:rows], stream=self.copies)
+        slot.device[-1].copy_to_host(slot.host[-1], stream=self.copies)
+        events["copied"].record(self.copies)
+        enqueue_s = time.perf_counter() - began
+        self._flight.append(Group(slot, start, count, row0, rows, sensors, launch_s, enqueue_s))
+
+    def settle(self, sim: Simulation) -> None:
+        """Hand every group in flight over to the recorder, in order (the host waits for
+        their copies)."""
+        while self._flight:
+            self._hand_over(sim, self._flight.popleft())
+
+    def _hand_over(self, sim: Simulation, group: Group) -> None:
+        """Wait for ``group``'s copy, store its rows in the recorder and do its bookkeeping
+        (``CompiledEngine._after``: alerts, the recorder's count, its listeners), the clock
+        kept at the engine's iteration."""
+        slot = group.slot
+        slot.events["copied"].synchronize()
+        began = time.perf_counter()
+        *columns, traces, behaviour, stopped = slot.host
+        rows = group.rows
+        recorded = {k: v[:rows] for k, v in zip(self.names, columns, strict=True)}
+        self.recorder.store_group(group.row0, recorded, traces[:rows], behaviour[:rows])
+        now = sim.world.iteration
+        CompiledEngine._after(sim, group.sensors, group.start, group.count, stopped)
+        sim.world.iteration = now
+        host = time.perf_counter() - began
+        if self.on_device:
+            events = slot.events
+            kernel = events["began"].elapsed_time(events["ran"]) / 1000.0
+            copy = events["copying"].elapsed_time(events["copied"]) / 1000.0
+        else:
+            kernel, copy = group.launch_s, group.enqueue_s
+        self.timings["kernel"] += kernel
+        self.timings["copy_back"] += copy + host
