@@ -18,7 +18,8 @@ Between the calls of one run nothing on the host reads it (the sensors' alerts r
 iterations the agents stopped at, copied back with the records).
 
 ``auto`` takes this engine where a device is present and the run has at least
-:data:`AUTO_DRONE_ITERATIONS` drone-iterations (provisional, :func:`auto_takes_gpu`).
+:data:`AUTO_DRONE_ITERATIONS` drone-iterations (:func:`auto_takes_gpu`; unset, so never,
+until that crossover is measured on a GPU).
 
 Without numba-cuda, CuPy or a CUDA device, creating the engine raises
 :class:`GpuUnavailableError` (one line naming the install command). With
@@ -96,18 +97,20 @@ def gpu_problem() -> str | None:
 
 
 #: Drone-iterations (agents x iterations) from which "auto" takes the GPU engine where a
-#: device is present (:func:`auto_takes_gpu`). Provisional: an estimate, not a measurement
-#: (the GPU's set-up, a CUDA compile of a few seconds, against the compiled engine's loop
-#: at about 5 ns a drone-iteration on a GPU machine's CPU cores), until
-#: ``scripts/gpu_figures.sh`` (its ``crossover`` step) measures where the GPU starts to win.
-AUTO_DRONE_ITERATIONS = 10**9
+#: device is present (:func:`auto_takes_gpu`); None: never. It stays None until
+#: ``scripts/gpu_figures.sh`` (its ``crossover`` step) has run on a GPU: it measures where
+#: the GPU starts to win and prints the value to put here. Until then the engine has run
+#: only in numba's CUDA simulator, and "auto" does not send anyone's run to a device path
+#: that no one has run on a device.
+AUTO_DRONE_ITERATIONS: int | None = None
 
 
 def auto_takes_gpu(agents: int, iterations: int) -> bool:
     """Whether "auto" takes the GPU engine for a run of ``agents`` x ``iterations``: at
     least :data:`AUTO_DRONE_ITERATIONS`, a device present (:func:`gpu_problem` is None),
     and not numba's CUDA simulator (a stand-in for tests, slower than any CPU engine)."""
-    if agents * iterations < AUTO_DRONE_ITERATIONS or simulating():
+    least = AUTO_DRONE_ITERATIONS
+    if least is None or agents * iterations < least or simulating():
         return False
     return gpu_problem() is None
 
