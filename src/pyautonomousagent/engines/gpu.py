@@ -17,6 +17,7 @@ in Python on the CPU, for tests).
 from __future__ import annotations
 
 import time
+import types
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import replace
@@ -26,8 +27,8 @@ import numpy as np
 
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.engines.compiled import CompiledEngine, load_source
-from pyautonomousagent.engines.compiled_source import Constants
-from pyautonomousagent.engines.gpu_source import kernel_module_source
+from pyautonomousagent.engines.compiled_source import Constants, Layout, Messaging
+from pyautonomousagent.engines.gpu_source import kernel_module_source, message_module_source
 from pyautonomousagent.inputs import InputError
 from pyautonomousagent.models.drone2d import Drone2D
 from pyautonomousagent.models.drone3d import Drone3D
@@ -35,6 +36,8 @@ from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
 if TYPE_CHECKING:
+    from pyautonomousagent.datalink import Delivery
+    from pyautonomousagent.engines.gpu_messages import DeviceMessages
     from pyautonomousagent.simulation.run import Simulation
 
 #: How to install what the GPU engine needs.
@@ -104,18 +107,36 @@ def no_fma() -> Iterator[None]:
         nvvm.compile_ir = original
 
 
-def load_kernel(source: str) -> Any:
-    """The ``block_gpu`` of generated ``source`` as a CUDA kernel (``cuda.jit``, no fast
+def load_kernel(source: str, name: str = "block_gpu") -> Any:
+    """Function ``name`` of generated ``source`` as a CUDA kernel (``cuda.jit``, no fast
     math). Under the simulator the njit helpers it calls with arrays run as Python (their
     ``py_func``): the simulator's arrays are not NumPy's."""
     from numba import cuda
 
     module = load_source(source)
     if simulating():
-        for name, value in list(vars(module).items()):
-            if name != "cuda" and hasattr(value, "py_func"):
-                setattr(module, name, value.py_func)
-    return cuda.jit(fastmath=False)(module.block_gpu)
+        for key, value in list(vars(module).items()):
+            if key != "cuda" and hasattr(value, "py_func"):
+                setattr(module, key, _python(value))
+    return cuda.jit(fastmath=False)(getattr(module, name))
+
+
+def _python(function: Any, made: dict[int, Any] | None = None) -> Any:
+    """An njit ``function`` as plain Python for the simulator: its ``py_func`` with the njit
+    functions it calls made plain Python too (in a copy of its globals: the module's own
+    are left to the compiled code)."""
+    made = {} if made is None else made
+    if id(function) in made:
+        return made[id(function)]
+    py = function.py_func
+    names = dict(py.__globals__)
+    plain = types.FunctionType(py.__code__, names, py.__name__, py.__defaults__, py.__closure__)
+    made[id(function)] = plain
+    for key in py.__code__.co_names:
+        value = names.get(key)
+        if value is not None and hasattr(value, "py_func"):
+            names[key] = _python(value, made)
+    return plain
 
 
 def fma_free(kernel: Any) -> bool:
@@ -139,6 +160,7 @@ class GpuEngine(CompiledEngine):
         require_gpu()
         super().__init__(tree, swarm, world, defaults)
         self._kernel: Any = None
+        self._messages: DeviceMessages | None = None
         self._sensors: Any = None
         self._kernel_constants: tuple[np.ndarray, np.ndarray] = (np.zeros(1), np.zeros(1, int))
         self._device: list[Any] | None = None
@@ -152,23 +174,57 @@ class GpuEngine(CompiledEngine):
             InputError: the run cannot be fused (messages, no compiled sensors, ...).
         """
         fused = self._fusable(sim)
-        if fused is None or fused.messaging is not None:
+        if fused is None:
             raise InputError(
-                "engine gpu: only runs whose tree sends no messages and whose mission has "
-                "compiled sensors run on the GPU so far (e.g. patrol); use --engine compiled"
+                "engine gpu: only runs whose mission has compiled sensors and compiled "
+                "handlers of the messages its tree sends run on the GPU so far (e.g. patrol, "
+                "gathering); use --engine compiled"
             )
         start = time.perf_counter()
         self._sensors = fused.sensors
         layout = replace(self.layout, constants=Constants(), vertical=fused.vertical)
-        source = kernel_module_source(self.program, self.kernels, layout, fused.sensors)
+        if fused.messaging is None:
+            source = kernel_module_source(self.program, self.kernels, layout, fused.sensors)
+            self._kernel = load_kernel(source)
+        else:
+            source = self._message_kernels(layout, fused.messaging)
         self._kernel_constants = layout.constants.arrays()  # the CPU tick's may differ
         self.kernel_source = source
-        self._kernel = load_kernel(source)
         with no_fma():
             self.loop(sim, 0)
-        if not fma_free(self._kernel):
+        compiled = self._messages.kernels.values() if self._messages else [self._kernel]
+        if not all(fma_free(kernel) for kernel in compiled):
             raise RuntimeError("engine gpu: the kernel's PTX has fused multiply-adds")
         self.timings = {"compile": time.perf_counter() - start, "kernel": 0.0, "copy_back": 0.0}
+
+    def _message_kernels(self, layout: Layout, messaging: Messaging) -> str:
+        """Generate and load the kernels of a tree that sends messages
+        (:mod:`~pyautonomousagent.engines.gpu_messages`); the source."""
+        from pyautonomousagent.engines.gpu_messages import DeviceMessages
+
+        source = message_module_source(self.program, self.kernels, layout, self._sensors, messaging)
+        names = [line.split("(")[0][4:] for line in source.splitlines() if line.startswith("def ")]
+        kernels = {name: load_kernel(source, name) for name in names}
+        self._messages = DeviceMessages(kernels, messaging, self.layout.names, self.swarm.size)
+        return source
+
+    @staticmethod
+    def _takes(delivery: Delivery, messaging: Messaging | None) -> bool:
+        """Whether the device loop handles ``delivery`` (of ``sim.inbox``): one of a type the
+        tree sends that reached everyone, or broadcasts from finite positions whose type's
+        handler has a per-receiver form."""
+        messages = delivery.messages
+        if messaging is None or messages.type not in messaging.types:
+            return False
+        if delivery.to_all:
+            return True
+        handler = messaging.handlers[messaging.types.index(messages.type)]
+        return bool(
+            handler.receive is not None
+            and (messages.lists < 0).all()
+            and np.isfinite(messages.x).all()
+            and np.isfinite(messages.y).all()
+        )
 
     def device(self) -> dict[str, str]:
         """What ran the kernel, for ``run.json``: the device's name, the CUDA driver's
@@ -208,10 +264,10 @@ class GpuEngine(CompiledEngine):
         state into the swarm's arrays."""
         from numba import cuda
 
-        if self._kernel is None:
+        if self._kernel is None and self._messages is None:
             self.prepare(sim)
         fused = self._fusable(sim)
-        if fused is None or fused.messaging is not None:  # e.g. a radiation source came on
+        if fused is None:  # e.g. a radiation source came on
             return 0  # the CPU steps this iteration; the state goes to the device again after
         recorder, model = sim.recorder, sim.model
         assert isinstance(model, Drone2D | Drone3D)
@@ -219,7 +275,8 @@ class GpuEngine(CompiledEngine):
         row0 = start // every + 1  # the first record these iterations can write
         rows = (start + count) // every - start // every
         state = self._state(sim)
-        if self._device is None or self._synced != start:  # new, or stepped on the CPU since
+        fresh = self._device is None or self._synced != start  # new, or stepped on the CPU
+        if fresh:
             self._device = [cuda.to_device(array) for array in state]
         n = self.swarm.size
         traced_at = np.full(n, -1, dtype=np.int64)
@@ -236,21 +293,47 @@ class GpuEngine(CompiledEngine):
             p.max_speed, p.speed_step, p.turn_step,
         )  # fmt: skip
         began = time.perf_counter()
-        blocks = max(1, -(-n // THREADS))
-        self._kernel[blocks, THREADS](start, count, every, row0, *arguments)
+        if self._messages is None:
+            blocks = max(1, -(-n // THREADS))
+            self._kernel[blocks, THREADS](start, count, every, row0, *arguments)
+            done = count
+        else:
+            done = self._message_loop(sim, fresh, arguments, count, row0)
         cuda.synchronize()
+        rows = (start + done) // every - start // every  # the rows written
         copied = time.perf_counter()
         self.timings["kernel"] += copied - began
         if rows:
             for name, device in zip(self.layout.names, group, strict=True):
-                recorder.columns[name][row0 : row0 + rows] = device.copy_to_host()
-            recorder.traces[row0 : row0 + rows] = traces.copy_to_host()
+                recorder.columns[name][row0 : row0 + rows] = device[:rows].copy_to_host()
+            recorder.traces[row0 : row0 + rows] = traces[:rows].copy_to_host()
             assert recorder.behaviour is not None
-            recorder.behaviour[row0 : row0 + rows] = behaviour.copy_to_host()
+            recorder.behaviour[row0 : row0 + rows] = behaviour[:rows].copy_to_host()
         for host, device in zip(state, self._device, strict=True):
             device.copy_to_host(host)  # the state, for what reads it between calls
-        self._synced = start + count
+        if self._messages is not None:
+            self._messages.download_state()
+        self._synced = start + done
         self.timings["copy_back"] += time.perf_counter() - copied
-        if count:
-            self._after(sim, self._sensors, start, count, stopped.copy_to_host())
-        return count
+        if done:
+            self._after(sim, self._sensors, start, done, stopped.copy_to_host())
+        if self._messages is not None and done:
+            sim.inbox = []  # handled in the first iteration
+            self._send(sim.world.datalink)  # the last iteration's, for the CPU to deliver
+        return done
+
+    def _message_loop(
+        self, sim: Simulation, fresh: bool, arguments: tuple[Any, ...], count: int, row0: int
+    ) -> int:
+        """Up to ``count`` iterations of a tree that sends messages
+        (:class:`~pyautonomousagent.engines.gpu_messages.DeviceMessages`), ``sim.inbox``
+        handled in the first; how many were done. ``count`` 0 compiles the kernels."""
+        messages = self._messages
+        assert messages is not None
+        if fresh:
+            messages.upload_state()
+        if not count:
+            messages.compile(arguments, sim.world.datalink.range)
+            return 0
+        messages.upload_inbox(sim)
+        return messages.run(sim, arguments, count, row0)
