@@ -13,10 +13,11 @@ messages on the device between iterations:
    order, pairs by message then receiver, as each receiver sees it).
 3. ``tick``: Phases 3, 4 and 6.
 4. Phase 5: per type, each agent's sent flags (``flag_<k>``), their exclusive prefix sum
-   (:func:`exclusive_scan`, block scans in shared memory) and the messages scattered to
-   their places (``scatter_<k>``): the inbox in canonical order (by sender, then sending
-   node). :data:`extent` reduces the agents' and senders' bounding box per block; the host
-   reads the counts and boxes (a few numbers) and picks the next iteration's handling.
+   (:func:`exclusive_scan`) and the messages scattered to their places (``scatter_<k>``):
+   the inbox in canonical order (by sender, then sending node). :func:`bounding_box`
+   reduces the agents' and each type's senders' positions to the datalink's bounding box;
+   the host reads the counts and boxes (a few numbers) and plans the next iteration's
+   handling.
 
 The loop stops after an iteration that sent a recorded message type (the CPU delivers it
 and records its events, as the compiled engine does), or whose positions hold a NaN, or
@@ -31,7 +32,7 @@ import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numba import cuda, float64, int64
+from numba import cuda
 
 from pyautonomousagent.arrays import hypot
 from pyautonomousagent.engines.compiled_source import Messaging
@@ -39,7 +40,7 @@ from pyautonomousagent.engines.compiled_source import Messaging
 if TYPE_CHECKING:
     from pyautonomousagent.simulation.run import Simulation
 
-#: Threads per block of every launch (and the shared arrays' size).
+#: Threads per block of every launch.
 THREADS = 256
 
 #: ``lowest`` before an iteration's collection: above every node index.
@@ -52,82 +53,103 @@ def shape(live: int) -> tuple[int, int]:
     return max(1, -(-live // threads)), threads
 
 
-@cuda.jit
-def _scan_block(values: Any, out: Any, sums: Any) -> None:
-    """Each block's exclusive prefix sum of ``values`` (int64, shape (L,)) into ``out``,
-    its total into ``sums[block]`` (Hillis-Steele in shared memory)."""
-    shared = cuda.shared.array(THREADS, int64)
-    i = cuda.grid(1)
-    tid = cuda.threadIdx.x
-    value = values[i] if i < values.shape[0] else 0
-    shared[tid] = value
-    cuda.syncthreads()
-    step = 1
-    while step < cuda.blockDim.x:
-        add = shared[tid - step] if tid >= step else 0
-        cuda.syncthreads()
-        shared[tid] += add
-        cuda.syncthreads()
-        step *= 2
-    if i < values.shape[0]:
-        out[i] = shared[tid] - value
-    if tid == cuda.blockDim.x - 1:
-        sums[cuda.blockIdx.x] = shared[tid]
+#: Elements one thread of a reduction takes in turn (scans and bounding boxes are trees of
+#: such chunks: no shared memory and no barrier, which numba's CUDA simulator runs slowly).
+CHUNK = 16
 
 
 @cuda.jit
-def _add_block(out: Any, offsets: Any) -> None:
-    """``out[i] += offsets[block of i]``."""
+def _scan_chunks(values: Any, out: Any, sums: Any) -> None:
+    """Each chunk's exclusive prefix sum of ``values`` (int64, shape (L,)) into ``out``, its
+    total into ``sums[chunk]``."""
+    c = cuda.grid(1)
+    first = c * CHUNK
+    if first >= values.shape[0]:
+        return
+    total = 0
+    for i in range(first, min(first + CHUNK, values.shape[0])):
+        value = values[i]
+        out[i] = total
+        total += value
+    sums[c] = total
+
+
+@cuda.jit
+def _add_chunks(out: Any, offsets: Any) -> None:
+    """``out[i] += offsets[chunk of i]``."""
     i = cuda.grid(1)
     if i < out.shape[0]:
-        out[i] += offsets[cuda.blockIdx.x]
+        out[i] += offsets[i // CHUNK]
 
 
 def exclusive_scan(values: Any, out: Any) -> None:
-    """``out`` := the exclusive prefix sum of ``values`` (device int64 arrays, shape (L,)),
-    block by block, then the blocks' totals scanned the same way and added."""
-    blocks, threads = shape(values.shape[0])
-    sums = cuda.device_array(blocks, np.int64)
-    _scan_block[blocks, threads](values, out, sums)
-    if blocks > 1:
-        offsets = cuda.device_array(blocks, np.int64)
+    """``out`` := the exclusive prefix sum of ``values`` (device int64 arrays, shape (L,)):
+    chunk by chunk, then the chunks' totals scanned the same way and added."""
+    chunks = -(-values.shape[0] // CHUNK)
+    sums = cuda.device_array(chunks, np.int64)
+    _scan_chunks[shape(chunks)](values, out, sums)
+    if chunks > 1:
+        offsets = cuda.device_array(chunks, np.int64)
         exclusive_scan(sums, offsets)
-        _add_block[blocks, threads](out, offsets)
+        _add_chunks[shape(values.shape[0])](out, offsets)
 
 
 @cuda.jit
-def extent(x: Any, y: Any, sx: Any, sy: Any, counts: Any, k: int, live: int, out: Any) -> None:
-    """Per block, the bounding box of the agents (``x``, ``y``, the first ``live``) and type
-    ``k``'s senders (``sx``, ``sy``, the first ``counts[k]``): ``out[block]`` = (low x,
-    high x, low y, high y, 1.0 where a coordinate is NaN, else 0.0)."""
-    box = cuda.shared.array((5, THREADS), float64)
-    i = cuda.grid(1)
-    tid = cuda.threadIdx.x
-    px, py, point = 0.0, 0.0, False
-    if i < live:
-        px, py, point = x[i], y[i], True
-    elif i - live < counts[k]:
-        px, py, point = sx[i - live], sy[i - live], True
-    box[0, tid] = px if point else math.inf
-    box[1, tid] = px if point else -math.inf
-    box[2, tid] = py if point else math.inf
-    box[3, tid] = py if point else -math.inf
-    box[4, tid] = 1.0 if point and (px != px or py != py) else 0.0
-    cuda.syncthreads()
-    step = 1
-    while step < cuda.blockDim.x:
-        other = tid + step
-        if tid % (2 * step) == 0 and other < cuda.blockDim.x:
-            box[0, tid] = min(box[0, tid], box[0, other])
-            box[1, tid] = max(box[1, tid], box[1, other])
-            box[2, tid] = min(box[2, tid], box[2, other])
-            box[3, tid] = max(box[3, tid], box[3, other])
-            box[4, tid] = max(box[4, tid], box[4, other])
-        cuda.syncthreads()
-        step *= 2
-    if tid == 0:
-        for j in range(5):
-            out[cuda.blockIdx.x, j] = box[j, 0]
+def _box_points(x: Any, y: Any, sx: Any, sy: Any, counts: Any, k: int, live: int,
+                out: Any) -> None:  # fmt: skip
+    """Per chunk of the points (the first ``live`` agents ``x``, ``y``, then type ``k``'s
+    first ``counts[k]`` senders ``sx``, ``sy``), their bounding box: ``out[chunk]`` = (low
+    x, high x, low y, high y, 1.0 where a coordinate is NaN, else 0.0)."""
+    c = cuda.grid(1)
+    if c >= out.shape[0]:
+        return
+    low_x, high_x, low_y, high_y, bad = math.inf, -math.inf, math.inf, -math.inf, 0.0
+    for i in range(c * CHUNK, c * CHUNK + CHUNK):
+        if i < live:
+            px, py = x[i], y[i]
+        elif i - live < counts[k]:
+            px, py = sx[i - live], sy[i - live]
+        else:
+            break
+        if px != px or py != py:
+            bad = 1.0
+        low_x, high_x = min(low_x, px), max(high_x, px)
+        low_y, high_y = min(low_y, py), max(high_y, py)
+    out[c, 0], out[c, 1], out[c, 2], out[c, 3], out[c, 4] = low_x, high_x, low_y, high_y, bad
+
+
+@cuda.jit
+def _box_boxes(boxes: Any, out: Any) -> None:
+    """Per chunk of ``boxes`` (shape (B, 5), as ``_box_points`` writes them), the box of
+    their union into ``out[chunk]``."""
+    c = cuda.grid(1)
+    if c >= out.shape[0]:
+        return
+    first = c * CHUNK
+    for j in range(5):
+        out[c, j] = boxes[first, j]
+    for i in range(first + 1, min(first + CHUNK, boxes.shape[0])):
+        out[c, 0] = min(out[c, 0], boxes[i, 0])
+        out[c, 1] = max(out[c, 1], boxes[i, 1])
+        out[c, 2] = min(out[c, 2], boxes[i, 2])
+        out[c, 3] = max(out[c, 3], boxes[i, 3])
+        out[c, 4] = max(out[c, 4], boxes[i, 4])
+
+
+def bounding_box(x: Any, y: Any, sx: Any, sy: Any, counts: Any, k: int) -> np.ndarray:
+    """The bounding box of the agents (``x``, ``y``, device arrays shape (N,)) and type
+    ``k``'s senders (``sx``, ``sy``, the first ``counts[k]``, on the device): (low x, high
+    x, low y, high y, NaN flag), a host array shape (5,). Min and max are exact: the order
+    of the reduction does not change the bits."""
+    chunks = -(-(x.shape[0] + sx.shape[0]) // CHUNK)
+    boxes = cuda.device_array((chunks, 5))
+    _box_points[shape(chunks)](x, y, sx, sy, counts, k, x.shape[0], boxes)
+    while boxes.shape[0] > 1:
+        chunks = -(-boxes.shape[0] // CHUNK)
+        out = cuda.device_array((chunks, 5))
+        _box_boxes[shape(chunks)](boxes, out)
+        boxes = out
+    return boxes.copy_to_host()[0]
 
 
 class DeviceMessages:
@@ -156,7 +178,6 @@ class DeviceMessages:
         self.counts = cuda.to_device(np.zeros(types, dtype=np.int64))
         self.lowest = cuda.to_device(np.full(types, NO_NODE, dtype=np.int64))
         self.rx, self.ry = cuda.device_array(n), cuda.device_array(n)
-        self.boxes: list[Any] = []
         self.inboxes: list[list[Any]] = []
         for k, handler in enumerate(messaging.handlers):
             slots = max(1, n * self.width[k])  # one message per sending node and agent
@@ -165,7 +186,6 @@ class DeviceMessages:
                      cuda.device_array((len(handler.fields), slots)),
                      cuda.device_array(slots), cuda.device_array(slots)]  # fmt: skip
             self.inboxes.append(flags + inbox)
-            self.boxes.append(cuda.device_array((shape(n + slots)[0], 5)))
         self.state: list[Any] = []
         self.room = [8] * types
         self.tables: list[tuple[Any, ...]] = [()] * types
@@ -224,8 +244,7 @@ class DeviceMessages:
         for kernel in self.kernels.values():
             kernel[1, 1](0, 0, 1, 0, *common, *self.arguments(reach))
         exclusive_scan(self.inboxes[0][0][:1], self.inboxes[0][1][:1])
-        x, y, (sx, sy) = common[self.xy[0]], common[self.xy[1]], self.inboxes[0][4:]
-        extent[1, 1](x, y, sx, sy, self.counts, 0, 0, self.boxes[0])
+        bounding_box(common[self.xy[0]], common[self.xy[1]], *self.inboxes[0][4:], self.counts, 0)
 
     def run(self, sim: Simulation, common: tuple[Any, ...], count: int, row0: int) -> int:
         """Up to ``count`` iterations from the world's (``common``: the kernels' common
@@ -277,22 +296,18 @@ class DeviceMessages:
         blocks, threads = shape(n)
         x, y = common[self.xy[0]], common[self.xy[1]]
         for k in range(len(messaging.types)):
-            flags, places, _, _, sx, sy = self.inboxes[k]
+            flags, places = self.inboxes[k][:2]
             self.kernels[f"flag_{k}"][blocks, threads](n, t, every, row0, *common, *extra)
             exclusive_scan(flags[: n * self.width[k]], places)
             self.kernels[f"scatter_{k}"][blocks, threads](n, t, every, row0, *common, *extra)
-            box = self.boxes[k]
-            extent[box.shape[0], shape(n + sx.shape[0])[1]](x, y, sx, sy, self.counts, k, n, box)
         counts, lowest = self.counts.copy_to_host(), self.lowest.copy_to_host()
         sent = sorted((int(lowest[k]), k) for k in range(len(counts)) if counts[k] > 0)
         self.plan, stop = [], False
         for _, k in sent:
-            box = self.boxes[k].copy_to_host()
-            low_x, low_y = box[:, 0].min(), box[:, 2].min()
-            high_x, high_y = box[:, 1].max(), box[:, 3].max()
+            low_x, high_x, low_y, high_y, bad = bounding_box(x, y, *self.inboxes[k][4:],
+                                                             self.counts, k)  # fmt: skip
             everyone = bool(hypot(high_x - low_x, high_y - low_y) <= reach)
             near = messaging.handlers[k].receive is not None
-            stop = stop or messaging.recorded[k] or box[:, 4].max() > 0.0
-            stop = stop or not (everyone or near)
+            stop = stop or messaging.recorded[k] or bad > 0.0 or not (everyone or near)
             self.plan.append((k, self.ALL if everyone else self.NEAR))
         return stop
