@@ -167,6 +167,9 @@ class DeviceMessages:
     #: How a type's delivery of last iteration is handled: not delivered, to everyone, near.
     NONE, ALL, NEAR = 0, 1, 2
 
+    #: Entries per receiver a per-receiver state starts with (doubled while short).
+    ROOM = 8
+
     def __init__(
         self, kernels: dict[str, Any], messaging: Messaging, names: tuple[str, ...], n: int
     ) -> None:
@@ -187,7 +190,7 @@ class DeviceMessages:
                      cuda.device_array(slots), cuda.device_array(slots)]  # fmt: skip
             self.inboxes.append(flags + inbox)
         self.state: list[Any] = []
-        self.room = [8] * types
+        self.room = [self.ROOM] * types
         self.tables: list[tuple[Any, ...]] = [()] * types
         self.plan: list[tuple[int, int]] = []  # (type, how) of the next iteration's handling
 
