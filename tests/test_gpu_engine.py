@@ -214,11 +214,15 @@ def test_a_gpu_runs_folder_names_the_device_and_verifies(tmp_path: Path) -> None
 @pytest.mark.parametrize(
     ("scenario", "why"),
     [
-        ("gathering", "engine gpu: only runs whose tree sends no messages"),
+        (
+            "crowded",
+            "engine gpu: only runs whose mission has compiled sensors and compiled handlers",
+        ),
         ("radiation-search", "the compiled engine cannot run this tree: leaf"),
     ],
 )
 def test_a_run_the_kernel_cannot_do_is_refused_in_one_line(scenario: str, why: str) -> None:
+    """(Gathering, whose tree sends messages, runs: tests/test_gpu_messages.py.)"""
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
     command = [sys.executable, "-m", "pyautonomousagent.cli", "run", scenario, "--engine", "gpu",
                "--iterations", "5", "--no-gif", "--quiet", "--out", "/nonexistent"]  # fmt: skip

@@ -32,13 +32,15 @@ import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from numba import cuda
+from numba import cuda as numba_cuda
 
 from pyautonomousagent.arrays import hypot
 from pyautonomousagent.engines.compiled_source import Messaging
 
 if TYPE_CHECKING:
     from pyautonomousagent.simulation.run import Simulation
+
+cuda: Any = numba_cuda  # numba's stubs type cuda.grid poorly
 
 #: Threads per block of every launch.
 THREADS = 256
@@ -247,7 +249,8 @@ class DeviceMessages:
         for kernel in self.kernels.values():
             kernel[1, 1](0, 0, 1, 0, *common, *self.arguments(reach))
         exclusive_scan(self.inboxes[0][0][:1], self.inboxes[0][1][:1])
-        bounding_box(common[self.xy[0]], common[self.xy[1]], *self.inboxes[0][4:], self.counts, 0)
+        sx, sy = self.inboxes[0][4:]
+        bounding_box(common[self.xy[0]], common[self.xy[1]], sx, sy, self.counts, 0)
 
     def run(self, sim: Simulation, common: tuple[Any, ...], count: int, row0: int) -> int:
         """Up to ``count`` iterations from the world's (``common``: the kernels' common
@@ -307,8 +310,8 @@ class DeviceMessages:
         sent = sorted((int(lowest[k]), k) for k in range(len(counts)) if counts[k] > 0)
         self.plan, stop = [], False
         for _, k in sent:
-            low_x, high_x, low_y, high_y, bad = bounding_box(x, y, *self.inboxes[k][4:],
-                                                             self.counts, k)  # fmt: skip
+            sx, sy = self.inboxes[k][4:]
+            low_x, high_x, low_y, high_y, bad = bounding_box(x, y, sx, sy, self.counts, k)
             everyone = bool(hypot(high_x - low_x, high_y - low_y) <= reach)
             near = messaging.handlers[k].receive is not None
             stop = stop or messaging.recorded[k] or bad > 0.0 or not (everyone or near)

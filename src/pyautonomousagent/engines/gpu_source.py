@@ -5,13 +5,17 @@ The kernel is written by the compiled engine's generator
 body, Phase 4 and recording code, for agent ``a = cuda.grid(1)`` instead of a loop over a
 chunk of agents; the leaves' and sensors' njit kernels are called as they are (numba-cuda
 compiles ``@jit`` functions called from a kernel for the device). There is no second copy
-of a node or a leaf. Only trees that send no messages are written so far (the patrol).
+of a node or a leaf.
 
 ``block_gpu(t0, count, every, row0, st, cur, pend, kf, ki, arrays..., us, uh, uc,
 records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed, speed_step,
 turn_step)`` runs iterations ``t0 + 1 .. t0 + count`` for every agent; a record of
 iteration ``t`` goes to row ``t // every - row0`` of the record arrays (a group of rows on
-the device, copied back by the engine).
+the device, copied back by the engine). That is the kernel of a tree that sends no messages
+(the patrol). One that sends messages gets :func:`message_kernels` instead: one kernel per
+phase and message type, each for one iteration, the same generator's pieces plus the
+mission's compiled handlers (``HandlerKernel.function`` and its per-receiver
+``Receive.function``), launched by :mod:`~pyautonomousagent.engines.gpu_messages`.
 """
 
 from __future__ import annotations
