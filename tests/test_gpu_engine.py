@@ -101,11 +101,11 @@ def test_with_a_device_auto_picks_the_gpu_from_the_threshold_on(
 def test_auto_takes_the_compiled_engine_where_the_kernel_cannot_run_the_run(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """Gathering sends messages (not on the GPU yet): above the threshold, with a device,
-    auto builds the GPU engine, sees it cannot run the run, and takes the compiled one."""
+    """Crowded's proximity sensor is not compiled: above the threshold, with a device, auto
+    builds the GPU engine, sees it cannot run the run, and takes the compiled one."""
     _device_present(monkeypatch)
     monkeypatch.setattr(gpu, "AUTO_DRONE_ITERATIONS", 40)
-    scenario = load("gathering").with_overrides(agents=4, iterations=10)
+    scenario = load("crowded").with_overrides(agents=4, iterations=10)
     assert choose_engine(scenario_tree(scenario), 4, 10) == "gpu"
     sim = Simulation.create(scenario, seed=1, engine="auto")
     assert sim.engine.name == "compiled"
@@ -392,11 +392,14 @@ def test_a_gpu_runs_folder_names_the_device_and_verifies(tmp_path: Path) -> None
 @pytest.mark.parametrize(
     ("scenario", "why"),
     [
-        ("gathering", "engine gpu: only runs whose tree sends no messages"),
-        ("radiation-search", "engine gpu: only runs whose tree sends no messages"),
+        (
+            "crowded",
+            "engine gpu: only runs whose mission has compiled sensors and compiled handlers",
+        ),
     ],
 )
 def test_a_run_the_kernel_cannot_do_is_refused_in_one_line(scenario: str, why: str) -> None:
+    """(Gathering, whose tree sends messages, runs: tests/test_gpu_messages.py.)"""
     env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
     command = [sys.executable, "-m", "pyautonomousagent.cli", "run", scenario, "--engine", "gpu",
                "--iterations", "5", "--no-gif", "--quiet", "--out", "/nonexistent"]  # fmt: skip

@@ -13,7 +13,8 @@ read and written at ``[a]``), then its constants; it must give the same bits as 
 
 Messages: a leaf that broadcasts declares what it sends (:class:`Sends`) and its kernel gets
 an outbox after its arrays; a mission's message type may have a :class:`HandlerKernel`, the
-compiled form of its handler for deliveries that reached every agent. The helpers
+compiled form of its handler for deliveries that reached every agent (and, optionally,
+:class:`Receive`, one message for one receiver, for those that reached only some). The helpers
 below repeat :mod:`pyautonomousagent.arrays` and NumPy's element-wise rules operation for
 operation on one number, so kernels can use them.
 """
@@ -97,9 +98,35 @@ class LeafKernel:
 
 
 @dataclass(frozen=True)
+class Receive:
+    """A handler's per-receiver form: what one message does to one receiver, for deliveries
+    that reached only some agents (the GPU engine hands each receiver the messages in range,
+    in message order, the batched engine's delivery order).
+
+    Attributes:
+        function: ``function(r, m, t, senders, data, *arrays, *state, *constants)``: message
+            ``m`` (column ``m`` of ``data``, sent by ``senders[m]`` at iteration ``t - 1``)
+            received by agent ``r``; the arrays and constants are the handler's. It may
+            write only receiver ``r``'s entries (receivers run in parallel), and handling the
+            same messages again must leave the same state (see ``state``).
+        state: ``state(room) -> arrays``: the mission's run state this form writes, as
+            arrays with room for ``room`` entries per receiver, the first a flag of shape
+            (1,) int64 that ``function`` sets to 1 where a receiver had no room left (the
+            engine then calls ``keep``, asks for twice the room and handles the messages
+            again); None: no state.
+        keep: ``keep(arrays)`` takes the state back (the arrays ``state`` gave, written).
+    """
+
+    function: Callable[..., None]
+    state: Callable[[int], tuple[Any, ...]] | None = None
+    keep: Callable[[tuple[Any, ...]], None] | None = None
+
+
+@dataclass(frozen=True)
 class HandlerKernel:
     """A message type's handler, compiled, for messages that reached every agent but their
-    sender (``Delivery.to_all``), the usual case of a long-range datalink.
+    sender (``Delivery.to_all``), the usual case of a long-range datalink; optionally its
+    per-receiver form for deliveries that reached only some (:class:`Receive`).
 
     Attributes:
         function: ``function(t, senders, data, count, *arrays, *state, *constants)``, called
@@ -112,6 +139,8 @@ class HandlerKernel:
         state: arrays of the mission's run state passed as they are (e.g. what each agent
             heard), in order.
         constants: numbers passed last.
+        receive: the per-receiver form, or None (such deliveries are then handled by the
+            mission's Python handler).
     """
 
     function: Callable[..., None]
@@ -119,6 +148,7 @@ class HandlerKernel:
     names: tuple[str, ...] = ()
     state: tuple[Any, ...] = ()
     constants: tuple[float | int, ...] = ()
+    receive: Receive | None = None
 
 
 @dataclass(frozen=True)

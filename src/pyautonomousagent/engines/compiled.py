@@ -53,7 +53,7 @@ from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
 if TYPE_CHECKING:
-    from pyautonomousagent.datalink import Datalink
+    from pyautonomousagent.datalink import Datalink, Delivery
     from pyautonomousagent.recording import Recorder
     from pyautonomousagent.simulation.run import Simulation
 
@@ -403,14 +403,21 @@ class CompiledEngine:
         messaging = self._messaging(sim) if self.layout.outboxes else None
         if self.layout.outboxes and messaging is None:
             return None
-        types = messaging.types if messaging is not None else ()
-        if any(not d.to_all or d.messages.type not in types for d in sim.inbox):
+        if any(not self._takes(d, messaging) for d in sim.inbox):
             return None
         model = sim.model
         if isinstance(model, Drone3D):
             p = model.params
             return Fused(sensors, messaging, (p.max_climb_rate, p.climb_step, p.max_altitude))
         return Fused(sensors, messaging)
+
+    @staticmethod
+    def _takes(delivery: Delivery, messaging: Messaging | None) -> bool:
+        """Whether the fused loop handles ``delivery`` (of ``sim.inbox``): one that reached
+        everyone, of a type the tree sends."""
+        return (
+            delivery.to_all and messaging is not None and delivery.messages.type in messaging.types
+        )
 
     @staticmethod
     def _after(

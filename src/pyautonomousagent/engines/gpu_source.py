@@ -5,13 +5,17 @@ The kernel is written by the compiled engine's generator
 body, Phase 4 and recording code, for agent ``a = cuda.grid(1)`` instead of a loop over a
 chunk of agents; the leaves' and sensors' njit kernels are called as they are (numba-cuda
 compiles ``@jit`` functions called from a kernel for the device). There is no second copy
-of a node or a leaf. Only trees that send no messages are written so far (the patrol).
+of a node or a leaf.
 
 ``block_gpu(t0, count, every, row0, st, cur, pend, kf, ki, arrays..., us, uh, uc,
 records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed, speed_step,
 turn_step)`` runs iterations ``t0 + 1 .. t0 + count`` for every agent; a record of
 iteration ``t`` goes to row ``t // every - row0`` of the record arrays (a group of rows on
-the device, copied back by the engine).
+the device, copied back by the engine). That is the kernel of a tree that sends no messages
+(the patrol). One that sends messages gets :func:`message_kernels` instead: one kernel per
+phase and message type, each for one iteration, the same generator's pieces plus the
+mission's compiled handlers (``HandlerKernel.function`` and its per-receiver
+``Receive.function``), launched by :mod:`~pyautonomousagent.engines.gpu_messages`.
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from pyautonomousagent.engines.batched import Program
 from pyautonomousagent.engines.compiled_source import (
     _FUSED_ARGS,
     Layout,
+    Messaging,
     _control,
     _later_pass,
     _motion,
@@ -91,12 +96,197 @@ def kernel_module_source(
 ) -> str:
     """The generated module: imports of the helpers and kernels, then ``block_gpu`` (a plain
     Python function: :func:`~pyautonomousagent.engines.gpu.load_kernel` compiles it)."""
-    lines = [HEADER]
+    lines = [HEADER, *_import_lines(_kernel_imports(kernels, sensors))]
+    lines.append(kernel_function(program, kernels, layout, sensors))
+    return "\n".join(lines) + "\n"
+
+
+def _kernel_imports(kernels: Mapping[int, LeafKernel], sensors: SensorKernel) -> dict[str, Any]:
+    """Name -> function of the leaves' (and their ``Later`` steps') and sensors' kernels."""
     used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
     used |= {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
     used["S"] = sensors.function
+    return used
+
+
+def _import_lines(used: Mapping[str, Any]) -> list[str]:
+    """``from module import function as name`` for each of ``used``, by name."""
+    lines = []
     for name, function in sorted(used.items()):
         py = getattr(function, "py_func", function)
         lines.append(f"from {py.__module__} import {py.__qualname__} as {name}")
-    lines.append(kernel_function(program, kernels, layout, sensors))
+    return lines
+
+
+def message_arguments(layout: Layout, messaging: Messaging) -> str:
+    """The arguments of every message kernel after the common ones: the datalink's range,
+    ``counts`` and ``lowest`` per type, the receivers' positions at delivery ``rx``, ``ry``,
+    then per type its flags and places (``fl<k>``, ``ps<k>``), its inbox (senders, data,
+    sender positions: ``ib_s<k>, ib_d<k>, ib_x<k>, ib_y<k>``), its handler's state
+    (``hs<k>_<j>``) and its per-receiver state (``rs<k>_<j>``)."""
+    names = ["reach", "counts", "lowest", "rx", "ry"]
+    for k in range(len(messaging.types)):
+        names += [f"fl{k}", f"ps{k}", f"ib_s{k}", f"ib_d{k}", f"ib_x{k}", f"ib_y{k}"]
+    names += [f"hs{k}_{j}" for k, h in enumerate(messaging.handlers) for j in range(len(h.state))]
+    names += [
+        f"rs{k}_{j}" for k in range(len(messaging.types)) for j in range(receive_size(messaging, k))
+    ]
+    return ", ".join(names)
+
+
+def receive_size(messaging: Messaging, k: int) -> int:
+    """How many state arrays type ``k``'s per-receiver form takes (0 without one)."""
+    receive = messaging.handlers[k].receive
+    if receive is None or receive.state is None:
+        return 0
+    return len(receive.state(1))
+
+
+def _kernel(name: str, layout: Layout, messaging: Messaging, body: str) -> str:
+    """A message kernel ``name(live, t, every, row0, common..., message...)``: ``body`` for
+    thread ``a = cuda.grid(1)`` below ``live``, indented by 4."""
+    records = ", ".join(f"r{j}" for j in range(len(layout.names)))
+    common = _FUSED_ARGS.format(arrays=layout.arrays, records=records)
+    return f"""
+def {name}(live, t, every, row0, {common},
+           {message_arguments(layout, messaging)}):
+    a = cuda.grid(1)
+    if a >= live:
+        return
+{body}
+"""
+
+
+def _handler_args(messaging: Messaging, layout: Layout, k: int) -> list[str]:
+    """Type ``k``'s handler arrays, as arguments (its constants come after the state)."""
+    return [layout.array(name) for name in messaging.handlers[k].names]
+
+
+def _handle_all(messaging: Messaging, layout: Layout, k: int) -> str:
+    """Thread 0 runs type ``k``'s handler of a delivery that reached everyone."""
+    handler = messaging.handlers[k]
+    args = [f"t, ib_s{k}, ib_d{k}, counts[{k}]", *_handler_args(messaging, layout, k)]
+    args += [f"hs{k}_{j}" for j in range(len(handler.state))]
+    args += layout.constants.refs(f"handler {k}", handler.constants)
+    return f"    H{k}({', '.join(args)})"
+
+
+def _handle_near(messaging: Messaging, layout: Layout, k: int) -> str:
+    """Receiver ``a`` takes type ``k``'s messages in range (``hypot`` of its position at
+    delivery and the sender's, the datalink's ``grid_pairs`` test), in message order."""
+    handler = messaging.handlers[k]
+    args = [f"a, m, t, ib_s{k}, ib_d{k}", *_handler_args(messaging, layout, k)]
+    args += [f"rs{k}_{j}" for j in range(receive_size(messaging, k))]
+    args += layout.constants.refs(f"handler {k}", handler.constants)
+    return f"""    for m in range(counts[{k}]):
+        if ib_s{k}[m] != a and hypot(rx[a] - ib_x{k}[m], ry[a] - ib_y{k}[m]) <= reach:
+            R{k}({", ".join(args)})"""
+
+
+def _slots(messaging: Messaging, k: int) -> list[int]:
+    """The sending nodes of type ``k``, in node order (each agent's slots of ``fl<k>``)."""
+    return [i for i, (kind, _) in messaging.senders.items() if kind == k]
+
+
+def _flag(messaging: Messaging, layout: Layout, k: int) -> str:
+    """Agent ``a``'s flags of type ``k`` (1: sent by that node), the lowest sending node in
+    ``lowest[k]``; flag_0 also keeps the agents' positions at delivery."""
+    slots = _slots(messaging, k)
+    lines = (
+        [f"    rx[a] = {layout.array('x')}[a]", f"    ry[a] = {layout.array('y')}[a]"]
+        if k == 0
+        else []
+    )
+    for s, i in enumerate(slots):
+        lines += [
+            f"    sent = o{i}[0, a] == 1.0",
+            f"    fl{k}[a * {len(slots)} + {s}] = 1 if sent else 0",
+            "    if sent:",
+            f"        cuda.atomic.min(lowest, {k}, {i})",
+        ]
+    return "\n".join(lines)
+
+
+def _scatter(messaging: Messaging, k: int) -> str:
+    """Agent ``a``'s messages of type ``k`` to their places ``ps<k>`` (an exclusive prefix sum
+    of the flags) in the inbox: canonical order, by sender then sending node; the last
+    agent's thread writes ``counts[k]``."""
+    slots = _slots(messaging, k)
+    width = len(slots)
+    lines = []
+    for s, i in enumerate(slots):
+        rows = messaging.senders[i][1]
+        lines += [f"    j = a * {width} + {s}", f"    if fl{k}[j] == 1:", f"        m = ps{k}[j]"]
+        lines += [
+            f"        ib_s{k}[m] = a",
+            f"        ib_x{k}[m] = o{i}[1, a]",
+            f"        ib_y{k}[m] = o{i}[2, a]",
+        ]
+        lines += [f"        ib_d{k}[{f}, m] = o{i}[{row}, a]" for f, row in enumerate(rows)]
+    last = f"live * {width} - 1"
+    lines += ["    if a == live - 1:", f"        counts[{k}] = ps{k}[{last}] + fl{k}[{last}]"]
+    return "\n".join(lines)
+
+
+def message_kernels(
+    program: Program,
+    kernels: Mapping[int, LeafKernel],
+    layout: Layout,
+    sensors: SensorKernel,
+    messaging: Messaging,
+) -> str:
+    """The kernels of one iteration of a tree that sends messages, one thread an agent:
+    ``sense_move`` (Phase 2's sensors and motion), per type
+    ``handle_all_<k>`` (thread 0: the compiled handler of a delivery that reached everyone)
+    and ``handle_near_<k>`` (one thread per receiver: the per-receiver form of the messages
+    in range), ``tick`` (Phases 3, 4 and 6), then per type ``flag_<k>`` and ``scatter_<k>``
+    (Phase 5: the messages into the inbox; the engine runs a prefix sum between them)."""
+    records = len(layout.names)
+    store = "\n".join(f"        r{j}[row, a] = c{j}[a]" for j in range(records))
+    if layout.deferred:
+        control = _later_pass(
+            kernels, layout, "range(a, a + 1)", _control(layout, " " * 8), " " * 4
+        )
+    else:
+        control = _control(layout, " " * 4)
+    tick = f"""{tree_body(program, kernels, layout, " " * 4)}
+{control}
+    if t % every == 0:
+        row = t // every - row0
+{store}
+        record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"""
+    parts = [_kernel("sense_move", layout, messaging, _motion(layout, sensors, " " * 4))]
+    for k in range(len(messaging.types)):
+        parts.append(
+            _kernel(f"handle_all_{k}", layout, messaging, _handle_all(messaging, layout, k))
+        )
+        if messaging.handlers[k].receive is not None:
+            parts.append(
+                _kernel(f"handle_near_{k}", layout, messaging, _handle_near(messaging, layout, k))
+            )
+    parts.append(_kernel("tick", layout, messaging, tick))
+    for k in range(len(messaging.types)):
+        parts.append(_kernel(f"flag_{k}", layout, messaging, _flag(messaging, layout, k)))
+        parts.append(_kernel(f"scatter_{k}", layout, messaging, _scatter(messaging, k)))
+    return "".join(parts)
+
+
+def message_module_source(
+    program: Program,
+    kernels: Mapping[int, LeafKernel],
+    layout: Layout,
+    sensors: SensorKernel,
+    messaging: Messaging,
+) -> str:
+    """The generated module of a tree that sends messages: imports of the helpers, leaves',
+    sensors' and handlers' kernels (``H<k>``, per-receiver ``R<k>``), then
+    :func:`message_kernels` (plain Python functions: the engine compiles them)."""
+    lines = [HEADER.replace("np_maximum,", "hypot, np_maximum,")]
+    used = _kernel_imports(kernels, sensors)
+    for k, handler in enumerate(messaging.handlers):
+        used[f"H{k}"] = handler.function
+        if handler.receive is not None:
+            used[f"R{k}"] = handler.receive.function
+    lines += _import_lines(used)
+    lines.append(message_kernels(program, kernels, layout, sensors, messaging))
     return "\n".join(lines) + "\n"

@@ -166,14 +166,43 @@ def remember_everyone(t: int, senders: np.ndarray, data: np.ndarray, count: int,
             heard[s, f] = data[f, m]
 
 
+@njit(inline="always")
+def remember_pair(r: int, m: int, t: int, senders: np.ndarray, data: np.ndarray,
+                  full: np.ndarray, pair_sender: np.ndarray, pair_at: np.ndarray,
+                  pair_data: np.ndarray) -> None:  # fmt: skip
+    """``SharedData.store`` of message ``m`` received by ``r`` alone (a ``Receive``): the
+    sender's data (``pair_data`` shape (N, room, fields)) and the iteration it was sent,
+    ``t - 1`` (``pair_at`` shape (N, room) int64), in the slot of ``r``'s row of
+    ``pair_sender`` (shape (N, room) int64, -1: free) holding that sender, else the first
+    free one; ``full[0] = 1`` where none is left."""
+    s = senders[m]
+    for j in range(pair_sender.shape[1]):
+        held = pair_sender[r, j]
+        if held == s or held < 0:
+            pair_sender[r, j] = s
+            pair_at[r, j] = t - 1
+            for f in range(data.shape[0]):
+                pair_data[r, j, f] = data[f, m]
+            return
+    full[0] = 1
+
+
+@njit(inline="always")
+def adopt_point(r: int, m: int, t: int, senders: np.ndarray, data: np.ndarray, px: np.ndarray,
+                py: np.ndarray) -> None:  # fmt: skip
+    """``GatheringMission.adopt_gathering_position`` of message ``m`` received by ``r`` (a
+    ``Receive``): the drone takes the point (data rows x, y)."""
+    px[r] = data[0, m]
+    py[r] = data[1, m]
+
+
 @njit
 def adopt_point_everyone(t: int, senders: np.ndarray, data: np.ndarray, count: int,
                          px: np.ndarray, py: np.ndarray) -> None:  # fmt: skip
     """``GatheringMission.adopt_gathering_position`` of a delivery that reached everyone:
-    every drone but the sender takes the point (data rows x, y); the last message wins."""
+    :func:`adopt_point` for every drone but the sender; the last message wins."""
     for m in range(count):
         s = senders[m]
         for r in range(px.shape[0]):
             if r != s:
-                px[r] = data[0, m]
-                py[r] = data[1, m]
+                adopt_point(r, m, t, senders, data, px, py)

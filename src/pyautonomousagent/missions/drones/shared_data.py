@@ -9,8 +9,8 @@ from typing import Any
 import numpy as np
 
 from pyautonomousagent.datalink import Delivery
-from pyautonomousagent.kernels import HandlerKernel
-from pyautonomousagent.missions.drones.kernels import remember_everyone
+from pyautonomousagent.kernels import HandlerKernel, Receive
+from pyautonomousagent.missions.drones.kernels import remember_everyone, remember_pair
 
 
 @dataclass
@@ -72,10 +72,40 @@ class SharedData:
         self._pair_data = np.insert(self._pair_data, at[new], values[new], axis=0)
 
     def kernel(self) -> HandlerKernel:
-        """:meth:`store` of a delivery that reached everyone, compiled (it writes the same
-        per-sender arrays)."""
+        """:meth:`store` compiled: of a delivery that reached everyone (it writes the same
+        per-sender arrays), and per receiver (``kernels.remember_pair`` on the arrays of
+        :meth:`pair_table`, taken back by :meth:`keep_pair_table`)."""
         state = (self._everyone_iteration, self._everyone_data)
-        return HandlerKernel(remember_everyone, self.fields, state=state)
+        receive = Receive(remember_pair, self.pair_table, self.keep_pair_table)
+        return HandlerKernel(remember_everyone, self.fields, state=state, receive=receive)
+
+    def pair_table(self, room: int) -> tuple[np.ndarray, ...]:
+        """The pairs heard as one row per receiver (``kernels.remember_pair``'s arrays):
+        ``full`` (1,) int64 zero, ``senders`` (N, R) int64 (-1: free slot), ``iterations``
+        (N, R) int64 and ``data`` (N, R, fields), R the larger of ``room`` and the most
+        senders one receiver has heard; each row's pairs first, by sender."""
+        n = self.n_agents
+        receivers = self._pair_keys // n
+        first = np.searchsorted(receivers, receivers)  # keys ascending: rows grouped
+        slot = np.arange(receivers.size) - first
+        room = max(room, int(slot.max()) + 1 if slot.size else 0)
+        senders = np.full((n, room), -1, dtype=np.int64)
+        iterations = np.zeros((n, room), dtype=np.int64)
+        data = np.zeros((n, room, len(self.fields)))
+        senders[receivers, slot] = self._pair_keys % n
+        iterations[receivers, slot] = self._pair_iteration
+        data[receivers, slot] = self._pair_data
+        return np.zeros(1, dtype=np.int64), senders, iterations, data
+
+    def keep_pair_table(self, table: tuple[np.ndarray, ...]) -> None:
+        """Take back the pairs of a :meth:`pair_table` (written by ``remember_pair``)."""
+        _, senders, iterations, data = table
+        receivers, slot = np.nonzero(senders >= 0)
+        keys = receivers * self.n_agents + senders[receivers, slot]
+        order = np.argsort(keys)
+        self._pair_keys = keys[order]
+        self._pair_iteration = iterations[receivers, slot][order]
+        self._pair_data = data[receivers, slot][order]
 
     def __len__(self) -> int:
         return self.n_agents

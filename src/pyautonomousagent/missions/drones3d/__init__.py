@@ -15,11 +15,15 @@ from typing import Any, ClassVar
 import numpy as np
 
 from pyautonomousagent.datalink import Delivery
-from pyautonomousagent.kernels import HandlerKernel, SensorKernel
+from pyautonomousagent.kernels import HandlerKernel, Receive, SensorKernel
 from pyautonomousagent.missions.drones.leaves import GATHERING
 from pyautonomousagent.missions.drones.mission import TARGET_COLOUR, DroneMission, cycled
 from pyautonomousagent.missions.drones.sensors import drain_energy
-from pyautonomousagent.missions.drones3d.kernels import adopt_point_everyone_3d, drain_energy_3d
+from pyautonomousagent.missions.drones3d.kernels import (
+    adopt_point_3d,
+    adopt_point_everyone_3d,
+    drain_energy_3d,
+)
 from pyautonomousagent.missions.drones3d.leaves import (
     DESTINATION_3D,
     PATROL_3D,
@@ -196,7 +200,7 @@ class Gathering3DMission(GatheringMission):
             MessageType(GATHERING, self.adopt_gathering_position, recorded=True,
                         doc="x, y, z: the position to gather on",
                         kernel=HandlerKernel(adopt_point_everyone_3d, ("x", "y", "z"),
-                                             SURVEILLANCE_3D)),
+                                             SURVEILLANCE_3D, receive=Receive(adopt_point_3d))),
         ]  # fmt: skip
 
     def adopt_gathering_position(self, sim: Simulation, delivery: Delivery) -> None:

@@ -119,15 +119,23 @@ def drain_energy_3d(a: int, energy: np.ndarray, climb_rate: np.ndarray, use: flo
     return level > 0.0
 
 
+@njit(inline="always")
+def adopt_point_3d(r: int, m: int, t: int, senders: np.ndarray, data: np.ndarray,
+                   px: np.ndarray, py: np.ndarray, pz: np.ndarray) -> None:  # fmt: skip
+    """``Gathering3DMission.adopt_gathering_position`` of message ``m`` received by ``r`` (a
+    ``Receive``): the drone takes the point (data rows x, y, z)."""
+    px[r] = data[0, m]
+    py[r] = data[1, m]
+    pz[r] = data[2, m]
+
+
 @njit
 def adopt_point_everyone_3d(t: int, senders: np.ndarray, data: np.ndarray, count: int,
                             px: np.ndarray, py: np.ndarray, pz: np.ndarray) -> None:  # fmt: skip
     """``Gathering3DMission.adopt_gathering_position`` of a delivery that reached everyone:
-    every drone but the sender takes the point (data rows x, y, z); the last message wins."""
+    :func:`adopt_point_3d` for every drone but the sender; the last message wins."""
     for m in range(count):
         s = senders[m]
         for r in range(px.shape[0]):
             if r != s:
-                px[r] = data[0, m]
-                py[r] = data[1, m]
-                pz[r] = data[2, m]
+                adopt_point_3d(r, m, t, senders, data, px, py, pz)

@@ -8,8 +8,8 @@ from typing import Any, ClassVar
 import numpy as np
 
 from pyautonomousagent.datalink import Delivery
-from pyautonomousagent.kernels import HandlerKernel
-from pyautonomousagent.missions.drones.kernels import adopt_point_everyone
+from pyautonomousagent.kernels import HandlerKernel, Receive
+from pyautonomousagent.missions.drones.kernels import adopt_point, adopt_point_everyone
 from pyautonomousagent.missions.drones.leaves import GATHERING, SURVEILLANCE
 from pyautonomousagent.missions.drones.mission import DroneMission, cycled, read_points
 from pyautonomousagent.missions.gathering import measures  # noqa: F401  (registers them)
@@ -73,7 +73,8 @@ class GatheringMission(DroneMission):
             *super().message_types(),
             MessageType(GATHERING, self.adopt_gathering_position, recorded=True,
                         doc="x, y: the position to gather on",
-                        kernel=HandlerKernel(adopt_point_everyone, ("x", "y"), SURVEILLANCE)),
+                        kernel=HandlerKernel(adopt_point_everyone, ("x", "y"), SURVEILLANCE,
+                                             receive=Receive(adopt_point))),
         ]  # fmt: skip
 
     def adopt_gathering_position(self, sim: Simulation, delivery: Delivery) -> None:

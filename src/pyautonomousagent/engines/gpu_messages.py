@@ -1,0 +1,319 @@
+"""The GPU engine's iterations of a tree that sends messages: the datalink on the device.
+
+The generated kernels (:func:`~pyautonomousagent.engines.gpu_source.message_kernels`) run
+one thread an agent; this module launches them iteration by iteration and keeps the
+messages on the device between iterations:
+
+1. ``sense_move``: Phase 2's sensors and motion.
+2. Last iteration's deliveries, type by type in delivery order: one that reached everyone
+   (the datalink's bounding-box test) runs the type's compiled handler in one thread
+   (``handle_all_<k>``); one that reached only some runs its per-receiver form
+   (:class:`~pyautonomousagent.kernels.Receive`) in one thread per receiver, over the
+   messages in range in message order (``handle_near_<k>``: the batched engine's delivery
+   order, pairs by message then receiver, as each receiver sees it).
+3. ``tick``: Phases 3, 4 and 6.
+4. Phase 5: per type, each agent's sent flags (``flag_<k>``), their exclusive prefix sum
+   (:func:`exclusive_scan`) and the messages scattered to their places (``scatter_<k>``):
+   the inbox in canonical order (by sender, then sending node). :func:`bounding_box`
+   reduces the agents' and each type's senders' positions to the datalink's bounding box;
+   the host reads the counts and boxes (a few numbers) and plans the next iteration's
+   handling.
+
+The loop stops after an iteration that sent a recorded message type (the CPU delivers it
+and records its events, as the compiled engine does), or whose positions hold a NaN, or
+whose messages did not reach everyone and whose type has no per-receiver form. Messages in
+range are found by testing every sender for each receiver (O(N * M) work, in parallel): no
+cell list yet.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numba import cuda as numba_cuda
+
+from pyautonomousagent.arrays import hypot
+from pyautonomousagent.engines.compiled_source import Messaging
+
+if TYPE_CHECKING:
+    from pyautonomousagent.simulation.run import Simulation
+
+cuda: Any = numba_cuda  # numba's stubs type cuda.grid poorly
+
+#: Threads per block of every launch.
+THREADS = 256
+
+#: ``lowest`` before an iteration's collection: above every node index.
+NO_NODE = np.iinfo(np.int64).max
+
+
+def shape(live: int) -> tuple[int, int]:
+    """(blocks, threads per block) of a launch over ``live`` threads (at least one)."""
+    threads = min(THREADS, max(1, live))
+    return max(1, -(-live // threads)), threads
+
+
+#: Elements one thread of a reduction takes in turn (scans and bounding boxes are trees of
+#: such chunks: no shared memory and no barrier, which numba's CUDA simulator runs slowly).
+CHUNK = 16
+
+
+@cuda.jit
+def _scan_chunks(values: Any, out: Any, sums: Any) -> None:
+    """Each chunk's exclusive prefix sum of ``values`` (int64, shape (L,)) into ``out``, its
+    total into ``sums[chunk]``."""
+    c = cuda.grid(1)
+    first = c * CHUNK
+    if first >= values.shape[0]:
+        return
+    total = 0
+    for i in range(first, min(first + CHUNK, values.shape[0])):
+        value = values[i]
+        out[i] = total
+        total += value
+    sums[c] = total
+
+
+@cuda.jit
+def _add_chunks(out: Any, offsets: Any) -> None:
+    """``out[i] += offsets[chunk of i]``."""
+    i = cuda.grid(1)
+    if i < out.shape[0]:
+        out[i] += offsets[i // CHUNK]
+
+
+def exclusive_scan(values: Any, out: Any) -> None:
+    """``out`` := the exclusive prefix sum of ``values`` (device int64 arrays, shape (L,)):
+    chunk by chunk, then the chunks' totals scanned the same way and added."""
+    chunks = -(-values.shape[0] // CHUNK)
+    sums = cuda.device_array(chunks, np.int64)
+    _scan_chunks[shape(chunks)](values, out, sums)
+    if chunks > 1:
+        offsets = cuda.device_array(chunks, np.int64)
+        exclusive_scan(sums, offsets)
+        _add_chunks[shape(values.shape[0])](out, offsets)
+
+
+@cuda.jit
+def _box_points(x: Any, y: Any, sx: Any, sy: Any, counts: Any, k: int, live: int,
+                out: Any) -> None:  # fmt: skip
+    """Per chunk of the points (the first ``live`` agents ``x``, ``y``, then type ``k``'s
+    first ``counts[k]`` senders ``sx``, ``sy``), their bounding box: ``out[chunk]`` = (low
+    x, high x, low y, high y, 1.0 where a coordinate is NaN, else 0.0)."""
+    c = cuda.grid(1)
+    if c >= out.shape[0]:
+        return
+    low_x, high_x, low_y, high_y, bad = math.inf, -math.inf, math.inf, -math.inf, 0.0
+    for i in range(c * CHUNK, c * CHUNK + CHUNK):
+        if i < live:
+            px, py = x[i], y[i]
+        elif i - live < counts[k]:
+            px, py = sx[i - live], sy[i - live]
+        else:
+            break
+        if px != px or py != py:
+            bad = 1.0
+        low_x, high_x = min(low_x, px), max(high_x, px)
+        low_y, high_y = min(low_y, py), max(high_y, py)
+    out[c, 0], out[c, 1], out[c, 2], out[c, 3], out[c, 4] = low_x, high_x, low_y, high_y, bad
+
+
+@cuda.jit
+def _box_boxes(boxes: Any, out: Any) -> None:
+    """Per chunk of ``boxes`` (shape (B, 5), as ``_box_points`` writes them), the box of
+    their union into ``out[chunk]``."""
+    c = cuda.grid(1)
+    if c >= out.shape[0]:
+        return
+    first = c * CHUNK
+    for j in range(5):
+        out[c, j] = boxes[first, j]
+    for i in range(first + 1, min(first + CHUNK, boxes.shape[0])):
+        out[c, 0] = min(out[c, 0], boxes[i, 0])
+        out[c, 1] = max(out[c, 1], boxes[i, 1])
+        out[c, 2] = min(out[c, 2], boxes[i, 2])
+        out[c, 3] = max(out[c, 3], boxes[i, 3])
+        out[c, 4] = max(out[c, 4], boxes[i, 4])
+
+
+def bounding_box(x: Any, y: Any, sx: Any, sy: Any, counts: Any, k: int) -> np.ndarray:
+    """The bounding box of the agents (``x``, ``y``, device arrays shape (N,)) and type
+    ``k``'s senders (``sx``, ``sy``, the first ``counts[k]``, on the device): (low x, high
+    x, low y, high y, NaN flag), a host array shape (5,). Min and max are exact: the order
+    of the reduction does not change the bits."""
+    chunks = -(-(x.shape[0] + sx.shape[0]) // CHUNK)
+    boxes = cuda.device_array((chunks, 5))
+    _box_points[shape(chunks)](x, y, sx, sy, counts, k, x.shape[0], boxes)
+    while boxes.shape[0] > 1:
+        chunks = -(-boxes.shape[0] // CHUNK)
+        out = cuda.device_array((chunks, 5))
+        _box_boxes[shape(chunks)](boxes, out)
+        boxes = out
+    return boxes.copy_to_host()[0]
+
+
+class DeviceMessages:
+    """The inboxes, flags and handler state of a tree's message types on the device, and the
+    launches of whole iterations (see the module's docstring).
+
+    Args:
+        kernels: name -> compiled kernel, the generated module's (``sense_move``, ``tick``,
+            ``handle_all_<k>``, ``handle_near_<k>``, ``flag_<k>``, ``scatter_<k>``).
+        messaging: the tree's message types and their handlers.
+        names: the generated code's arrays ``c0, c1, ...`` (``Layout.names``).
+        n: agents.
+    """
+
+    #: How a type's delivery of last iteration is handled: not delivered, to everyone, near.
+    NONE, ALL, NEAR = 0, 1, 2
+
+    #: Entries per receiver a per-receiver state starts with (doubled while short).
+    ROOM = 8
+
+    def __init__(
+        self, kernels: dict[str, Any], messaging: Messaging, names: tuple[str, ...], n: int
+    ) -> None:
+        self.kernels, self.messaging, self.n = kernels, messaging, n
+        self.xy = (5 + names.index("x"), 5 + names.index("y"))  # in the common arguments
+        types = len(messaging.types)
+        self.width = [sum(1 for kind, _ in messaging.senders.values() if kind == k)
+                      for k in range(types)]  # fmt: skip
+        self.counts = cuda.to_device(np.zeros(types, dtype=np.int64))
+        self.lowest = cuda.to_device(np.full(types, NO_NODE, dtype=np.int64))
+        self.rx, self.ry = cuda.device_array(n), cuda.device_array(n)
+        self.inboxes: list[list[Any]] = []
+        for k, handler in enumerate(messaging.handlers):
+            slots = max(1, n * self.width[k])  # one message per sending node and agent
+            flags = [cuda.device_array(slots, np.int64) for _ in range(2)]
+            inbox = [cuda.device_array(slots, np.int64),
+                     cuda.device_array((len(handler.fields), slots)),
+                     cuda.device_array(slots), cuda.device_array(slots)]  # fmt: skip
+            self.inboxes.append(flags + inbox)
+        self.state: list[Any] = []
+        self.room = [self.ROOM] * types
+        self.tables: list[tuple[Any, ...]] = [()] * types
+        self.plan: list[tuple[int, int]] = []  # (type, how) of the next iteration's handling
+
+    def upload_state(self) -> None:
+        """The handlers' state to the device (after the CPU changed it)."""
+        handlers = self.messaging.handlers
+        self.state = [cuda.to_device(array) for h in handlers for array in h.state]
+        for k, handler in enumerate(handlers):
+            receive = handler.receive
+            if receive is not None and receive.state is not None:
+                self.tables[k] = tuple(cuda.to_device(a) for a in receive.state(self.room[k]))
+
+    def download_state(self) -> None:
+        """The handlers' state back into the mission's arrays."""
+        host = [array for h in self.messaging.handlers for array in h.state]
+        for array, device in zip(host, self.state, strict=True):
+            device.copy_to_host(array)
+        for k, handler in enumerate(self.messaging.handlers):
+            if handler.receive is not None and handler.receive.keep is not None:
+                handler.receive.keep(tuple(a.copy_to_host() for a in self.tables[k]))
+
+    def upload_inbox(self, sim: Simulation) -> None:
+        """``sim.inbox`` (last iteration's deliveries, delivered by the CPU) into the inboxes;
+        the agents' positions now are their positions at delivery."""
+        x, y = sim.swarm.columns["x"], sim.swarm.columns["y"]
+        self.rx.copy_to_device(np.ascontiguousarray(x))
+        self.ry.copy_to_device(np.ascontiguousarray(y))
+        counts = np.zeros(len(self.messaging.types), dtype=np.int64)
+        self.plan = []
+        for delivery in sim.inbox:
+            messages = delivery.messages
+            k = self.messaging.types.index(messages.type)
+            m = counts[k] = len(messages)
+            fields = self.messaging.handlers[k].fields
+            inbox = self.inboxes[k][2:]  # senders, data, sender x, sender y
+            host = [np.zeros(a.shape, a.dtype) for a in inbox]
+            host[0][:m] = messages.senders
+            host[1][:, :m] = [messages.data[f] for f in fields]
+            host[2][:m], host[3][:m] = messages.x, messages.y
+            for device, array in zip(inbox, host, strict=True):
+                device.copy_to_device(array)
+            self.plan.append((k, self.ALL if delivery.to_all else self.NEAR))
+        self.counts.copy_to_device(counts)
+
+    def arguments(self, reach: float) -> tuple[Any, ...]:
+        """The kernels' arguments after the common ones (``gpu_source.message_arguments``)."""
+        inboxes = [array for inbox in self.inboxes for array in inbox]
+        tables = [array for table in self.tables for array in table]
+        return (reach, self.counts, self.lowest, self.rx, self.ry, *inboxes, *self.state,
+                *tables)  # fmt: skip
+
+    def compile(self, common: tuple[Any, ...], reach: float) -> None:
+        """Launch every kernel once with no thread at work (compiles them, changes nothing)."""
+        for kernel in self.kernels.values():
+            kernel[1, 1](0, 0, 1, 0, *common, *self.arguments(reach))
+        exclusive_scan(self.inboxes[0][0][:1], self.inboxes[0][1][:1])
+        sx, sy = self.inboxes[0][4:]
+        bounding_box(common[self.xy[0]], common[self.xy[1]], sx, sy, self.counts, 0)
+
+    def run(self, sim: Simulation, common: tuple[Any, ...], count: int, row0: int) -> int:
+        """Up to ``count`` iterations from the world's (``common``: the kernels' common
+        arguments, ``row0``: the record group's first row); how many were done."""
+        start, every, reach = sim.world.iteration, sim.recorder.every, sim.world.datalink.range
+        blocks, threads = shape(self.n)
+        done = 0
+        for t in range(start + 1, start + count + 1):
+            extra = self.arguments(reach)
+            self.kernels["sense_move"][blocks, threads](self.n, t, every, row0, *common, *extra)
+            for k, how in self.plan:
+                self._handle(k, how, t, every, row0, common, reach)
+            extra = self.arguments(reach)
+            self.kernels["tick"][blocks, threads](self.n, t, every, row0, *common, *extra)
+            done += 1
+            if self._collect(t, every, row0, common, reach):
+                break
+        return done
+
+    def _handle(self, k: int, how: int, t: int, every: int, row0: int, common: tuple[Any, ...],
+                reach: float) -> None:  # fmt: skip
+        """Type ``k``'s delivery of last iteration, in one thread (``ALL``) or one thread per
+        receiver (``NEAR``), with more room for the per-receiver state while it lacks some."""
+        if how == self.ALL:
+            self.kernels[f"handle_all_{k}"][1, 1](1, t, every, row0, *common,
+                                                  *self.arguments(reach))  # fmt: skip
+            return
+        blocks, threads = shape(self.n)
+        receive = self.messaging.handlers[k].receive
+        assert receive is not None
+        while True:
+            extra = self.arguments(reach)
+            self.kernels[f"handle_near_{k}"][blocks, threads](self.n, t, every, row0, *common,
+                                                              *extra)  # fmt: skip
+            if not self.tables[k] or self.tables[k][0].copy_to_host()[0] == 0:
+                return
+            assert receive.keep is not None and receive.state is not None
+            receive.keep(tuple(a.copy_to_host() for a in self.tables[k]))
+            self.room[k] *= 2
+            self.tables[k] = tuple(cuda.to_device(a) for a in receive.state(self.room[k]))
+
+    def _collect(self, t: int, every: int, row0: int, common: tuple[Any, ...],
+                 reach: float) -> bool:  # fmt: skip
+        """Phase 5 on the device: this iteration's messages into the inboxes and the next
+        iteration's handling planned; True where the CPU must deliver them instead."""
+        n, messaging = self.n, self.messaging
+        self.lowest.copy_to_device(np.full(len(messaging.types), NO_NODE, dtype=np.int64))
+        extra = self.arguments(reach)
+        blocks, threads = shape(n)
+        x, y = common[self.xy[0]], common[self.xy[1]]
+        for k in range(len(messaging.types)):
+            flags, places = self.inboxes[k][:2]
+            self.kernels[f"flag_{k}"][blocks, threads](n, t, every, row0, *common, *extra)
+            exclusive_scan(flags[: n * self.width[k]], places)
+            self.kernels[f"scatter_{k}"][blocks, threads](n, t, every, row0, *common, *extra)
+        counts, lowest = self.counts.copy_to_host(), self.lowest.copy_to_host()
+        sent = sorted((int(lowest[k]), k) for k in range(len(counts)) if counts[k] > 0)
+        self.plan, stop = [], False
+        for _, k in sent:
+            sx, sy = self.inboxes[k][4:]
+            low_x, high_x, low_y, high_y, bad = bounding_box(x, y, sx, sy, self.counts, k)
+            everyone = bool(hypot(high_x - low_x, high_y - low_y) <= reach)
+            near = messaging.handlers[k].receive is not None
+            stop = stop or messaging.recorded[k] or bad > 0.0 or not (everyone or near)
+            self.plan.append((k, self.ALL if everyone else self.NEAR))
+        return stop
