@@ -11,6 +11,7 @@ import sys
 import textwrap
 import types
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -324,19 +325,45 @@ def test_the_gpu_engines_run_folder_is_streamed_as_the_batched_engines(tmp_path:
     assert runs.verify(tmp_path / "gpu")["engine"] == "gpu"
 
 
+#: Device runs against the batched engine: (scenario, overrides, whether messages are sent).
+#: Gathering and radiation-search once with the default range (messages reach everyone)
+#: and once with a short one (only neighbours hear them: delivered on the device).
+DEVICE_CASES = [
+    ("patrol", {"agents": 2000, "iterations": 300}, False),
+    ("patrol-3d", {"agents": 2000, "iterations": 300}, False),
+    ("gathering", {"agents": 64, "iterations": 300, "gathering_iteration": 100}, True),
+    ("gathering", {"agents": 64, "iterations": 300, "gathering_iteration": 100,
+                   "datalink_range": 25}, True),
+    ("radiation-search", {"agents": 64, "iterations": 400}, True),
+    ("radiation-search", {"agents": 64, "iterations": 400, "datalink_range": 15}, True),
+]  # fmt: skip
+
+
+def _same_bits(x: Any, y: Any) -> bool:
+    x, y = np.asarray(x), np.asarray(y)
+    return x.shape == y.shape and x.dtype == y.dtype and x.tobytes() == y.tobytes()
+
+
 @needs_device
 @pytest.mark.parametrize("seed", [1, 2, 3])
-def test_on_the_device_the_gpu_engine_gives_the_batched_engines_bits(seed: int) -> None:
-    scenario = load("patrol").with_overrides(agents=2000, iterations=300)
+@pytest.mark.parametrize(("scenario", "overrides", "messages"), DEVICE_CASES)
+def test_on_the_device_the_gpu_engine_gives_the_batched_engines_bits(
+    scenario: str, overrides: dict[str, Any], messages: bool, seed: int
+) -> None:
+    """Every recorded column, bit for bit, the traces, the active behaviour and the events."""
+    loaded = load(scenario).with_overrides(**overrides)
     a, b = (
-        Simulation.create(scenario, seed=seed, engine=e, record_every=10).run(progress=False)
+        Simulation.create(loaded, seed=seed, engine=e, record_every=10).run(progress=False)
         for e in ("batched", "gpu")
     )
+    assert b.engine.name == "gpu" and b.engine.device()["name"] != "numba CUDA simulator"
     for key in a.recorder.columns:
-        assert np.array_equal(a.recorder.columns[key], b.recorder.columns[key]), key
-    assert np.array_equal(a.recorder.traces, b.recorder.traces)
-    assert np.array_equal(a.recorder.behaviour, b.recorder.behaviour)
+        assert _same_bits(a.recorder.columns[key], b.recorder.columns[key]), key
+    assert _same_bits(a.recorder.traces, b.recorder.traces)
+    assert _same_bits(a.recorder.behaviour, b.recorder.behaviour)
     assert a.events == b.events
+    sent = [e for e in a.events if e["event"] == "message"]
+    assert bool(sent) == messages  # a message case that sent nothing would test nothing
 
 
 @needs_numba

@@ -38,7 +38,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from pyautonomousagent.arrays import hypot
-from pyautonomousagent.kernels import HandlerKernel, SensorKernel
+from pyautonomousagent.kernels import HandlerKernel, Receive, SensorKernel
 from pyautonomousagent.mission import (
     Delivery,
     Mark,
@@ -59,6 +59,7 @@ from pyautonomousagent.missions.radiation_search import leaves
 from pyautonomousagent.missions.radiation_search.kernels import (
     radiation_reading,
     store_found_everyone,
+    take_found,
 )
 from pyautonomousagent.missions.radiation_search.leaves import FOUND, REPORTED
 
@@ -177,7 +178,8 @@ class RadiationSearchMission(Mission):
         return [
             MessageType(FOUND, self.store_reported_position, recorded=True,
                         doc="x, y: where the sender detected the source",
-                        kernel=HandlerKernel(store_found_everyone, ("x", "y"), REPORTED)),
+                        kernel=HandlerKernel(store_found_everyone, ("x", "y"), REPORTED,
+                                             receive=Receive(take_found))),
         ]  # fmt: skip
 
     def store_reported_position(self, sim: Simulation, delivery: Delivery) -> None:

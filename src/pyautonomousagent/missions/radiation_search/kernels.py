@@ -105,26 +105,24 @@ def wander(a: int, t: int, x: np.ndarray, y: np.ndarray, requested_speed: np.nda
 
 
 @njit(inline="always")
-def take_first_found(r: int, senders: np.ndarray, data: np.ndarray, count: int,
-                     reported: np.ndarray, to_x: np.ndarray, to_y: np.ndarray) -> None:  # fmt: skip
-    """``store_reported_position`` for receiver ``r`` of ``count`` ``found`` messages that
-    reached everyone but their senders (canonical order; ``data`` rows x, y): a drone that
-    knows no position takes the first message it received, one that knows a position
-    keeps it."""
-    if reported[r] != 0:
-        return
-    for m in range(count):
-        if senders[m] != r:
-            reported[r] = 1
-            to_x[r] = data[0, m]
-            to_y[r] = data[1, m]
-            return
+def take_found(r: int, m: int, t: int, senders: np.ndarray, data: np.ndarray,
+               reported: np.ndarray, to_x: np.ndarray, to_y: np.ndarray) -> None:  # fmt: skip
+    """``store_reported_position`` of ``found`` message ``m`` received by drone ``r`` (a
+    ``Receive``; ``data`` rows x, y): a drone that knows no position takes it, one that knows
+    a position keeps it (so, given its messages in canonical order, the first wins)."""
+    if reported[r] == 0:
+        reported[r] = 1
+        to_x[r] = data[0, m]
+        to_y[r] = data[1, m]
 
 
 @njit
 def store_found_everyone(t: int, senders: np.ndarray, data: np.ndarray, count: int,
                          reported: np.ndarray, px: np.ndarray, py: np.ndarray) -> None:  # fmt: skip
     """``RadiationSearchMission.store_reported_position`` of a delivery that reached everyone:
-    :func:`take_first_found` for every drone (``px``, ``py``: the reported positions)."""
+    :func:`take_found` of every message for every drone but its sender, in canonical order
+    (``px``, ``py``: the reported positions)."""
     for r in range(reported.shape[0]):
-        take_first_found(r, senders, data, count, reported, px, py)
+        for m in range(count):
+            if senders[m] != r:
+                take_found(r, m, t, senders, data, reported, px, py)
