@@ -4,6 +4,8 @@
   every node's status after every tick;
 - :func:`check_engines_agree`: run a tree on both engines side by side and fail at the first
   node status, state or blackboard value, or event that differs;
+- :func:`check_same_runs`: two finished runs (of two engines, say) recorded the same bits:
+  every column, the traces, the active behaviour, the record iterations and the events;
 - :func:`check_leaf`: prove a leaf type gives the same results on both engines when it is
   ticked for all, most or few of the agents;
 - :func:`scoped_registrations`: whatever a test registers (leaves, missions, scenarios, motion
@@ -45,6 +47,7 @@ __all__ = [
     "check_engines_agree",
     "check_exercise",
     "check_leaf",
+    "check_same_runs",
     "make_harness",
     "scoped_registrations",
     "tick_table",
@@ -129,6 +132,49 @@ def check_engines_agree(
             f"events differ: {a.events[:3]} ({engines[0]}) vs {b.events[:3]} ({engines[1]})"
         )
     return scenario.iterations
+
+
+def check_same_runs(a: Simulation, b: Simulation, names: tuple[str, str] = ("a", "b")) -> None:
+    """Check that two finished runs recorded the same bits: every recorded column, the traced
+    node statuses, the active behaviour, the record iterations (compared as raw bytes, so
+    NaN payloads and the sign of zero count) and the events.
+
+    Args:
+        a, b: the runs (e.g. of ``engine="batched"`` and ``engine="gpu"``).
+        names: what to call them in the message.
+
+    Raises:
+        AssertionError: naming the first record array that differs and its first differing
+            (record, agent) entry, or the first differing event.
+    """
+    ra, rb = a.recorder, b.recorder
+    arrays = [(key, ra.column(key), rb.column(key)) for key in ra.columns]
+    arrays += [("traces", ra.traces[: ra.count], rb.traces[: rb.count]),
+               ("behaviour", _behaviour(ra), _behaviour(rb)),
+               ("iterations", ra.iterations[: ra.count], rb.iterations[: rb.count])]  # fmt: skip
+    for what, x, y in arrays:
+        x, y = np.asarray(x), np.asarray(y)
+        if x.shape != y.shape or x.dtype != y.dtype:
+            raise AssertionError(f"{what}: shape {x.shape} {x.dtype} ({names[0]}) vs "
+                                 f"{y.shape} {y.dtype} ({names[1]})")  # fmt: skip
+        if x.tobytes() != y.tobytes():
+            bits = np.dtype(f"u{x.dtype.itemsize}")  # compare raw bits: NaNs, -0.0
+            first = tuple(int(i) for i in np.argwhere(x.view(bits) != y.view(bits))[0])
+            raise AssertionError(f"{what} differs first at {first}: {x[first]!r} ({names[0]}) "
+                                 f"vs {y[first]!r} ({names[1]})")  # fmt: skip
+    if a.events != b.events:
+        pairs = zip(a.events, b.events, strict=False)
+        shorter = min(len(a.events), len(b.events))
+        event = next((i for i, (p, q) in enumerate(pairs) if p != q), shorter)
+        raise AssertionError(f"events differ first at {event} of {len(a.events)} ({names[0]}) "
+                             f"and {len(b.events)} ({names[1]})")  # fmt: skip
+
+
+def _behaviour(recorder: Any) -> np.ndarray:
+    """The active behaviour of the records so far, shape (records, N) (empty without a tree)."""
+    if recorder.behaviour is None:
+        return np.zeros((0, 0), np.int16)
+    return recorder.behaviour_block(0, recorder.count)
 
 
 ENGINE_PAIR = ("pytrees", "batched")
