@@ -10,20 +10,20 @@ messages on the device between iterations:
    (``handle_all_<k>``); one that reached only some runs its per-receiver form
    (:class:`~pyautonomousagent.kernels.Receive`) in one thread per receiver, over the
    messages in range in message order (``handle_near_<k>``: the batched engine's delivery
-   order, pairs by message then receiver, as each receiver sees it).
+   order, pairs by message then receiver, as each receiver sees it), found on the type's
+   cell grid (:class:`~pyautonomousagent.engines.gpu_grid.DeviceGrid`: each receiver tests
+   only the messages of its own and the neighbouring cells, not all M).
 3. ``tick``: Phases 3, 4 and 6.
 4. Phase 5: per type, each agent's sent flags (``flag_<k>``), their exclusive prefix sum
    (:func:`exclusive_scan`) and the messages scattered to their places (``scatter_<k>``):
    the inbox in canonical order (by sender, then sending node). :func:`bounding_box`
    reduces the agents' and each type's senders' positions to the datalink's bounding box;
    the host reads the counts and boxes (a few numbers) and plans the next iteration's
-   handling.
+   handling; a delivery that reached only some is grouped by cell on the device then.
 
 The loop stops after an iteration that sent a recorded message type (the CPU delivers it
 and records its events, as the compiled engine does), or whose positions hold a NaN, or
-whose messages did not reach everyone and whose type has no per-receiver form. Messages in
-range are found by testing every sender for each receiver (O(N * M) work, in parallel): no
-cell list yet.
+whose messages did not reach everyone and whose type has no per-receiver form.
 """
 
 from __future__ import annotations
@@ -48,8 +48,8 @@ NO_NODE = np.iinfo(np.int64).max
 
 
 class DeviceMessages:
-    """The inboxes, flags and handler state of a tree's message types on the device, and the
-    launches of whole iterations (see the module's docstring).
+    """The inboxes, flags, handler state and cell grids of a tree's message types on the
+    device, and the launches of whole iterations (see the module's docstring).
 
     Args:
         kernels: name -> compiled kernel, the generated module's (``sense_move``, ``tick``,
@@ -154,6 +154,9 @@ class DeviceMessages:
         exclusive_scan(self.inboxes[0][0][:1], self.inboxes[0][1][:1])
         sx, sy = self.inboxes[0][4:]
         bounding_box(common[self.xy[0]], common[self.xy[1]], sx, sy, self.counts, 0)
+        for k, grid in self.grids.items():  # its kernels, with no message
+            sx, sy = self.inboxes[k][4:]
+            grid.group(sx, sy, 0, (0.0, 0.0, 0.0, 0.0), reach)
 
     def run(self, sim: Simulation, common: tuple[Any, ...], count: int, row0: int) -> int:
         """Up to ``count`` iterations from the world's (``common``: the kernels' common

@@ -263,8 +263,9 @@ def message_kernels(
     ``sense_move`` (Phase 2's sensors and motion), per type
     ``handle_all_<k>`` (thread 0: the compiled handler of a delivery that reached everyone)
     and ``handle_near_<k>`` (one thread per receiver: the per-receiver form of the messages
-    in range), ``tick`` (Phases 3, 4 and 6), then per type ``flag_<k>`` and ``scatter_<k>``
-    (Phase 5: the messages into the inbox; the engine runs a prefix sum between them)."""
+    in range, found on the type's cell grid), ``tick`` (Phases 3, 4 and 6), then per type
+    ``flag_<k>`` and ``scatter_<k>`` (Phase 5: the messages into the inbox; the engine runs
+    a prefix sum between them)."""
     records = len(layout.names)
     store = "\n".join(f"        r{j}[row, a] = c{j}[a]" for j in range(records))
     if layout.deferred:
