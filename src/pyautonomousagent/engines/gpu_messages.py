@@ -10,25 +10,24 @@ messages on the device between iterations:
    (``handle_all_<k>``); one that reached only some runs its per-receiver form
    (:class:`~pyautonomousagent.kernels.Receive`) in one thread per receiver, over the
    messages in range in message order (``handle_near_<k>``: the batched engine's delivery
-   order, pairs by message then receiver, as each receiver sees it).
+   order, pairs by message then receiver, as each receiver sees it), found on the type's
+   cell grid (:class:`~pyautonomousagent.engines.gpu_grid.DeviceGrid`: each receiver tests
+   only the messages of its own and the neighbouring cells, not all M).
 3. ``tick``: Phases 3, 4 and 6.
 4. Phase 5: per type, each agent's sent flags (``flag_<k>``), their exclusive prefix sum
    (:func:`exclusive_scan`) and the messages scattered to their places (``scatter_<k>``):
    the inbox in canonical order (by sender, then sending node). :func:`bounding_box`
    reduces the agents' and each type's senders' positions to the datalink's bounding box;
    the host reads the counts and boxes (a few numbers) and plans the next iteration's
-   handling.
+   handling; a delivery that reached only some is grouped by cell on the device then.
 
 The loop stops after an iteration that sent a recorded message type (the CPU delivers it
 and records its events, as the compiled engine does), or whose positions hold a NaN, or
-whose messages did not reach everyone and whose type has no per-receiver form. Messages in
-range are found by testing every sender for each receiver (O(N * M) work, in parallel): no
-cell list yet.
+whose messages did not reach everyone and whose type has no per-receiver form.
 """
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -36,127 +35,21 @@ from numba import cuda as numba_cuda
 
 from pyautonomousagent.arrays import hypot
 from pyautonomousagent.engines.compiled_source import Messaging
+from pyautonomousagent.engines.gpu_grid import DeviceGrid
+from pyautonomousagent.engines.gpu_reduce import bounding_box, exclusive_scan, shape
 
 if TYPE_CHECKING:
     from pyautonomousagent.simulation.run import Simulation
 
 cuda: Any = numba_cuda  # numba's stubs type cuda.grid poorly
 
-#: Threads per block of every launch.
-THREADS = 256
-
 #: ``lowest`` before an iteration's collection: above every node index.
 NO_NODE = np.iinfo(np.int64).max
 
 
-def shape(live: int) -> tuple[int, int]:
-    """(blocks, threads per block) of a launch over ``live`` threads (at least one)."""
-    threads = min(THREADS, max(1, live))
-    return max(1, -(-live // threads)), threads
-
-
-#: Elements one thread of a reduction takes in turn (scans and bounding boxes are trees of
-#: such chunks: no shared memory and no barrier, which numba's CUDA simulator runs slowly).
-CHUNK = 16
-
-
-@cuda.jit
-def _scan_chunks(values: Any, out: Any, sums: Any) -> None:
-    """Each chunk's exclusive prefix sum of ``values`` (int64, shape (L,)) into ``out``, its
-    total into ``sums[chunk]``."""
-    c = cuda.grid(1)
-    first = c * CHUNK
-    if first >= values.shape[0]:
-        return
-    total = 0
-    for i in range(first, min(first + CHUNK, values.shape[0])):
-        value = values[i]
-        out[i] = total
-        total += value
-    sums[c] = total
-
-
-@cuda.jit
-def _add_chunks(out: Any, offsets: Any) -> None:
-    """``out[i] += offsets[chunk of i]``."""
-    i = cuda.grid(1)
-    if i < out.shape[0]:
-        out[i] += offsets[i // CHUNK]
-
-
-def exclusive_scan(values: Any, out: Any) -> None:
-    """``out`` := the exclusive prefix sum of ``values`` (device int64 arrays, shape (L,)):
-    chunk by chunk, then the chunks' totals scanned the same way and added."""
-    chunks = -(-values.shape[0] // CHUNK)
-    sums = cuda.device_array(chunks, np.int64)
-    _scan_chunks[shape(chunks)](values, out, sums)
-    if chunks > 1:
-        offsets = cuda.device_array(chunks, np.int64)
-        exclusive_scan(sums, offsets)
-        _add_chunks[shape(values.shape[0])](out, offsets)
-
-
-@cuda.jit
-def _box_points(x: Any, y: Any, sx: Any, sy: Any, counts: Any, k: int, live: int,
-                out: Any) -> None:  # fmt: skip
-    """Per chunk of the points (the first ``live`` agents ``x``, ``y``, then type ``k``'s
-    first ``counts[k]`` senders ``sx``, ``sy``), their bounding box: ``out[chunk]`` = (low
-    x, high x, low y, high y, 1.0 where a coordinate is NaN, else 0.0)."""
-    c = cuda.grid(1)
-    if c >= out.shape[0]:
-        return
-    low_x, high_x, low_y, high_y, bad = math.inf, -math.inf, math.inf, -math.inf, 0.0
-    for i in range(c * CHUNK, c * CHUNK + CHUNK):
-        if i < live:
-            px, py = x[i], y[i]
-        elif i - live < counts[k]:
-            px, py = sx[i - live], sy[i - live]
-        else:
-            break
-        if px != px or py != py:
-            bad = 1.0
-        low_x, high_x = min(low_x, px), max(high_x, px)
-        low_y, high_y = min(low_y, py), max(high_y, py)
-    out[c, 0], out[c, 1], out[c, 2], out[c, 3], out[c, 4] = low_x, high_x, low_y, high_y, bad
-
-
-@cuda.jit
-def _box_boxes(boxes: Any, out: Any) -> None:
-    """Per chunk of ``boxes`` (shape (B, 5), as ``_box_points`` writes them), the box of
-    their union into ``out[chunk]``."""
-    c = cuda.grid(1)
-    if c >= out.shape[0]:
-        return
-    first = c * CHUNK
-    for j in range(5):
-        out[c, j] = boxes[first, j]
-    for i in range(first + 1, min(first + CHUNK, boxes.shape[0])):
-        out[c, 0] = min(out[c, 0], boxes[i, 0])
-        out[c, 1] = max(out[c, 1], boxes[i, 1])
-        out[c, 2] = min(out[c, 2], boxes[i, 2])
-        out[c, 3] = max(out[c, 3], boxes[i, 3])
-        out[c, 4] = max(out[c, 4], boxes[i, 4])
-
-
-def bounding_box(x: Any, y: Any, sx: Any, sy: Any, counts: Any, k: int) -> np.ndarray:
-    """The bounding box of the agents (``x``, ``y``, device arrays shape (N,)) and type
-    ``k``'s senders (``sx``, ``sy``, the first ``counts[k]``, on the device): (low x, high
-    x, low y, high y, NaN flag), a host array shape (5,). Min and max are exact: the order
-    of the reduction does not change the bits."""
-    chunks = -(-(x.shape[0] + sx.shape[0]) // CHUNK)
-    boxes = cuda.device_array((chunks, 5))
-    _box_points[shape(chunks)](x, y, sx, sy, counts, k, x.shape[0], boxes)
-    while boxes.shape[0] > 1:
-        chunks = -(-boxes.shape[0] // CHUNK)
-        out = cuda.device_array((chunks, 5))
-        _box_boxes[shape(chunks)](boxes, out)
-        boxes = out
-    return boxes.copy_to_host()[0]
-
-
 class DeviceMessages:
-    """The inboxes, flags and handler state of a tree's message types on the device, and the
-    launches of whole iterations (see the module's docstring).
+    """The inboxes, flags, handler state and cell grids of a tree's message types on the
+    device, and the launches of whole iterations (see the module's docstring).
 
     Args:
         kernels: name -> compiled kernel, the generated module's (``sense_move``, ``tick``,
@@ -184,8 +77,11 @@ class DeviceMessages:
         self.lowest = cuda.to_device(np.full(types, NO_NODE, dtype=np.int64))
         self.rx, self.ry = cuda.device_array(n), cuda.device_array(n)
         self.inboxes: list[list[Any]] = []
+        self.grids: dict[int, DeviceGrid] = {}  # type -> its grid, for those handled near
         for k, handler in enumerate(messaging.handlers):
             slots = max(1, n * self.width[k])  # one message per sending node and agent
+            if handler.receive is not None:
+                self.grids[k] = DeviceGrid(slots)
             flags = [cuda.device_array(slots, np.int64) for _ in range(2)]
             inbox = [cuda.device_array(slots, np.int64),
                      cuda.device_array((len(handler.fields), slots)),
@@ -215,9 +111,11 @@ class DeviceMessages:
                 handler.receive.keep(tuple(a.copy_to_host() for a in self.tables[k]))
 
     def upload_inbox(self, sim: Simulation) -> None:
-        """``sim.inbox`` (last iteration's deliveries, delivered by the CPU) into the inboxes;
-        the agents' positions now are their positions at delivery."""
+        """``sim.inbox`` (last iteration's deliveries, delivered by the CPU) into the inboxes,
+        those that reached only some grouped by cell; the agents' positions now are their
+        positions at delivery."""
         x, y = sim.swarm.columns["x"], sim.swarm.columns["y"]
+        reach = sim.world.datalink.range
         self.rx.copy_to_device(np.ascontiguousarray(x))
         self.ry.copy_to_device(np.ascontiguousarray(y))
         counts = np.zeros(len(self.messaging.types), dtype=np.int64)
@@ -235,14 +133,19 @@ class DeviceMessages:
             for device, array in zip(inbox, host, strict=True):
                 device.copy_to_device(array)
             self.plan.append((k, self.ALL if delivery.to_all else self.NEAR))
+            if not delivery.to_all and k in self.grids:
+                xs, ys = np.concatenate((x, messages.x)), np.concatenate((y, messages.y))
+                box = (xs.min(), xs.max(), ys.min(), ys.max())  # NaN: one cell
+                self.grids[k].group(inbox[2], inbox[3], m, tuple(map(float, box)), reach)
         self.counts.copy_to_device(counts)
 
     def arguments(self, reach: float) -> tuple[Any, ...]:
         """The kernels' arguments after the common ones (``gpu_source.message_arguments``)."""
         inboxes = [array for inbox in self.inboxes for array in inbox]
         tables = [array for table in self.tables for array in table]
+        grids = [array for k in sorted(self.grids) for array in self.grids[k].arguments()]
         return (reach, self.counts, self.lowest, self.rx, self.ry, *inboxes, *self.state,
-                *tables)  # fmt: skip
+                *tables, *grids)  # fmt: skip
 
     def compile(self, common: tuple[Any, ...], reach: float) -> None:
         """Launch every kernel once with no thread at work (compiles them, changes nothing)."""
@@ -251,6 +154,9 @@ class DeviceMessages:
         exclusive_scan(self.inboxes[0][0][:1], self.inboxes[0][1][:1])
         sx, sy = self.inboxes[0][4:]
         bounding_box(common[self.xy[0]], common[self.xy[1]], sx, sy, self.counts, 0)
+        for k, grid in self.grids.items():  # its kernels, with no message
+            sx, sy = self.inboxes[k][4:]
+            grid.group(sx, sy, 0, (0.0, 0.0, 0.0, 0.0), reach)
 
     def run(self, sim: Simulation, common: tuple[Any, ...], count: int, row0: int) -> int:
         """Up to ``count`` iterations from the world's (``common``: the kernels' common
@@ -308,7 +214,7 @@ class DeviceMessages:
             self.kernels[f"scatter_{k}"][blocks, threads](n, t, every, row0, *common, *extra)
         counts, lowest = self.counts.copy_to_host(), self.lowest.copy_to_host()
         sent = sorted((int(lowest[k]), k) for k in range(len(counts)) if counts[k] > 0)
-        self.plan, stop = [], False
+        self.plan, stop, boxes = [], False, {}
         for _, k in sent:
             sx, sy = self.inboxes[k][4:]
             low_x, high_x, low_y, high_y, bad = bounding_box(x, y, sx, sy, self.counts, k)
@@ -316,4 +222,9 @@ class DeviceMessages:
             near = messaging.handlers[k].receive is not None
             stop = stop or messaging.recorded[k] or bad > 0.0 or not (everyone or near)
             self.plan.append((k, self.ALL if everyone else self.NEAR))
+            boxes[k] = (low_x, high_x, low_y, high_y)
+        for k, how in self.plan if not stop else []:
+            if how == self.NEAR:
+                sx, sy = self.inboxes[k][4:]
+                self.grids[k].group(sx, sy, int(counts[k]), boxes[k], reach)
         return stop

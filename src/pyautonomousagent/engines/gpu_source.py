@@ -45,6 +45,15 @@ from pyautonomousagent.engines.compiled_runtime import halt, record_statuses
 from pyautonomousagent.kernels import np_maximum, np_minimum, np_sign, sincos_degrees, wrap_degrees
 """
 
+#: The header of a tree that sends messages: also ``hypot`` (the range test), numba's
+#: ``int64`` (local arrays) and the cell grid's walk over a receiver's cells.
+MESSAGE_HEADER = (
+    HEADER.replace("np_maximum,", "hypot, np_maximum,").replace(
+        "import cuda\n", "import cuda, int64\n"
+    )
+    + "from pyautonomousagent.engines.gpu_grid import cell_spans, next_message\n"
+)
+
 #: The helpers the generated kernel imports besides the leaves' and sensors' kernels.
 HELPERS = (
     "halt",
@@ -123,7 +132,9 @@ def message_arguments(layout: Layout, messaging: Messaging) -> str:
     ``counts`` and ``lowest`` per type, the receivers' positions at delivery ``rx``, ``ry``,
     then per type its flags and places (``fl<k>``, ``ps<k>``), its inbox (senders, data,
     sender positions: ``ib_s<k>, ib_d<k>, ib_x<k>, ib_y<k>``), its handler's state
-    (``hs<k>_<j>``) and its per-receiver state (``rs<k>_<j>``)."""
+    (``hs<k>_<j>``), its per-receiver state (``rs<k>_<j>``), and per type with a
+    per-receiver form its cell grid (:class:`~pyautonomousagent.engines.gpu_grid.DeviceGrid`:
+    geometry ``gg<k>``, cell starts ``gs<k>``, messages by cell ``go<k>``)."""
     names = ["reach", "counts", "lowest", "rx", "ry"]
     for k in range(len(messaging.types)):
         names += [f"fl{k}", f"ps{k}", f"ib_s{k}", f"ib_d{k}", f"ib_x{k}", f"ib_y{k}"]
@@ -131,7 +142,13 @@ def message_arguments(layout: Layout, messaging: Messaging) -> str:
     names += [
         f"rs{k}_{j}" for k in range(len(messaging.types)) for j in range(receive_size(messaging, k))
     ]
+    names += [f"{a}{k}" for k in _near_types(messaging) for a in ("gg", "gs", "go")]
     return ", ".join(names)
+
+
+def _near_types(messaging: Messaging) -> list[int]:
+    """The message types with a per-receiver form (handled near: each has a cell grid)."""
+    return [k for k, handler in enumerate(messaging.handlers) if handler.receive is not None]
 
 
 def receive_size(messaging: Messaging, k: int) -> int:
@@ -173,14 +190,21 @@ def _handle_all(messaging: Messaging, layout: Layout, k: int) -> str:
 
 def _handle_near(messaging: Messaging, layout: Layout, k: int) -> str:
     """Receiver ``a`` takes type ``k``'s messages in range (``hypot`` of its position at
-    delivery and the sender's, the datalink's ``grid_pairs`` test), in message order."""
+    delivery and the sender's, the datalink's ``grid_pairs`` test), in message order: the
+    messages of its own and neighbouring cells of the type's grid, merged by index
+    (:mod:`~pyautonomousagent.engines.gpu_grid`)."""
     handler = messaging.handlers[k]
     args = [f"a, m, t, ib_s{k}, ib_d{k}", *_handler_args(messaging, layout, k)]
     args += [f"rs{k}_{j}" for j in range(receive_size(messaging, k))]
     args += layout.constants.refs(f"handler {k}", handler.constants)
-    return f"""    for m in range(counts[{k}]):
+    return f"""    heads = cuda.local.array(9, int64)
+    ends = cuda.local.array(9, int64)
+    spans = cell_spans(rx[a], ry[a], gg{k}, gs{k}, heads, ends)
+    m = next_message(heads, ends, spans, go{k})
+    while m >= 0:
         if ib_s{k}[m] != a and hypot(rx[a] - ib_x{k}[m], ry[a] - ib_y{k}[m]) <= reach:
-            R{k}({", ".join(args)})"""
+            R{k}({", ".join(args)})
+        m = next_message(heads, ends, spans, go{k})"""
 
 
 def _slots(messaging: Messaging, k: int) -> list[int]:
@@ -239,8 +263,9 @@ def message_kernels(
     ``sense_move`` (Phase 2's sensors and motion), per type
     ``handle_all_<k>`` (thread 0: the compiled handler of a delivery that reached everyone)
     and ``handle_near_<k>`` (one thread per receiver: the per-receiver form of the messages
-    in range), ``tick`` (Phases 3, 4 and 6), then per type ``flag_<k>`` and ``scatter_<k>``
-    (Phase 5: the messages into the inbox; the engine runs a prefix sum between them)."""
+    in range, found on the type's cell grid), ``tick`` (Phases 3, 4 and 6), then per type
+    ``flag_<k>`` and ``scatter_<k>`` (Phase 5: the messages into the inbox; the engine runs
+    a prefix sum between them)."""
     records = len(layout.names)
     store = "\n".join(f"        r{j}[row, a] = c{j}[a]" for j in range(records))
     if layout.deferred:
@@ -281,7 +306,7 @@ def message_module_source(
     """The generated module of a tree that sends messages: imports of the helpers, leaves',
     sensors' and handlers' kernels (``H<k>``, per-receiver ``R<k>``), then
     :func:`message_kernels` (plain Python functions: the engine compiles them)."""
-    lines = [HEADER.replace("np_maximum,", "hypot, np_maximum,")]
+    lines = [MESSAGE_HEADER]
     used = _kernel_imports(kernels, sensors)
     for k, handler in enumerate(messaging.handlers):
         used[f"H{k}"] = handler.function
