@@ -13,7 +13,6 @@ import types
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pytest
 
 from pyautonomousagent import Simulation, cli, jit, load, runs
@@ -21,6 +20,7 @@ from pyautonomousagent.engines import gpu
 from pyautonomousagent.engines.compiled_source import Constants
 from pyautonomousagent.engines.gpu_source import kernel_module_source
 from pyautonomousagent.simulation.run import ENGINES, choose_engine, scenario_tree
+from pyautonomousagent.testing import check_same_runs
 
 needs_numba = pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
 needs_device = pytest.mark.skipif(
@@ -136,12 +136,12 @@ def test_the_kernel_is_the_compiled_generators_code_for_one_thread() -> None:
 
 
 #: Run under NUMBA_ENABLE_CUDASIM=1 (numba reads it on import): the GPU engine's kernel in the
-#: simulator against the batched engine; prints the first difference, or "same".
+#: simulator against the batched engine; raises at the first difference, else prints "same".
 SIMULATED = textwrap.dedent(
     """
     import sys
-    import numpy as np
     from pyautonomousagent import Simulation, load
+    from pyautonomousagent.testing import check_same_runs
 
     agents, iterations, every = (int(v) for v in sys.argv[1:4])
     scenario_name, energy_use = sys.argv[4], float(sys.argv[5])
@@ -151,21 +151,7 @@ SIMULATED = textwrap.dedent(
         a, b = (Simulation.create(scenario, seed=seed, engine=e, record_every=every).run(
             progress=False) for e in ("batched", "gpu"))
         assert b.engine.name == "gpu" and b.engine.timings["kernel"] > 0.0
-        ra, rb = a.recorder, b.recorder
-        checks = [(k, ra.columns[k], rb.columns[k]) for k in ra.columns]
-        checks += [("traces", ra.traces, rb.traces), ("behaviour", ra.behaviour, rb.behaviour),
-                   ("iterations", ra.iterations, rb.iterations)]
-        for name, x, y in checks:
-            x, y = np.asarray(x), np.asarray(y)
-            same = x.shape == y.shape and np.array_equal(
-                x.view(np.uint64) if x.dtype == np.float64 else x,
-                y.view(np.uint64) if y.dtype == np.float64 else y)
-            if not same:
-                print("differ", seed, name)
-                sys.exit(1)
-        if a.events != b.events:
-            print("differ", seed, "events")
-            sys.exit(1)
+        check_same_runs(a, b, ("batched", "gpu"))
         # a third of the run, three single steps (a launch each), the rest with three
         # iterations on the CPU (the compiled engine's tick): the same bits
         c = Simulation.create(scenario, seed=seed, engine="gpu", record_every=every)
@@ -175,13 +161,7 @@ SIMULATED = textwrap.dedent(
         for _ in range(3):
             c.step()
         c.run(progress=False)
-        if not all(np.array_equal(np.asarray(ra.columns[k]), np.asarray(c.recorder.columns[k]))
-                   for k in ra.columns):
-            print("differ", seed, "after stepping")
-            sys.exit(1)
-        if a.events != c.events:
-            print("differ", seed, "events")
-            sys.exit(1)
+        check_same_runs(a, c, ("batched", "gpu with CPU steps"))
     print("same")
     """
 )
@@ -217,6 +197,7 @@ IN_FLIGHT = textwrap.dedent(
     from pyautonomousagent import Simulation, load, recording
     from pyautonomousagent.engines import gpu_records
     from pyautonomousagent.simulation import run
+    from pyautonomousagent.testing import check_same_runs
 
     every, fused, group_bytes = (int(v) for v in sys.argv[1:4])
     recording.COMPACT_AGENTS = 1  # records kept compact, as for a large swarm
@@ -244,10 +225,8 @@ IN_FLIGHT = textwrap.dedent(
     def bits(x):
         x = np.asarray(x)
         return x.view(np.uint64) if x.dtype == np.float64 else x
-    checks = [(k, ra.columns[k], rb.columns[k]) for k in ra.columns]
-    checks += [("traces", ra.traces, rb.traces), ("behaviour", ra.behaviour, rb.behaviour),
-               ("iterations", ra.iterations, rb.iterations), ("count", ra.count, rb.count)]
-    checks += [("mid " + k, a.mid[1][k], b.mid[1][k]) for k in a.mid[1]]
+    check_same_runs(a, b, ("batched", "gpu"))  # records, traces, behaviour, events
+    checks = [("mid " + k, a.mid[1][k], b.mid[1][k]) for k in a.mid[1]]
     checks += [("end " + k, a.swarm.columns[k], b.swarm.columns[k]) for k in a.swarm.columns]
     for name, x, y in checks:
         assert np.shape(x) == np.shape(y) and np.array_equal(bits(x), bits(y)), name
@@ -339,11 +318,6 @@ DEVICE_CASES = [
 ]  # fmt: skip
 
 
-def _same_bits(x: Any, y: Any) -> bool:
-    x, y = np.asarray(x), np.asarray(y)
-    return x.shape == y.shape and x.dtype == y.dtype and x.tobytes() == y.tobytes()
-
-
 @needs_device
 @pytest.mark.parametrize("seed", [1, 2, 3])
 @pytest.mark.parametrize(("scenario", "overrides", "messages"), DEVICE_CASES)
@@ -357,11 +331,7 @@ def test_on_the_device_the_gpu_engine_gives_the_batched_engines_bits(
         for e in ("batched", "gpu")
     )
     assert b.engine.name == "gpu" and b.engine.device()["name"] != "numba CUDA simulator"
-    for key in a.recorder.columns:
-        assert _same_bits(a.recorder.columns[key], b.recorder.columns[key]), key
-    assert _same_bits(a.recorder.traces, b.recorder.traces)
-    assert _same_bits(a.recorder.behaviour, b.recorder.behaviour)
-    assert a.events == b.events
+    check_same_runs(a, b, ("batched", "gpu"))
     sent = [e for e in a.events if e["event"] == "message"]
     assert bool(sent) == messages  # a message case that sent nothing would test nothing
 

@@ -150,13 +150,14 @@ def test_the_device_grid_finds_the_cpu_datalinks_pairs_in_order() -> None:
 
 
 #: Under the simulator: gathering with 40 drones spread over the world (one refuelling
-#: place each, 11 units apart) and a 12-unit range, batched against gpu; prints the first
-#: difference, or the cells with messages of each grouping, the pairs heard and "same".
+#: place each, 11 units apart) and a 12-unit range, batched against gpu; raises at the first
+#: difference, else prints the cells with messages of each grouping, the pairs heard and "same".
 SPREAD = textwrap.dedent(
     """
     import numpy as np
     from pyautonomousagent import Simulation, load
     from pyautonomousagent.engines import gpu_grid
+    from pyautonomousagent.testing import check_same_runs
 
     cells = []
     group = gpu_grid.DeviceGrid.group
@@ -174,15 +175,10 @@ SPREAD = textwrap.dedent(
         refueling_positions=places)
     a, b = (Simulation.create(scenario, seed=1, engine=e).run(progress=False)
             for e in ("batched", "gpu"))
-    ra, rb = a.recorder, b.recorder
-    for name in ra.columns:
-        x, y = np.asarray(ra.columns[name]), np.asarray(rb.columns[name])
-        if x.tobytes() != y.tobytes():
-            print("differ", name)
-            raise SystemExit(1)
+    check_same_runs(a, b, ("batched", "gpu"))  # records, traces, behaviour, events
     sa, sb = a.mission.shared, b.mission.shared
-    if a.events != b.events or any(sa[r] != sb[r] for r in range(len(sa))):
-        print("differ events or shared data")
+    if any(sa[r] != sb[r] for r in range(len(sa))):
+        print("differ shared data")
         raise SystemExit(1)
     print("cells", *cells)
     print("pairs", sa._pair_keys.size, int((sa._everyone_iteration > 0).sum()))

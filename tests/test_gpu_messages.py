@@ -52,13 +52,13 @@ def test_the_message_kernels_are_generated_python_without_libm(scenario: str) ->
 
 
 #: Run under NUMBA_ENABLE_CUDASIM=1: gathering on the GPU engine in the simulator against the
-#: batched engine, 3 seeds; prints the first difference, or "same" and what was sent.
+#: batched engine, 3 seeds; raises at the first difference, else prints what was sent and "same".
 SIMULATED = textwrap.dedent(
     """
     import sys
-    import numpy as np
     from pyautonomousagent import Simulation, load
     from pyautonomousagent.engines import gpu_messages
+    from pyautonomousagent.testing import check_same_runs
 
     scenario_name, reach, every, room = sys.argv[1], float(sys.argv[2]), *map(int, sys.argv[3:5])
     gpu_messages.DeviceMessages.ROOM = room
@@ -70,18 +70,7 @@ SIMULATED = textwrap.dedent(
     gpu_messages.DeviceMessages._handle = counted
 
     def differ(a, b):
-        ra, rb = a.recorder, b.recorder
-        checks = [(k, ra.columns[k], rb.columns[k]) for k in ra.columns]
-        checks += [("traces", ra.traces, rb.traces), ("behaviour", ra.behaviour, rb.behaviour),
-                   ("iterations", ra.iterations, rb.iterations)]
-        for name, x, y in checks:
-            x, y = np.asarray(x), np.asarray(y)
-            if not (x.shape == y.shape and np.array_equal(
-                    x.view(np.uint64) if x.dtype == np.float64 else x,
-                    y.view(np.uint64) if y.dtype == np.float64 else y)):
-                return name
-        if a.events != b.events:
-            return "events"
+        check_same_runs(a, b, ("batched", "gpu"))  # raises at the first difference
         sa, sb = a.mission.shared, b.mission.shared
         if any(sa[r] != sb[r] for r in range(len(sa))):
             return "shared data"
@@ -167,8 +156,8 @@ def test_messages_reaching_only_some_are_delivered_on_the_device(
 
 
 #: Run under NUMBA_ENABLE_CUDASIM=1: radiation-search (random wander, the recorded ``found``
-#: message) on the GPU engine against the batched engine, 3 seeds; prints the first
-#: difference, or the iterations of the ``found`` messages of each seed and "same".
+#: message) on the GPU engine against the batched engine, 3 seeds; raises at the first
+#: difference, else prints the iterations of the ``found`` messages of each seed and "same".
 RADIATION = textwrap.dedent(
     """
     import sys
@@ -176,6 +165,7 @@ RADIATION = textwrap.dedent(
     import numpy as np
     from pyautonomousagent import Simulation, load
     from pyautonomousagent.engines import gpu_messages
+    from pyautonomousagent.testing import check_same_runs
 
     warnings.simplefilter("ignore", RuntimeWarning)  # the generator's uint64 wraps in Python
     reach = float(sys.argv[1])
@@ -191,17 +181,7 @@ RADIATION = textwrap.dedent(
         a, b = (Simulation.create(scenario, seed=seed, engine=e).run(progress=False)
                 for e in ("batched", "gpu"))
         assert b.engine.name == "gpu" and b.engine.timings["kernel"] > 0.0
-        ra, rb = a.recorder, b.recorder
-        checks = [(k, ra.columns[k], rb.columns[k]) for k in ra.columns]
-        checks += [("traces", ra.traces, rb.traces), ("behaviour", ra.behaviour, rb.behaviour)]
-        for name, x, y in checks:
-            x, y = np.asarray(x), np.asarray(y)
-            if not (x.shape == y.shape and x.tobytes() == y.tobytes()):
-                print("differ", seed, name)
-                sys.exit(1)
-        if a.events != b.events:
-            print("differ", seed, "events")
-            sys.exit(1)
+        check_same_runs(a, b, ("batched", "gpu"))
         found = [e["iteration"] for e in a.events if e.get("type") == "found"]
         print("found", seed, *found)
     print("handled", *sorted(set(handled)))

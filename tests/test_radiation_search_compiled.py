@@ -22,7 +22,7 @@ from pyautonomousagent.bt import (
 )
 from pyautonomousagent.missions.radiation_search import FOUND
 from pyautonomousagent.missions.radiation_search.kernels import store_found_everyone
-from pyautonomousagent.testing import check_engines_agree
+from pyautonomousagent.testing import check_engines_agree, check_same_runs
 
 pytestmark = pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
 
@@ -47,18 +47,7 @@ def found(sim: Simulation) -> list[dict]:
 
 
 def assert_same_runs(a: Simulation, b: Simulation) -> None:
-    assert a.events == b.events
-    assert list(a.recorder.columns) == list(b.recorder.columns)
-    for key, expected in a.recorder.columns.items():
-        got = np.asarray(b.recorder.columns[key])
-        expected = np.asarray(expected)
-        if expected.dtype == np.float64:
-            got, expected = got.view(np.uint64), expected.view(np.uint64)  # the same bits
-        assert np.array_equal(got, expected), key
-    assert np.array_equal(a.recorder.traces, b.recorder.traces)
-    assert np.array_equal(a.recorder.behaviour, b.recorder.behaviour)
-    assert np.array_equal(a.recorder.iterations, b.recorder.iterations)
-    assert np.array_equal(a.engine.node_statuses(), b.engine.node_statuses())
+    check_same_runs(a, b, ("batched", "compiled"))
 
 
 @pytest.mark.parametrize(("seed", "every"), [(0, 1), (1, 1), (2, 7)])
