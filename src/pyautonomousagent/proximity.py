@@ -281,6 +281,59 @@ def _pairs(
 
 
 @njit
+def _near_and_pairs(
+    points: np.ndarray,
+    cells: np.ndarray,
+    order: np.ndarray,
+    starts: np.ndarray,
+    extent: np.ndarray,
+    mask: int,
+    range2: float,
+    radius2: float,
+    none: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:meth:`CellList.near` on a built grid (squared range and radius): each point's nearest
+    within the range (N,) and its distance (N,), and the pairs closer than the radius, first,
+    second (P,) sorted by first then second, and their distances (P,)."""
+    n = order.shape[0]
+    nearest = np.empty(n, dtype=np.int64)
+    distance = np.empty(n)
+    close = np.empty(n, dtype=np.int64)
+    _near(points, cells, order, starts, extent, mask, range2, radius2, none, nearest, distance,
+          close)  # fmt: skip
+    total = close.sum()
+    pairs = np.empty((2, total), dtype=np.int64)
+    pairs2 = np.empty(total)
+    if total:
+        _pairs(points, cells, order, starts, extent, mask, radius2, close, pairs, pairs2)
+    by = np.argsort(pairs[0] * n + pairs[1])  # the keys are distinct: any sort is stable
+    return nearest, distance, pairs[0][by], pairs[1][by], np.sqrt(pairs2[by])
+
+
+@njit
+def _grid_shape(n: int, reach: float) -> tuple[float, int]:
+    """The cell width for queries within ``reach`` (1 for reach 0) and the bucket mask for
+    ``n`` points: 2N to 4N buckets (at least 2)."""
+    width = reach * (1.0 + MARGIN) if reach > 0.0 else 1.0
+    bits = 1
+    while (1 << bits) < 2 * n:
+        bits += 1
+    return width, (1 << bits) - 1
+
+
+@njit
+def near_all(
+    axes: tuple[np.ndarray, ...], range_: float, radius: float, none: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``CellList(axes, max(range_, radius)).near(range_, radius, none)`` as one compiled
+    call (for compiled code that senses the whole swarm): the fields of :class:`Near`."""
+    width, mask = _grid_shape(axes[0].shape[0], max(range_, radius))
+    _, extent, cells, points, order, starts = _build(axes, width, mask)
+    return _near_and_pairs(points, cells, order, starts, extent, mask, range_ * range_,
+                           radius * radius, none)  # fmt: skip
+
+
+@njit
 def _candidates(
     query: np.ndarray,
     low: np.ndarray,
@@ -351,9 +404,7 @@ class CellList:
         if not axes or any(a.shape != axes[0].shape or a.ndim != 1 for a in axes):
             raise ValueError("CellList: one array of shape (N,) per axis")
         self.reach = float(reach)
-        self.width = self.reach * (1.0 + MARGIN) if self.reach > 0.0 else 1.0
-        n = axes[0].size
-        self.mask = (1 << max(1, (2 * n - 1).bit_length())) - 1  # 2N to 4N buckets
+        self.width, self.mask = _grid_shape(axes[0].size, self.reach)
         built = _build(axes, self.width, self.mask)
         self.low, self.extent, self.cells, self.sorted_points, self.order, self.starts = built
 
@@ -370,19 +421,8 @@ class CellList:
         cells)."""
         if max(range_, radius) > self.reach:
             raise ValueError(f"near: range {range_} and radius {radius} must be <= {self.reach}")
-        n = self.size
-        nearest = np.empty(n, dtype=np.int64)
-        distance = np.empty(n)
-        close = np.empty(n, dtype=np.int64)
         grid = (self.sorted_points, self.cells, self.order, self.starts, self.extent, self.mask)
-        _near(*grid, range_ * range_, radius * radius, none, nearest, distance, close)
-        total = int(close.sum())
-        pairs = np.empty((2, total), dtype=np.int64)
-        pairs2 = np.empty(total)
-        if total:
-            _pairs(*grid, radius * radius, close, pairs, pairs2)
-        by = np.lexsort((pairs[1], pairs[0]))
-        return Near(nearest, distance, pairs[0, by], pairs[1, by], np.sqrt(pairs2[by]))
+        return Near(*_near_and_pairs(*grid, range_ * range_, radius * radius, none))
 
     def candidates(self, coordinates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         """(query row, point) of every query point and grid point in neighbouring cells: a
