@@ -19,7 +19,7 @@ import numpy as np
 
 from pyautonomousagent.jit import njit
 from pyautonomousagent.kernels import bearing, np_minimum
-from pyautonomousagent.proximity import near_all
+from pyautonomousagent.proximity import near_all, workspace
 
 
 @dataclass(frozen=True)
@@ -46,7 +46,7 @@ class Reading:
 class Collisions:
     """The pairs within the collision radius at the last check, for counting on entry, and
     the buffers that :func:`detect` fills (the NumPy path and the compiled engine's fused loop
-    call it alike, through :meth:`sense` and :meth:`kernel`).
+    call it alike, through :meth:`sense` and ``CrowdedMission.compiled_sensors``).
 
     Args:
         agents: the swarm's size N.
@@ -63,6 +63,8 @@ class Collisions:
             :func:`detect` asked for where it had too little (touching, collisions; else 0).
         events: the buffered collisions (iteration (E,), pair (2, E), distance (E,)), in order
             of iteration, then pair; the first ``fill[1]`` are new.
+        work: the grid's scratch arrays (:func:`~pyautonomousagent.proximity.workspace`),
+            kept from check to check.
     """
 
     def __init__(self, agents: int, radius: float, sensor_range: float) -> None:
@@ -76,6 +78,7 @@ class Collisions:
         self.touching = np.zeros(max(64, agents // 4), dtype=np.int64)
         room = max(1024, agents)
         self.events = (np.zeros(room, np.int64), np.zeros((2, room), np.int64), np.zeros(room))
+        self.work = workspace(agents, 2, max(self.radius, self.range))  # the grid's, reused
         if self.active:  # compile (or load from numba's cache) now, in the run's set-up
             Collisions(2, 0.0, 0.0).sense((np.zeros(2), np.ones(2)))
 
@@ -87,7 +90,8 @@ class Collisions:
     @property
     def state(self) -> tuple[np.ndarray, ...]:
         """The arrays :func:`detect` reads and writes after the coordinates, in order."""
-        return (self.distance, self.bearing, self.hits, self.touching, self.fill, *self.events)
+        return (self.distance, self.bearing, self.hits, self.touching, self.fill, *self.events,
+                *self.work)  # fmt: skip
 
     def sense(self, coordinates: Sequence[np.ndarray]) -> Reading:
         """The proximity readings and the new collisions at the agents' positions.
@@ -96,6 +100,8 @@ class Collisions:
             coordinates: x, y (and z) of every agent, world units, shape (N,) each.
         """
         axes = tuple(np.ascontiguousarray(c, dtype=np.float64) for c in coordinates)
+        if len(axes) != 2:
+            self.work = workspace(self.agents, len(axes), max(self.radius, self.range))
         while detect(0, axes, self.radius, self.range, *self.state):
             self.make_room()
         t, pairs, distance = self.take(np.iinfo(np.int64).max)
@@ -141,15 +147,19 @@ def detect(
     event_t: np.ndarray,
     event_pairs: np.ndarray,
     event_distance: np.ndarray,
+    work: np.ndarray,
+    scratch: np.ndarray,
 ) -> int:
     """One check at iteration ``t`` of the agents at ``axes`` (x, y (, z), shape (N,) each):
     each agent's nearest neighbour within ``sensor_range`` into ``distance`` and ``heading``
     (its bearing), the pairs now closer than ``radius`` into ``touching`` (the state of
     :class:`Collisions`, sorted keys), and those not touching before (collisions, counted on
-    entry) into ``hits`` and appended to the buffered events. Returns 0; or 1, changing
-    nothing but ``fill[2:]`` (the room asked for), where a buffer is too small."""
+    entry) into ``hits`` and appended to the buffered events; ``work``, ``scratch``: the
+    grid's (:func:`~pyautonomousagent.proximity.workspace`). Returns 0; or 1, changing
+    nothing but ``fill[2:]`` (the room asked for) and the scratch, where a buffer is too
+    small."""
     n = axes[0].shape[0]
-    found = near_all(axes, sensor_range, radius, sensor_range)
+    found = near_all(axes, sensor_range, radius, sensor_range, work, scratch)
     nearest, near, first, second, pair_distance = found
     keys = first * n + second
     before = touching[: fill[0]]
@@ -192,12 +202,13 @@ def sense_plane(
     neighbour_bearing: np.ndarray, collisions: np.ndarray, damage: np.ndarray,
     distance: np.ndarray, heading: np.ndarray, hits: np.ndarray, touching: np.ndarray,
     fill: np.ndarray, event_t: np.ndarray, event_pairs: np.ndarray,
-    event_distance: np.ndarray, radius: float, sensor_range: float, damage_per_hit: float,
+    event_distance: np.ndarray, work: np.ndarray, scratch: np.ndarray, radius: float,
+    sensor_range: float, damage_per_hit: float,
 ) -> int:  # fmt: skip
     """:func:`detect` of the agents in the plane (``SwarmSensorKernel.detect``: the arrays
     :data:`COLUMNS`, the state :attr:`Collisions.state`, then radius, range and damage)."""
     return detect(t, (x, y), radius, sensor_range, distance, heading, hits, touching, fill,
-                  event_t, event_pairs, event_distance)  # fmt: skip
+                  event_t, event_pairs, event_distance, work, scratch)  # fmt: skip
 
 
 @njit(inline="always")
@@ -206,7 +217,8 @@ def take_reading(
     neighbour_bearing: np.ndarray, collisions: np.ndarray, damage: np.ndarray,
     distance: np.ndarray, heading: np.ndarray, hits: np.ndarray, touching: np.ndarray,
     fill: np.ndarray, event_t: np.ndarray, event_pairs: np.ndarray,
-    event_distance: np.ndarray, radius: float, sensor_range: float, damage_per_hit: float,
+    event_distance: np.ndarray, work: np.ndarray, scratch: np.ndarray, radius: float,
+    sensor_range: float, damage_per_hit: float,
 ) -> None:  # fmt: skip
     """Agent ``a``'s reading (``SwarmSensorKernel.apply``): the proximity sensor's columns
     where it is powered (``moving``), and ``damage_per_hit`` percent damage (at most 100)
