@@ -78,9 +78,10 @@ class Collisions:
         self.touching = np.zeros(max(64, agents // 4), dtype=np.int64)
         room = max(1024, agents)
         self.events = (np.zeros(room, np.int64), np.zeros((2, room), np.int64), np.zeros(room))
-        self.work = workspace(agents, 2, max(self.radius, self.range))  # the grid's, reused
+        self.work = (np.empty(0, np.int64), np.empty(0))  # the grid's, reused (sense makes it)
         if self.active:  # compile (or load from numba's cache) now, in the run's set-up
             Collisions(2, 0.0, 0.0).sense((np.zeros(2), np.ones(2)))
+            self.work = workspace(agents, 2, max(self.radius, self.range))
 
     @property
     def active(self) -> bool:
@@ -100,7 +101,7 @@ class Collisions:
             coordinates: x, y (and z) of every agent, world units, shape (N,) each.
         """
         axes = tuple(np.ascontiguousarray(c, dtype=np.float64) for c in coordinates)
-        if len(axes) != 2:
+        if len(axes) != 2 or self.work[0].size == 0:
             self.work = workspace(self.agents, len(axes), max(self.radius, self.range))
         while detect(0, axes, self.radius, self.range, *self.state):
             self.make_room()
@@ -164,8 +165,10 @@ def detect(
     keys = first * n + second
     before = touching[: fill[0]]
     new = np.empty(keys.size, dtype=np.bool_)
-    for p in range(keys.size):
-        at = np.searchsorted(before, keys[p])
+    at = 0
+    for p in range(keys.size):  # both sorted: one walk along them
+        while at < before.size and before[at] < keys[p]:
+            at += 1
         new[p] = not (at < before.size and before[at] == keys[p])
     events = fill[1] + new.sum()
     if keys.size > touching.size or events > event_t.size:
