@@ -301,6 +301,81 @@ def test_engines_agree_on_crowded_with_and_without_avx512():
         assert len(runs) == engines and len(set(runs.values())) == 1, runs
 
 
+# ------------------------------------------------------- the compiled engine's fused loop
+
+needs_numba = pytest.mark.skipif(not jit.available(), reason="the compiled engine needs numba")
+
+
+def fused_run(scenario, seed: int, **replace_buffers: int) -> tuple[Simulation, int, int]:
+    """``scenario`` on the compiled engine, how many of its iterations ran fused and in how
+    many calls; ``replace_buffers``: the collision buffers ``touching`` / ``events`` made
+    that small."""
+    sim = Simulation.create(scenario, seed=seed, engine="compiled")
+    assert sim.engine.fuses(sim) and sim.engine.why_not_fused(sim) == ""
+    state = sim.mission.collisions
+    if "touching" in replace_buffers:
+        state.touching = np.zeros(replace_buffers["touching"], dtype=np.int64)
+    if "events" in replace_buffers:
+        room = replace_buffers["events"]
+        state.events = (np.zeros(room, np.int64), np.zeros((2, room), np.int64), np.zeros(room))
+    loop, fused, calls = sim.engine.loop, [0], [0]
+
+    def counting(sim: Simulation, count: int, typical: int | None = None) -> int:
+        done = loop(sim, count, typical)
+        fused[0] += done
+        calls[0] += 1
+        return done
+
+    sim.engine.loop = counting  # type: ignore[method-assign]
+    return sim.run(progress=False), fused[0], calls[0]
+
+
+def assert_same_crowded_runs(batched: Simulation, compiled: Simulation) -> None:
+    from tests.test_compiled_engine import assert_same_runs
+
+    assert_same_runs(batched, compiled)  # events, recorded columns, traces, behaviour
+    for key in ("neighbour_distance", "neighbour_bearing", "collisions", "damage", "x"):
+        assert np.array_equal(batched.swarm.columns[key], compiled.swarm.columns[key]), key
+
+
+@needs_numba
+@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("name", ["crowded", "crowded-avoid"])
+def test_the_compiled_engine_runs_crowded_fused_with_the_batched_bits(name, seed):
+    scenario = load(name).with_overrides(iterations=700, initial_heading="random")
+    batched = Simulation.create(scenario, seed=seed, engine="batched").run(progress=False)
+    compiled, fused, calls = fused_run(scenario, seed)
+    assert fused == 700 and calls == 2  # 500 iterations a call at most
+    assert_same_crowded_runs(batched, compiled)
+    if name == "crowded":  # not vacuous: drones collided, and were seen near
+        assert len(_collisions(compiled)) > 0
+    else:  # avoidance decided something: a neighbour came within the risk distance
+        risk = scenario.parameters.collision_risk_distance
+        assert (compiled.recorder.column("neighbour_distance") < risk).any()
+        assert not _collisions(compiled)
+
+
+@needs_numba
+@pytest.mark.parametrize("parallel", [True, False])
+def test_fused_collisions_with_alerts_and_buffers_too_small_give_the_batched_run(
+    monkeypatch, parallel
+):
+    from pyautonomousagent.engines import compiled
+
+    monkeypatch.setattr(compiled, "PARALLEL_AGENTS", 100 if parallel else 10**9)
+    scenario = load("crowded").with_overrides(
+        agents=300, iterations=600, energy_use=0.2, low_energy_threshold=1, refuel_rate=0.5
+    )
+    batched = Simulation.create(scenario, seed=4, engine="batched").run(progress=False)
+    events = [e["event"] for e in batched.events]  # alerts and collisions in the same calls
+    assert "alert" in events and events.count("collision") > 8
+    run, fused, calls = fused_run(scenario, 4, touching=1, events=2)
+    assert fused == 600 and calls > 2  # stopped for room (then made) before an iteration
+    assert run.mission.collisions.events[0].size > 2
+    assert run.engine._function(run.engine._fused, 1).endswith("_parallel" if parallel else "l")
+    assert_same_crowded_runs(batched, run)
+
+
 # ------------------------------------------------------------------------- the command line
 
 
@@ -320,14 +395,13 @@ def test_bad_collision_parameters_are_refused(key, value, tmp_path, capsys):
     assert f"{path.name}: parameters.{key} must be" in line
 
 
-@pytest.mark.skipif(not jit.available(), reason="the compiled engine needs numba")
-def test_pyaa_run_says_when_the_compiled_engine_does_not_fuse(tmp_path, capsys):
+@needs_numba
+def test_pyaa_run_fuses_crowded_on_the_compiled_engine(tmp_path, capsys):
     argv = ["run", "crowded", "--engine", "compiled", "--iterations", "30", "--no-gif",
             "--no-replay", "--out", str(tmp_path / "run")]  # fmt: skip
     assert main(argv) == 0
     out = capsys.readouterr().out
-    lines = [line for line in out.splitlines() if "compiled engine" in line]
-    assert len(lines) == 1 and "sensors" in lines[0], out
+    assert "crowded" in out and "the compiled engine ticks the tree only" not in out, out
     summary = json.loads((tmp_path / "run" / "run.json").read_text())
     assert "events" in summary
 

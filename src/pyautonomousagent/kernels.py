@@ -152,6 +152,38 @@ class HandlerKernel:
 
 
 @dataclass(frozen=True)
+class SwarmSensorKernel:
+    """A mission's Phase 2 sensing of the whole swarm at once (e.g. each agent's nearest
+    neighbour, collisions between agents), compiled: the fused loop calls ``detect`` once an
+    iteration, between the iterations' per-agent phases, and ``apply`` per agent.
+
+    Attributes:
+        detect: ``detect(t, *arrays, *state, *constants) -> int`` (njit), once per iteration
+            ``t`` before the per-agent sensors: reads the arrays (columns the per-agent
+            sensors do not write, e.g. the positions at the iteration's start) of every
+            agent and writes only ``state``. Returns 0; or, changing nothing the run sees,
+            not 0 where ``state`` has too little room: the fused call then stops before
+            iteration ``t`` (the NumPy path runs it; ``collect`` makes room).
+        apply: ``apply(a, moving, *arrays, *state, *constants)`` (njit, inline), for agent
+            ``a`` right after its per-agent sensors (``moving``: what they returned): puts
+            what ``detect`` found into the agent's columns.
+        names: the swarm columns or blackboard keys passed as arrays, in order.
+        state: arrays of the mission's run state passed as they are, in order.
+        constants: numbers passed last.
+        collect: ``collect(sim, through)``, after a fused call, as many times as it needs,
+            with ``through`` rising to the last iteration run: what ``detect`` kept for the
+            run (e.g. events) for the iterations up to ``through``, in order.
+    """
+
+    detect: Callable[..., int]
+    apply: Callable[..., None]
+    names: tuple[str, ...]
+    state: tuple[Any, ...] = ()
+    constants: tuple[float | int, ...] = ()
+    collect: Callable[[Simulation, int], None] | None = None
+
+
+@dataclass(frozen=True)
 class SensorKernel:
     """A mission's Phase 2 sensors for one agent.
 
@@ -163,12 +195,15 @@ class SensorKernel:
         stopped: ``stopped(sim, rows)`` is called, with ``sim.world.iteration`` set, for the
             agents (int array) found unable to move for the first time in a run of
             iterations (the mission's alerts), in order of iteration.
+        swarm: the sensing of the whole swarm done with them (after ``function`` in an
+            iteration, as the NumPy path does), or None.
     """
 
     function: Callable[..., bool]
     names: tuple[str, ...]
     constants: tuple[float | int, ...] = ()
     stopped: Callable[[Simulation, Any], None] | None = None
+    swarm: SwarmSensorKernel | None = None
 
 
 @njit(inline="always")

@@ -56,12 +56,14 @@ def _cell(value: float, low: float, width: float) -> int:
 
 @njit
 def _build(
-    axes: tuple[np.ndarray, ...], width: float, mask: int
+    axes: tuple[np.ndarray, ...], width: float, mask: int, work: np.ndarray, points: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The grid of the points whose coordinates ``axes`` holds (one array (N,) per axis):
     its lowest corner (d,), cells per axis (d,), the points' cells (d, N) and coordinates
     (d, N) in bucket order, their indices in that order (N,), and each bucket's first
-    position in it (mask + 2,)."""
+    position in it (mask + 2,). The big arrays are views of ``work`` (int64, at least
+    (d + 2) N + 2 mask + 3) and ``points`` (float64, at least d N): a caller that builds a
+    grid every iteration allocates (and the system zeroes) no new memory each time."""
     d, n = len(axes), axes[0].shape[0]
     low = np.zeros(d)
     extent = np.ones(d, dtype=np.int64)
@@ -74,8 +76,9 @@ def _build(
         if n:
             low[k] = lowest
             extent[k] = min(int(math.floor((highest - lowest) / width)) + 3, _LOW31)
-    buckets = np.empty(n, dtype=np.int64)
-    starts = np.zeros(mask + 2, dtype=np.int64)
+    buckets = work[:n]
+    starts = work[n : n + mask + 2]
+    starts[:] = 0
     cell = np.empty(d, dtype=np.int64)
     for i in range(n):
         for k in range(d):
@@ -85,10 +88,12 @@ def _build(
         starts[b + 1] += 1
     for b in range(mask + 1):
         starts[b + 1] += starts[b]
-    order = np.empty(n, dtype=np.int64)
-    sorted_cells = np.empty((d, n), dtype=np.int64)
-    sorted_points = np.empty((d, n))
-    fill = starts[:-1].copy()
+    rest = n + mask + 2
+    order = work[rest : rest + n]
+    sorted_cells = work[rest + n : rest + n + d * n].reshape((d, n))
+    sorted_points = points[: d * n].reshape((d, n))
+    fill = work[rest + n + d * n : rest + n + d * n + mask + 1]
+    fill[:] = starts[:-1]
     for i in range(n):  # stable: a bucket's points in ascending order
         s = fill[buckets[i]]
         fill[buckets[i]] = s + 1
@@ -240,6 +245,8 @@ def _near(
     nearest: np.ndarray,
     distance: np.ndarray,
     close: np.ndarray,
+    best2: np.ndarray,
+    best: np.ndarray,
 ) -> None:
     """Each point's nearest other point with squared distance <= ``range2`` (lowest index
     among equals) and its distance into ``nearest``, ``distance`` (-1 and ``none`` for
@@ -248,8 +255,8 @@ def _near(
     order (``order`` gives the indices). One core: on a machine shared with NumPy's work,
     threads waiting for the next parallel loop slow the rest more than they save here."""
     n = points.shape[1]
-    best2 = np.full(n, math.inf)
-    best = np.full(n, -1, dtype=np.int64)
+    best2[:n] = math.inf  # (scratch, at least (N,) each)
+    best[:n] = -1
     unused = np.empty((2, 0), dtype=np.int64)
     _forward(points, cells, order, starts, extent, mask, range2, radius2, best2, best, close,
              unused, best2, False)  # fmt: skip
@@ -278,6 +285,74 @@ def _pairs(
     unused_best = np.empty(0, dtype=np.int64)
     _forward(points, cells, order, starts, extent, mask, 0.0, radius2, unused, unused_best,
              close, pairs, pairs2, True)  # fmt: skip
+
+
+@njit
+def _near_and_pairs(
+    points: np.ndarray,
+    cells: np.ndarray,
+    order: np.ndarray,
+    starts: np.ndarray,
+    extent: np.ndarray,
+    mask: int,
+    range2: float,
+    radius2: float,
+    none: float,
+    work: np.ndarray,
+    scratch: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:meth:`CellList.near` on a built grid (squared range and radius): each point's nearest
+    within the range (N,) and its distance (N,), views of ``work`` (int64, at least 3 N) and
+    ``scratch`` (float64, at least 2 N), and the pairs closer than the radius, first, second
+    (P,) sorted by first then second, and their distances (P,)."""
+    n = order.shape[0]
+    nearest, close, best = work[:n], work[n : 2 * n], work[2 * n : 3 * n]
+    distance, best2 = scratch[:n], scratch[n : 2 * n]
+    _near(points, cells, order, starts, extent, mask, range2, radius2, none, nearest, distance,
+          close, best2, best)  # fmt: skip
+    total = close.sum()
+    pairs = np.empty((2, total), dtype=np.int64)
+    pairs2 = np.empty(total)
+    if total:
+        _pairs(points, cells, order, starts, extent, mask, radius2, close, pairs, pairs2)
+    by = np.argsort(pairs[0] * n + pairs[1])  # the keys are distinct: any sort is stable
+    return nearest, distance, pairs[0][by], pairs[1][by], np.sqrt(pairs2[by])
+
+
+@njit
+def workspace(n: int, d: int, reach: float) -> tuple[np.ndarray, np.ndarray]:
+    """The scratch arrays :func:`near_all` takes for ``n`` points in ``d`` dimensions within
+    ``reach``: int64 and float64 (keep them for the next call)."""
+    _, mask = _grid_shape(n, reach)
+    return np.empty((d + 5) * n + 2 * mask + 3, np.int64), np.empty((d + 2) * n)
+
+
+@njit
+def _grid_shape(n: int, reach: float) -> tuple[float, int]:
+    """The cell width for queries within ``reach`` (1 for reach 0) and the bucket mask for
+    ``n`` points: 2N to 4N buckets (at least 2)."""
+    width = reach * (1.0 + MARGIN) if reach > 0.0 else 1.0
+    bits = 1
+    while (1 << bits) < 2 * n:
+        bits += 1
+    return width, (1 << bits) - 1
+
+
+@njit
+def near_all(
+    axes: tuple[np.ndarray, ...], range_: float, radius: float, none: float,
+    work: np.ndarray, scratch: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """``CellList(axes, max(range_, radius)).near(range_, radius, none)`` as one compiled
+    call (for compiled code that senses the whole swarm every iteration), in the scratch
+    arrays of :func:`workspace`: the fields of :class:`Near` (nearest and distance are views
+    of them, valid until the next call)."""
+    n, d = axes[0].shape[0], len(axes)
+    width, mask = _grid_shape(n, max(range_, radius))
+    grid_ints = (d + 2) * n + 2 * mask + 3
+    _, extent, cells, points, order, starts = _build(axes, width, mask, work, scratch)
+    return _near_and_pairs(points, cells, order, starts, extent, mask, range_ * range_,
+                           radius * radius, none, work[grid_ints:], scratch[d * n :])  # fmt: skip
 
 
 @njit
@@ -351,10 +426,9 @@ class CellList:
         if not axes or any(a.shape != axes[0].shape or a.ndim != 1 for a in axes):
             raise ValueError("CellList: one array of shape (N,) per axis")
         self.reach = float(reach)
-        self.width = self.reach * (1.0 + MARGIN) if self.reach > 0.0 else 1.0
-        n = axes[0].size
-        self.mask = (1 << max(1, (2 * n - 1).bit_length())) - 1  # 2N to 4N buckets
-        built = _build(axes, self.width, self.mask)
+        self.width, self.mask = _grid_shape(axes[0].size, self.reach)
+        self._work = workspace(axes[0].size, len(axes), self.reach)  # the grid's arrays
+        built = _build(axes, self.width, self.mask, *self._work)
         self.low, self.extent, self.cells, self.sorted_points, self.order, self.starts = built
 
     @property
@@ -370,19 +444,10 @@ class CellList:
         cells)."""
         if max(range_, radius) > self.reach:
             raise ValueError(f"near: range {range_} and radius {radius} must be <= {self.reach}")
-        n = self.size
-        nearest = np.empty(n, dtype=np.int64)
-        distance = np.empty(n)
-        close = np.empty(n, dtype=np.int64)
         grid = (self.sorted_points, self.cells, self.order, self.starts, self.extent, self.mask)
-        _near(*grid, range_ * range_, radius * radius, none, nearest, distance, close)
-        total = int(close.sum())
-        pairs = np.empty((2, total), dtype=np.int64)
-        pairs2 = np.empty(total)
-        if total:
-            _pairs(*grid, radius * radius, close, pairs, pairs2)
-        by = np.lexsort((pairs[1], pairs[0]))
-        return Near(nearest, distance, pairs[0, by], pairs[1, by], np.sqrt(pairs2[by]))
+        n = self.size
+        work, scratch = np.empty(3 * n, np.int64), np.empty(2 * n)
+        return Near(*_near_and_pairs(*grid, range_ * range_, radius * radius, none, work, scratch))
 
     def candidates(self, coordinates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         """(query row, point) of every query point and grid point in neighbouring cells: a

@@ -10,11 +10,14 @@ engines give the same bits.
 Where the run allows it (the mission's sensors have a compiled form, the motion model is the
 2-D or the 3-D drone), :meth:`CompiledEngine.loop` runs whole iterations, Phases 2 to 6, in
 one compiled call. A tree that sends no message runs ``CHUNK`` agents at a time over many
-iterations, on every core. A tree that sends messages runs iteration by iteration, its
-messages handled by the mission's compiled handlers (``MessageType.kernel``) while they reach
-every agent; a delivery that reaches only some, or a recorded message type, is handed to the
-datalink in Python. Elsewhere the simulation calls :meth:`CompiledEngine.tick` once per
-iteration, and what the leaves sent goes to the datalink after it.
+iterations, on every core, unless the sensors sense the whole swarm at once
+(``SwarmSensorKernel``, e.g. collisions): then it runs iteration by iteration, the swarm
+sensor once an iteration before the agents' phases. A tree that sends messages runs
+iteration by iteration, its messages handled by the mission's compiled handlers
+(``MessageType.kernel``) while they reach every agent; a delivery that reaches only some, or
+a recorded message type, is handed to the datalink in Python. Elsewhere the simulation calls
+:meth:`CompiledEngine.tick` once per iteration, and what the leaves sent goes to the datalink
+after it.
 """
 
 from __future__ import annotations
@@ -275,9 +278,10 @@ class CompiledEngine:
         """The fused function a call of ``iterations`` iterations runs: the parallel one
         where it pays for starting the threads (once a call without messages, three times
         an iteration with them)."""
-        if fused.messaging is not None:
+        if fused.messaging is not None or fused.sensors.swarm is not None:
+            kind = "messages" if fused.messaging is not None else "swarm"
             parallel = self.swarm.size >= PARALLEL_AGENTS
-            return "block_messages_parallel" if parallel else "block_messages_serial"
+            return f"block_{kind}_parallel" if parallel else f"block_{kind}_serial"
         return "block_parallel" if iterations * self.swarm.size >= PARALLEL else "block_serial"
 
     def node_statuses(self) -> np.ndarray:
@@ -311,6 +315,8 @@ class CompiledEngine:
         start, every = sim.world.iteration, recorder.every
         if fused.messaging is not None:
             arguments += tuple(self._inbox(sim, fused.messaging))
+        if fused.sensors.swarm is not None:
+            arguments += fused.sensors.swarm.state
         block = getattr(code, self._function(fused, typical or count))
         import numba
 
@@ -423,12 +429,18 @@ class CompiledEngine:
     def _after(
         sim: Simulation, sensors: SensorKernel, start: int, count: int, stopped: np.ndarray
     ) -> None:
-        """The bookkeeping of a fused run: the sensors' alerts in order of iteration, the
-        world's clock, the recorder's iterations and count."""
+        """The bookkeeping of a fused run: the sensors' alerts and what the swarm sensor
+        kept, in order of iteration (an iteration's alerts first, as Phase 2 raises them),
+        the world's clock, the recorder's iterations and count."""
+        collect = sensors.swarm.collect if sensors.swarm is not None else None
         for t in np.unique(stopped[stopped >= 0]).tolist():
+            if collect is not None:
+                collect(sim, t - 1)
             sim.world.iteration = t
             if sensors.stopped is not None:
                 sensors.stopped(sim, np.flatnonzero(stopped == t))
+        if collect is not None:
+            collect(sim, start + count)
         sim.world.iteration = start + count
         recorder = sim.recorder
         for t in range(start + 1, start + count + 1):

@@ -25,7 +25,14 @@ import numpy as np
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.status import FAILURE, NAMES, RUNNING, SUCCESS
 from pyautonomousagent.engines.batched import Program
-from pyautonomousagent.kernels import ITERATION, HandlerKernel, Later, LeafKernel, SensorKernel
+from pyautonomousagent.kernels import (
+    ITERATION,
+    HandlerKernel,
+    Later,
+    LeafKernel,
+    SensorKernel,
+    SwarmSensorKernel,
+)
 
 _CODES = {name: code for code, name in NAMES.items()}
 
@@ -288,6 +295,32 @@ def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:
     return f"S({', '.join(args)})"
 
 
+def _swarm_args(swarm: SwarmSensorKernel, layout: Layout) -> list[str]:
+    """The arguments of a swarm sensor's functions after the first ones: its arrays, its state
+    ``ws0, ws1, ...`` (arguments of the fused function) and its constants."""
+    args = [layout.array(name) for name in swarm.names]
+    args += [f"ws{j}" for j in range(len(swarm.state))]
+    return args + layout.constants.refs("swarm", swarm.constants)
+
+
+def _swarm_apply(sensors: SensorKernel, layout: Layout) -> str:
+    """After agent ``a``'s sensors, what the swarm sensor found for it (a line of its own);
+    "" without a swarm sensor."""
+    if sensors.swarm is None:
+        return ""
+    return f"\nWA({', '.join(['a', 'moving', *_swarm_args(sensors.swarm, layout)])})"
+
+
+def _swarm_detect(sensors: SensorKernel, layout: Layout) -> str:
+    """At the start of iteration ``t``: the swarm sensor over every agent, stopping before
+    the iteration where it has too little room; "" without a swarm sensor."""
+    if sensors.swarm is None:
+        return ""
+    args = ", ".join(["t", *_swarm_args(sensors.swarm, layout)])
+    return f"""        if W({args}) != 0:
+            return done"""
+
+
 def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
     """Phase 2 for agent ``a``: the sensors, then the 2-D drone's step (and the 3-D drone's
     altitude, :func:`_vertical_motion`). The sine and cosine are
@@ -295,7 +328,7 @@ def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
     bits on every CPU, and in a GPU kernel compiled without FMA contraction."""
     c = {name: layout.array(name) for name in layout.names}
     x, y, v, h = c["x"], c["y"], c["speed"], c["heading"]
-    lines = f"""moving = {_sensor_call(sensors, layout)}
+    lines = f"""moving = {_sensor_call(sensors, layout)}{_swarm_apply(sensors, layout)}
 if moving:
     heading = {h}[a]
     speed = {v}[a]
@@ -509,33 +542,36 @@ def _groups(body: str, indent: str) -> str:
     return "\n".join(indent + line for line in head.splitlines()) + "\n" + body
 
 
-def message_block_function(
+def stepwise_block_function(
     program: Program,
     kernels: Mapping[int, LeafKernel],
     layout: Layout,
     sensors: SensorKernel,
-    messaging: Messaging,
+    messaging: Messaging | None,
     parallel: bool,
 ) -> str:
-    """``block_messages_serial``/``block_messages_parallel(t0, count, every, chunk, st, cur,
-    pend, kf, ki, arrays..., outboxes..., us, uh, uc, records..., traces, traced_at,
-    behaviour, leaf_rows, stopped_at, max_speed, speed_step, turn_step, reach, order, counts,
-    lowest, inboxes..., handler state...) -> iterations done``: up to ``count`` whole
-    iterations, Phase by Phase over every agent (``chunk`` agents at a time, on every core
-    in the parallel one), the messages handled compiled. The inboxes hold the messages to
-    handle in the first iteration (``order``: the types delivered, in delivery order, -1
-    after them; ``counts`` per type). It stops after an iteration whose messages do not
-    reach every agent (``reach``: the datalink's range, world units), or include a recorded
-    type: the caller delivers those (the outboxes keep them) as it does after the last
-    iteration."""
+    """The fused loop that runs iteration by iteration, Phase by Phase over every agent
+    (``chunk`` agents at a time, on every core in the parallel one), for a tree that sends
+    messages (given ``messaging``) or sensors that sense the whole swarm
+    (``sensors.swarm``, called once an iteration, before the agents' sensors):
+
+    ``block_messages_serial``/``block_messages_parallel`` (with messaging) or
+    ``block_swarm_serial``/``block_swarm_parallel`` (without) ``(t0, count, every, chunk, st,
+    cur, pend, kf, ki, arrays..., outboxes..., us, uh, uc, records..., traces, traced_at,
+    behaviour, leaf_rows, stopped_at, max_speed, speed_step, turn_step[, reach, order,
+    counts, lowest, inboxes..., handler state...][, swarm state...]) -> iterations done``:
+    up to ``count`` whole iterations. With messaging, the messages are handled compiled: the
+    inboxes hold the messages to handle in the first iteration (``order``: the types
+    delivered, in delivery order, -1 after them; ``counts`` per type); it stops after an
+    iteration whose messages do not reach every agent (``reach``: the datalink's range,
+    world units), or include a recorded type: the caller delivers those (the outboxes keep
+    them) as it does after the last iteration. The swarm sensor stops it before an
+    iteration it has no room for."""
     records = ", ".join(f"r{j}" for j in range(len(layout.names)))
     store = "\n".join(
         f"                r{j}[row, first:last] = c{j}[first:last]"
         for j in range(len(layout.names))
     )
-    recorded = [k for k, flag in enumerate(messaging.recorded) if flag]
-    deliver_here = " or ".join(f"counts[{k}] > 0" for k in recorded) or "False"
-    state = f", {messaging.state}" if messaging.state else ""
     agents = "range(U(first), U(last))"
     sense_and_move = f"""            for a in {agents}:
 {_motion(layout, sensors, " " * 16)}"""
@@ -545,28 +581,39 @@ def message_block_function(
     record = f"""{store}
                 for a in {agents}:
                     record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"""
-    name = "block_messages_parallel" if parallel else "block_messages_serial"
-    return f"""
-@njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
-def {name}(t0, count, every, chunk, {_FUSED_ARGS.format(arrays=layout.arrays, records=records)},
-           reach, order, counts, lowest, {messaging.inboxes}{state}):
-    n = {layout.array("x")}.shape[0]
-    groups = (n + chunk - 1) // chunk
-    done = 0
-    for t in range(t0 + 1, t0 + count + 1):
-{_groups(sense_and_move, " " * 8)}
-{_handle(messaging, layout)}
-{_groups(tick_and_control, " " * 8)}
-        if t % every == 0:
-            row = t // every
-{_groups(record, " " * 12)}
-        done += 1
+    extra, handle, collect = "", "", ""
+    if messaging is not None:
+        recorded = [k for k, flag in enumerate(messaging.recorded) if flag]
+        deliver_here = " or ".join(f"counts[{k}] > 0" for k in recorded) or "False"
+        state = f", {messaging.state}" if messaging.state else ""
+        extra = f",\n           reach, order, counts, lowest, {messaging.inboxes}{state}"
+        handle = "\n" + _handle(messaging, layout)
+        collect = f"""
 {_collect(messaging, layout)}
         if j > 0:
             if bad or not hypot(high_x - low_x, high_y - low_y) <= reach:
                 return done
             if {deliver_here}:
-                return done
+                return done"""
+    if sensors.swarm is not None and sensors.swarm.state:
+        extra += ",\n           " + ", ".join(f"ws{j}" for j in range(len(sensors.swarm.state)))
+    kind = "messages" if messaging is not None else "swarm"
+    name = f"block_{kind}_{'parallel' if parallel else 'serial'}"
+    arguments = _FUSED_ARGS.format(arrays=layout.arrays, records=records) + extra
+    return f"""
+@njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
+def {name}(t0, count, every, chunk, {arguments}):
+    n = {layout.array("x")}.shape[0]
+    groups = (n + chunk - 1) // chunk
+    done = 0
+    for t in range(t0 + 1, t0 + count + 1):
+{_swarm_detect(sensors, layout)}
+{_groups(sense_and_move, " " * 8)}{handle}
+{_groups(tick_and_control, " " * 8)}
+        if t % every == 0:
+            row = t // every
+{_groups(record, " " * 12)}
+        done += 1{collect}
     return done
 """
 
@@ -606,24 +653,27 @@ def module_source(
 ) -> str:
     """The whole generated module: imports of the kernels, ``tick`` and, given ``sensors``,
     the fused loop: ``block_messages_serial`` and ``block_messages_parallel`` where the tree
-    sends messages (given ``messaging``), else ``block_serial`` and ``block_parallel``."""
+    sends messages (given ``messaging``), ``block_swarm_serial`` and ``block_swarm_parallel``
+    where it sends none and ``sensors`` sense the whole swarm, else ``block_serial`` and
+    ``block_parallel``."""
     lines = [HEADER]
     used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
     used |= {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
     if sensors is not None:
         used["S"] = sensors.function
+    if sensors is not None and sensors.swarm is not None:
+        used["W"], used["WA"] = sensors.swarm.detect, sensors.swarm.apply
     for k, handler in enumerate(messaging.handlers if messaging is not None else ()):
         used[f"H{k}"] = handler.function
     for name, function in sorted(used.items()):
         py = getattr(function, "py_func", function)
         lines.append(f"from {py.__module__} import {py.__qualname__} as {name}")
     lines.append(tick_function(program, kernels, layout))
-    if sensors is not None and layout.outboxes:
-        if messaging is not None:
-            lines += [
-                message_block_function(program, kernels, layout, sensors, messaging, p)
-                for p in (False, True)
-            ]
-    elif sensors is not None:
-        lines += [block_function(program, kernels, layout, sensors, p) for p in (False, True)]
+    if sensors is None or (layout.outboxes and messaging is None):
+        return "\n".join(lines) + "\n"  # no fused loop
+    for p in (False, True):
+        if layout.outboxes or sensors.swarm is not None:
+            lines.append(stepwise_block_function(program, kernels, layout, sensors, messaging, p))
+        else:
+            lines.append(block_function(program, kernels, layout, sensors, p))
     return "\n".join(lines) + "\n"

@@ -301,8 +301,10 @@ class GpuEngine(CompiledEngine):
     def runs(self, sim: Simulation) -> bool:
         """Whether the kernels can run ``sim``'s iterations from its start (else
         :meth:`prepare` refuses it): a mission with compiled sensors and compiled handlers
-        of the messages its tree sends, the 2-D or 3-D drone."""
-        return self._fusable(sim) is not None
+        of the messages its tree sends, the 2-D or 3-D drone; no sensor of the whole swarm
+        (``SwarmSensorKernel``: not on the device yet)."""
+        fused = self._fusable(sim)
+        return fused is not None and fused.sensors.swarm is None
 
     def bytes_per_drone_iteration(self, sim: Simulation) -> float:
         """Bytes of device memory one drone-iteration moves, counted from the kernel's

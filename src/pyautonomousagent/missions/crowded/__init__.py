@@ -11,13 +11,20 @@ from __future__ import annotations
 
 import logging
 import math
+from dataclasses import replace
 from typing import Any, ClassVar
 
 import numpy as np
 
-from pyautonomousagent.kernels import SensorKernel
+from pyautonomousagent.kernels import SensorKernel, SwarmSensorKernel
 from pyautonomousagent.missions.crowded import leaves  # noqa: F401  (registers them)
-from pyautonomousagent.missions.crowded.collisions import Collisions, collisions_per_agent
+from pyautonomousagent.missions.crowded.collisions import (
+    COLUMNS,
+    Collisions,
+    collisions_per_agent,
+    sense_plane,
+    take_reading,
+)
 from pyautonomousagent.missions.drones.mission import (
     SLOT_COLOUR,
     DroneMission,
@@ -151,27 +158,51 @@ class CrowdedMission(DroneMission):
         self, sim: Simulation, first: np.ndarray, second: np.ndarray, distance: np.ndarray
     ) -> None:
         """Damage, counts and one ``collision`` event per new colliding pair."""
-        s, names = sim.swarm.columns, sim.swarm.names
+        s = sim.swarm.columns
         counts = collisions_per_agent(first, second, sim.swarm.size)
         hit = np.flatnonzero(counts)
         s["collisions"][hit] += counts[hit]
         damage = s["damage"][hit] + counts[hit] * self.params.collision_damage
         s["damage"][hit] = np.minimum(damage, 100.0)
-        t = sim.world.iteration
-        for a, b, d in zip(first.tolist(), second.tolist(), distance.tolist(), strict=True):
+        t = np.full(first.size, sim.world.iteration, dtype=np.int64)
+        self._events(sim, t, first, second, distance)
+
+    def _events(
+        self, sim: Simulation, t: np.ndarray, first: np.ndarray, second: np.ndarray,
+        distance: np.ndarray,
+    ) -> None:  # fmt: skip
+        """One ``collision`` event per pair (``first[k]``, ``second[k]``) colliding at
+        iteration ``t[k]`` ``distance[k]`` world units apart, in order."""
+        names = sim.swarm.names
+        for u, a, b, d in zip(t.tolist(), first.tolist(), second.tolist(), distance.tolist(),
+                              strict=True):  # fmt: skip
             sim.events.append(
-                {"iteration": t, "event": "collision", "agent": names[a], "other": names[b],
+                {"iteration": u, "event": "collision", "agent": names[a], "other": names[b],
                  "distance": d, "message": f"collided with {names[b]} ({d:.3g} world units)"}
             )  # fmt: skip
-        log.debug("iteration %d: %d collision(s)", t, first.size)
+        if t.size:
+            log.debug("iterations %d to %d: %d collision(s)", t[0], t[-1], t.size)
+
+    def _collect(self, sim: Simulation, through: int) -> None:
+        """The collisions the fused loop found up to iteration ``through``, as events; then
+        room for what it found too little room for."""
+        t, pairs, distance = self.collisions.take(through)
+        self._events(sim, t, pairs[0], pairs[1], distance)
+        self.collisions.make_room()
 
     def compiled_sensors(self, sim: Simulation) -> SensorKernel | None:
-        """The drones' compiled sensors where nothing is sensed or detected (collision
-        radius and sensor range 0); else None: the proximity sensor needs the whole swarm
-        at once, so the compiled engine ticks the tree and leaves Phase 2 to :meth:`sense`."""
-        if self.collisions.active:
-            return None
-        return self.drone_sensors(sim)
+        """The drones' compiled sensors, with the proximity sensor and collisions as a
+        sensor of the whole swarm (:class:`~pyautonomousagent.kernels.SwarmSensorKernel`:
+        the same :func:`~pyautonomousagent.missions.crowded.collisions.detect`) where
+        they are on; None where the drones' own sensors have no compiled form."""
+        sensors = self.drone_sensors(sim)
+        if sensors is None or not self.collisions.active:
+            return sensors
+        c, p = self.collisions, self.params
+        constants = (c.radius, c.range, p.collision_damage)
+        swarm = SwarmSensorKernel(sense_plane, take_reading, COLUMNS, c.state, constants,
+                                  self._collect)  # fmt: skip
+        return replace(sensors, swarm=swarm)
 
     def marks(self) -> list[Mark]:
         """The groups' refuelling slots (small light-blue circles) and positions S1.."""

@@ -18,8 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from pyautonomousagent.jit import njit
-from pyautonomousagent.kernels import bearing
-from pyautonomousagent.proximity import CellList
+from pyautonomousagent.kernels import bearing, np_minimum
+from pyautonomousagent.proximity import near_all, workspace
 
 
 @dataclass(frozen=True)
@@ -44,27 +44,55 @@ class Reading:
 
 
 class Collisions:
-    """The pairs within the collision radius at the last check, for counting on entry.
+    """The pairs within the collision radius at the last check, for counting on entry, and
+    the buffers that :func:`detect` fills (the NumPy path and the compiled engine's fused loop
+    call it alike, through :meth:`sense` and ``CrowdedMission.compiled_sensors``).
 
     Args:
         agents: the swarm's size N.
         radius: agents closer than this collide (world units); 0: no collisions.
         sensor_range: the proximity sensor's range (world units); 0: the sensor reads
             nothing (distance 0 is never reported: the range, 0, is).
+
+    Attributes:
+        distance, bearing, hits: the last check's reading, shape (N,) each: the nearest
+            neighbour's distance and bearing, and the new collisions of each agent (int64).
+        touching: the keys ``first * N + second`` of the pairs within the radius, sorted, in
+            the first ``fill[0]`` places (room for more).
+        fill: int64 (4,): the pairs touching, the collisions buffered, and the room
+            :func:`detect` asked for where it had too little (touching, collisions; else 0).
+        events: the buffered collisions (iteration (E,), pair (2, E), distance (E,)), in order
+            of iteration, then pair; the first ``fill[1]`` are new.
+        work: the grid's scratch arrays (:func:`~pyautonomousagent.proximity.workspace`),
+            kept from check to check.
     """
 
     def __init__(self, agents: int, radius: float, sensor_range: float) -> None:
         self.agents = agents
         self.radius = float(radius)
         self.range = float(sensor_range)
-        self.touching = np.zeros(0, dtype=np.int64)  # pair keys first * N + second, sorted
+        self.distance = np.full(agents, self.range)
+        self.bearing = np.zeros(agents)
+        self.hits = np.zeros(agents, dtype=np.int64)
+        self.fill = np.zeros(4, dtype=np.int64)
+        self.touching = np.zeros(max(64, agents // 4), dtype=np.int64)
+        room = max(1024, agents)
+        self.events = (np.zeros(room, np.int64), np.zeros((2, room), np.int64), np.zeros(room))
+        self.work = (np.empty(0, np.int64), np.empty(0))  # the grid's, reused (sense makes it)
         if self.active:  # compile (or load from numba's cache) now, in the run's set-up
-            CellList((np.zeros(2), np.ones(2)), 1.0).near(1.0, 1.0)
+            Collisions(2, 0.0, 0.0).sense((np.zeros(2), np.ones(2)))
+            self.work = workspace(agents, 2, max(self.radius, self.range))
 
     @property
     def active(self) -> bool:
         """Whether anything is sensed or detected (a radius or a range above 0)."""
         return max(self.radius, self.range) > 0.0
+
+    @property
+    def state(self) -> tuple[np.ndarray, ...]:
+        """The arrays :func:`detect` reads and writes after the coordinates, in order."""
+        return (self.distance, self.bearing, self.hits, self.touching, self.fill, *self.events,
+                *self.work)  # fmt: skip
 
     def sense(self, coordinates: Sequence[np.ndarray]) -> Reading:
         """The proximity readings and the new collisions at the agents' positions.
@@ -72,17 +100,139 @@ class Collisions:
         Args:
             coordinates: x, y (and z) of every agent, world units, shape (N,) each.
         """
-        grid = CellList(coordinates, max(self.radius, self.range))
-        near = grid.near(self.range, self.radius, none=self.range)
-        heading = np.empty(self.agents)
-        bearings(coordinates[0], coordinates[1], near.nearest, heading)
-        distance = near.distance
-        keys = near.first * self.agents + near.second
-        new = ~_members(keys, self.touching)
-        self.touching = keys
-        return Reading(
-            distance, heading, near.first[new], near.second[new], near.pair_distance[new]
-        )
+        axes = tuple(np.ascontiguousarray(c, dtype=np.float64) for c in coordinates)
+        if len(axes) != 2 or self.work[0].size == 0:
+            self.work = workspace(self.agents, len(axes), max(self.radius, self.range))
+        while detect(0, axes, self.radius, self.range, *self.state):
+            self.make_room()
+        t, pairs, distance = self.take(np.iinfo(np.int64).max)
+        return Reading(self.distance.copy(), self.bearing.copy(), pairs[0], pairs[1], distance)
+
+    def make_room(self) -> None:
+        """Enlarge the buffers :func:`detect` found too small (to twice what it asked)."""
+        touching, events = int(self.fill[2]), int(self.fill[3])
+        if touching:
+            self.touching = np.resize(self.touching, 2 * touching)
+        if events:
+            t, pairs, distance = self.events
+            self.events = (np.resize(t, 2 * events), np.zeros((2, 2 * events), np.int64),
+                           np.resize(distance, 2 * events))  # fmt: skip
+            self.events[1][:, : pairs.shape[1]] = pairs
+        self.fill[2:] = 0
+
+    def take(self, through: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Remove the buffered collisions of iterations up to ``through`` and return them:
+        iteration (C,), pair (2, C) (first < second), distance (C,), in order."""
+        t, pairs, distance = self.events
+        count = int(self.fill[1])
+        k = int(np.searchsorted(t[:count], through, side="right"))
+        taken = t[:k].copy(), pairs[:, :k].copy(), distance[:k].copy()
+        rest = slice(k, count)
+        t[: count - k], distance[: count - k] = t[rest], distance[rest]
+        pairs[:, : count - k] = pairs[:, rest]
+        self.fill[1] = count - k
+        return taken
+
+
+@njit
+def detect(
+    t: int,
+    axes: tuple[np.ndarray, ...],
+    radius: float,
+    sensor_range: float,
+    distance: np.ndarray,
+    heading: np.ndarray,
+    hits: np.ndarray,
+    touching: np.ndarray,
+    fill: np.ndarray,
+    event_t: np.ndarray,
+    event_pairs: np.ndarray,
+    event_distance: np.ndarray,
+    work: np.ndarray,
+    scratch: np.ndarray,
+) -> int:
+    """One check at iteration ``t`` of the agents at ``axes`` (x, y (, z), shape (N,) each):
+    each agent's nearest neighbour within ``sensor_range`` into ``distance`` and ``heading``
+    (its bearing), the pairs now closer than ``radius`` into ``touching`` (the state of
+    :class:`Collisions`, sorted keys), and those not touching before (collisions, counted on
+    entry) into ``hits`` and appended to the buffered events; ``work``, ``scratch``: the
+    grid's (:func:`~pyautonomousagent.proximity.workspace`). Returns 0; or 1, changing
+    nothing but ``fill[2:]`` (the room asked for) and the scratch, where a buffer is too
+    small."""
+    n = axes[0].shape[0]
+    found = near_all(axes, sensor_range, radius, sensor_range, work, scratch)
+    nearest, near, first, second, pair_distance = found
+    keys = first * n + second
+    before = touching[: fill[0]]
+    new = np.empty(keys.size, dtype=np.bool_)
+    at = 0
+    for p in range(keys.size):  # both sorted: one walk along them
+        while at < before.size and before[at] < keys[p]:
+            at += 1
+        new[p] = not (at < before.size and before[at] == keys[p])
+    events = fill[1] + new.sum()
+    if keys.size > touching.size or events > event_t.size:
+        fill[2] = keys.size if keys.size > touching.size else 0
+        fill[3] = events if events > event_t.size else 0
+        return 1
+    distance[:] = near
+    bearings(axes[0], axes[1], nearest, heading)
+    hits[:] = 0
+    e = fill[1]
+    for p in range(keys.size):
+        touching[p] = keys[p]
+        if new[p]:
+            a, b = first[p], second[p]
+            hits[a] += 1
+            hits[b] += 1
+            event_t[e] = t
+            event_pairs[0, e] = a
+            event_pairs[1, e] = b
+            event_distance[e] = pair_distance[p]
+            e += 1
+    fill[0] = keys.size
+    fill[1] = e
+    return 0
+
+
+#: The columns :func:`sense_plane` and :func:`take_reading` get, in order.
+COLUMNS = ("x", "y", "neighbour_distance", "neighbour_bearing", "collisions", "damage")
+
+
+@njit
+def sense_plane(
+    t: int, x: np.ndarray, y: np.ndarray, neighbour_distance: np.ndarray,
+    neighbour_bearing: np.ndarray, collisions: np.ndarray, damage: np.ndarray,
+    distance: np.ndarray, heading: np.ndarray, hits: np.ndarray, touching: np.ndarray,
+    fill: np.ndarray, event_t: np.ndarray, event_pairs: np.ndarray,
+    event_distance: np.ndarray, work: np.ndarray, scratch: np.ndarray, radius: float,
+    sensor_range: float, damage_per_hit: float,
+) -> int:  # fmt: skip
+    """:func:`detect` of the agents in the plane (``SwarmSensorKernel.detect``: the arrays
+    :data:`COLUMNS`, the state :attr:`Collisions.state`, then radius, range and damage)."""
+    return detect(t, (x, y), radius, sensor_range, distance, heading, hits, touching, fill,
+                  event_t, event_pairs, event_distance, work, scratch)  # fmt: skip
+
+
+@njit(inline="always")
+def take_reading(
+    a: int, moving: bool, x: np.ndarray, y: np.ndarray, neighbour_distance: np.ndarray,
+    neighbour_bearing: np.ndarray, collisions: np.ndarray, damage: np.ndarray,
+    distance: np.ndarray, heading: np.ndarray, hits: np.ndarray, touching: np.ndarray,
+    fill: np.ndarray, event_t: np.ndarray, event_pairs: np.ndarray,
+    event_distance: np.ndarray, work: np.ndarray, scratch: np.ndarray, radius: float,
+    sensor_range: float, damage_per_hit: float,
+) -> None:  # fmt: skip
+    """Agent ``a``'s reading (``SwarmSensorKernel.apply``): the proximity sensor's columns
+    where it is powered (``moving``), and ``damage_per_hit`` percent damage (at most 100)
+    per new collision: ``CrowdedMission.sense``'s operations for one agent."""
+    if moving:
+        neighbour_distance[a] = distance[a]
+        neighbour_bearing[a] = heading[a]
+    count = hits[a]
+    if count:
+        collisions[a] += count
+        damage[a] = np_minimum(damage[a] + count * damage_per_hit, 100.0)
 
 
 @njit
@@ -93,14 +243,6 @@ def bearings(x: np.ndarray, y: np.ndarray, nearest: np.ndarray, out: np.ndarray)
     for i in range(x.size):
         j = nearest[i]
         out[i] = bearing(x[i], y[i], x[j], y[j]) if j >= 0 else 0.0
-
-
-def _members(keys: np.ndarray, sorted_keys: np.ndarray) -> np.ndarray:
-    """Which of ``keys`` are in ``sorted_keys`` (ascending), shape of ``keys``."""
-    if sorted_keys.size == 0 or keys.size == 0:
-        return np.zeros(keys.shape, dtype=bool)
-    at = np.minimum(np.searchsorted(sorted_keys, keys), sorted_keys.size - 1)
-    return sorted_keys[at] == keys
 
 
 def collisions_per_agent(first: np.ndarray, second: np.ndarray, agents: int) -> np.ndarray:
