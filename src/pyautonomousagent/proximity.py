@@ -315,8 +315,46 @@ def _near_and_pairs(
     pairs2 = np.empty(total)
     if total:
         _pairs(points, cells, order, starts, extent, mask, radius2, close, pairs, pairs2)
-    by = np.argsort(pairs[0] * n + pairs[1])  # the keys are distinct: any sort is stable
+    by = _pair_order(pairs[0], pairs[1], n)
     return nearest, distance, pairs[0][by], pairs[1][by], np.sqrt(pairs2[by])
+
+
+#: Above this many pairs of one first point, :func:`_pair_order` sorts them with
+#: ``np.argsort`` rather than by insertion.
+_FEW_PARTNERS = 16
+
+
+@njit
+def _pair_order(first: np.ndarray, second: np.ndarray, n: int) -> np.ndarray:
+    """The order of the pairs (``first``, ``second``, shape (P,) each, points < ``n``, no
+    pair twice) by first, then second: a counting sort by first (O(N + P)), then each first
+    point's few partners by insertion. (A comparison sort of all the keys cost the batched
+    engine's run with collisions about a tenth of its time at 100,000 drones.)"""
+    starts = np.zeros(n + 1, dtype=np.int64)
+    for p in range(first.size):
+        starts[first[p] + 1] += 1
+    for a in range(n):
+        starts[a + 1] += starts[a]
+    fill = starts[:-1].copy()
+    by = np.empty(first.size, dtype=np.int64)
+    for p in range(first.size):
+        a = first[p]
+        by[fill[a]] = p
+        fill[a] += 1
+    for a in range(n):
+        low, high = starts[a], starts[a + 1]
+        if high - low > _FEW_PARTNERS:
+            segment = by[low:high].copy()
+            by[low:high] = segment[np.argsort(second[segment])]
+            continue
+        for i in range(low + 1, high):
+            p = by[i]
+            j = i - 1
+            while j >= low and second[by[j]] > second[p]:
+                by[j + 1] = by[j]
+                j -= 1
+            by[j + 1] = p
+    return by
 
 
 @njit

@@ -28,7 +28,8 @@ class Reading:
 
     Attributes:
         distance: distance to the nearest other agent within the sensor's range, world
-            units, shape (N,); the range itself where none is within it.
+            units, shape (N,); the range itself where none is within it. (This and
+            ``bearing`` are the :class:`Collisions`' own arrays: valid until its next check.)
         bearing: the bearing to it, degrees clockwise from north in [0, 360), shape (N,);
             0 where none is within range.
         first, second: the pairs that collide now (entered the radius), first < second,
@@ -106,7 +107,7 @@ class Collisions:
         while detect(0, axes, self.radius, self.range, *self.state):
             self.make_room()
         t, pairs, distance = self.take(np.iinfo(np.int64).max)
-        return Reading(self.distance.copy(), self.bearing.copy(), pairs[0], pairs[1], distance)
+        return Reading(self.distance, self.bearing, pairs[0], pairs[1], distance)
 
     def make_room(self) -> None:
         """Enlarge the buffers :func:`detect` found too small (to twice what it asked)."""
