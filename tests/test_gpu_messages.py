@@ -11,6 +11,7 @@ import re
 import subprocess
 import sys
 import textwrap
+from pathlib import Path
 
 import pytest
 
@@ -18,6 +19,7 @@ from pyautonomousagent import Simulation, jit, load
 from pyautonomousagent.engines.compiled_source import Constants
 from pyautonomousagent.engines.gpu_messages import DeviceMessages
 from pyautonomousagent.engines.gpu_source import message_module_source
+from pyautonomousagent.missions import gathering
 
 NEAR, SENDER, EACH = DeviceMessages.NEAR, DeviceMessages.SENDER, DeviceMessages.EACH
 
@@ -227,3 +229,75 @@ def test_radiation_search_gives_the_batched_engines_bits(reach: str) -> None:
     assert len({tuple(f) for f in found}) > 1  # the seeds wander differently
     handled = _handled(lines)
     assert set(handled) == ({("found", EACH)} if reach == "1000" else {("found", NEAR)}), handled
+
+
+#: Run under NUMBA_ENABLE_CUDASIM=1 with a scenario folder: gathering with a tree that sends
+#: "sharing data" twice per tick (before and after a refuel to 100 %, so the two differ in
+#: energy), on the GPU engine against the batched engine; prints the shared data's energies
+#: heard, how each delivery was handled (type, how, messages) and "same".
+TWICE = textwrap.dedent(
+    """
+    import sys
+    from collections import Counter
+    from pathlib import Path
+    from pyautonomousagent import Simulation, load
+    from pyautonomousagent.engines import gpu_messages
+    from pyautonomousagent.testing import check_same_runs
+
+    handled = Counter()
+    handle = gpu_messages.DeviceMessages._handle
+    def counted(self, k, how, m, *rest):
+        handled[self.messaging.types[k].replace(" ", "_"), how, m] += 1
+        return handle(self, k, how, m, *rest)
+    gpu_messages.DeviceMessages._handle = counted
+    scenario = load(Path(sys.argv[1]) / "twice.yaml").with_overrides(
+        agents=5, iterations=30, gathering_iteration=12)
+    for seed in (1, 2):
+        a, b = (Simulation.create(scenario, seed=seed, engine=e).run(progress=False)
+                for e in ("batched", "gpu"))
+        assert b.engine.name == "gpu"
+        check_same_runs(a, b, ("batched", "gpu"))
+        sa, sb = a.mission.shared, b.mission.shared
+        if any(sa[r] != sb[r] for r in range(len(sa))):
+            print("differ", seed, "shared data")
+            sys.exit(1)
+        print("energy", *sorted({h["energy"] for r in range(len(sa)) for h in sa[r].values()}))
+    for (name, how, m), times in sorted(handled.items()):
+        print("handled", name, how, m, times)
+    print("same")
+    """
+)
+
+
+@needs_numba
+def test_a_sender_sending_a_type_twice_in_a_tick_keeps_its_messages_order(
+    tmp_path: Path,
+) -> None:
+    """A tree may send one type from two nodes: the inbox holds each sender's two messages
+    side by side (canonical order), and the shared data handled by sender keeps the later
+    one, the batched engine's (5 drones x 30 iterations, 2 seeds)."""
+    folder = Path(gathering.__file__).parent
+    tree = (folder / "gathering.xml").read_text()
+    one = '<Action_Transmit_Shared_Data_S name="action_transmit_shared_data_s"/>'
+    twice = (
+        '<Action_Transmit_Shared_Data_S name="first"/>'
+        '<Action_Refuel_A name="top_up" rate="100"/>'
+        '<Action_Transmit_Shared_Data_S name="second"/>'
+    )
+    assert one in tree
+    (tmp_path / "twice.xml").write_text(tree.replace(one, twice))
+    yaml = (folder / "gathering.yaml").read_text()
+    (tmp_path / "twice.yaml").write_text(yaml.replace("tree: gathering.xml", "tree: twice.xml"))
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
+    done = subprocess.run(
+        [sys.executable, "-c", TWICE, str(tmp_path)], env=env, capture_output=True, text=True,
+        timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    lines = done.stdout.strip().splitlines()
+    assert lines[-1] == "same", done.stdout
+    energies = [line.split()[1:] for line in lines if line.startswith("energy")]
+    assert energies == [["100.0"], ["100.0"]]  # the second message of each sender, topped up
+    handled = {tuple(line.split()[1:4]): int(line.split()[4]) for line in lines
+               if line.startswith("handled")}  # fmt: skip
+    assert handled[("sharing_data", str(SENDER), "10")] == 2 * 29  # 5 drones, 2 messages each
