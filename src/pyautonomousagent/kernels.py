@@ -14,7 +14,9 @@ read and written at ``[a]``), then its constants; it must give the same bits as 
 Messages: a leaf that broadcasts declares what it sends (:class:`Sends`) and its kernel gets
 an outbox after its arrays; a mission's message type may have a :class:`HandlerKernel`, the
 compiled form of its handler for deliveries that reached every agent (and, optionally,
-:class:`Receive`, one message for one receiver, for those that reached only some). The helpers
+:class:`Receive`, one message for one receiver, for those that reached only some; and
+``by_sender``, for an everyone form whose messages touch only their senders' entries: the
+GPU engine handles a delivery to everyone in parallel with either). The helpers
 below repeat :mod:`pyautonomousagent.arrays` and NumPy's element-wise rules operation for
 operation on one number, so kernels can use them.
 """
@@ -101,7 +103,10 @@ class LeafKernel:
 class Receive:
     """A handler's per-receiver form: what one message does to one receiver, for deliveries
     that reached only some agents (the GPU engine hands each receiver the messages in range,
-    in message order, the batched engine's delivery order).
+    in message order, the batched engine's delivery order), and, unless the handler is
+    ``by_sender``, for a delivery to everyone of a few messages (the GPU engine hands each
+    receiver every message not its own, in message order: the everyone form must do just
+    that, as gathering's and radiation-search's loops of this form do).
 
     Attributes:
         function: ``function(r, m, t, senders, data, *arrays, *state, *constants)``: message
@@ -141,6 +146,10 @@ class HandlerKernel:
         constants: numbers passed last.
         receive: the per-receiver form, or None (such deliveries are then handled by the
             mission's Python handler).
+        by_sender: the everyone form's effect of a message touches only its sender's
+            entries (of the arrays and state), so ``function`` may be called on each
+            sender's messages apart (a slice of ``senders`` and ``data``, in order), all
+            senders at once: the GPU engine does so, one thread per sender.
     """
 
     function: Callable[..., None]
@@ -149,6 +158,7 @@ class HandlerKernel:
     state: tuple[Any, ...] = ()
     constants: tuple[float | int, ...] = ()
     receive: Receive | None = None
+    by_sender: bool = False
 
 
 @dataclass(frozen=True)

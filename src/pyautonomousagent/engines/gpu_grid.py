@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 from numba import cuda as numba_cuda
 
-from pyautonomousagent.engines.gpu_reduce import exclusive_scan, shape
+from pyautonomousagent.engines.gpu_reduce import Workspace, exclusive_scan, shape
 from pyautonomousagent.jit import njit
 
 cuda: Any = numba_cuda  # numba's stubs type cuda.grid poorly
@@ -185,6 +185,7 @@ class DeviceGrid:
         self.starts = cuda.to_device(np.zeros(self.limit + 1, dtype=np.int64))
         self.cell = cuda.device_array(max(1, slots), np.int64)
         self.order = cuda.device_array(max(1, slots), np.int64)
+        self.work = Workspace()  # the prefix sum's temporaries
         self.cells = 1
 
     def group(self, sx: Any, sy: Any, count: int, box: tuple[float, ...], reach: float) -> None:
@@ -195,7 +196,7 @@ class DeviceGrid:
         self.grid.copy_to_device(np.array(layout, dtype=np.float64))
         self.cells = layout[3] * layout[4]
         _count[shape(count)](sx, sy, count, self.grid, self.cell, self.filled)
-        exclusive_scan(self.filled[: self.cells + 1], self.starts[: self.cells + 1])
+        exclusive_scan(self.filled[: self.cells + 1], self.starts[: self.cells + 1], self.work)
         _place[shape(count)](self.cell, self.starts, self.filled, count, self.order)
         _sort[shape(self.cells)](self.starts, self.order, self.cells)
 

@@ -5,18 +5,28 @@ one thread an agent; this module launches them iteration by iteration and keeps 
 messages on the device between iterations:
 
 1. ``sense_move``: Phase 2's sensors and motion.
-2. Last iteration's deliveries, type by type in delivery order: one that reached everyone
-   (the datalink's bounding-box test) runs the type's compiled handler in one thread
-   (``handle_all_<k>``); one that reached only some runs its per-receiver form
-   (:class:`~pyautonomousagent.kernels.Receive`) in one thread per receiver, over the
-   messages in range in message order (``handle_near_<k>``: the batched engine's delivery
-   order, pairs by message then receiver, as each receiver sees it), found on the type's
-   cell grid (:class:`~pyautonomousagent.engines.gpu_grid.DeviceGrid`: each receiver tests
-   only the messages of its own and the neighbouring cells, not all M).
+2. Last iteration's deliveries, type by type in delivery order. One that reached everyone
+   (the datalink's bounding-box test) runs, in the first way that fits:
+
+   - by sender (a ``by_sender`` handler, :class:`~pyautonomousagent.kernels.HandlerKernel`):
+     one thread per run of a sender's messages (adjacent in the inbox, which is by sender),
+     the compiled handler on that run's slice, in order (``handle_sender_<k>``);
+   - per receiver (a handler with a per-receiver form,
+     :class:`~pyautonomousagent.kernels.Receive`, and at most :data:`EACH_MOST` messages):
+     one thread per receiver, the form on every message it did not send, in message order
+     (``handle_each_<k>``);
+   - else the compiled handler in one thread (``handle_all_<k>``).
+
+   One that reached only some runs its per-receiver form in one thread per receiver, over
+   the messages in range in message order (``handle_near_<k>``: the batched engine's
+   delivery order, pairs by message then receiver, as each receiver sees it), found on the
+   type's cell grid (:class:`~pyautonomousagent.engines.gpu_grid.DeviceGrid`: each receiver
+   tests only the messages of its own and the neighbouring cells, not all M).
 3. ``tick``: Phases 3, 4 and 6.
 4. Phase 5: per type, each agent's sent flags (``flag_<k>``), their exclusive prefix sum
-   (:func:`exclusive_scan`) and the messages scattered to their places (``scatter_<k>``):
-   the inbox in canonical order (by sender, then sending node). :func:`bounding_box`
+   (:func:`~pyautonomousagent.engines.gpu_reduce.exclusive_scan`) and the messages
+   scattered to their places (``scatter_<k>``): the inbox in canonical order (by sender,
+   then sending node). :func:`~pyautonomousagent.engines.gpu_reduce.bounding_box`
    reduces the agents' and each type's senders' positions to the datalink's bounding box;
    the host reads the counts and boxes (a few numbers) and plans the next iteration's
    handling; a delivery that reached only some is grouped by cell on the device then.
@@ -36,7 +46,7 @@ from numba import cuda as numba_cuda
 from pyautonomousagent.arrays import hypot
 from pyautonomousagent.engines.compiled_source import Messaging
 from pyautonomousagent.engines.gpu_grid import DeviceGrid
-from pyautonomousagent.engines.gpu_reduce import bounding_box, exclusive_scan, shape
+from pyautonomousagent.engines.gpu_reduce import Workspace, bounding_box, exclusive_scan, shape
 
 if TYPE_CHECKING:
     from pyautonomousagent.simulation.run import Simulation
@@ -46,6 +56,12 @@ cuda: Any = numba_cuda  # numba's stubs type cuda.grid poorly
 #: ``lowest`` before an iteration's collection: above every node index.
 NO_NODE = np.iinfo(np.int64).max
 
+#: The most messages of a delivery to everyone handled per receiver (``handle_each``):
+#: that is N x M steps in all, M per thread, where the handler's everyone form in one
+#: thread may take as few as M (a form that keeps the last message of all, say): beyond a
+#: few dozen messages the N x M work costs more than the one thread's latency.
+EACH_MOST = 64
+
 
 class DeviceMessages:
     """The inboxes, flags, handler state and cell grids of a tree's message types on the
@@ -53,14 +69,20 @@ class DeviceMessages:
 
     Args:
         kernels: name -> compiled kernel, the generated module's (``sense_move``, ``tick``,
-            ``handle_all_<k>``, ``handle_near_<k>``, ``flag_<k>``, ``scatter_<k>``).
+            ``handle_all_<k>``, ``handle_sender_<k>``, ``handle_each_<k>``,
+            ``handle_near_<k>``, ``flag_<k>``, ``scatter_<k>``).
         messaging: the tree's message types and their handlers.
         names: the generated code's arrays ``c0, c1, ...`` (``Layout.names``).
         n: agents.
     """
 
-    #: How a type's delivery of last iteration is handled: not delivered, to everyone, near.
-    NONE, ALL, NEAR = 0, 1, 2
+    #: How a type's delivery of last iteration is handled: not delivered; to everyone in one
+    #: thread; near (to some, per receiver); to everyone by sender; to everyone per receiver.
+    NONE, ALL, NEAR, SENDER, EACH = 0, 1, 2, 3, 4
+
+    #: The kernel of each way of handling (type ``k``'s: the name and ``_<k>``).
+    KERNELS = {ALL: "handle_all", NEAR: "handle_near", SENDER: "handle_sender",
+               EACH: "handle_each"}  # fmt: skip
 
     #: Entries per receiver a per-receiver state starts with (doubled while short).
     ROOM = 8
@@ -74,7 +96,9 @@ class DeviceMessages:
         self.width = [sum(1 for kind, _ in messaging.senders.values() if kind == k)
                       for k in range(types)]  # fmt: skip
         self.counts = cuda.to_device(np.zeros(types, dtype=np.int64))
-        self.lowest = cuda.to_device(np.full(types, NO_NODE, dtype=np.int64))
+        self.no_node = np.full(types, NO_NODE, dtype=np.int64)
+        self.lowest = cuda.to_device(self.no_node)
+        self.work = Workspace()  # the prefix sums' and bounding boxes' temporaries
         self.rx, self.ry = cuda.device_array(n), cuda.device_array(n)
         self.inboxes: list[list[Any]] = []
         self.grids: dict[int, DeviceGrid] = {}  # type -> its grid, for those handled near
@@ -90,7 +114,8 @@ class DeviceMessages:
         self.state: list[Any] = []
         self.room = [self.ROOM] * types
         self.tables: list[tuple[Any, ...]] = [()] * types
-        self.plan: list[tuple[int, int]] = []  # (type, how) of the next iteration's handling
+        #: (type, how, messages) of the next iteration's handling, in delivery order.
+        self.plan: list[tuple[int, int, int]] = []
 
     def upload_state(self) -> None:
         """The handlers' state to the device (after the CPU changed it)."""
@@ -124,15 +149,15 @@ class DeviceMessages:
             messages = delivery.messages
             k = self.messaging.types.index(messages.type)
             m = counts[k] = len(messages)
-            fields = self.messaging.handlers[k].fields
             inbox = self.inboxes[k][2:]  # senders, data, sender x, sender y
-            host = [np.zeros(a.shape, a.dtype) for a in inbox]
-            host[0][:m] = messages.senders
-            host[1][:, :m] = [messages.data[f] for f in fields]
-            host[2][:m], host[3][:m] = messages.x, messages.y
-            for device, array in zip(inbox, host, strict=True):
-                device.copy_to_device(array)
-            self.plan.append((k, self.ALL if delivery.to_all else self.NEAR))
+            fields = self.messaging.handlers[k].fields
+            rows = [messages.senders, messages.x, messages.y, *(messages.data[f] for f in fields)]
+            places = [inbox[0], inbox[2], inbox[3], *(inbox[1][f] for f in range(len(fields)))]
+            for device, row in zip(places, rows, strict=True):
+                if m:  # only the first m: the kernels read no further
+                    device[:m].copy_to_device(np.ascontiguousarray(row, device.dtype))
+            how = self._everyone(k, m) if delivery.to_all else self.NEAR
+            self.plan.append((k, how, m))
             if not delivery.to_all and k in self.grids:
                 xs, ys = np.concatenate((x, messages.x)), np.concatenate((y, messages.y))
                 box = (xs.min(), xs.max(), ys.min(), ys.max())  # NaN: one cell
@@ -151,9 +176,9 @@ class DeviceMessages:
         """Launch every kernel once with no thread at work (compiles them, changes nothing)."""
         for kernel in self.kernels.values():
             kernel[1, 1](0, 0, 1, 0, *common, *self.arguments(reach))
-        exclusive_scan(self.inboxes[0][0][:1], self.inboxes[0][1][:1])
+        exclusive_scan(self.inboxes[0][0][:1], self.inboxes[0][1][:1], self.work)
         sx, sy = self.inboxes[0][4:]
-        bounding_box(common[self.xy[0]], common[self.xy[1]], sx, sy, self.counts, 0)
+        bounding_box(common[self.xy[0]], common[self.xy[1]], sx, sy, self.counts, 0, self.work)
         for k, grid in self.grids.items():  # its kernels, with no message
             sx, sy = self.inboxes[k][4:]
             grid.group(sx, sy, 0, (0.0, 0.0, 0.0, 0.0), reach)
@@ -167,8 +192,8 @@ class DeviceMessages:
         for t in range(start + 1, start + count + 1):
             extra = self.arguments(reach)
             self.kernels["sense_move"][blocks, threads](self.n, t, every, row0, *common, *extra)
-            for k, how in self.plan:
-                self._handle(k, how, t, every, row0, common, reach)
+            for k, how, m in self.plan:
+                self._handle(k, how, m, t, every, row0, common, reach)
             extra = self.arguments(reach)
             self.kernels["tick"][blocks, threads](self.n, t, every, row0, *common, *extra)
             done += 1
@@ -176,21 +201,33 @@ class DeviceMessages:
                 break
         return done
 
-    def _handle(self, k: int, how: int, t: int, every: int, row0: int, common: tuple[Any, ...],
-                reach: float) -> None:  # fmt: skip
-        """Type ``k``'s delivery of last iteration, in one thread (``ALL``) or one thread per
-        receiver (``NEAR``), with more room for the per-receiver state while it lacks some."""
-        if how == self.ALL:
-            self.kernels[f"handle_all_{k}"][1, 1](1, t, every, row0, *common,
-                                                  *self.arguments(reach))  # fmt: skip
+    def _everyone(self, k: int, m: int) -> int:
+        """How type ``k``'s delivery to everyone of ``m`` messages is handled (see the
+        module's docstring)."""
+        handler = self.messaging.handlers[k]
+        if handler.by_sender:
+            return self.SENDER
+        if handler.receive is not None and m <= EACH_MOST:
+            return self.EACH
+        return self.ALL
+
+    def _handle(self, k: int, how: int, m: int, t: int, every: int, row0: int,
+                common: tuple[Any, ...], reach: float) -> None:  # fmt: skip
+        """Type ``k``'s delivery of last iteration (``m`` messages), handled ``how``: in one
+        thread (``ALL``), one thread per message (``SENDER``: those that start a sender's
+        run work) or one thread per receiver (``EACH``, ``NEAR``), with more room for the
+        per-receiver state while it lacks some."""
+        kernel = self.kernels[f"{self.KERNELS[how]}_{k}"]
+        if how in (self.ALL, self.SENDER):
+            live = 1 if how == self.ALL else m
+            kernel[shape(live)](live, t, every, row0, *common, *self.arguments(reach))
             return
         blocks, threads = shape(self.n)
         receive = self.messaging.handlers[k].receive
         assert receive is not None
         while True:
             extra = self.arguments(reach)
-            self.kernels[f"handle_near_{k}"][blocks, threads](self.n, t, every, row0, *common,
-                                                              *extra)  # fmt: skip
+            kernel[blocks, threads](self.n, t, every, row0, *common, *extra)
             if not self.tables[k] or self.tables[k][0].copy_to_host()[0] == 0:
                 return
             assert receive.keep is not None and receive.state is not None
@@ -203,27 +240,29 @@ class DeviceMessages:
         """Phase 5 on the device: this iteration's messages into the inboxes and the next
         iteration's handling planned; True where the CPU must deliver them instead."""
         n, messaging = self.n, self.messaging
-        self.lowest.copy_to_device(np.full(len(messaging.types), NO_NODE, dtype=np.int64))
+        self.lowest.copy_to_device(self.no_node)
         extra = self.arguments(reach)
         blocks, threads = shape(n)
         x, y = common[self.xy[0]], common[self.xy[1]]
         for k in range(len(messaging.types)):
             flags, places = self.inboxes[k][:2]
             self.kernels[f"flag_{k}"][blocks, threads](n, t, every, row0, *common, *extra)
-            exclusive_scan(flags[: n * self.width[k]], places)
+            exclusive_scan(flags[: n * self.width[k]], places, self.work)
             self.kernels[f"scatter_{k}"][blocks, threads](n, t, every, row0, *common, *extra)
         counts, lowest = self.counts.copy_to_host(), self.lowest.copy_to_host()
         sent = sorted((int(lowest[k]), k) for k in range(len(counts)) if counts[k] > 0)
         self.plan, stop, boxes = [], False, {}
         for _, k in sent:
             sx, sy = self.inboxes[k][4:]
-            low_x, high_x, low_y, high_y, bad = bounding_box(x, y, sx, sy, self.counts, k)
+            box = bounding_box(x, y, sx, sy, self.counts, k, self.work)
+            low_x, high_x, low_y, high_y, bad = box
             everyone = bool(hypot(high_x - low_x, high_y - low_y) <= reach)
             near = messaging.handlers[k].receive is not None
             stop = stop or messaging.recorded[k] or bad > 0.0 or not (everyone or near)
-            self.plan.append((k, self.ALL if everyone else self.NEAR))
+            m = int(counts[k])
+            self.plan.append((k, self._everyone(k, m) if everyone else self.NEAR, m))
             boxes[k] = (low_x, high_x, low_y, high_y)
-        for k, how in self.plan if not stop else []:
+        for k, how, _ in self.plan if not stop else []:
             if how == self.NEAR:
                 sx, sy = self.inboxes[k][4:]
                 self.grids[k].group(sx, sy, int(counts[k]), boxes[k], reach)

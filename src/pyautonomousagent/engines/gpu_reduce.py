@@ -1,7 +1,9 @@
 """Launch shapes and chunked reductions on the device: exclusive prefix sums and bounding
 boxes, as trees of chunks that one thread each takes in turn (no shared memory and no
-barrier, which numba's CUDA simulator runs slowly). Used by the GPU engine's datalink
-(:mod:`~pyautonomousagent.engines.gpu_messages`, :mod:`~pyautonomousagent.engines.gpu_grid`).
+barrier, which numba's CUDA simulator runs slowly), their temporaries kept in a
+:class:`Workspace` (allocated once, grown when a longer input comes). Used by the GPU
+engine's datalink (:mod:`~pyautonomousagent.engines.gpu_messages`,
+:mod:`~pyautonomousagent.engines.gpu_grid`).
 """
 
 from __future__ import annotations
@@ -29,6 +31,26 @@ def shape(live: int) -> tuple[int, int]:
 CHUNK = 16
 
 
+class Workspace:
+    """The reductions' device temporaries, one array per use (a name and a level of the
+    tree of chunks), allocated at its first use and again only when a longer one is asked
+    for (twice the length then), so a run's iterations allocate nothing."""
+
+    def __init__(self) -> None:
+        self._arrays: dict[tuple[str, int], Any] = {}
+
+    def array(self, name: str, level: int, length: int, dtype: Any, width: int = 0) -> Any:
+        """A device array of ``length`` rows (``width`` columns, 0: one dimension) of
+        ``dtype``, the first rows of the one kept for (``name``, ``level``)."""
+        key = (name, level)
+        held = self._arrays.get(key)
+        if held is None or held.shape[0] < length:
+            rows = max(length, 2 * held.shape[0] if held is not None else length)
+            held = cuda.device_array((rows, width) if width else rows, dtype)
+            self._arrays[key] = held
+        return held[:length]
+
+
 @cuda.jit
 def _scan_chunks(values: Any, out: Any, sums: Any) -> None:
     """Each chunk's exclusive prefix sum of ``values`` (int64, shape (L,)) into ``out``, its
@@ -53,15 +75,16 @@ def _add_chunks(out: Any, offsets: Any) -> None:
         out[i] += offsets[i // CHUNK]
 
 
-def exclusive_scan(values: Any, out: Any) -> None:
+def exclusive_scan(values: Any, out: Any, work: Workspace, level: int = 0) -> None:
     """``out`` := the exclusive prefix sum of ``values`` (device int64 arrays, shape (L,)):
-    chunk by chunk, then the chunks' totals scanned the same way and added."""
+    chunk by chunk, then the chunks' totals scanned the same way (``level`` + 1, its
+    temporaries in ``work``) and added."""
     chunks = -(-values.shape[0] // CHUNK)
-    sums = cuda.device_array(chunks, np.int64)
+    sums = work.array("sums", level, chunks, np.int64)
     _scan_chunks[shape(chunks)](values, out, sums)
     if chunks > 1:
-        offsets = cuda.device_array(chunks, np.int64)
-        exclusive_scan(sums, offsets)
+        offsets = work.array("offsets", level, chunks, np.int64)
+        exclusive_scan(sums, offsets, work, level + 1)
         _add_chunks[shape(values.shape[0])](out, offsets)
 
 
@@ -107,17 +130,20 @@ def _box_boxes(boxes: Any, out: Any) -> None:
         out[c, 4] = max(out[c, 4], boxes[i, 4])
 
 
-def bounding_box(x: Any, y: Any, sx: Any, sy: Any, counts: Any, k: int) -> np.ndarray:
+def bounding_box(
+    x: Any, y: Any, sx: Any, sy: Any, counts: Any, k: int, work: Workspace
+) -> np.ndarray:
     """The bounding box of the agents (``x``, ``y``, device arrays shape (N,)) and type
     ``k``'s senders (``sx``, ``sy``, the first ``counts[k]``, on the device): (low x, high
-    x, low y, high y, NaN flag), a host array shape (5,). Min and max are exact: the order
-    of the reduction does not change the bits."""
+    x, low y, high y, NaN flag), a host array shape (5,); the chunks' boxes in ``work``.
+    Min and max are exact: the order of the reduction does not change the bits."""
     chunks = -(-(x.shape[0] + sx.shape[0]) // CHUNK)
-    boxes = cuda.device_array((chunks, 5))
+    boxes = work.array("boxes", 0, chunks, np.float64, 5)
     _box_points[shape(chunks)](x, y, sx, sy, counts, k, x.shape[0], boxes)
+    level = 0
     while boxes.shape[0] > 1:
-        chunks = -(-boxes.shape[0] // CHUNK)
-        out = cuda.device_array((chunks, 5))
+        chunks, level = -(-boxes.shape[0] // CHUNK), level + 1
+        out = work.array("boxes", level, chunks, np.float64, 5)
         _box_boxes[shape(chunks)](boxes, out)
         boxes = out
     return boxes.copy_to_host()[0]

@@ -179,13 +179,52 @@ def _handler_args(messaging: Messaging, layout: Layout, k: int) -> list[str]:
     return [layout.array(name) for name in messaging.handlers[k].names]
 
 
-def _handle_all(messaging: Messaging, layout: Layout, k: int) -> str:
-    """Thread 0 runs type ``k``'s handler of a delivery that reached everyone."""
+def _everyone_call(messaging: Messaging, layout: Layout, k: int, senders: str, data: str,
+                   count: str) -> str:  # fmt: skip
+    """The call of type ``k``'s everyone form on the messages ``senders``, ``data`` (source
+    expressions: the inbox or a slice of it), ``count`` of them."""
     handler = messaging.handlers[k]
-    args = [f"t, ib_s{k}, ib_d{k}, counts[{k}]", *_handler_args(messaging, layout, k)]
+    args = [f"t, {senders}, {data}, {count}", *_handler_args(messaging, layout, k)]
     args += [f"hs{k}_{j}" for j in range(len(handler.state))]
     args += layout.constants.refs(f"handler {k}", handler.constants)
-    return f"    H{k}({', '.join(args)})"
+    return f"H{k}({', '.join(args)})"
+
+
+def _handle_all(messaging: Messaging, layout: Layout, k: int) -> str:
+    """Thread 0 runs type ``k``'s handler of a delivery that reached everyone."""
+    return "    " + _everyone_call(messaging, layout, k, f"ib_s{k}", f"ib_d{k}", f"counts[{k}]")
+
+
+def _handle_sender(messaging: Messaging, layout: Layout, k: int) -> str:
+    """Thread ``a`` (one per message) runs type ``k``'s handler (``by_sender``) of a
+    delivery that reached everyone on the run of messages of one sender that starts at
+    message ``a`` (the inbox is by sender: a sender's messages are adjacent), a slice in
+    order; a thread whose message does not start a run does nothing."""
+    call = _everyone_call(messaging, layout, k, f"ib_s{k}[a:end]", f"ib_d{k}[:, a:end]", "end - a")
+    return f"""    s = ib_s{k}[a]
+    if a > 0 and ib_s{k}[a - 1] == s:
+        return
+    end = a + 1
+    while end < live and ib_s{k}[end] == s:
+        end += 1
+    {call}"""
+
+
+def _receive_call(messaging: Messaging, layout: Layout, k: int) -> str:
+    """The call of type ``k``'s per-receiver form: message ``m`` received by agent ``a``."""
+    handler = messaging.handlers[k]
+    args = [f"a, m, t, ib_s{k}, ib_d{k}", *_handler_args(messaging, layout, k)]
+    args += [f"rs{k}_{j}" for j in range(receive_size(messaging, k))]
+    args += layout.constants.refs(f"handler {k}", handler.constants)
+    return f"R{k}({', '.join(args)})"
+
+
+def _handle_each(messaging: Messaging, layout: Layout, k: int) -> str:
+    """Receiver ``a`` takes every message of type ``k``'s delivery to everyone that it did
+    not send, in message order (the per-receiver form: O(N x M) work in all)."""
+    return f"""    for m in range(counts[{k}]):
+        if ib_s{k}[m] != a:
+            {_receive_call(messaging, layout, k)}"""
 
 
 def _handle_near(messaging: Messaging, layout: Layout, k: int) -> str:
@@ -193,17 +232,13 @@ def _handle_near(messaging: Messaging, layout: Layout, k: int) -> str:
     delivery and the sender's, the datalink's ``grid_pairs`` test), in message order: the
     messages of its own and neighbouring cells of the type's grid, merged by index
     (:mod:`~pyautonomousagent.engines.gpu_grid`)."""
-    handler = messaging.handlers[k]
-    args = [f"a, m, t, ib_s{k}, ib_d{k}", *_handler_args(messaging, layout, k)]
-    args += [f"rs{k}_{j}" for j in range(receive_size(messaging, k))]
-    args += layout.constants.refs(f"handler {k}", handler.constants)
     return f"""    heads = cuda.local.array(9, int64)
     ends = cuda.local.array(9, int64)
     spans = cell_spans(rx[a], ry[a], gg{k}, gs{k}, heads, ends)
     m = next_message(heads, ends, spans, go{k})
     while m >= 0:
         if ib_s{k}[m] != a and hypot(rx[a] - ib_x{k}[m], ry[a] - ib_y{k}[m]) <= reach:
-            R{k}({", ".join(args)})
+            {_receive_call(messaging, layout, k)}
         m = next_message(heads, ends, spans, go{k})"""
 
 
@@ -260,10 +295,13 @@ def message_kernels(
     messaging: Messaging,
 ) -> str:
     """The kernels of one iteration of a tree that sends messages, one thread an agent:
-    ``sense_move`` (Phase 2's sensors and motion), per type
-    ``handle_all_<k>`` (thread 0: the compiled handler of a delivery that reached everyone)
-    and ``handle_near_<k>`` (one thread per receiver: the per-receiver form of the messages
-    in range, found on the type's cell grid), ``tick`` (Phases 3, 4 and 6), then per type
+    ``sense_move`` (Phase 2's sensors and motion), per type the handling of last
+    iteration's delivery: of one that reached everyone ``handle_all_<k>`` (thread 0: the
+    compiled handler), ``handle_sender_<k>`` (a ``by_sender`` handler: one thread per
+    sender, on its messages) and ``handle_each_<k>`` (one thread per receiver: the
+    per-receiver form of every message it did not send), of one that reached only some
+    ``handle_near_<k>`` (one thread per receiver: the per-receiver form of the messages in
+    range, found on the type's cell grid), ``tick`` (Phases 3, 4 and 6), then per type
     ``flag_<k>`` and ``scatter_<k>`` (Phase 5: the messages into the inbox; the engine runs
     a prefix sum between them)."""
     records = len(layout.names)
@@ -281,14 +319,13 @@ def message_kernels(
 {store}
         record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"""
     parts = [_kernel("sense_move", layout, messaging, _motion(layout, sensors, " " * 4))]
-    for k in range(len(messaging.types)):
-        parts.append(
-            _kernel(f"handle_all_{k}", layout, messaging, _handle_all(messaging, layout, k))
-        )
-        if messaging.handlers[k].receive is not None:
-            parts.append(
-                _kernel(f"handle_near_{k}", layout, messaging, _handle_near(messaging, layout, k))
-            )
+    for k, handler in enumerate(messaging.handlers):
+        forms = [("handle_all", _handle_all)]
+        forms += [("handle_sender", _handle_sender)] if handler.by_sender else []
+        if handler.receive is not None:
+            forms += [("handle_each", _handle_each), ("handle_near", _handle_near)]
+        for name, form in forms:
+            parts.append(_kernel(f"{name}_{k}", layout, messaging, form(messaging, layout, k)))
     parts.append(_kernel("tick", layout, messaging, tick))
     for k in range(len(messaging.types)):
         parts.append(_kernel(f"flag_{k}", layout, messaging, _flag(messaging, layout, k)))

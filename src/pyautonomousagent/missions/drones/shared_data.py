@@ -73,11 +73,14 @@ class SharedData:
 
     def kernel(self) -> HandlerKernel:
         """:meth:`store` compiled: of a delivery that reached everyone (it writes the same
-        per-sender arrays), and per receiver (``kernels.remember_pair`` on the arrays of
-        :meth:`pair_table`, taken back by :meth:`keep_pair_table`)."""
+        per-sender arrays, only the sender's rows: ``by_sender``), and per receiver
+        (``kernels.remember_pair`` on the arrays of :meth:`pair_table`, taken back by
+        :meth:`keep_pair_table`)."""
         state = (self._everyone_iteration, self._everyone_data)
         receive = Receive(remember_pair, self.pair_table, self.keep_pair_table)
-        return HandlerKernel(remember_everyone, self.fields, state=state, receive=receive)
+        return HandlerKernel(
+            remember_everyone, self.fields, state=state, receive=receive, by_sender=True
+        )
 
     def pair_table(self, room: int) -> tuple[np.ndarray, ...]:
         """The pairs heard as one row per receiver (``kernels.remember_pair``'s arrays):
