@@ -3,7 +3,9 @@ BehaviorTree.CPP's FileLogger2 writes it (behaviortreepy, the Python binding of 
 
 from __future__ import annotations
 
+import gc
 import re
+import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -77,7 +79,23 @@ def theirs(tmp_path_factory: pytest.TempPathFactory) -> Path:
         tree.tick_once()
     logger.flush()
     del logger  # the writer thread finishes the file
+    gc.collect()
+    _wait_until_written(path)
     return path
+
+
+def _wait_until_written(path: Path, seconds: float = 20.0) -> None:
+    """Wait until FileLogger2's writer thread has written transitions and the file has
+    stopped growing (the thread may still run after ``flush``, on a loaded machine)."""
+    size, steady, deadline = -1, 0, time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        data = path.read_bytes()
+        header = 31 + int.from_bytes(data[19:23], "little") if len(data) >= 23 else len(data) + 1
+        steady = steady + 1 if len(data) == size and len(data) > header else 0
+        if steady >= 3:
+            return
+        size = len(data)
+        time.sleep(0.05)
 
 
 def test_our_log_decodes_to_the_recorded_transitions(ours):
