@@ -167,9 +167,13 @@ def test_a_run_that_cannot_be_fused_ticks_compiled_every_iteration() -> None:
     assert_same_runs(run("batched", **overrides), sim)
 
 
-def counted_run(engine: str, scenario: str = "gathering", **overrides: object):
+def counted_run(
+    engine: str, scenario: str = "gathering", seed: int = 5, record_every: int = 1,
+    **overrides: object,
+):  # fmt: skip
     """A run, and how many of its iterations the compiled engine fused."""
-    sim = Simulation.create(load(scenario).with_overrides(**overrides), seed=5, engine=engine)
+    scenario_ = load(scenario).with_overrides(**overrides)
+    sim = Simulation.create(scenario_, seed=seed, engine=engine, record_every=record_every)
     fused = []
     loop = getattr(sim.engine, "loop", None)
     if loop is not None:

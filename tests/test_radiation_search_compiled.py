@@ -24,6 +24,8 @@ from pyautonomousagent.missions.radiation_search import FOUND
 from pyautonomousagent.missions.radiation_search.kernels import store_found_everyone
 from pyautonomousagent.testing import check_engines_agree, check_same_runs
 
+from .test_compiled_engine import counted_run as counted
+
 pytestmark = pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
 
 #: Seeds whose 4 drones find the source (at iterations 229, 222 and 148) within 400.
@@ -31,15 +33,8 @@ SEEDS = (0, 1, 2)
 
 
 def counted_run(engine: str, seed: int, record_every: int = 1, **overrides: object):
-    """A run, and how many of its iterations the compiled engine fused."""
-    scenario = load("radiation-search").with_overrides(**overrides)
-    sim = Simulation.create(scenario, seed=seed, engine=engine, record_every=record_every)
-    fused = []
-    loop = getattr(sim.engine, "loop", None)
-    if loop is not None:
-        sim.engine.loop = lambda s, count, **kw: fused.append(loop(s, count, **kw)) or fused[-1]
-    sim.run(progress=False)
-    return sim, sum(fused)
+    """A radiation-search run, and how many of its iterations the compiled engine fused."""
+    return counted(engine, "radiation-search", seed, record_every, **overrides)
 
 
 def found(sim: Simulation) -> list[dict]:
