@@ -9,6 +9,12 @@ OUT=${OUT:-$(mktemp -d)}
 python "$HERE/gpu_figures.py" check || exit 2
 set -x
 python "$HERE/gpu_figures.py" device
+# The same bits first: the device tests (patrol, patrol-3d, gathering, radiation-search
+# against the batched engine, 3 seeds each), where the tests are beside this script.
+if [ -d "$HERE/../tests" ]; then
+  (cd "$HERE/.." && python -m pytest -q -p no:cacheprovider -o addopts="" -rs \
+     tests/test_gpu_engine.py -k on_the_device)
+fi
 BW=$(python "$HERE/gpu_figures.py" bandwidth)
 echo "measured device copy bandwidth: $BW GB/s (bytes read + written, best of 20 copies of 2 GiB)"
 python "$HERE/gpu_figures.py" bytes
