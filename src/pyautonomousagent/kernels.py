@@ -28,7 +28,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from pyautonomousagent.arrays import _COSINE, _SERIES, _SINE, _SQRT3, _TAN_PI_12, DEGREE
+from pyautonomousagent.arrays import _SERIES, _SQRT3, _TAN_PI_12, _sincos_float
 from pyautonomousagent.jit import njit
 
 if TYPE_CHECKING:
@@ -285,23 +285,7 @@ def bearing(x: float, y: float, to_x: float, to_y: float) -> float:
     return wrap_degrees(arctan2(to_x - x, to_y - y) * (180.0 / math.pi))
 
 
-@njit(inline="always")
-def sincos_degrees(angle: float) -> tuple[float, float]:
-    """:func:`pyautonomousagent.arrays.sincos_degrees` of one angle in [0, 360) degrees,
-    operation for operation: (sine, cosine)."""
-    b1 = 1.0 if angle >= 45.0 else 0.0
-    b2 = 1.0 if angle >= 135.0 else 0.0
-    b3 = 1.0 if angle >= 225.0 else 0.0
-    b4 = 1.0 if angle >= 315.0 else 0.0
-    x = (angle - 90.0 * (b1 + b2 + b3 + b4)) * DEGREE
-    z = x * x
-    s, c = _SINE, _COSINE
-    sine = x * ((((((((z * s[8] + s[7]) * z + s[6]) * z + s[5]) * z + s[4]) * z + s[3]) * z
-        + s[2]) * z + s[1]) * z + s[0])  # fmt: skip
-    cosine = (((((((((z * c[9] + c[8]) * z + c[7]) * z + c[6]) * z + c[5]) * z + c[4]) * z
-        + c[3]) * z + c[2]) * z + c[1]) * z + c[0])  # fmt: skip
-    swap = b1 - b2 + b3 - b4
-    return (
-        (1.0 - 2.0 * (b2 - b4)) * (swap * cosine + (1.0 - swap) * sine),
-        (1.0 - 2.0 * (b1 - b3)) * (swap * sine + (1.0 - swap) * cosine),
-    )
+#: :func:`pyautonomousagent.arrays.sincos_degrees` of one angle in [0, 360) degrees: the
+#: scalar path's own function (``arrays._sincos_float``) compiled, so the same operations in
+#: the same order: (sine, cosine).
+sincos_degrees = njit(inline="always")(_sincos_float)
