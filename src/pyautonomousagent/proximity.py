@@ -54,6 +54,23 @@ def _cell(value: float, low: float, width: float) -> int:
     return int(min(max(c, -1.0), 2.0**40))
 
 
+#: An empty workspace (:func:`workspace`): the grid functions then allocate their arrays anew
+#: on every call. Between NumPy's array operations (the batched engine's phases) that is the
+#: faster choice: the allocator hands back memory NumPy just freed, still in the CPU's cache,
+#: where a workspace kept from call to call has been pushed out by the rest of the iteration.
+#: A compiled loop with nothing else allocating between calls keeps a workspace instead: there
+#: each new array is fresh pages for the system to map and zero.
+FRESH = (np.empty(0, np.int64), np.empty(0))
+
+
+@njit(inline="always")
+def _part(work: np.ndarray, start: int, size: int) -> np.ndarray:
+    """``work[start : start + size]``, or a new array of ``size`` where ``work`` is empty."""
+    if work.size == 0:
+        return np.empty(size, work.dtype)
+    return work[start : start + size]
+
+
 @njit
 def _build(
     axes: tuple[np.ndarray, ...], width: float, mask: int, work: np.ndarray, points: np.ndarray
@@ -62,8 +79,8 @@ def _build(
     its lowest corner (d,), cells per axis (d,), the points' cells (d, N) and coordinates
     (d, N) in bucket order, their indices in that order (N,), and each bucket's first
     position in it (mask + 2,). The big arrays are views of ``work`` (int64, at least
-    (d + 2) N + 2 mask + 3) and ``points`` (float64, at least d N): a caller that builds a
-    grid every iteration allocates (and the system zeroes) no new memory each time."""
+    (d + 2) N + 2 mask + 3) and ``points`` (float64, at least d N), or new arrays where
+    those are empty (:func:`_part`)."""
     d, n = len(axes), axes[0].shape[0]
     low = np.zeros(d)
     extent = np.ones(d, dtype=np.int64)
@@ -76,8 +93,8 @@ def _build(
         if n:
             low[k] = lowest
             extent[k] = min(int(math.floor((highest - lowest) / width)) + 3, _LOW31)
-    buckets = work[:n]
-    starts = work[n : n + mask + 2]
+    buckets = _part(work, 0, n)
+    starts = _part(work, n, mask + 2)
     starts[:] = 0
     cell = np.empty(d, dtype=np.int64)
     for i in range(n):
@@ -89,10 +106,10 @@ def _build(
     for b in range(mask + 1):
         starts[b + 1] += starts[b]
     rest = n + mask + 2
-    order = work[rest : rest + n]
-    sorted_cells = work[rest + n : rest + n + d * n].reshape((d, n))
-    sorted_points = points[: d * n].reshape((d, n))
-    fill = work[rest + n + d * n : rest + n + d * n + mask + 1]
+    order = _part(work, rest, n)
+    sorted_cells = _part(work, rest + n, d * n).reshape((d, n))
+    sorted_points = _part(points, 0, d * n).reshape((d, n))
+    fill = _part(work, rest + n + d * n, mask + 1)
     fill[:] = starts[:-1]
     for i in range(n):  # stable: a bucket's points in ascending order
         s = fill[buckets[i]]
@@ -303,18 +320,20 @@ def _near_and_pairs(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:meth:`CellList.near` on a built grid (squared range and radius): each point's nearest
     within the range (N,) and its distance (N,), views of ``work`` (int64, at least 3 N) and
-    ``scratch`` (float64, at least 2 N), and the pairs closer than the radius, first, second
-    (P,) sorted by first then second, and their distances (P,)."""
+    ``scratch`` (float64, at least 2 N) or new arrays where those are empty, and the pairs
+    closer than the radius, first, second (P,) sorted by first then second, and their
+    distances (P,)."""
     n = order.shape[0]
-    nearest, close, best = work[:n], work[n : 2 * n], work[2 * n : 3 * n]
-    distance, best2 = scratch[:n], scratch[n : 2 * n]
+    nearest, close, best = _part(work, 0, n), _part(work, n, n), _part(work, 2 * n, n)
+    distance, best2 = _part(scratch, 0, n), _part(scratch, n, n)
     _near(points, cells, order, starts, extent, mask, range2, radius2, none, nearest, distance,
           close, best2, best)  # fmt: skip
     total = close.sum()
     pairs = np.empty((2, total), dtype=np.int64)
     pairs2 = np.empty(total)
-    if total:
-        _pairs(points, cells, order, starts, extent, mask, radius2, close, pairs, pairs2)
+    if total == 0:
+        return nearest, distance, pairs[0], pairs[1], pairs2
+    _pairs(points, cells, order, starts, extent, mask, radius2, close, pairs, pairs2)
     by = _pair_order(pairs[0], pairs[1], n)
     return nearest, distance, pairs[0][by], pairs[1][by], np.sqrt(pairs2[by])
 
@@ -383,8 +402,8 @@ def near_all(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """``CellList(axes, max(range_, radius)).near(range_, radius, none)`` as one compiled
     call (for compiled code that senses the whole swarm every iteration), in the scratch
-    arrays of :func:`workspace`: the fields of :class:`Near` (nearest and distance are views
-    of them, valid until the next call)."""
+    arrays of :func:`workspace` (or new ones: :data:`FRESH`): the fields of :class:`Near`
+    (nearest and distance are views of them, valid until the next call)."""
     n, d = axes[0].shape[0], len(axes)
     width, mask = _grid_shape(n, max(range_, radius))
     grid_ints = (d + 2) * n + 2 * mask + 3
@@ -465,8 +484,7 @@ class CellList:
             raise ValueError("CellList: one array of shape (N,) per axis")
         self.reach = float(reach)
         self.width, self.mask = _grid_shape(axes[0].size, self.reach)
-        self._work = workspace(axes[0].size, len(axes), self.reach)  # the grid's arrays
-        built = _build(axes, self.width, self.mask, *self._work)
+        built = _build(axes, self.width, self.mask, *FRESH)
         self.low, self.extent, self.cells, self.sorted_points, self.order, self.starts = built
 
     @property
@@ -483,9 +501,7 @@ class CellList:
         if max(range_, radius) > self.reach:
             raise ValueError(f"near: range {range_} and radius {radius} must be <= {self.reach}")
         grid = (self.sorted_points, self.cells, self.order, self.starts, self.extent, self.mask)
-        n = self.size
-        work, scratch = np.empty(3 * n, np.int64), np.empty(2 * n)
-        return Near(*_near_and_pairs(*grid, range_ * range_, radius * radius, none, work, scratch))
+        return Near(*_near_and_pairs(*grid, range_ * range_, radius * radius, none, *FRESH))
 
     def candidates(self, coordinates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         """(query row, point) of every query point and grid point in neighbouring cells: a

@@ -19,7 +19,7 @@ import numpy as np
 
 from pyautonomousagent.jit import njit
 from pyautonomousagent.kernels import bearing, np_minimum
-from pyautonomousagent.proximity import near_all, workspace
+from pyautonomousagent.proximity import FRESH, near_all, workspace
 
 
 @dataclass(frozen=True)
@@ -64,8 +64,10 @@ class Collisions:
             :func:`detect` asked for where it had too little (touching, collisions; else 0).
         events: the buffered collisions (iteration (E,), pair (2, E), distance (E,)), in order
             of iteration, then pair; the first ``fill[1]`` are new.
-        work: the grid's scratch arrays (:func:`~pyautonomousagent.proximity.workspace`),
-            kept from check to check.
+        work: the grid's scratch arrays (:func:`~pyautonomousagent.proximity.workspace`)
+            for a compiled loop, made on its first use of :attr:`state` and kept from check
+            to check. :meth:`sense`, between NumPy's operations, has the grid allocate its
+            arrays anew instead (:data:`~pyautonomousagent.proximity.FRESH`: faster there).
     """
 
     def __init__(self, agents: int, radius: float, sensor_range: float) -> None:
@@ -79,10 +81,9 @@ class Collisions:
         self.touching = np.zeros(max(64, agents // 4), dtype=np.int64)
         room = max(1024, agents)
         self.events = (np.zeros(room, np.int64), np.zeros((2, room), np.int64), np.zeros(room))
-        self.work = (np.empty(0, np.int64), np.empty(0))  # the grid's, reused (sense makes it)
+        self.work = FRESH  # until a compiled loop asks for the state
         if self.active:  # compile (or load from numba's cache) now, in the run's set-up
             Collisions(2, 0.0, 0.0).sense((np.zeros(2), np.ones(2)))
-            self.work = workspace(agents, 2, max(self.radius, self.range))
 
     @property
     def active(self) -> bool:
@@ -90,10 +91,18 @@ class Collisions:
         return max(self.radius, self.range) > 0.0
 
     @property
+    def buffers(self) -> tuple[np.ndarray, ...]:
+        """The arrays :func:`detect` reads and writes after the coordinates, in order, but
+        the grid's workspace."""
+        return (self.distance, self.bearing, self.hits, self.touching, self.fill, *self.events)
+
+    @property
     def state(self) -> tuple[np.ndarray, ...]:
-        """The arrays :func:`detect` reads and writes after the coordinates, in order."""
-        return (self.distance, self.bearing, self.hits, self.touching, self.fill, *self.events,
-                *self.work)  # fmt: skip
+        """:attr:`buffers` and the grid's workspace for agents in the plane, for a compiled
+        loop that calls :func:`detect` every iteration."""
+        if self.work is FRESH:
+            self.work = workspace(self.agents, 2, max(self.radius, self.range))
+        return (*self.buffers, *self.work)
 
     def sense(self, coordinates: Sequence[np.ndarray]) -> Reading:
         """The proximity readings and the new collisions at the agents' positions.
@@ -102,9 +111,7 @@ class Collisions:
             coordinates: x, y (and z) of every agent, world units, shape (N,) each.
         """
         axes = tuple(np.ascontiguousarray(c, dtype=np.float64) for c in coordinates)
-        if len(axes) != 2 or self.work[0].size == 0:
-            self.work = workspace(self.agents, len(axes), max(self.radius, self.range))
-        while detect(0, axes, self.radius, self.range, *self.state):
+        while detect(0, axes, self.radius, self.range, *self.buffers, *FRESH):
             self.make_room()
         t, pairs, distance = self.take(np.iinfo(np.int64).max)
         return Reading(self.distance, self.bearing, pairs[0], pairs[1], distance)
@@ -157,7 +164,8 @@ def detect(
     (its bearing), the pairs now closer than ``radius`` into ``touching`` (the state of
     :class:`Collisions`, sorted keys), and those not touching before (collisions, counted on
     entry) into ``hits`` and appended to the buffered events; ``work``, ``scratch``: the
-    grid's (:func:`~pyautonomousagent.proximity.workspace`). Returns 0; or 1, changing
+    grid's (:func:`~pyautonomousagent.proximity.workspace`, or
+    :data:`~pyautonomousagent.proximity.FRESH`). Returns 0; or 1, changing
     nothing but ``fill[2:]`` (the room asked for) and the scratch, where a buffer is too
     small."""
     n = axes[0].shape[0]
