@@ -71,12 +71,20 @@ napoleon_custom_sections = [("Class attributes", "Attributes")]
 html_theme = "pydata_sphinx_theme"
 html_title = "pyAutonomousAgent"
 html_static_path: list[str] = []
+#: Pages that embed a replay (``lessons.embedded_replay``): without the right-hand "On this
+#: page" column, the replay gets the content's full width (its map and side panels need about
+#: 800 pixels side by side). Exact names: a second wildcard pattern would be a warning.
+WIDE_PAGES = ["lessons/03_blackboard_and_datalink"]
 html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
     "navbar_align": "left",
     "footer_start": ["copyright"],
     "footer_end": ["sphinx-version"],
+    "secondary_sidebar_items": {
+        "**": ["page-toc", "edit-this-page", "sourcelink"],  # the theme's default
+        **{page: [] for page in WIDE_PAGES},
+    },
 }
 html_show_sourcelink = False
 # Light or dark as the reader's system says (the theme's switch changes it); set, not left

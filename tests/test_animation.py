@@ -19,10 +19,10 @@ from pyautonomousagent.render.animation import (
     FramePainter,
     draw_frame,
     frame_rows,
-    panel_rows,
     write_gif,
 )
 from pyautonomousagent.render.gif import Palette, colour_codes
+from pyautonomousagent.render.panel import panel_rows
 from pyautonomousagent.scenarios import load
 from pyautonomousagent.simulation import Simulation
 
@@ -211,3 +211,49 @@ def test_events_are_marked_while_recent_and_the_inset_shows_the_followed_statuse
     statuses = run.recorder.trace("drone3")[150]
     for (x, y), code in zip(painter.inset_boxes, statuses, strict=False):
         assert tuple(pixels[y + 2, x + 2, :3]) == tuple(rgb(STATUS_COLOURS[int(code)])), (x, y)
+
+
+def text_right_edge(painter: FramePainter, left: int, top: int, text: str) -> float:
+    """Where Matplotlib's renderer ends ``text`` in the panel's font drawn at (left, top)
+    (pixels from the frame's top-left): pixels from the frame's left."""
+    figure = painter.figure
+    width, height = figure.bbox.width, figure.bbox.height
+    artist = figure.text(left / width, 1 - top / height, text, family="monospace", fontsize=9,
+                         va="top", ha="left")  # fmt: skip
+    try:
+        return float(artist.get_window_extent(painter.canvas.get_renderer()).x1)
+    finally:
+        artist.remove()
+
+
+@pytest.mark.parametrize("inset", [False, True])
+def test_long_panel_values_are_drawn_whole_inside_the_frame(inset):
+    scenario = load("patrol-3d").with_overrides(agents=2, iterations=20)  # 3-D points
+    sim = Simulation.create(scenario, seed=0, trace=inset).run(progress=False)
+    columns = sim.recorder.columns
+    columns["x"][:, 0] = np.linspace(0.0, -123456789.125, columns["x"].shape[0])
+    columns["energy"][5, 0] = np.nan
+    painter = FramePainter(sim.recorder, scenario, inset=inset)
+    right = painter.inset_left if inset else painter.size[0]
+    assert painter.size[0] > FIGSIZE[0] * 80 + (272 if inset else 0)  # wider for the values
+    assert painter.size[0] % 2 == 0  # an MP4 frame's width too
+    for row in (0, 5, sim.recorder.count - 1):
+        shown = painter.panel_values(row)
+        assert [text for _, _, text in shown] == [v for _, v in panel_rows(sim.recorder, row)]
+        for left, top, text in shown:
+            if text:
+                assert painter.panel_left <= left
+                assert text_right_edge(painter, left, top, text) <= right, (row, text)
+    values = dict(panel_rows(sim.recorder, sim.recorder.count - 1))
+    assert values["  position [u]"].startswith("(-123456789.12, ")  # whole, not cut
+
+
+def test_a_frame_whose_values_fit_keeps_its_size_at_any_resolution(run):
+    assert FramePainter(run.recorder, run.scenario).size == (800, 480)
+    wide = load("patrol-3d").with_overrides(agents=2, iterations=5)
+    sim = Simulation.create(wide, seed=0).run(progress=False)
+    for dpi in (50, 72, 80, 100):
+        painter = FramePainter(sim.recorder, wide, dpi=dpi)
+        assert painter.size[0] % 2 == 0 and painter.size[0] >= FIGSIZE[0] * dpi
+        shown = painter.panel_values(0)
+        assert max(text_right_edge(painter, *value) for value in shown) <= painter.size[0]

@@ -364,8 +364,9 @@ def test_fused_collisions_with_alerts_and_buffers_too_small_give_the_batched_run
 
     monkeypatch.setattr(compiled, "PARALLEL_AGENTS", 100 if parallel else 10**9)
     scenario = load("crowded").with_overrides(
-        agents=300, iterations=600, energy_use=0.2, low_energy_threshold=1, refuel_rate=0.5
-    )
+        agents=300, iterations=600, energy_use=0.2, low_energy_threshold=1, refuel_rate=0.5,
+        size=[470, 410],  # holds the lattice of 50 positions (CrowdedMission.world_for)
+    )  # fmt: skip
     batched = Simulation.create(scenario, seed=4, engine="batched").run(progress=False)
     events = [e["event"] for e in batched.events]  # alerts and collisions in the same calls
     assert "alert" in events and events.count("collision") > 8

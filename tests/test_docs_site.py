@@ -28,6 +28,9 @@ from tests.test_replay_browser import browser, shots_dir  # noqa: F401  (the Chr
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "scripts" / "build_docs.py"
 STATUSES = {"SUCCESS", "FAILURE", "RUNNING"}
+#: The narrowest replay page without a horizontal scroll, pixels: its map and side columns
+#: (at least 360 and 380), the gap between them and the padding (replay_template.html).
+REPLAY_WIDTH = 360 + 380 + 8 + 2 * 8
 
 
 def _build_docs() -> ModuleType:
@@ -213,5 +216,43 @@ def test_lesson_6_page_shows_its_plot(browser, site, executed_lessons, tmp_path)
         assert natural[0] is True and natural[1] > 100 and natural[2] > 100
     browser.execute_script("arguments[0].scrollIntoView({block: 'center'})", images[0])
     browser.save_screenshot(str(shots_dir(tmp_path) / "site-lesson-06-plot.png"))
+    errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
+    assert errors == []
+
+
+def test_lesson_3_page_gives_its_replay_room(browser, site, tmp_path):  # noqa: F811
+    """The embedded replay fills the content's width (no "On this page" column beside it):
+    its map and side panels side by side without a horizontal scroll, the whole page in the
+    frame's height; its button opens the replay full page in a tab of its own."""
+    from selenium.webdriver.common.by import By
+
+    page = next((site / "lessons").glob("03_*.html"))
+    _open(browser, page)
+    assert not browser.find_elements(By.CSS_SELECTOR, ".bd-sidebar-secondary")
+    frame = browser.find_element(By.CSS_SELECTOR, ".pyaa-replay iframe")
+    assert frame.size["width"] >= REPLAY_WIDTH and frame.size["height"] >= 600, frame.size
+    browser.execute_script("arguments[0].scrollIntoView({block: 'start'})", frame)
+    browser.save_screenshot(str(shots_dir(tmp_path) / "site-lesson-03-replay.png"))
+    browser.switch_to.frame(frame)
+    inside = browser.execute_script(
+        "const e = document.documentElement, box = id => document.getElementById(id)"
+        ".getBoundingClientRect();"
+        "return [e.scrollWidth, e.clientWidth, e.scrollHeight, e.clientHeight,"
+        " box('map').width, box('map').right, box('side').left, box('side').right];"
+    )
+    browser.switch_to.default_content()
+    scroll_width, width, scroll_height, height, map_width, map_right, side, side_right = inside
+    assert scroll_width <= width and scroll_height <= height, inside  # nothing to scroll
+    assert map_right <= side and side_right <= width, inside  # side by side, all shown
+    here = browser.current_window_handle
+    browser.find_element(By.CSS_SELECTOR, ".pyaa-replay button").click()
+    opened = [h for h in browser.window_handles if h != here]
+    assert len(opened) == 1
+    browser.switch_to.window(opened[0])
+    try:
+        assert browser.find_element(By.ID, "map").size["width"] > map_width
+    finally:
+        browser.close()
+        browser.switch_to.window(here)
     errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
     assert errors == []

@@ -11,6 +11,7 @@ import pytest
 from pyautonomousagent.lessons import (
     CHECKS,
     ExerciseError,
+    embedded_replay,
     l02_tree,
     l05_expected_tree,
     scripted,
@@ -70,6 +71,23 @@ def test_check_02_answer_is_what_the_engines_give() -> None:
 def test_an_exercise_error_renders_without_a_traceback() -> None:
     error = ExerciseError("Not quite.\nHint: look again.")
     assert error._render_traceback_() == ["\u2718 Not quite.", "  Hint: look again."]
+
+
+def test_an_embedded_replay_fills_the_width_and_opens_full_page(tmp_path: Path) -> None:
+    import html
+    import re
+
+    page = '<!DOCTYPE html><title>a "replay" & more</title><p>ok</p>'
+    (tmp_path / "replay.html").write_text(page, encoding="utf-8")
+    shown = embedded_replay(tmp_path / "replay.html")
+    markup = shown._repr_html_()
+    frame = re.search(r'<iframe title="replay replay.html" srcdoc="([^"]*)" style="([^"]*)"',
+                      markup)  # fmt: skip
+    assert frame is not None, markup
+    assert html.unescape(frame[1]) == page  # the page whole, its quotes escaped
+    assert "width:100%" in frame[2] and "height:85vh" in frame[2]
+    assert "createObjectURL" in html.unescape(markup) and "full page</button>" in markup
+    assert repr(shown) == str(shown) == "replay.html: a replay of 0 kB (open it in a browser)"
 
 
 def test_every_lesson_has_a_check() -> None:

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from pyautonomousagent.simulation import Simulation
+    from pyautonomousagent.simulation.scenario import Scenario
 
 #: The paper's tables (4000 iterations, its 2 GHz machine): scenario -> {agents: seconds}.
 PAPER_TABLES = {
@@ -136,13 +137,9 @@ class Result:
 def run_case_here(case: Case) -> dict[str, Any]:
     """Run ``case`` in this process; its seconds (set-up and loop), set-up seconds, and peak
     memory (MB); with ``case.save`` also the seconds of writing the data and the views."""
-    from pyautonomousagent.scenarios import load
     from pyautonomousagent.simulation import Simulation
 
-    full = max(case.full_iterations or case.iterations, case.iterations)
-    scenario = load(case.scenario).with_overrides(
-        agents=case.agents, iterations=full, **parse_parameters(case.parameters)
-    )
+    scenario = case_scenario(case)
     engine, implementation = BENCH_ENGINES[case.engine]
     start = time.perf_counter()
     sim = Simulation.create(
@@ -159,6 +156,21 @@ def run_case_here(case: Case) -> dict[str, Any]:
     else:
         figures = {"setup": setup, **saved_timings(sim, case.iterations, start)}
     return {**figures, **gpu_figures(sim, figures.get("write"))}
+
+
+def case_scenario(case: Case) -> Scenario:
+    """The scenario ``case`` runs: its agents, iterations (enough for ``full_iterations``)
+    and parameters, in the world the mission needs for that many agents
+    (:meth:`~pyautonomousagent.simulation.Mission.world_for`: crowded's lattice of
+    positions grows with the swarm; the bench has no option for the world's size)."""
+    from pyautonomousagent.scenarios import load
+
+    full = max(case.full_iterations or case.iterations, case.iterations)
+    scenario = load(case.scenario).with_overrides(
+        iterations=full, **parse_parameters(case.parameters)
+    )
+    size = scenario.mission_type.world_for(scenario, case.agents)
+    return scenario.with_overrides(agents=case.agents, size=list(size))
 
 
 def gpu_figures(sim: Simulation, write: float | None) -> dict[str, Any]:

@@ -299,6 +299,7 @@ def bench_command(args: argparse.Namespace) -> int:
         return _stress(args, engines, bench)
     short = args.reference_iterations
     variants = _bench_variants(args, scenario, bench)
+    _note_grown_worlds(scenario, args.agents)
     results = []
     for _ in range(args.repeat):
         for every in args.record_every or [1]:
@@ -359,6 +360,17 @@ def _gpu_row(result: Any, gbps: float | None) -> dict[str, Any]:
     if gbps is not None:
         row |= {"bandwidth_gbps": gbps, "bandwidth_fraction": result.bandwidth_fraction(gbps)}
     return row
+
+
+def _note_grown_worlds(scenario: Scenario, agents: Sequence[int]) -> None:
+    """Say on stderr where a swarm runs in a world larger than the scenario's (the mission's
+    ``world_for``: crowded's lattice of positions grows with the swarm)."""
+    for count in agents:
+        size = scenario.mission_type.world_for(scenario, count)
+        if size != scenario.world:
+            print(f"{scenario.name} with {count} agents: in a world of {size[0]:g} x "
+                  f"{size[1]:g} (the scenario's is {scenario.world[0]:g} x "
+                  f"{scenario.world[1]:g}), which holds its layout", file=sys.stderr)  # fmt: skip
 
 
 def _bench_variants(

@@ -14,6 +14,7 @@ from __future__ import annotations
 import html
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -21,7 +22,15 @@ import numpy as np
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.status import NAMES
 
-__all__ = ["ExerciseError", "TickTable", "check_exercise", "tick_table", "CHECKS"]
+__all__ = [
+    "CHECKS",
+    "EmbeddedReplay",
+    "ExerciseError",
+    "TickTable",
+    "check_exercise",
+    "embedded_replay",
+    "tick_table",
+]
 
 #: Background colours of the statuses in :class:`TickTable`'s HTML (as in the replay).
 STATUS_COLOURS = {
@@ -86,6 +95,54 @@ class TickTable:
             '<table class="pyaa-tick-table"><thead><tr><th>node</th>'
             f"{head}</tr></thead><tbody>{''.join(rows)}</tbody></table>"
         )
+
+
+@dataclass(frozen=True, repr=False)
+class EmbeddedReplay:
+    """A replay page (``replay.html``, :func:`~pyautonomousagent.render.replay.write_replay`)
+    shown in a notebook: as wide as the notebook's (or the documentation site's) content,
+    most of the window high, with a button that opens it full page in a tab of its own.
+
+    Attributes:
+        name: the page's file name (the frame's title).
+        page: the page's HTML, self-contained.
+    """
+
+    name: str
+    page: str
+
+    def __repr__(self) -> str:
+        """What a plain-text front end shows (not the page)."""
+        return f"{self.name}: a replay of {len(self.page) // 1000} kB (open it in a browser)"
+
+    def _repr_html_(self) -> str:
+        title = html.escape(f"replay {self.name}")
+        return (
+            f'<div class="pyaa-replay"><iframe title="{title}" srcdoc="{html.escape(self.page)}"'
+            f' style="{REPLAY_FRAME_STYLE}"></iframe>'
+            f'<button type="button" onclick="{html.escape(OPEN_FULL_PAGE)}">'
+            "Open the replay full page</button></div>"
+        )
+
+
+#: The embedded replay's frame: the content's width, most of the window's height (the replay
+#: lays itself out in the frame's height).
+REPLAY_FRAME_STYLE = (
+    "display:block;width:100%;height:85vh;min-height:600px;max-height:1000px;"
+    "border:1px solid #ccc;margin-bottom:4px"
+)
+#: The button's script: the frame's page in a new tab (a blob: address of its HTML).
+#: ``window.URL``: in an inline handler a bare ``URL`` is the document's address.
+OPEN_FULL_PAGE = (
+    "const page = this.parentElement.querySelector('iframe').srcdoc;"
+    "window.open(window.URL.createObjectURL(new Blob([page], {type: 'text/html'})), '_blank');"
+)
+
+
+def embedded_replay(path: str | Path) -> EmbeddedReplay:
+    """The replay page at ``path`` for a notebook to show (the cell's last expression)."""
+    path = Path(path)
+    return EmbeddedReplay(path.name, path.read_text(encoding="utf-8"))
 
 
 def tick_table(tree: Node, ticks: int, engine: str = "pytrees") -> TickTable:

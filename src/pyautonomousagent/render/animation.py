@@ -8,8 +8,9 @@ altitude (column ``z``: the 3-D drone), each drone is coloured by it, with a col
 beside the map, and its label reads ``N z=A`` (A: altitude, rounded); events as diamonds with a
 line of text above the map for a while after they happen; beside the map, a panel with the
 iteration and the followed agent's active behaviour, state and blackboard (each with its
-unit), and a legend; optionally, an inset with the tree, each node coloured by the followed
-agent's status.
+unit; :mod:`.panel`: the frame grows wider where the run's widest value needs it, so that no
+value is cut), and a legend; optionally, an inset with the tree, each node coloured by the
+followed agent's status.
 
 Speed and memory: the static background (axes, marks, legend, panel labels, tree names) is
 drawn once with Matplotlib's Agg canvas (no pyplot, no global backend); each frame restores
@@ -34,6 +35,7 @@ from pyautonomousagent.progress import Progress
 from pyautonomousagent.recording import Recorder
 from pyautonomousagent.render.events import PlacedEvent, placed_events
 from pyautonomousagent.render.marks import Mark
+from pyautonomousagent.render.panel import PanelLine, panel_lines
 from pyautonomousagent.simulation.scenario import Scenario
 
 if TYPE_CHECKING:
@@ -72,15 +74,13 @@ STATUS_COLOURS = {
 """Inset colour per node status."""
 EVENT_SHOWN = 0.04
 """An event stays on the map for this fraction of the run's iterations (at least 1)."""
-UNITS = {"world unit": "u", "world unit / iteration": "u/it", "degree": "deg", "percent": "%"}
-"""Short forms of the recorded columns' units (``Recorder.docs``) in the panel."""
 PANEL_NOTES = (
     "u: world units  it: iterations",
     "heading: degrees clockwise from north",
 )
 """The panel's footnote, explaining its units."""
-LABELS = {"number_ticks": "leaf ticks so far"}
-"""Panel labels that differ from the column name."""
+PANEL_MARGIN = 8
+"""Pixels kept free right of the panel's widest value."""
 
 
 @dataclass(frozen=True)
@@ -117,73 +117,6 @@ def frame_rows(recorder: Recorder, frame_every: int) -> np.ndarray:
     return np.flatnonzero(first)
 
 
-def panel_rows(recorder: Recorder, row: int, agent: int = 0) -> list[tuple[str, str]]:
-    """The text panel of record ``row`` for agent ``agent`` as (label, value) lines.
-
-    The iteration, the agent's active behaviour (when recorded), its state (position, speed,
-    heading, energy, damage, radiation and the motion model's columns) and its blackboard
-    (``x_K``/``y_K`` pairs as one point). Labels carry the unit (see :data:`UNITS`); keys
-    that were not recorded are left out, so the labels are the same for every row of a run.
-    """
-    columns, last = recorder.columns, int(recorder.iterations[recorder.count - 1])
-    name = recorder.names[agent] if recorder.names else "agent 1"
-    lines = [("Iteration", f"{int(recorder.iterations[row])} of {last}"), ("Following", name)]
-    if recorder.behaviour is not None:
-        code = int(recorder.behaviour[row, agent])
-        leaf = recorder.nodes[code].name if code >= 0 else "(none yet)"
-        lines += [("Active behaviour (leaf)", ""), ("", leaf)]
-    lines += [("", ""), (f"State of {name}", "")]
-    state = [k for k in recorder.groups.get("state", []) if not k.startswith("requested_")]
-    model = recorder.groups.get("model", [])
-    shown = [k for k in state + model if k in columns]
-    lines += _value_rows(columns, shown, row, agent, recorder.docs)
-    board = [k for k in recorder.groups.get("blackboard", []) if k in columns]
-    if board:
-        lines += [("", ""), ("Blackboard", "")]
-        lines += _value_rows(columns, board, row, agent, recorder.docs)
-    return lines
-
-
-def _value_rows(
-    columns: Mapping[str, np.ndarray],
-    keys: Sequence[str],
-    row: int,
-    agent: int,
-    docs: Mapping[str, tuple[str, str]],
-) -> list[tuple[str, str]]:
-    """Panel lines for ``keys``: ``x_K, y_K`` (or ``x, y``) pairs as one point, with
-    ``z_K`` (or ``z``) where it is recorded too (a 3-D point); others alone."""
-    lines: list[tuple[str, str]] = []
-    done: set[str] = set()
-    for key in keys:
-        if key in done:
-            continue
-        if key in ("x", "y") or key.startswith(("x_", "y_")):
-            partner = ("y" if key[0] == "x" else "x") + key[1:]
-            if partner in columns and partner in keys:
-                xk, yk = (key, partner) if key[0] == "x" else (partner, key)
-                zk = "z" + key[1:]
-                point = [xk, yk, *([zk] if zk in columns and zk in keys else [])]
-                done.update(point)
-                stem = key[2:] if len(key) > 1 else "position"
-                label = _label(stem.removesuffix("_position") or "position", docs.get(xk))
-                value = ", ".join(f"{columns[k][row, agent]:.2f}" for k in point)
-                lines.append((label, f"({value})"))
-                continue
-        values = columns[key]
-        v = values[row, agent]
-        text = f"{int(v)}" if np.issubdtype(values.dtype, np.integer) else f"{float(v):.2f}"
-        lines.append((_label(key, docs.get(key)), text))
-    return lines
-
-
-def _label(key: str, doc: tuple[str, str] | None) -> str:
-    """``"  speed [u/it]"``: the key in words, with its short unit."""
-    words = LABELS.get(key, key.replace("_", " "))
-    unit = UNITS.get(doc[0], doc[0]) if doc else ""
-    return f"  {words}" + (f" [{unit}]" if unit and key not in LABELS else "")
-
-
 def _rgb(colour: str) -> tuple[int, int, int]:
     from matplotlib.colors import to_rgb
 
@@ -197,7 +130,8 @@ class FramePainter:
     Args:
         recorder: the run's records (x, y and heading are required; shape (records, N)).
         scenario: the run's scenario (world size and name; the default marks).
-        dpi: pixels per inch; the frame is ``FIGSIZE * dpi`` pixels (wider with the inset).
+        dpi: pixels per inch; the frame is ``FIGSIZE * dpi`` pixels (wider with the inset,
+            and where the panel's widest value needs more room).
         marks: the static marks; by default the scenario's mission's (``Mission.marks()``).
         events: the run's events (``sim.events``), marked while they are recent.
         follow: the agent (index or name) the panel and the inset show.
@@ -237,15 +171,17 @@ class FramePainter:
         self.events = placed_events(events, recorder)
         last = int(recorder.iterations[recorder.count - 1])
         self.event_window = max(1, round(EVENT_SHOWN * last))
-        width = FIGSIZE[0] + (INSET_WIDTH if inset else 0.0)
+        self.panel_font = GlyphAtlas(9, dpi)
+        self.label_font = GlyphAtlas(8, dpi)
+        self.lines = panel_lines(recorder, self.follow)
+        self.panel_width = self._lay_out_panel(dpi)
+        width = self.panel_width + (INSET_WIDTH if inset else 0.0)
         self.figure = Figure(figsize=(width, FIGSIZE[1]), dpi=dpi)
         self.canvas = FigureCanvasAgg(self.figure)
         left, bottom, w, h = AXES_INCHES
         self.axes = self.figure.add_axes(
             (left / width, bottom / FIGSIZE[1], w / width, h / FIGSIZE[1]), anchor="W"
         )
-        self.panel_font = GlyphAtlas(9, dpi)
-        self.label_font = GlyphAtlas(8, dpi)
         _draw_world(self.axes, scenario.world, self.marks)
         self.figure.text(
             left / width,
@@ -260,7 +196,7 @@ class FramePainter:
         self._add_legend(width)
         self._add_panel_labels()
         if inset:
-            self._add_inset(FIGSIZE[0] + 0.1)
+            self._add_inset(self.panel_width + 0.1)
         self.canvas.draw()
         self.background = self.canvas.copy_from_bbox(self.figure.bbox)
 
@@ -355,16 +291,31 @@ class FramePainter:
             columnspacing=0.8,
         )
 
-    def _add_panel_labels(self) -> None:
-        """The panel's labels and notes (static, in the background); values are per frame."""
-        rows = panel_rows(self.recorder, 0, self.follow)
+    def _lay_out_panel(self, dpi: float) -> float:
+        """Where the panel's lines go (pixels: its left, top and line height; the values'
+        left); returns the figure's width without the inset, inches: ``FIGSIZE``'s, or
+        wider where the run's widest value (:class:`~.panel.PanelLine`) needs it."""
         font = self.panel_font
         self.line_height = font.cell[0] + 1
-        self.panel_left = round(PANEL_INCHES[0] * self.figure.dpi)
-        self.panel_top = round((FIGSIZE[1] - PANEL_INCHES[1]) * self.figure.dpi)
-        longest = max(len(label) for label, _ in rows)
+        self.panel_left = round(PANEL_INCHES[0] * dpi)
+        self.panel_top = round((FIGSIZE[1] - PANEL_INCHES[1]) * dpi)
+        longest = max(len(line.label) for line in self.lines)
         self.value_left = self.panel_left + font.width("x" * (longest + 1))
-        text = "\n".join(label for label, _ in rows)
+        right = max(self._value_left(line) + font.width("x" * line.widest) for line in self.lines)
+        needed = right + PANEL_MARGIN
+        if needed <= FIGSIZE[0] * dpi:
+            return FIGSIZE[0]
+        # even (an MP4's frames must be), and a quarter pixel more: Matplotlib truncates
+        return (needed + needed % 2 + 0.25) / dpi
+
+    def _value_left(self, line: PanelLine) -> int:
+        """The left edge (pixels) of ``line``'s value: beside the labels, or indented on a
+        line of its own."""
+        return self.value_left if line.label else self.panel_left + self.panel_font.width("  ")
+
+    def _add_panel_labels(self) -> None:
+        """The panel's labels and notes (static, in the background); values are per frame."""
+        text = "\n".join(line.label for line in self.lines)
         notes = "\n".join(PANEL_NOTES)
         style: dict[str, Any] = {
             "family": "monospace",
@@ -380,7 +331,7 @@ class FramePainter:
             text,
             **style,
         )
-        notes_top = self.panel_top + self.line_height * (len(rows) + 1)
+        notes_top = self.panel_top + self.line_height * (len(self.lines) + 1)
         style.update(fontsize=8, color="#555555")
         self.figure.text(
             self.panel_left / self.figure.bbox.width, 1 - notes_top / height, notes, **style
@@ -523,15 +474,17 @@ class FramePainter:
             return str(agent + 1)
         return f"{agent + 1} z={self.recorder.columns[ALTITUDE][row, agent]:.0f}"
 
+    def panel_values(self, row: int) -> list[tuple[int, int, str]]:
+        """The panel's values at record ``row`` as (left, top, text): pixels from the frame's
+        top-left corner to the top-left of the text; the frame is wide enough for all."""
+        return [
+            (self._value_left(line), self.panel_top + k * self.line_height, line.value(row))
+            for k, line in enumerate(self.lines)
+        ]
+
     def _draw_panel(self, pixels: np.ndarray, row: int) -> None:
-        font, colour = self.panel_font, (0, 0, 0)
-        for k, (label, value) in enumerate(panel_rows(self.recorder, row, self.follow)):
-            if not value:
-                continue
-            left = self.value_left if label else self.panel_left + font.width("  ")
-            limit = (pixels.shape[1] if self.trace is None else self.inset_left) - left - 4
-            text = value[: max(0, limit // font.cell[1])]
-            font.draw(pixels, text, left, self.panel_top + k * self.line_height, colour, "top")
+        for left, top, text in self.panel_values(row):
+            self.panel_font.draw(pixels, text, left, top, (0, 0, 0), "top")
 
     def _draw_banner(self, pixels: np.ndarray, active: list[PlacedEvent]) -> None:
         if not active:
@@ -711,7 +664,8 @@ def write_animation(
         path: the file to write (overwritten).
         video: "gif", or "mp4" (H.264; needs the ``[video]`` extra, imageio-ffmpeg).
         frame_every: iterations between frames (one frame per window of this many).
-        dpi: pixels per inch; frames are ``FIGSIZE * dpi`` pixels (800 x 480 at 80).
+        dpi: pixels per inch; frames are ``FIGSIZE * dpi`` pixels (800 x 480 at 80), wider
+            where the panel's widest value needs more room.
         fps: frames per second when played. GIF delays are whole hundredths of a second,
             so the GIF's delay is ``100 / fps`` rounded, and at least 2 (at most 50 fps).
         progress: show a progress bar; by default only on a terminal.

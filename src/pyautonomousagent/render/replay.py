@@ -46,6 +46,7 @@ from pyautonomousagent.recording import Recorder, node_list
 from pyautonomousagent.render.animation import ALTITUDE, altitude_range, frame_rows
 from pyautonomousagent.render.events import placed_events
 from pyautonomousagent.render.marks import Mark
+from pyautonomousagent.render.panel import UNITS
 
 MAX_FRAMES = 2000
 """Default most frames in a replay."""
@@ -158,9 +159,7 @@ def changing_marks(
 
 
 def _short_unit(unit: str) -> str:
-    """ "world unit / iteration" -> "u/it" (the animation's short units)."""
-    from pyautonomousagent.render.animation import UNITS
-
+    """ "world unit / iteration" -> "u/it" (the animation panel's short units)."""
     return UNITS.get(unit, unit)
 
 

@@ -38,7 +38,7 @@ from pyautonomousagent.jit import njit
 from pyautonomousagent.kernels import HandlerKernel, SensorKernel
 from pyautonomousagent.registry import Registry
 from pyautonomousagent.render.marks import Mark
-from pyautonomousagent.simulation.params import Param, Reader, ScenarioError
+from pyautonomousagent.simulation.params import Param, Point, Reader, ScenarioError
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
@@ -136,6 +136,14 @@ class Mission:
     def check(cls, scenario: Scenario, reader: Reader) -> None:
         """Checks across fields, after each field was read (e.g. a named agent exists);
         raise ``reader.fail(...)``. Nothing by default."""
+
+    @classmethod
+    def world_for(cls, scenario: Scenario, agents: int) -> Point:
+        """The world (width, height), world units, that a run of ``scenario`` with ``agents``
+        agents needs: the scenario's own by default; a mission whose layout grows with the
+        swarm gives a larger one where the scenario's is too small (``pyaa bench`` runs
+        swarms of any size in it)."""
+        return scenario.world
 
     def blackboard(self) -> dict[str, Any]:
         """Phase 1: every agent's blackboard keys, key -> dtype (``number_ticks`` is added)."""

@@ -32,7 +32,7 @@ from pyautonomousagent.missions.drones.mission import (
 )
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation import Param, Simulation, WorldObject, register_mission
-from pyautonomousagent.simulation.params import Reader
+from pyautonomousagent.simulation.params import Point, Reader
 from pyautonomousagent.simulation.scenario import Scenario
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
@@ -60,6 +60,31 @@ def layout(
     angle = member * (2.0 * np.pi / group_size)
     slots = points + slot_radius * np.column_stack((np.sin(angle), np.cos(angle)))
     return slots, points
+
+
+def lattice_extent(groups: int, spacing: float, slot_radius: float) -> Point:
+    """The smallest world (width, height), world units, that holds :func:`layout`'s first
+    ``groups`` (>= 1) positions with their circles of slots (and so the way between slot
+    and position): ``ceil(sqrt(groups))`` columns and as many rows as they fill, ``spacing``
+    apart, the first at ``spacing / 2``, each circle of radius ``slot_radius``."""
+    columns = math.isqrt(groups - 1) + 1
+    rows = (groups - 1) // columns + 1
+    return (columns - 0.5) * spacing + slot_radius, (rows - 0.5) * spacing + slot_radius
+
+
+def largest_swarm(world: Point, group_size: int, spacing: float, slot_radius: float) -> int:
+    """The most drones (whole groups of ``group_size``) whose :func:`layout` lies in the world
+    [0, width] x [0, height] (``world``, world units), for ``slot_radius <= spacing / 2``."""
+
+    def fits(groups: int) -> bool:
+        width, height = lattice_extent(groups, spacing, slot_radius)
+        return width <= world[0] and height <= world[1]
+
+    low, high = 0, (int(world[0] // spacing) + 2) ** 2  # more columns than the width holds
+    while high - low > 1:  # fits(low), not fits(high): fitting is monotonic in the groups
+        middle = (low + high) // 2
+        low, high = (middle, high) if fits(middle) else (low, middle)
+    return low * group_size
 
 
 @register_mission
@@ -111,7 +136,7 @@ class CrowdedMission(DroneMission):
 
     @classmethod
     def check(cls, scenario: Scenario, reader: Reader) -> None:
-        """The risk distance lies within the sensor's range."""
+        """The risk distance lies within the sensor's range; the lattice, within the world."""
         p = scenario.parameters
         if p.collision_risk_distance > p.proximity_range:
             raise reader.fail(
@@ -119,6 +144,40 @@ class CrowdedMission(DroneMission):
                 f"at most proximity_range ({p.proximity_range:g} world units)",
                 p.collision_risk_distance,
             )
+        cls._check_lattice(scenario, reader)
+
+    @classmethod
+    def _check_lattice(cls, scenario: Scenario, reader: Reader) -> None:
+        """Every group's circle of slots lies in the world, else name the largest swarm that
+        fits and the world this one needs."""
+        p, agents = scenario.parameters, scenario.agents
+        if p.slot_radius > p.point_spacing / 2:
+            raise reader.fail(
+                "parameters.slot_radius",
+                f"at most point_spacing / 2 ({p.point_spacing / 2:g}) so that the first "
+                "group's slots lie in the world",
+                p.slot_radius,
+            )
+        most = largest_swarm(scenario.world, p.group_size, p.point_spacing, p.slot_radius)
+        if agents > most:
+            width, height = cls.world_for(scenario, agents)
+            raise reader.fail(
+                "agents",
+                f"at most {most} to keep crowded's lattice of surveillance positions "
+                f"(group_size {p.group_size}, point_spacing {p.point_spacing:g}, slot_radius "
+                f"{p.slot_radius:g}) in the world {scenario.world[0]:g} x "
+                f"{scenario.world[1]:g}; {agents} need world.size at least [{width:g}, "
+                f"{height:g}]",
+                agents,
+            )
+
+    @classmethod
+    def world_for(cls, scenario: Scenario, agents: int) -> Point:
+        """The scenario's world, grown where the lattice of ``agents`` drones needs more."""
+        p = scenario.parameters
+        groups = -(-agents // p.group_size)
+        width, height = lattice_extent(groups, p.point_spacing, p.slot_radius)
+        return max(scenario.world[0], width), max(scenario.world[1], height)
 
     def _layout(self) -> tuple[np.ndarray, np.ndarray]:
         p = self.params
