@@ -198,15 +198,17 @@ class SensorKernel:
     """A mission's Phase 2 sensors for one agent.
 
     Attributes:
-        function: ``function(a, *arrays, *constants) -> bool``: updates agent ``a``'s sensed
-            columns and says whether it can move this iteration (an njit function).
+        function: ``function(a, *arrays, *state, *constants) -> bool``: updates agent ``a``'s
+            sensed columns and says whether it can move this iteration (an njit function).
         names: the swarm columns or blackboard keys passed as arrays, in order.
-        constants: numbers passed after the arrays.
+        constants: numbers passed after the arrays and the state.
         stopped: ``stopped(sim, rows)`` is called, with ``sim.world.iteration`` set, for the
             agents (int array) found unable to move for the first time in a run of
             iterations (the mission's alerts), in order of iteration.
         swarm: the sensing of the whole swarm done with them (after ``function`` in an
             iteration, as the NumPy path does), or None.
+        state: arrays the sensors read (never write) passed as they are, after the named
+            arrays, in order (e.g. obstacles as arrays of corners or centres and radii).
     """
 
     function: Callable[..., bool]
@@ -214,6 +216,7 @@ class SensorKernel:
     constants: tuple[float | int, ...] = ()
     stopped: Callable[[Simulation, Any], None] | None = None
     swarm: SwarmSensorKernel | None = None
+    state: tuple[Any, ...] = ()
 
 
 @njit(inline="always")

@@ -209,6 +209,7 @@ class GpuEngine(CompiledEngine):
         self._messages: DeviceMessages | None = None
         self._kernel_constants: tuple[np.ndarray, np.ndarray] = (np.zeros(1), np.zeros(1, int))
         self._device: list[Any] | None = None
+        self._readings: list[Any] = []  # the sensors' state (SensorKernel.state), on the device
         self._synced = -1  # the iteration the device's state is of (-1: none sent)
         self._host_synced = -1  # the iteration the state copied back is of
         self._groups: RecordGroups | None = None
@@ -358,6 +359,7 @@ class GpuEngine(CompiledEngine):
         if fresh:
             sent = time.perf_counter()
             self._device = [cuda.to_device(array) for array in self._state(sim)]
+            self._readings = [cuda.to_device(array) for array in fused.sensors.state]
             self._host_synced = start
             self.timings["state"] += time.perf_counter() - sent
         assert self._device is not None
@@ -366,6 +368,7 @@ class GpuEngine(CompiledEngine):
         p = model.params
         arguments = (
             *self._device, *self._groups.arguments(slot), p.max_speed, p.speed_step, p.turn_step,
+            *self._readings,
         )  # fmt: skip
         began = time.perf_counter()
         if self._messages is None:

@@ -9,7 +9,7 @@ of a node or a leaf.
 
 ``block_gpu(t0, count, every, row0, st, cur, pend, kf, ki, arrays..., us, uh, uc,
 records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed, speed_step,
-turn_step)`` runs iterations ``t0 + 1 .. t0 + count`` for every agent; a record of
+turn_step, sensor state...)`` runs iterations ``t0 + 1 .. t0 + count`` for every agent; a record of
 iteration ``t`` goes to row ``t // every - row0`` of the record arrays (a group of rows on
 the device, copied back by the engine). That is the kernel of a tree that sends no messages
 (the patrol). One that sends messages gets :func:`message_kernels` instead: one kernel per
@@ -25,13 +25,13 @@ from typing import Any
 
 from pyautonomousagent.engines.batched import Program
 from pyautonomousagent.engines.compiled_source import (
-    _FUSED_ARGS,
     Layout,
     Messaging,
     _control,
     _later_pass,
     _motion,
     alias,
+    fused_arguments,
     tree_body,
 )
 from pyautonomousagent.kernels import LeafKernel, SensorKernel
@@ -75,7 +75,6 @@ def kernel_function(
     contraction off (:mod:`~pyautonomousagent.engines.gpu`)."""
     if layout.outboxes:
         raise ValueError("the GPU kernel is written for trees that send no messages")
-    records = ", ".join(f"r{j}" for j in range(len(layout.names)))
     store = "\n".join(f"            r{j}[row, a] = c{j}[a]" for j in range(len(layout.names)))
     if layout.deferred:
         control = _later_pass(
@@ -83,7 +82,7 @@ def kernel_function(
         )
     else:
         control = _control(layout, " " * 8)
-    arguments = _FUSED_ARGS.format(arrays=layout.arrays, records=records)
+    arguments = fused_arguments(layout, sensors)
     return f"""
 def block_gpu(t0, count, every, row0, {arguments}):
     a = cuda.grid(1)
@@ -159,11 +158,12 @@ def receive_size(messaging: Messaging, k: int) -> int:
     return len(receive.state(1))
 
 
-def _kernel(name: str, layout: Layout, messaging: Messaging, body: str) -> str:
+def _kernel(
+    name: str, layout: Layout, sensors: SensorKernel, messaging: Messaging, body: str
+) -> str:
     """A message kernel ``name(live, t, every, row0, common..., message...)``: ``body`` for
     thread ``a = cuda.grid(1)`` below ``live``, indented by 4."""
-    records = ", ".join(f"r{j}" for j in range(len(layout.names)))
-    common = _FUSED_ARGS.format(arrays=layout.arrays, records=records)
+    common = fused_arguments(layout, sensors)
     return f"""
 def {name}(live, t, every, row0, {common},
            {message_arguments(layout, messaging)}):
@@ -318,18 +318,20 @@ def message_kernels(
         row = t // every - row0
 {store}
         record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"""
-    parts = [_kernel("sense_move", layout, messaging, _motion(layout, sensors, " " * 4))]
+    parts = [_kernel("sense_move", layout, sensors, messaging, _motion(layout, sensors, " " * 4))]
     for k, handler in enumerate(messaging.handlers):
         forms = [("handle_all", _handle_all)]
         forms += [("handle_sender", _handle_sender)] if handler.by_sender else []
         if handler.receive is not None:
             forms += [("handle_each", _handle_each), ("handle_near", _handle_near)]
         for name, form in forms:
-            parts.append(_kernel(f"{name}_{k}", layout, messaging, form(messaging, layout, k)))
-    parts.append(_kernel("tick", layout, messaging, tick))
+            parts.append(
+                _kernel(f"{name}_{k}", layout, sensors, messaging, form(messaging, layout, k))
+            )
+    parts.append(_kernel("tick", layout, sensors, messaging, tick))
     for k in range(len(messaging.types)):
-        parts.append(_kernel(f"flag_{k}", layout, messaging, _flag(messaging, layout, k)))
-        parts.append(_kernel(f"scatter_{k}", layout, messaging, _scatter(messaging, k)))
+        parts.append(_kernel(f"flag_{k}", layout, sensors, messaging, _flag(messaging, layout, k)))
+        parts.append(_kernel(f"scatter_{k}", layout, sensors, messaging, _scatter(messaging, k)))
     return "".join(parts)
 
 
