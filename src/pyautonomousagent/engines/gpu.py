@@ -222,6 +222,12 @@ class GpuEngine(CompiledEngine):
             InputError: the run cannot be fused (messages, no compiled sensors, ...).
         """
         fused = self._fusable(sim)
+        if fused is not None and fused.sensors.swarm is not None:
+            raise InputError(
+                f"engine gpu: mission {sim.mission.name!r} senses the whole swarm at once (a "
+                "SwarmSensorKernel, e.g. collisions or a shared grid), which has no device "
+                "form yet; use --engine compiled"
+            )
         if fused is None or not self.runs(sim):
             raise InputError(
                 "engine gpu: only runs whose mission has compiled sensors and compiled "
