@@ -316,6 +316,8 @@ DEVICE_CASES = [
                    "datalink_range": 25}, True),
     ("radiation-search", {"agents": 64, "iterations": 400}, True),
     ("radiation-search", {"agents": 64, "iterations": 400, "datalink_range": 15}, True),
+    ("vacuum", {"agents": 64, "iterations": 300}, False),
+    ("vacuum", {"agents": 64, "iterations": 300, "start_positions": [[1.5, 1.5]]}, False),
 ]  # fmt: skip
 
 
@@ -391,7 +393,6 @@ def test_a_gpu_runs_folder_names_the_device_and_verifies(tmp_path: Path) -> None
     ("scenario", "why"),
     [
         ("crowded", "engine gpu: mission 'crowded' senses the whole swarm at once"),
-        ("vacuum", "engine gpu: mission 'vacuum' senses the whole swarm at once"),
     ],
 )
 def test_a_run_the_kernel_cannot_do_is_refused_in_one_line(scenario: str, why: str) -> None:

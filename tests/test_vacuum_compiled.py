@@ -1,8 +1,13 @@
 """The vacuum robot on the compiled engine: its leaf kernels, the sonar and stop rule per
 robot, the cleaning grid as a sensor of the whole swarm, and the fused loop against the
-batched engine (and py_trees), bit for bit."""
+batched engine (and py_trees), bit for bit; and on the GPU engine in numba's CUDA simulator."""
 
 from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
 
 import numpy as np
 import pytest
@@ -150,7 +155,39 @@ def test_the_grid_kernel_cleans_what_the_cleaning_grid_cleans(seed: int) -> None
         brushing = rng.random(30) < 0.7
         expected = grids[0].clean(x, y, brushing)
         clean_grid(0, x, y, brushing.astype(np.int64), np.zeros(30, np.int64), grids[1].free,
-                   grids[1].cleaned, fresh, 0.5)  # fmt: skip
+                   grids[1].cleaned, fresh, np.zeros(0, np.int64), 0.5)  # fmt: skip
         assert np.array_equal(fresh, expected)
         assert np.array_equal(grids[0].cleaned, grids[1].cleaned)
     assert grids[0].cleaned.any()
+
+
+#: Run under NUMBA_ENABLE_CUDASIM=1: vacuum on the GPU engine in numba's CUDA simulator (the
+#: grid's device steps, atomics included) against the batched engine; prints "same".
+SIMULATED = textwrap.dedent(
+    """
+    import numpy as np
+    from pyautonomousagent import Simulation, load
+    from pyautonomousagent.testing import check_same_runs
+
+    cases = [(1, {"agents": 3}, 7), (2, {"agents": 4, "start_positions": [[1.5, 1.5]]}, 1),
+             (3, {"agents": 2}, 5)]
+    for seed, overrides, every in cases:
+        scenario = load("vacuum").with_overrides(iterations=60, **overrides)
+        a, b = (Simulation.create(scenario, seed=seed, engine=e, record_every=every)
+                .run(progress=False) for e in ("batched", "gpu"))
+        assert b.engine.name == "gpu" and b.engine.timings["kernel"] > 0.0
+        check_same_runs(a, b, ("batched", "gpu"))
+        assert np.array_equal(a.mission.grid.cleaned, b.mission.grid.cleaned)
+        if seed == 2:  # four robots brushed one cell at once: robot 1 was credited
+            assert a.recorder.column("cleaned_cells")[2].tolist() == [1, 0, 0, 0]
+    print("same")
+    """
+)
+
+
+def test_the_simulated_gpu_engine_gives_the_batched_bits() -> None:
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1"}
+    done = subprocess.run([sys.executable, "-c", SIMULATED], env=env, capture_output=True,
+                          text=True, timeout=600)  # fmt: skip
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert done.stdout.strip().splitlines()[-1] == "same"

@@ -183,6 +183,13 @@ class SwarmSensorKernel:
         collect: ``collect(sim, through)``, after a fused call, as many times as it needs,
             with ``through`` rising to the last iteration run: what ``detect`` kept for the
             run (e.g. events) for the iterations up to ``through``, in order.
+        device: ``detect``'s form for the GPU engine, or () for none (the GPU engine then
+            refuses the run): steps ``step(a, t, *arrays, *state, *constants)`` (njit,
+            inline, called from CUDA kernels only: they may use ``numba.cuda.atomic``), each
+            run for every agent ``a`` as one launch, the steps in order (every agent ends a
+            step before any starts the next). Together they must leave the arrays and the
+            state as ``detect`` does, whatever order the threads run in (e.g. an atomic
+            minimum of agent rows to find the lowest, not a race).
     """
 
     detect: Callable[..., int]
@@ -191,6 +198,7 @@ class SwarmSensorKernel:
     state: tuple[Any, ...] = ()
     constants: tuple[float | int, ...] = ()
     collect: Callable[[Simulation, int], None] | None = None
+    device: tuple[Callable[..., None], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -47,6 +47,7 @@ from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.engines.compiled import CompiledEngine, load_source
 from pyautonomousagent.engines.compiled_source import Constants, Layout, Messaging
 from pyautonomousagent.engines.gpu_records import RecordGroups
+from pyautonomousagent.engines.gpu_reduce import shape
 from pyautonomousagent.engines.gpu_source import kernel_module_source, message_module_source
 from pyautonomousagent.inputs import InputError
 from pyautonomousagent.kernels import SensorKernel
@@ -170,7 +171,10 @@ def load_kernel(source: str, name: str = "block_gpu") -> Any:
 def _python(function: Any, made: dict[int, Any] | None = None) -> Any:
     """An njit ``function`` as plain Python for the simulator: its ``py_func`` with the njit
     functions it calls made plain Python too (in a copy of its globals: the module's own
-    are left to the compiled code)."""
+    are left to the compiled code); one that uses ``numba.cuda`` (e.g. its atomics) as the
+    simulator's device function, which gives it the running thread's ``cuda``."""
+    from numba import cuda
+
     made = {} if made is None else made
     if id(function) in made:
         return made[id(function)]
@@ -182,7 +186,9 @@ def _python(function: Any, made: dict[int, Any] | None = None) -> Any:
         value = names.get(key)
         if value is not None and hasattr(value, "py_func"):
             names[key] = _python(value, made)
-    return plain
+    if any(names.get(key) is cuda for key in py.__code__.co_names):
+        made[id(function)] = cuda.jit(device=True)(plain)
+    return made[id(function)]
 
 
 def fma_free(kernel: Any) -> bool:
@@ -210,6 +216,9 @@ class GpuEngine(CompiledEngine):
         self._kernel_constants: tuple[np.ndarray, np.ndarray] = (np.zeros(1), np.zeros(1, int))
         self._device: list[Any] | None = None
         self._readings: list[Any] = []  # the sensors' state (SensorKernel.state), on the device
+        self._swarm_kernels: list[Any] = []  # the swarm sensor's device steps (swarm_<j>)
+        self._swarm_state: tuple[np.ndarray, ...] = ()  # its state (host), written on the device
+        self._swarm_device: list[Any] = []  # and on the device
         self._synced = -1  # the iteration the device's state is of (-1: none sent)
         self._host_synced = -1  # the iteration the state copied back is of
         self._groups: RecordGroups | None = None
@@ -222,11 +231,12 @@ class GpuEngine(CompiledEngine):
             InputError: the run cannot be fused (messages, no compiled sensors, ...).
         """
         fused = self._fusable(sim)
-        if fused is not None and fused.sensors.swarm is not None:
+        swarm = fused.sensors.swarm if fused is not None else None
+        if fused is not None and swarm is not None and not self.runs(sim):
+            why = "no device form yet" if not swarm.device else "and a tree that sends messages"
             raise InputError(
                 f"engine gpu: mission {sim.mission.name!r} senses the whole swarm at once (a "
-                "SwarmSensorKernel, e.g. collisions or a shared grid), which has no device "
-                "form yet; use --engine compiled"
+                f"SwarmSensorKernel, e.g. collisions) with {why}; use --engine compiled"
             )
         if fused is None or not self.runs(sim):
             raise InputError(
@@ -239,6 +249,8 @@ class GpuEngine(CompiledEngine):
         if fused.messaging is None:
             source = kernel_module_source(self.program, self.kernels, layout, fused.sensors)
             self._kernel = load_kernel(source)
+            steps = len(swarm.device) if swarm is not None else 0
+            self._swarm_kernels = [load_kernel(source, f"swarm_{j}") for j in range(steps)]
         else:
             source = self._message_kernels(layout, fused.sensors, fused.messaging)
         self._kernel_constants = layout.constants.arrays()  # the CPU tick's may differ
@@ -249,6 +261,7 @@ class GpuEngine(CompiledEngine):
         with no_fma():
             self.loop(sim, 0)
         compiled = self._messages.kernels.values() if self._messages else [self._kernel]
+        compiled = [*compiled, *self._swarm_kernels]
         if not all(fma_free(kernel) for kernel in compiled):
             raise RuntimeError("engine gpu: the kernel's PTX has fused multiply-adds")
         self.timings.update(dict.fromkeys(TIMINGS, 0.0), compile=time.perf_counter() - start)
@@ -308,10 +321,13 @@ class GpuEngine(CompiledEngine):
     def runs(self, sim: Simulation) -> bool:
         """Whether the kernels can run ``sim``'s iterations from its start (else
         :meth:`prepare` refuses it): a mission with compiled sensors and compiled handlers
-        of the messages its tree sends, the 2-D or 3-D drone; no sensor of the whole swarm
-        (``SwarmSensorKernel``: not on the device yet)."""
+        of the messages its tree sends, the 2-D or 3-D drone; a sensor of the whole swarm
+        (``SwarmSensorKernel``) only with a device form and a tree that sends nothing."""
         fused = self._fusable(sim)
-        return fused is not None and fused.sensors.swarm is None
+        if fused is None:
+            return False
+        swarm = fused.sensors.swarm
+        return swarm is None or (bool(swarm.device) and fused.messaging is None)
 
     def bytes_per_drone_iteration(self, sim: Simulation) -> float:
         """Bytes of device memory one drone-iteration moves, counted from the kernel's
@@ -366,6 +382,9 @@ class GpuEngine(CompiledEngine):
             sent = time.perf_counter()
             self._device = [cuda.to_device(array) for array in self._state(sim)]
             self._readings = [cuda.to_device(array) for array in fused.sensors.state]
+            swarm = fused.sensors.swarm
+            self._swarm_state = swarm.state if swarm is not None else ()
+            self._swarm_device = [cuda.to_device(array) for array in self._swarm_state]
             self._host_synced = start
             self.timings["state"] += time.perf_counter() - sent
         assert self._device is not None
@@ -377,7 +396,10 @@ class GpuEngine(CompiledEngine):
             *self._readings,
         )  # fmt: skip
         began = time.perf_counter()
-        if self._messages is None:
+        if self._swarm_kernels:
+            self._swarm_loop(start, count, every, row0, arguments)
+            done = count
+        elif self._messages is None:
             blocks = max(1, -(-n // THREADS))
             launch = self._kernel[blocks, THREADS, self._groups.stream]
             launch(start, count, every, row0, *arguments)
@@ -404,11 +426,31 @@ class GpuEngine(CompiledEngine):
             return
         began = time.perf_counter()
         assert self._groups is not None  # made with the device's state, by prepare
-        for host, device in zip(self._state(sim), self._device, strict=True):
+        hosts = [*self._state(sim), *self._swarm_state]
+        for host, device in zip(hosts, [*self._device, *self._swarm_device], strict=True):
             device.copy_to_host(host, stream=self._groups.stream)
         self._groups.stream.synchronize()
         self._host_synced = self._synced
         self.timings["state"] += time.perf_counter() - began
+
+    def _swarm_loop(
+        self, start: int, count: int, every: int, row0: int, arguments: tuple[Any, ...]
+    ) -> None:
+        """Iterations ``start + 1 .. start + count`` of a run with a sensor of the whole swarm:
+        per iteration its device steps (``gpu_source.swarm_kernels``) over every agent, then
+        one iteration of ``block_gpu``, all on the records' stream. ``count`` 0 launches each
+        once on no agent (compiling them)."""
+        assert self._device is not None and self._groups is not None
+        n, stream = self.swarm.size, self._groups.stream
+        kf, ki = self._device[3:5]
+        arrays = self._device[5 : 5 + len(self.arrays)]
+        state = self._swarm_device
+        blocks = max(1, -(-n // THREADS))
+        for t in range(start + 1, start + max(count, 1) + 1):
+            for kernel in self._swarm_kernels:
+                kernel[(*shape(n), stream)](t, n if count else 0, kf, ki, *arrays, *state)
+            launch = self._kernel[blocks, THREADS, stream]
+            launch(t - 1, 1 if count else 0, every, row0, *arguments, *state)
 
     def _message_loop(
         self, sim: Simulation, fresh: bool, arguments: tuple[Any, ...], count: int, row0: int

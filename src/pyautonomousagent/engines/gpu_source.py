@@ -30,6 +30,7 @@ from pyautonomousagent.engines.compiled_source import (
     _control,
     _later_pass,
     _motion,
+    _swarm_args,
     alias,
     fused_arguments,
     tree_body,
@@ -82,7 +83,7 @@ def kernel_function(
         )
     else:
         control = _control(layout, " " * 8)
-    arguments = fused_arguments(layout, sensors)
+    arguments = fused_arguments(layout, sensors) + _swarm_state(sensors)
     return f"""
 def block_gpu(t0, count, every, row0, {arguments}):
     a = cuda.grid(1)
@@ -99,21 +100,57 @@ def block_gpu(t0, count, every, row0, {arguments}):
 """
 
 
+def _swarm_state(sensors: SensorKernel) -> str:
+    """``, ws0, ws1, ...``: the swarm sensor's state after ``block_gpu``'s other arguments
+    ("" without a swarm sensor)."""
+    swarm = sensors.swarm
+    return "".join(f", ws{j}" for j in range(len(swarm.state))) if swarm is not None else ""
+
+
+def swarm_kernels(layout: Layout, sensors: SensorKernel) -> str:
+    """``swarm_0``, ``swarm_1``, ...: one kernel per step of the swarm sensor's device form
+    (``SwarmSensorKernel.device``), ``swarm_<j>(t, n, kf, ki, arrays..., ws...)`` calling
+    step ``j`` for agent ``a = cuda.grid(1)`` below ``n`` at iteration ``t``; "" without a
+    swarm sensor. The engine launches them in order before each iteration's ``block_gpu``
+    (one iteration a launch), so ``block_gpu``'s ``apply`` reads what they found."""
+    swarm = sensors.swarm
+    if swarm is None:
+        return ""
+    states = "".join(f", ws{j}" for j in range(len(swarm.state)))
+    args = ", ".join(["a", "t", *_swarm_args(swarm, layout)])
+    return "".join(
+        f"""
+def swarm_{j}(t, n, kf, ki, {layout.arrays}{states}):
+    a = cuda.grid(1)
+    if a >= n:
+        return
+    WD{j}({args})
+"""
+        for j in range(len(swarm.device))
+    )
+
+
 def kernel_module_source(
     program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, sensors: SensorKernel
 ) -> str:
-    """The generated module: imports of the helpers and kernels, then ``block_gpu`` (a plain
-    Python function: :func:`~pyautonomousagent.engines.gpu.load_kernel` compiles it)."""
+    """The generated module: imports of the helpers and kernels, then ``block_gpu`` and the
+    swarm sensor's :func:`swarm_kernels` (plain Python functions:
+    :func:`~pyautonomousagent.engines.gpu.load_kernel` compiles them)."""
     lines = [HEADER, *_import_lines(_kernel_imports(kernels, sensors))]
     lines.append(kernel_function(program, kernels, layout, sensors))
+    lines.append(swarm_kernels(layout, sensors))
     return "\n".join(lines) + "\n"
 
 
 def _kernel_imports(kernels: Mapping[int, LeafKernel], sensors: SensorKernel) -> dict[str, Any]:
-    """Name -> function of the leaves' (and their ``Later`` steps') and sensors' kernels."""
+    """Name -> function of the leaves' (and their ``Later`` steps') and sensors' kernels (with
+    a swarm sensor its ``apply``, ``WA``, and device steps, ``WD0, WD1, ...``)."""
     used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
     used |= {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
     used["S"] = sensors.function
+    if sensors.swarm is not None:
+        used["WA"] = sensors.swarm.apply
+        used |= {f"WD{j}": step for j, step in enumerate(sensors.swarm.device)}
     return used
 
 

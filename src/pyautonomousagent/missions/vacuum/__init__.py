@@ -61,7 +61,12 @@ from pyautonomousagent.mission import (
     register_mission,
 )
 from pyautonomousagent.missions.vacuum import leaves
-from pyautonomousagent.missions.vacuum.kernels import clean_grid, count_cleaned, sonar_and_stop
+from pyautonomousagent.missions.vacuum.kernels import (
+    NOBODY,
+    clean_grid,
+    count_cleaned,
+    sonar_and_stop,
+)
 from pyautonomousagent.missions.vacuum.room import (
     Circle,
     CleaningGrid,
@@ -199,6 +204,7 @@ class VacuumMission(Mission):
         swarm.blackboard["cruise_heading"][:] = s["heading"]
         s["sonar"][:] = self.room.sonar(s["x"], s["y"], s["heading"], self.params.sonar_range)
         self.fresh = np.zeros(swarm.size, dtype=np.int64)  # the compiled grid's, per robot
+        self.winner = np.full(self.grid.free.size, NOBODY)  # the GPU's, per cell
 
     def sense(self, sim: Simulation) -> np.ndarray:
         """Clean under the brushes that ran, read the sonar, stop robots about to collide.
@@ -217,11 +223,15 @@ class VacuumMission(Mission):
         """:meth:`sense` compiled: the sonar and the stop rule per robot
         (``kernels.sonar_and_stop``, the room's rectangles and circles as its state), and the
         cleaning as a sensor of the whole swarm (``kernels.clean_grid`` once an iteration on
-        :attr:`grid`'s arrays, then ``kernels.count_cleaned`` per robot)."""
+        :attr:`grid`'s arrays, then ``kernels.count_cleaned`` per robot; on the GPU
+        ``device.claim_cell`` and ``device.take_cell``)."""
+        from pyautonomousagent.missions.vacuum.device import claim_cell, take_cell  # numba's
+
         room, grid = self.room, self.grid
         swarm = SwarmSensorKernel(
             clean_grid, count_cleaned, ("x", "y", "vacuuming", "cleaned_cells"),
-            (grid.free, grid.cleaned, self.fresh), (float(grid.cell),),
+            (grid.free, grid.cleaned, self.fresh, self.winner), (float(grid.cell),),
+            device=(claim_cell, take_cell),
         )  # fmt: skip
         return SensorKernel(
             sonar_and_stop, ("x", "y", "speed", "heading", "sonar"),

@@ -161,21 +161,33 @@ def sonar_and_stop(a: int, x: np.ndarray, y: np.ndarray, speed: np.ndarray,
     return not blocked(px + v * sine, py + v * cosine, rects, circles, width, height, margin)
 
 
+#: ``winner``'s entry of a cell no robot claimed (``device.claim_cell``).
+NOBODY = np.iinfo(np.int64).max
+
+
+@njit(inline="always")
+def cell_of(px: float, py: float, cell: float, rows: int, cols: int) -> tuple[int, int]:
+    """``CleaningGrid.clean``'s cell (row, column) under a robot at (px, py)."""
+    row = min(max(int(py // cell), 0), rows - 1)
+    col = min(max(int(px // cell), 0), cols - 1)
+    return row, col
+
+
 @njit
 def clean_grid(t: int, x: np.ndarray, y: np.ndarray, vacuuming: np.ndarray,
                cleaned_cells: np.ndarray, free: np.ndarray, cleaned: np.ndarray,
-               fresh: np.ndarray, cell: float) -> int:  # fmt: skip
+               fresh: np.ndarray, winner: np.ndarray, cell: float) -> int:  # fmt: skip
     """``CleaningGrid.clean`` of the whole swarm at the start of iteration ``t``
     (``SwarmSensorKernel.detect``): the robots whose brush ran (``vacuuming`` 1), in row
     order, each cleaning the free (``free``: bool, (rows, columns)) cell under it if it is
     not ``cleaned`` yet; ``fresh[a]``: 1 where robot ``a`` cleaned its cell first (a cell two
-    robots clean at once counts for the lower row), else 0. Returns 0."""
+    robots clean at once counts for the lower row), else 0. (``winner``, shape (rows *
+    columns,), is the device form's: ``device.claim_cell``.) Returns 0."""
     rows, cols = cleaned.shape
     for a in range(x.shape[0]):
         fresh[a] = 0
         if vacuuming[a] == 1:
-            row = min(max(int(y[a] // cell), 0), rows - 1)
-            col = min(max(int(x[a] // cell), 0), cols - 1)
+            row, col = cell_of(x[a], y[a], cell, rows, cols)
             if free[row, col] and not cleaned[row, col]:
                 cleaned[row, col] = True
                 fresh[a] = 1
@@ -185,7 +197,7 @@ def clean_grid(t: int, x: np.ndarray, y: np.ndarray, vacuuming: np.ndarray,
 @njit(inline="always")
 def count_cleaned(a: int, moving: bool, x: np.ndarray, y: np.ndarray, vacuuming: np.ndarray,
                   cleaned_cells: np.ndarray, free: np.ndarray, cleaned: np.ndarray,
-                  fresh: np.ndarray, cell: float) -> None:  # fmt: skip
+                  fresh: np.ndarray, winner: np.ndarray, cell: float) -> None:  # fmt: skip
     """Robot ``a``'s share of :func:`clean_grid` (``SwarmSensorKernel.apply``): its fresh
     cell added to ``cleaned_cells``, the brush off until the tree runs it again."""
     cleaned_cells[a] += fresh[a]
