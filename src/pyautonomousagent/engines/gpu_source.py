@@ -9,13 +9,16 @@ of a node or a leaf.
 
 ``block_gpu(t0, count, every, row0, st, cur, pend, kf, ki, arrays..., us, uh, uc,
 records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed, speed_step,
-turn_step, sensor state...)`` runs iterations ``t0 + 1 .. t0 + count`` for every agent; a record of
-iteration ``t`` goes to row ``t // every - row0`` of the record arrays (a group of rows on
-the device, copied back by the engine). That is the kernel of a tree that sends no messages
-(the patrol). One that sends messages gets :func:`message_kernels` instead: one kernel per
-phase and message type, each for one iteration, the same generator's pieces plus the
-mission's compiled handlers (``HandlerKernel.function`` and its per-receiver
-``Receive.function``), launched by :mod:`~pyautonomousagent.engines.gpu_messages`.
+turn_step, sensor state...)`` runs iterations ``t0 + 1 .. t0 + count`` for every agent; a
+record of iteration ``t`` goes to row ``t // every - row0`` of the record arrays (a group of
+rows on the device, copied back by the engine). That is the kernel of a tree that sends no
+messages (the patrol); with a sensor of the whole swarm (e.g. a grid all agents share),
+``block_gpu`` also takes the sensor's state (``ws0, ...``) and runs one iteration a launch,
+after :func:`swarm_kernels` (the sensor's device steps, ``SwarmSensorKernel.device``). A
+tree that sends messages gets :func:`message_kernels` instead: one kernel per phase and
+message type, each for one iteration, the same generator's pieces plus the mission's
+compiled handlers (``HandlerKernel.function`` and its per-receiver ``Receive.function``),
+launched by :mod:`~pyautonomousagent.engines.gpu_messages`.
 """
 
 from __future__ import annotations
