@@ -15,7 +15,8 @@ its documented kernel API (:mod:`pyautonomousagent.kernels`, ``randomness.unifor
 (:meth:`VacuumMission.compiled_sensors`: the sonar and the stop rule per robot, with the room's
 obstacles as arrays; the cleaning grid, shared by all robots, as a sensor of the whole swarm
 that cleans the cells in robot order once an iteration), so the compiled engine runs whole
-iterations fused (``kernels.py``):
+iterations fused (``kernels.py``), and so does the GPU engine (``device.py``: the grid's
+steps on the device, the lowest robot row winning a cell by an atomic minimum):
 
 - world objects (``world:``): ``obstacles``, a list of ``{shape: rect, x, y, width,
   height}`` (lower-left corner) and ``{shape: circle, x, y, radius}``; ``start_positions``,
@@ -225,7 +226,8 @@ class VacuumMission(Mission):
         cleaning as a sensor of the whole swarm (``kernels.clean_grid`` once an iteration on
         :attr:`grid`'s arrays, then ``kernels.count_cleaned`` per robot; on the GPU
         ``device.claim_cell`` and ``device.take_cell``)."""
-        from pyautonomousagent.missions.vacuum.device import claim_cell, take_cell  # numba's
+        # imports numba.cuda: here, where only the compiled and GPU engines (numba) call it
+        from pyautonomousagent.missions.vacuum.device import claim_cell, take_cell
 
         room, grid = self.room, self.grid
         swarm = SwarmSensorKernel(
