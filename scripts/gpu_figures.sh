@@ -9,7 +9,7 @@ OUT=${OUT:-$(mktemp -d)}
 python "$HERE/gpu_figures.py" check || exit 2
 set -x
 python "$HERE/gpu_figures.py" device
-# The same bits first: the device tests (patrol, patrol-3d, gathering, radiation-search
+# The same bits first: the device tests (patrol, patrol-3d, gathering, radiation-search, vacuum
 # against the batched engine, 3 seeds each), where the tests are beside this script.
 if [ -d "$HERE/../tests" ]; then
   (cd "$HERE/.." && python -m pytest -q -p no:cacheprovider -o addopts="" -rs \

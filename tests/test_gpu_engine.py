@@ -102,8 +102,9 @@ def test_with_a_device_auto_picks_the_gpu_from_the_threshold_on(
 def test_auto_takes_the_compiled_engine_where_the_kernel_cannot_run_the_run(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """Crowded's proximity sensor is not compiled: above the threshold, with a device, auto
-    builds the GPU engine, sees it cannot run the run, and takes the compiled one."""
+    """Crowded's proximity sensor senses the whole swarm (no device form): above the
+    threshold, with a device, auto builds the GPU engine, sees it cannot run the run, and
+    takes the compiled one."""
     _device_present(monkeypatch)
     monkeypatch.setattr(gpu, "AUTO_DRONE_ITERATIONS", 40)
     scenario = load("crowded").with_overrides(agents=4, iterations=10)
@@ -315,6 +316,8 @@ DEVICE_CASES = [
                    "datalink_range": 25}, True),
     ("radiation-search", {"agents": 64, "iterations": 400}, True),
     ("radiation-search", {"agents": 64, "iterations": 400, "datalink_range": 15}, True),
+    ("vacuum", {"agents": 64, "iterations": 300}, False),
+    ("vacuum", {"agents": 64, "iterations": 300, "start_positions": [[1.5, 1.5]]}, False),
 ]  # fmt: skip
 
 
@@ -389,10 +392,7 @@ def test_a_gpu_runs_folder_names_the_device_and_verifies(tmp_path: Path) -> None
 @pytest.mark.parametrize(
     ("scenario", "why"),
     [
-        (
-            "crowded",
-            "engine gpu: only runs whose mission has compiled sensors and compiled handlers",
-        ),
+        ("crowded", "engine gpu: mission 'crowded' senses the whole swarm at once"),
     ],
 )
 def test_a_run_the_kernel_cannot_do_is_refused_in_one_line(scenario: str, why: str) -> None:

@@ -183,6 +183,13 @@ class SwarmSensorKernel:
         collect: ``collect(sim, through)``, after a fused call, as many times as it needs,
             with ``through`` rising to the last iteration run: what ``detect`` kept for the
             run (e.g. events) for the iterations up to ``through``, in order.
+        device: ``detect``'s form for the GPU engine, or () for none (the GPU engine then
+            refuses the run): steps ``step(a, t, *arrays, *state, *constants)`` (njit,
+            inline, called from CUDA kernels only: they may use ``numba.cuda.atomic``), each
+            run for every agent ``a`` as one launch, the steps in order (every agent ends a
+            step before any starts the next). Together they must leave the arrays and the
+            state as ``detect`` does, whatever order the threads run in (e.g. an atomic
+            minimum of agent rows to find the lowest, not a race).
     """
 
     detect: Callable[..., int]
@@ -191,6 +198,7 @@ class SwarmSensorKernel:
     state: tuple[Any, ...] = ()
     constants: tuple[float | int, ...] = ()
     collect: Callable[[Simulation, int], None] | None = None
+    device: tuple[Callable[..., None], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -198,15 +206,17 @@ class SensorKernel:
     """A mission's Phase 2 sensors for one agent.
 
     Attributes:
-        function: ``function(a, *arrays, *constants) -> bool``: updates agent ``a``'s sensed
-            columns and says whether it can move this iteration (an njit function).
+        function: ``function(a, *arrays, *state, *constants) -> bool``: updates agent ``a``'s
+            sensed columns and says whether it can move this iteration (an njit function).
         names: the swarm columns or blackboard keys passed as arrays, in order.
-        constants: numbers passed after the arrays.
+        constants: numbers passed after the arrays and the state.
         stopped: ``stopped(sim, rows)`` is called, with ``sim.world.iteration`` set, for the
             agents (int array) found unable to move for the first time in a run of
             iterations (the mission's alerts), in order of iteration.
         swarm: the sensing of the whole swarm done with them (after ``function`` in an
             iteration, as the NumPy path does), or None.
+        state: arrays the sensors read (never write) passed as they are, after the named
+            arrays, in order (e.g. obstacles as arrays of corners or centres and radii).
     """
 
     function: Callable[..., bool]
@@ -214,6 +224,7 @@ class SensorKernel:
     constants: tuple[float | int, ...] = ()
     stopped: Callable[[Simulation, Any], None] | None = None
     swarm: SwarmSensorKernel | None = None
+    state: tuple[Any, ...] = ()
 
 
 @njit(inline="always")

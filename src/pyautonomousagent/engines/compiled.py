@@ -310,7 +310,7 @@ class CompiledEngine:
             self.status, self.current, self.pending, *self._constants, *self.arrays,
             model.u_speed, model.u_heading, u_climb, *records[:-1], recorder.traces,
             traced_at, records[-1], recorder._leaf_rows.astype(np.int64), stopped,
-            p.max_speed, p.speed_step, p.turn_step,
+            p.max_speed, p.speed_step, p.turn_step, *fused.sensors.state,
         )  # fmt: skip
         start, every = sim.world.iteration, recorder.every
         if fused.messaging is not None:

@@ -291,6 +291,7 @@ def tree_body(
 
 def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:
     args = ["a", *(layout.array(name) for name in sensors.names)]
+    args += [f"ss{j}" for j in range(len(sensors.state))]
     args += layout.constants.refs("sensors", sensors.constants)
     return f"S({', '.join(args)})"
 
@@ -398,10 +399,19 @@ def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, inde
 
 
 #: The arguments of the fused functions from the node statuses on (see
-#: :func:`block_function`).
+#: :func:`block_function`), less the sensors' state (:func:`fused_arguments`).
 _FUSED_ARGS = """st, cur, pend, kf, ki, {arrays}, us, uh, uc,
            {records}, traces, traced_at, behaviour, leaf_rows, stopped_at,
            max_speed, speed_step, turn_step"""
+
+
+def fused_arguments(layout: Layout, sensors: SensorKernel) -> str:
+    """The arguments of the fused functions (and the GPU kernels) from the node statuses on:
+    :data:`_FUSED_ARGS`, then the sensors' state ``ss0, ss1, ...``
+    (``SensorKernel.state``)."""
+    records = ", ".join(f"r{j}" for j in range(len(layout.names)))
+    state = "".join(f", ss{j}" for j in range(len(sensors.state)))
+    return _FUSED_ARGS.format(arrays=layout.arrays, records=records) + state
 
 
 def block_function(
@@ -413,11 +423,10 @@ def block_function(
 ) -> str:
     """``block_serial``/``block_parallel(t0, count, every, chunk, st, cur, pend, kf, ki, arrays...,
     us, uh, uc, records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
-    max_speed, speed_step, turn_step) -> count``: iterations ``t0 + 1 .. t0 + count`` of
-    Phases 2 (sensors, motion), 3, 4 and 6 for every agent, ``chunk`` agents at a time (no
-    agent hears another: the tree sends no message). ``us``, ``uh``, ``uc``: the control
-    signals u_v, u_a and (3-D drone) u_w, shape (N,)."""
-    records = ", ".join(f"r{j}" for j in range(len(layout.names)))
+    max_speed, speed_step, turn_step, sensor state...) -> count``: iterations ``t0 + 1 ..
+    t0 + count`` of Phases 2 (sensors, motion), 3, 4 and 6 for every agent, ``chunk`` agents
+    at a time (no agent hears another: the tree sends no message). ``us``, ``uh``, ``uc``: the
+    control signals u_v, u_a and (3-D drone) u_w, shape (N,)."""
     store = "\n".join(
         f"                r{j}[row, first:last] = c{j}[first:last]"
         for j in range(len(layout.names))
@@ -425,7 +434,7 @@ def block_function(
     name = "block_parallel" if parallel else "block_serial"
     return f"""
 @njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
-def {name}(t0, count, every, chunk, {_FUSED_ARGS.format(arrays=layout.arrays, records=records)}):
+def {name}(t0, count, every, chunk, {fused_arguments(layout, sensors)}):
     n = {layout.array("x")}.shape[0]
     for group in prange((n + chunk - 1) // chunk):
         first = group * chunk
@@ -558,8 +567,9 @@ def stepwise_block_function(
     ``block_messages_serial``/``block_messages_parallel`` (with messaging) or
     ``block_swarm_serial``/``block_swarm_parallel`` (without) ``(t0, count, every, chunk, st,
     cur, pend, kf, ki, arrays..., outboxes..., us, uh, uc, records..., traces, traced_at,
-    behaviour, leaf_rows, stopped_at, max_speed, speed_step, turn_step[, reach, order,
-    counts, lowest, inboxes..., handler state...][, swarm state...]) -> iterations done``:
+    behaviour, leaf_rows, stopped_at, max_speed, speed_step, turn_step, sensor state...[,
+    reach, order, counts, lowest, inboxes..., handler state...][, swarm state...]) ->
+    iterations done``:
     up to ``count`` whole iterations. With messaging, the messages are handled compiled: the
     inboxes hold the messages to handle in the first iteration (``order``: the types
     delivered, in delivery order, -1 after them; ``counts`` per type); it stops after an
@@ -567,7 +577,6 @@ def stepwise_block_function(
     world units), or include a recorded type: the caller delivers those (the outboxes keep
     them) as it does after the last iteration. The swarm sensor stops it before an
     iteration it has no room for."""
-    records = ", ".join(f"r{j}" for j in range(len(layout.names)))
     store = "\n".join(
         f"                r{j}[row, first:last] = c{j}[first:last]"
         for j in range(len(layout.names))
@@ -599,7 +608,7 @@ def stepwise_block_function(
         extra += ",\n           " + ", ".join(f"ws{j}" for j in range(len(sensors.swarm.state)))
     kind = "messages" if messaging is not None else "swarm"
     name = f"block_{kind}_{'parallel' if parallel else 'serial'}"
-    arguments = _FUSED_ARGS.format(arrays=layout.arrays, records=records) + extra
+    arguments = fused_arguments(layout, sensors) + extra
     return f"""
 @njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
 def {name}(t0, count, every, chunk, {arguments}):

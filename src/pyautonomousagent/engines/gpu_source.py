@@ -9,13 +9,16 @@ of a node or a leaf.
 
 ``block_gpu(t0, count, every, row0, st, cur, pend, kf, ki, arrays..., us, uh, uc,
 records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed, speed_step,
-turn_step)`` runs iterations ``t0 + 1 .. t0 + count`` for every agent; a record of
-iteration ``t`` goes to row ``t // every - row0`` of the record arrays (a group of rows on
-the device, copied back by the engine). That is the kernel of a tree that sends no messages
-(the patrol). One that sends messages gets :func:`message_kernels` instead: one kernel per
-phase and message type, each for one iteration, the same generator's pieces plus the
-mission's compiled handlers (``HandlerKernel.function`` and its per-receiver
-``Receive.function``), launched by :mod:`~pyautonomousagent.engines.gpu_messages`.
+turn_step, sensor state...)`` runs iterations ``t0 + 1 .. t0 + count`` for every agent; a
+record of iteration ``t`` goes to row ``t // every - row0`` of the record arrays (a group of
+rows on the device, copied back by the engine). That is the kernel of a tree that sends no
+messages (the patrol); with a sensor of the whole swarm (e.g. a grid all agents share),
+``block_gpu`` also takes the sensor's state (``ws0, ...``) and runs one iteration a launch,
+after :func:`swarm_kernels` (the sensor's device steps, ``SwarmSensorKernel.device``). A
+tree that sends messages gets :func:`message_kernels` instead: one kernel per phase and
+message type, each for one iteration, the same generator's pieces plus the mission's
+compiled handlers (``HandlerKernel.function`` and its per-receiver ``Receive.function``),
+launched by :mod:`~pyautonomousagent.engines.gpu_messages`.
 """
 
 from __future__ import annotations
@@ -25,13 +28,14 @@ from typing import Any
 
 from pyautonomousagent.engines.batched import Program
 from pyautonomousagent.engines.compiled_source import (
-    _FUSED_ARGS,
     Layout,
     Messaging,
     _control,
     _later_pass,
     _motion,
+    _swarm_args,
     alias,
+    fused_arguments,
     tree_body,
 )
 from pyautonomousagent.kernels import LeafKernel, SensorKernel
@@ -75,7 +79,6 @@ def kernel_function(
     contraction off (:mod:`~pyautonomousagent.engines.gpu`)."""
     if layout.outboxes:
         raise ValueError("the GPU kernel is written for trees that send no messages")
-    records = ", ".join(f"r{j}" for j in range(len(layout.names)))
     store = "\n".join(f"            r{j}[row, a] = c{j}[a]" for j in range(len(layout.names)))
     if layout.deferred:
         control = _later_pass(
@@ -83,7 +86,7 @@ def kernel_function(
         )
     else:
         control = _control(layout, " " * 8)
-    arguments = _FUSED_ARGS.format(arrays=layout.arrays, records=records)
+    arguments = fused_arguments(layout, sensors) + _swarm_state(sensors)
     return f"""
 def block_gpu(t0, count, every, row0, {arguments}):
     a = cuda.grid(1)
@@ -100,21 +103,57 @@ def block_gpu(t0, count, every, row0, {arguments}):
 """
 
 
+def _swarm_state(sensors: SensorKernel) -> str:
+    """``, ws0, ws1, ...``: the swarm sensor's state after ``block_gpu``'s other arguments
+    ("" without a swarm sensor)."""
+    swarm = sensors.swarm
+    return "".join(f", ws{j}" for j in range(len(swarm.state))) if swarm is not None else ""
+
+
+def swarm_kernels(layout: Layout, sensors: SensorKernel) -> str:
+    """``swarm_0``, ``swarm_1``, ...: one kernel per step of the swarm sensor's device form
+    (``SwarmSensorKernel.device``), ``swarm_<j>(t, n, kf, ki, arrays..., ws...)`` calling
+    step ``j`` for agent ``a = cuda.grid(1)`` below ``n`` at iteration ``t``; "" without a
+    swarm sensor. The engine launches them in order before each iteration's ``block_gpu``
+    (one iteration a launch), so ``block_gpu``'s ``apply`` reads what they found."""
+    swarm = sensors.swarm
+    if swarm is None:
+        return ""
+    states = "".join(f", ws{j}" for j in range(len(swarm.state)))
+    args = ", ".join(["a", "t", *_swarm_args(swarm, layout)])
+    return "".join(
+        f"""
+def swarm_{j}(t, n, kf, ki, {layout.arrays}{states}):
+    a = cuda.grid(1)
+    if a >= n:
+        return
+    WD{j}({args})
+"""
+        for j in range(len(swarm.device))
+    )
+
+
 def kernel_module_source(
     program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, sensors: SensorKernel
 ) -> str:
-    """The generated module: imports of the helpers and kernels, then ``block_gpu`` (a plain
-    Python function: :func:`~pyautonomousagent.engines.gpu.load_kernel` compiles it)."""
+    """The generated module: imports of the helpers and kernels, then ``block_gpu`` and the
+    swarm sensor's :func:`swarm_kernels` (plain Python functions:
+    :func:`~pyautonomousagent.engines.gpu.load_kernel` compiles them)."""
     lines = [HEADER, *_import_lines(_kernel_imports(kernels, sensors))]
     lines.append(kernel_function(program, kernels, layout, sensors))
+    lines.append(swarm_kernels(layout, sensors))
     return "\n".join(lines) + "\n"
 
 
 def _kernel_imports(kernels: Mapping[int, LeafKernel], sensors: SensorKernel) -> dict[str, Any]:
-    """Name -> function of the leaves' (and their ``Later`` steps') and sensors' kernels."""
+    """Name -> function of the leaves' (and their ``Later`` steps') and sensors' kernels (with
+    a swarm sensor its ``apply``, ``WA``, and device steps, ``WD0, WD1, ...``)."""
     used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
     used |= {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
     used["S"] = sensors.function
+    if sensors.swarm is not None:
+        used["WA"] = sensors.swarm.apply
+        used |= {f"WD{j}": step for j, step in enumerate(sensors.swarm.device)}
     return used
 
 
@@ -159,11 +198,12 @@ def receive_size(messaging: Messaging, k: int) -> int:
     return len(receive.state(1))
 
 
-def _kernel(name: str, layout: Layout, messaging: Messaging, body: str) -> str:
+def _kernel(
+    name: str, layout: Layout, sensors: SensorKernel, messaging: Messaging, body: str
+) -> str:
     """A message kernel ``name(live, t, every, row0, common..., message...)``: ``body`` for
     thread ``a = cuda.grid(1)`` below ``live``, indented by 4."""
-    records = ", ".join(f"r{j}" for j in range(len(layout.names)))
-    common = _FUSED_ARGS.format(arrays=layout.arrays, records=records)
+    common = fused_arguments(layout, sensors)
     return f"""
 def {name}(live, t, every, row0, {common},
            {message_arguments(layout, messaging)}):
@@ -318,18 +358,20 @@ def message_kernels(
         row = t // every - row0
 {store}
         record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"""
-    parts = [_kernel("sense_move", layout, messaging, _motion(layout, sensors, " " * 4))]
+    parts = [_kernel("sense_move", layout, sensors, messaging, _motion(layout, sensors, " " * 4))]
     for k, handler in enumerate(messaging.handlers):
         forms = [("handle_all", _handle_all)]
         forms += [("handle_sender", _handle_sender)] if handler.by_sender else []
         if handler.receive is not None:
             forms += [("handle_each", _handle_each), ("handle_near", _handle_near)]
         for name, form in forms:
-            parts.append(_kernel(f"{name}_{k}", layout, messaging, form(messaging, layout, k)))
-    parts.append(_kernel("tick", layout, messaging, tick))
+            parts.append(
+                _kernel(f"{name}_{k}", layout, sensors, messaging, form(messaging, layout, k))
+            )
+    parts.append(_kernel("tick", layout, sensors, messaging, tick))
     for k in range(len(messaging.types)):
-        parts.append(_kernel(f"flag_{k}", layout, messaging, _flag(messaging, layout, k)))
-        parts.append(_kernel(f"scatter_{k}", layout, messaging, _scatter(messaging, k)))
+        parts.append(_kernel(f"flag_{k}", layout, sensors, messaging, _flag(messaging, layout, k)))
+        parts.append(_kernel(f"scatter_{k}", layout, sensors, messaging, _scatter(messaging, k)))
     return "".join(parts)
 
 

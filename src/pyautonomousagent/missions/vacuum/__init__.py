@@ -9,7 +9,14 @@ straight ahead on its cruise heading (``Action_Navigate_S``) and vacuums
 (``Action_Vacuum_S``).
 
 Written only with the public API (:mod:`pyautonomousagent.mission`,
-:mod:`pyautonomousagent.bt`, :mod:`pyautonomousagent.arrays`):
+:mod:`pyautonomousagent.bt`, :mod:`pyautonomousagent.arrays`), and, for the compiled engine,
+its documented kernel API (:mod:`pyautonomousagent.kernels`, ``randomness.uniform_of_one``,
+``jit.njit``): every leaf has a ``kernel``, and the sensors a compiled form
+(:meth:`VacuumMission.compiled_sensors`: the sonar and the stop rule per robot, with the room's
+obstacles as arrays; the cleaning grid, shared by all robots, as a sensor of the whole swarm
+that cleans the cells in robot order once an iteration), so the compiled engine runs whole
+iterations fused (``kernels.py``), and so does the GPU engine (``device.py``: the grid's
+steps on the device, the lowest robot row winning a cell by an atomic minimum):
 
 - world objects (``world:``): ``obstacles``, a list of ``{shape: rect, x, y, width,
   height}`` (lower-left corner) and ``{shape: circle, x, y, radius}``; ``start_positions``,
@@ -37,6 +44,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from pyautonomousagent.kernels import SensorKernel, SwarmSensorKernel
 from pyautonomousagent.mission import (
     Mark,
     Mission,
@@ -54,6 +62,12 @@ from pyautonomousagent.mission import (
     register_mission,
 )
 from pyautonomousagent.missions.vacuum import leaves
+from pyautonomousagent.missions.vacuum.kernels import (
+    NOBODY,
+    clean_grid,
+    count_cleaned,
+    sonar_and_stop,
+)
 from pyautonomousagent.missions.vacuum.room import (
     Circle,
     CleaningGrid,
@@ -190,6 +204,8 @@ class VacuumMission(Mission):
         s["heading"][:] = np.round(s["heading"]) % 360.0
         swarm.blackboard["cruise_heading"][:] = s["heading"]
         s["sonar"][:] = self.room.sonar(s["x"], s["y"], s["heading"], self.params.sonar_range)
+        self.fresh = np.zeros(swarm.size, dtype=np.int64)  # the compiled grid's, per robot
+        self.winner = np.full(self.grid.free.size, NOBODY)  # the GPU's, per cell
 
     def sense(self, sim: Simulation) -> np.ndarray:
         """Clean under the brushes that ran, read the sonar, stop robots about to collide.
@@ -203,6 +219,27 @@ class VacuumMission(Mission):
         s["sonar"][:] = self.room.sonar(s["x"], s["y"], s["heading"], self.params.sonar_range)
         next_x, next_y = next_position(s["x"], s["y"], s["speed"], s["heading"])
         return ~self.room.blocked(next_x, next_y, STOP_MARGIN)
+
+    def compiled_sensors(self, sim: Simulation) -> SensorKernel:
+        """:meth:`sense` compiled: the sonar and the stop rule per robot
+        (``kernels.sonar_and_stop``, the room's rectangles and circles as its state), and the
+        cleaning as a sensor of the whole swarm (``kernels.clean_grid`` once an iteration on
+        :attr:`grid`'s arrays, then ``kernels.count_cleaned`` per robot; on the GPU
+        ``device.claim_cell`` and ``device.take_cell``)."""
+        # imports numba.cuda: here, where only the compiled and GPU engines (numba) call it
+        from pyautonomousagent.missions.vacuum.device import claim_cell, take_cell
+
+        room, grid = self.room, self.grid
+        swarm = SwarmSensorKernel(
+            clean_grid, count_cleaned, ("x", "y", "vacuuming", "cleaned_cells"),
+            (grid.free, grid.cleaned, self.fresh, self.winner), (float(grid.cell),),
+            device=(claim_cell, take_cell),
+        )  # fmt: skip
+        return SensorKernel(
+            sonar_and_stop, ("x", "y", "speed", "heading", "sonar"),
+            (float(room.width), float(room.height), float(self.params.sonar_range), STOP_MARGIN),
+            swarm=swarm, state=(room.rects, room.circles),
+        )  # fmt: skip
 
     def coverage(self) -> float:
         """The fraction of the room's free cells cleaned so far, in [0, 1]."""

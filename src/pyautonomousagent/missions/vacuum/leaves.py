@@ -1,8 +1,9 @@
 """The vacuum robot's leaves (the paper's Fig. 2): collision condition, avoid, navigate, vacuum.
 
 Written with array expressions on an :class:`~pyautonomousagent.mission.AgentView`, so the
-same code runs for one robot (py_trees engine) or many at once (batched engine). As in
-Fig. 2, every action returns SUCCESS when it is ticked.
+same code runs for one robot (py_trees engine) or many at once (batched engine); each leaf's
+``kernel`` is its form for one robot on the compiled engine (``kernels.py``). As in Fig. 2,
+every action returns SUCCESS when it is ticked.
 """
 
 from __future__ import annotations
@@ -11,7 +12,10 @@ from typing import Any
 
 from pyautonomousagent.arrays import choose, maximum, minimum, wrap_degrees
 from pyautonomousagent.bt import SUCCESS, Leaf, Port, register_leaf, success_if
+from pyautonomousagent.kernels import ITERATION, LeafKernel
 from pyautonomousagent.mission import AgentView, World
+from pyautonomousagent.missions.vacuum import kernels as k
+from pyautonomousagent.randomness import seed_halves
 
 CRUISE = ("cruise_heading",)
 """The blackboard key of the heading a robot holds while navigating (degrees)."""
@@ -28,6 +32,9 @@ class ConditionCollision(Leaf):
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return success_if(agents.sonar < self.distance)
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.collision, ("sonar",), (self.distance,))
 
 
 @register_leaf
@@ -71,6 +78,12 @@ class ActionAvoidObstacleS(Leaf):
         agents.requested_speed = 0.0
         return SUCCESS
 
+    def kernel(self, world: World) -> LeafKernel:
+        names = (ITERATION, "heading", *CRUISE, "requested_speed", "requested_heading")
+        constants = (*seed_halves(world.random.seed), self.stream, float(self.min_angle),
+                     float(self.max_angle), float(self.step))  # fmt: skip
+        return LeafKernel(k.avoid, names, constants)
+
 
 @register_leaf
 class ActionNavigateS(Leaf):
@@ -86,6 +99,10 @@ class ActionNavigateS(Leaf):
         agents.requested_speed = self.speed
         return SUCCESS
 
+    def kernel(self, world: World) -> LeafKernel:
+        names = (*CRUISE, "requested_speed", "requested_heading")
+        return LeafKernel(k.navigate, names, (float(self.speed),))
+
 
 @register_leaf
 class ActionVacuumS(Leaf):
@@ -96,3 +113,6 @@ class ActionVacuumS(Leaf):
     def evaluate(self, agents: AgentView, world: World) -> Any:
         agents.vacuuming = 1
         return SUCCESS
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(k.brush, ("vacuuming",))

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from pyautonomousagent.arrays import sincos_degrees
 from pyautonomousagent.mission import Reader
 
 
@@ -115,15 +116,16 @@ class Room:
 
         Args:
             x, y: positions, shape (N,), inside the room.
-            heading: degrees clockwise from north, shape (N,).
+            heading: degrees clockwise from north, [0, 360), shape (N,) (sine and cosine from
+                :func:`~pyautonomousagent.arrays.sincos_degrees`: the same bits on every CPU
+                and in a GPU kernel).
             reach: the sonar's range: longer distances read as ``reach`` (world units).
 
         Returns:
             World units in [0, reach], shape (N,); 0 for a position on an obstacle's edge
             facing into it.
         """
-        rad = np.asarray(heading, dtype=np.float64) * (np.pi / 180.0)
-        dx, dy = np.sin(rad), np.cos(rad)
+        dx, dy = sincos_degrees(np.asarray(heading, dtype=np.float64))
         with np.errstate(divide="ignore", invalid="ignore"):
             nearest = np.minimum(self._walls(x, y, dx, dy), reach)
             if len(self.rects):
