@@ -4,6 +4,8 @@ bench`` (which cannot set the world's size) grows the world to hold the lattice.
 
 from __future__ import annotations
 
+import json
+
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -88,3 +90,12 @@ def test_pyaa_bench_runs_a_swarm_larger_than_the_world_and_says_so(capsys):
     out, err = capsys.readouterr()
     assert "crowded with 30 agents: in a world of 170 x 120 (the scenario's is 120 x 120)" in err
     assert "failed" not in out and any(line.split()[:1] == ["30"] for line in out.splitlines())
+
+
+def test_pyaa_run_world_gives_a_larger_swarm_the_world_it_needs(tmp_path):
+    out = tmp_path / "run"
+    argv = ["run", "crowded", "--agents", "100", "--world", "290,230", "--iterations", "3",
+            "--no-gif", "--no-replay", "--quiet", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    scenario = json.loads((out / "run.json").read_text())["scenario"]
+    assert scenario["agents"] == 100 and scenario["world"]["size"] == [290.0, 230.0]

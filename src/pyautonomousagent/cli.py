@@ -68,6 +68,10 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("scenario", help="a registered scenario name or a scenario .yaml file")
     run.add_argument("--agents", type=int, help="number of agents (default: the scenario's)")
     run.add_argument("--iterations", type=int, help="iterations to simulate")
+    run.add_argument(
+        "--world", type=world_size, metavar="WIDTH,HEIGHT",
+        help="the world's size in world units, e.g. 500,400 (default: the scenario's)",
+    )  # fmt: skip
     run.add_argument("--seed", type=int, default=0, help="seed of the run's random generator")
     run.add_argument(
         "--engine",
@@ -442,7 +446,20 @@ def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
 
 #: Scenario fields that have their own option: ``--set agents=5`` points there.
 OPTIONS = {"agents": "--agents", "iterations": "--iterations", "frame_every": "--frame-every",
-           "tree": "--tree"}  # fmt: skip
+           "tree": "--tree", "size": "--world", "world": "--world"}  # fmt: skip
+
+
+def world_size(text: str) -> list[float]:
+    """``--world``: ``"WIDTH,HEIGHT"`` -> [width, height] (world units; the scenario checks
+    that they are finite and above 0)."""
+    parts = text.replace("x", ",").split(",")
+    try:
+        size = [float(part) for part in parts]
+    except ValueError:
+        size = []
+    if len(size) != 2:
+        raise argparse.ArgumentTypeError(f"WIDTH,HEIGHT in world units, e.g. 500,400; got {text!r}")
+    return size
 
 
 def _parse_overrides(pairs: list[str], known: list[str] | None = None) -> dict[str, Any]:
@@ -477,8 +494,9 @@ def _scenario(args: argparse.Namespace) -> Scenario:
     scenario = load(args.scenario)
     overrides = _parse_overrides(args.set, list(to_mapping(scenario)["parameters"]))
     return scenario.with_overrides(
-        agents=args.agents, iterations=args.iterations, frame_every=args.frame_every, **overrides
-    )
+        agents=args.agents, iterations=args.iterations, frame_every=args.frame_every,
+        size=args.world, **overrides,
+    )  # fmt: skip
 
 
 def _check_run_options(args: argparse.Namespace) -> None:
