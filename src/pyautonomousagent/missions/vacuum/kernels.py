@@ -46,7 +46,7 @@ def avoid(a: int, t: int, heading: np.ndarray, cruise: np.ndarray, requested_spe
         right = uniform_of_one(seed_high, seed_low, stream, a, t, 0.0, 1.0, 0) < 0.5
         angle = uniform_of_one(seed_high, seed_low, stream, a, t, min_angle, max_angle, 1)
         if step > 0.0:
-            angle = np_maximum(angle - angle % step, step)
+            angle = np_maximum(step * math.floor(angle / step), step)
         goal = wrap_degrees(h + (angle if right else -angle))
     cruise[a] = goal
     requested_heading[a] = goal
@@ -168,8 +168,8 @@ NOBODY = np.iinfo(np.int64).max
 @njit(inline="always")
 def cell_of(px: float, py: float, cell: float, rows: int, cols: int) -> tuple[int, int]:
     """``CleaningGrid.clean``'s cell (row, column) under a robot at (px, py)."""
-    row = min(max(int(py // cell), 0), rows - 1)
-    col = min(max(int(px // cell), 0), cols - 1)
+    row = min(max(math.floor(py / cell), 0), rows - 1)
+    col = min(max(math.floor(px / cell), 0), cols - 1)
     return row, col
 
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from pyautonomousagent.arrays import choose, maximum, minimum, wrap_degrees
 from pyautonomousagent.bt import SUCCESS, Leaf, Port, register_leaf, success_if
 from pyautonomousagent.kernels import ITERATION, LeafKernel
@@ -44,9 +46,11 @@ class ActionAvoidObstacleS(Leaf):
     When the robot holds its cruise heading (its last turn is complete), it draws a side
     (left or right, even odds) and an angle in [``min_angle``, ``max_angle``] and makes the
     turned heading its new cruise heading; while that turn is under way it keeps it. Angles
-    are whole multiples of ``step`` (the motion model's ``turn_step``): a robot starting on
-    whole degrees then turns exactly onto its target. The draws use :meth:`Leaf.uniform`, so
-    they are the same on both engines.
+    are whole multiples of ``step`` (the motion model's ``turn_step``; ``step * floor(angle
+    / step)``, correctly rounded operations that give the same bits on every CPU and a GPU,
+    where a float remainder may not): a robot starting on whole degrees then turns exactly
+    onto its target. The draws use :meth:`Leaf.uniform`, so they are the same on all
+    engines.
     """
 
     type_name = "Action_Avoid_Obstacle_S"
@@ -70,7 +74,7 @@ class ActionAvoidObstacleS(Leaf):
         right = self.uniform(agents, world, draw=0) < 0.5
         angle = self.uniform(agents, world, self.min_angle, self.max_angle, draw=1)
         if self.step > 0.0:
-            angle = maximum(angle - angle % self.step, self.step)
+            angle = maximum(self.step * np.floor(angle / self.step), self.step)
         turned = wrap_degrees(heading + choose(right, angle, -angle))
         cruise = choose(settled, turned, cruise)
         bb.cruise_heading = cruise

@@ -201,7 +201,8 @@ class CleaningGrid:
         self.cleaned = np.zeros((self.rows, self.cols), dtype=bool)
 
     def clean(self, x: np.ndarray, y: np.ndarray, brushing: np.ndarray) -> np.ndarray:
-        """Clean the cell under each robot whose brush is on.
+        """Clean the cell under each robot whose brush is on: row ``floor(y / cell)``,
+        column ``floor(x / cell)`` (a correctly rounded division, the same bits on a GPU).
 
         Args:
             x, y: positions, shape (N,).
@@ -215,8 +216,8 @@ class CleaningGrid:
         who = np.flatnonzero(brushing)
         if who.size == 0:
             return fresh
-        row = np.clip((y[who] // self.cell).astype(np.int64), 0, self.rows - 1)
-        col = np.clip((x[who] // self.cell).astype(np.int64), 0, self.cols - 1)
+        row = np.clip(np.floor(y[who] / self.cell).astype(np.int64), 0, self.rows - 1)
+        col = np.clip(np.floor(x[who] / self.cell).astype(np.int64), 0, self.cols - 1)
         flat = row * self.cols + col
         new = self.free.ravel()[flat] & ~self.cleaned.ravel()[flat]
         cells, first = np.unique(flat[new], return_index=True)
