@@ -8,7 +8,8 @@ is run for a few iterations under the simulator (in a subprocess) with a hook on
 simulator's kernel launch that records each kernel launched (its module and name) and the
 numba types of its arguments; then, in this process (real numba-cuda, no simulator), each is
 compiled with ``cuda.compile_ptx(..., cc=(9, 0))`` inside :func:`gpu.no_fma`: it must compile,
-and its PTX must hold no fused multiply-add (``fma.``).
+and its PTX must hold no fused multiply-add (``fma.``) and no approximate or flush-to-zero
+instruction (``.approx``, ``.ftz``): each would round otherwise than NumPy does.
 
 Runs where the numba-cuda package and its NVVM are importable (``pip install
 "numba-cuda[cu12]"`` brings NVVM in wheels; numba's own deprecated ``numba.cuda`` does not
@@ -164,7 +165,7 @@ def _ptx(function: Any, argument_types: tuple[Any, ...], contract: bool = False)
 
 @needs_nvvm
 @pytest.mark.parametrize(("scenario", "overrides", "messages"), CASES)
-def test_every_kernel_compiles_to_ptx_without_fused_multiply_adds(
+def test_every_kernel_compiles_to_ptx_without_fma_approx_or_ftz(
     scenario: str, overrides: dict[str, Any], messages: bool, tmp_path: Path
 ) -> None:
     launches, sent = _launches(scenario, overrides, tmp_path / "launches.pickle")
@@ -179,17 +180,17 @@ def test_every_kernel_compiles_to_ptx_without_fused_multiply_adds(
                if line.startswith("def ")}  # fmt: skip
     assert defined <= names  # every kernel of the generated module was launched
     assert (names >= DATALINK) == messages and ("block_gpu" in names) != messages
-    failed, fused = [], []
+    failed: list[str] = []
+    fused: list[str] = []
     for module, where, name, argument_types in launches:
         try:
             ptx = _ptx(_function(module, where, name), argument_types)
         except Exception as error:  # numba's TypingError, LoweringError, NVVM's errors
             failed.append(f"{name}: {type(error).__name__}: {error}")
             continue
-        if "fma." in ptx:
-            fused.append(name)
+        fused += [f"{name}: {bad}" for bad in ("fma.", ".approx", ".ftz") if bad in ptx]
     assert not failed, "\n\n".join(failed)
-    assert not fused, f"fused multiply-adds in the PTX of {fused}"
+    assert not fused, f"instructions that round otherwise than NumPy: {fused}"
     print(scenario, len(launches), "kernels compiled:", " ".join(sorted(names)))
 
 
