@@ -167,9 +167,11 @@ NOBODY = np.iinfo(np.int64).max
 
 @njit(inline="always")
 def cell_of(px: float, py: float, cell: float, rows: int, cols: int) -> tuple[int, int]:
-    """``CleaningGrid.clean``'s cell (row, column) under a robot at (px, py)."""
-    row = min(max(math.floor(py / cell), 0), rows - 1)
-    col = min(max(math.floor(px / cell), 0), cols - 1)
+    """``CleaningGrid.clean``'s cell (row, column) under a robot at (px, py). ``int`` of the
+    floor: numba's CUDA target types ``math.floor`` of a float as a float (its CPU target as
+    an int), and a float cannot index the grid on the device."""
+    row = min(max(int(math.floor(py / cell)), 0), rows - 1)
+    col = min(max(int(math.floor(px / cell)), 0), cols - 1)
     return row, col
 
 
