@@ -1,18 +1,20 @@
 """Helpers of scripts/gpu_figures.sh (issue 20's figures on a GPU machine).
 
 python scripts/gpu_figures.py check          # exit 2 with the reason where no GPU is usable
+python scripts/gpu_figures.py fma            # exit 1 where no_fma leaves FMA in the PTX
 python scripts/gpu_figures.py device         # device, driver, CuPy and numba-cuda versions
 python scripts/gpu_figures.py bandwidth      # measured device copy bandwidth, GB/s
 python scripts/gpu_figures.py bytes          # bytes of state per drone (patrol)
 python scripts/gpu_figures.py rate FILE GBS  # drone-iterations/s of a bench JSON, vs GBS
-python scripts/gpu_figures.py memory N       # device memory of an N-drone patrol run
-python scripts/gpu_figures.py crossover [ITERATIONS EVERY REPEATS]
-                                             # smallest swarm where gpu beats compiled
+python scripts/gpu_figures.py memory N [N]   # device memory of N-drone patrol runs
+python scripts/gpu_figures.py crossover [ITERATIONS EVERY FIRST]
+                                             # the swarm where gpu starts to beat compiled
 """
 
 from __future__ import annotations
 
 import json
+import math
 import sys
 import time
 
@@ -27,6 +29,24 @@ def check() -> int:
         print(f"gpu_figures: {problem}: the GPU figures need a CUDA device", file=sys.stderr)
         return 2
     return 0
+
+
+def fma() -> int:
+    """Exit 1 where :func:`~pyautonomousagent.engines.gpu.no_fma` does not keep this
+    numba-cuda's NVVM from contracting ``a * b + c`` (a version that compiles otherwise)."""
+    from numba import cuda
+
+    from pyautonomousagent.engines.gpu import no_fma
+
+    def multiply_add(a, b, c, out):  # type: ignore[no-untyped-def]
+        out[0] = a[0] * b[0] + c[0]
+
+    signature = "(float64[:], float64[:], float64[:], float64[:])"
+    with no_fma():
+        ptx, _ = cuda.compile_ptx(multiply_add, signature, cc=(9, 0))
+    contracted = "fma." in ptx
+    print(f"no_fma with this numba-cuda: {'FMA still in the PTX' if contracted else 'no FMA'}")
+    return int(contracted)
 
 
 def device() -> int:
@@ -103,63 +123,99 @@ def rate(path: str, gbs: str) -> int:
     return 0
 
 
-def crossover(iterations: str = "1000", every: str = "100", repeats: str = "3") -> int:
-    """The smallest patrol swarm whose whole run (set-up, the CUDA compile included, and
-    loop) is faster on the GPU than on the compiled engine (all this machine's cores; its
-    cache warm): swarms doubled from 1000 until the GPU wins, then bisected to 5 %; each
-    size runs the two engines interleaved ``repeats`` times, each in a fresh process
-    (``pyaa bench``'s), and compares their best. Prints the value for
-    ``engines.gpu.AUTO_DRONE_ITERATIONS``."""
+def crossover(iterations: str = "1000", every: str = "100", first: str = "62500") -> int:
+    """Where the GPU starts to pay for patrol: the whole run (set-up, the CUDA compile
+    included, and loop) of ``iterations`` x swarms doubled from ``first``, on the GPU and on
+    the compiled engine (all this machine's cores; its cache warm), each in a fresh process
+    (``pyaa bench``'s), the two interleaved, until the GPU wins at two sizes in a row (or at
+    16,000,000 drones). The two sizes around the crossover are then run twice more each
+    (best of three). Prints the crossover, interpolated between them, and the value for
+    ``engines.gpu.AUTO_DRONE_ITERATIONS`` (agents x iterations, rounded up)."""
     from pyautonomousagent.bench import Case, measure
 
-    its, k, r = int(iterations), int(every), int(repeats)
+    its, k = int(iterations), int(every)
+    best: dict[int, dict[str, float]] = {}
 
-    def gpu_wins(agents: int) -> bool:
-        best = {"compiled": float("inf"), "gpu": float("inf")}
-        for _ in range(r):
-            for engine in best:
-                result = measure(Case("patrol", engine, agents, its, k))
-                if result.seconds is None:
-                    raise SystemExit(f"crossover: {engine} at {agents} drones: {result.error}")
-                best[engine] = min(best[engine], result.seconds)
-        print(f"  {agents} drones x {its}: compiled {best['compiled']:.3f} s, "
-              f"gpu {best['gpu']:.3f} s (best of {r})", file=sys.stderr)  # fmt: skip
-        return best["gpu"] < best["compiled"]
+    def run(agents: int) -> float:
+        """GPU seconds minus compiled seconds (best so far) at ``agents``."""
+        times = best.setdefault(agents, {"compiled": float("inf"), "gpu": float("inf")})
+        for engine in times:
+            result = measure(Case("patrol", engine, agents, its, k))
+            if result.seconds is None:
+                raise SystemExit(f"crossover: {engine} at {agents} drones: {result.error}")
+            times[engine] = min(times[engine], result.seconds)
+        print(f"  {agents} drones x {its}: compiled {times['compiled']:.3f} s, "
+              f"gpu {times['gpu']:.3f} s", flush=True)  # fmt: skip
+        return times["gpu"] - times["compiled"]
 
-    low, high = 0, 1000  # the GPU loses at low (0: none tried), wins at high once found
-    while not gpu_wins(high):
-        low, high = high, high * 2
-        if high > 10**8:
-            print("crossover: the GPU did not win up to 100,000,000 drones")
-            return 1
-    while high - low > max(1, high // 20):
-        middle = (low + high) // 2
-        low, high = (low, middle) if gpu_wins(middle) else (middle, high)
-    print(f"crossover: {high} drones x {its} iterations (record every {k}); "
-          f"AUTO_DRONE_ITERATIONS = {high * its}")  # fmt: skip
+    agents, wins, losing = int(first), 0, None
+    while wins < 2 and agents <= 16_000_000:
+        if run(agents) < 0:
+            wins += 1
+        else:
+            wins, losing = 0, agents
+        agents *= 2
+    if wins == 0:
+        print("crossover: the GPU did not win up to 16,000,000 drones")
+        return 1
+    if losing is None:
+        print(f"crossover: the GPU wins from the first size tried ({first} drones) on")
+        return 0
+    for _ in range(2):
+        low, high = run(losing), run(losing * 2)
+    # the difference is linear in the swarm between the two sizes: its zero
+    if high >= 0:
+        print(f"crossover: not settled: the GPU won at {2 * losing} once, lost in the re-runs")
+        return 1
+    at = losing + losing * low / (low - high)
+    print(f"crossover: {at:.0f} drones x {its} iterations (record every {k}): the GPU loses "
+          f"at {losing} and wins at {2 * losing}; AUTO_DRONE_ITERATIONS = "
+          f"{math.ceil(at) * its}")  # fmt: skip
     return 0
 
 
-def memory(agents: str) -> int:
+def memory(*sizes: str) -> int:
+    """Device memory of patrol runs of ``sizes`` drones x 100 iterations (record every 100),
+    one after the other in this process; with two sizes or more, the bytes per drone (the
+    slope between the two largest: both should be past 6,300,000 drones, where a record
+    slot holds one row) and the largest swarm that the free memory holds."""
+    import gc
+
     from numba import cuda
 
     from pyautonomousagent import Simulation, load
 
-    n = int(agents)
-    free0, total = cuda.current_context().get_memory_info()
-    scenario = load("patrol").with_overrides(agents=n, iterations=100)
-    sim = Simulation.create(scenario, engine="gpu", record_every=100).run(progress=False)
-    free1, _ = cuda.current_context().get_memory_info()
-    used = free0 - free1
-    print(f"patrol {n} drones x 100 on the GPU: device memory in use {used / 2**30:.1f} GiB "
-          f"of {total / 2**30:.1f} GiB = {used / n:.0f} bytes per drone; "
-          f"{sim.world.iteration} iterations done")  # fmt: skip
+    context = cuda.current_context()
+    free0, total = context.get_memory_info()
+    print(f"device memory: {free0 / 2**30:.1f} GiB free of {total / 2**30:.1f} GiB")
+    used: dict[int, int] = {}
+    for text in sizes:
+        n = int(text)
+        scenario = load("patrol").with_overrides(agents=n, iterations=100)
+        sim = Simulation.create(scenario, engine="gpu", record_every=100).run(progress=False)
+        free1, _ = context.get_memory_info()
+        used[n] = free0 - free1
+        print(f"patrol {n} drones x 100 on the GPU: device memory in use "
+              f"{used[n] / 2**30:.2f} GiB = {used[n] / n:.0f} bytes per drone; "
+              f"{sim.world.iteration} iterations done", flush=True)  # fmt: skip
+        del sim
+        gc.collect()
+        context.deallocations.clear()
+    if len(used) >= 2:
+        (n1, u1), (n2, u2) = sorted(used.items())[-2:]
+        slope = (u2 - u1) / (n2 - n1)
+        fixed = u1 - slope * n1
+        largest = int((free0 - fixed) / slope)
+        print(f"memory per drone: {slope:.0f} bytes (fixed {fixed / 2**20:.0f} MiB); the "
+              f"largest patrol swarm the free {free0 / 2**30:.1f} GiB hold: {largest} drones "
+              f"(computed from the slope, not run)")  # fmt: skip
     return 0
 
 
 def main(argv: list[str]) -> int:
-    commands = {"check": check, "device": device, "bandwidth": bandwidth, "bytes": state_bytes,
-                "rate": rate, "memory": memory, "crossover": crossover}  # fmt: skip
+    commands = {"check": check, "fma": fma, "device": device, "bandwidth": bandwidth,
+                "bytes": state_bytes, "rate": rate, "memory": memory,
+                "crossover": crossover}  # fmt: skip
     if not argv or argv[0] not in commands:
         print(__doc__, file=sys.stderr)
         return 2

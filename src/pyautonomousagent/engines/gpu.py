@@ -258,8 +258,7 @@ class GpuEngine(CompiledEngine):
         iterations = sim.scenario.iterations
         self._groups = RecordGroups(sim.recorder, self.layout.names, iterations, self.timings,
                                      on_device=not simulating())  # fmt: skip
-        with no_fma():
-            self.loop(sim, 0)
+        self.loop(sim, 0)
         compiled = self._messages.kernels.values() if self._messages else [self._kernel]
         compiled = [*compiled, *self._swarm_kernels]
         if not all(fma_free(kernel) for kernel in compiled):
@@ -354,6 +353,14 @@ class GpuEngine(CompiledEngine):
                 model.u_speed, model.u_heading, u_climb]  # fmt: skip
 
     def loop(self, sim: Simulation, count: int, typical: int | None = None) -> int:
+        """:meth:`_loop` with NVVM's FMA contraction off (:func:`no_fma`): a kernel that is
+        first launched here with new argument types (a grid or reduction step, e.g. when the
+        first message falls in range) is compiled at that launch, and must do the NumPy
+        engine's arithmetic as the kernels compiled by :meth:`prepare` do."""
+        with no_fma():
+            return self._loop(sim, count)
+
+    def _loop(self, sim: Simulation, count: int) -> int:
         """Run up to ``count`` whole iterations on the device (0 compiles only; fewer where
         their records would not fit in a group, :meth:`RecordGroups.fit`, or where a tree's
         messages must go through the CPU's datalink, a recorded type); return how many ran,
