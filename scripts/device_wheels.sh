@@ -1,16 +1,12 @@
 #!/bin/bash
 # Wheels for a GPU machine without registry access (such as the project's lent H100/H200,
 # which ship numba, numba-cuda, CuPy for CUDA 13, NumPy, pyarrow, matplotlib and PyYAML):
-# the dependencies such a machine lacks (py_trees and pydot) in .whl/, and numba-cuda 0.30.4
-# (the version the tests pin) in .whl-alt/, for a machine whose own numba-cuda contracts
-# multiply-adds in spite of engines.gpu.no_fma (scripts/gpu_figures.py fma says so).
+# the dependencies such a machine lacks (py_trees and pydot) in .whl/. (Its own numba-cuda
+# is the one to use: the version the tests pin, 0.30.4, does not import with NumPy 2.5.)
 # Run here, from the repository's root; then on the GPU machine, from a copy of the
 # repository holding .whl/ (the project itself runs from src/):
 #   python3 -m pip install -q --no-index --no-deps --target /tmp/site .whl/*.whl
-#   export PYTHONPATH=$PWD/src:/tmp/site
-#   python3 scripts/gpu_figures.py fma || { python3 -m pip install -q --no-index --no-deps \
-#       --target /tmp/alt .whl-alt/*.whl; export PYTHONPATH=$PWD/src:/tmp/alt:/tmp/site; }
-#   bash scripts/gpu_figures.sh
+#   PYTHONPATH=$PWD/src:/tmp/site bash scripts/gpu_figures.sh
 set -e
 DEST=${1:-.whl}
 PYTHON=${PYTHON:-python3}
@@ -19,6 +15,4 @@ mkdir -p "$DEST"
 "$PYTHON" -m pip download -q --no-deps --only-binary=:all: --python-version "$VERSION" \
     --implementation cp --platform manylinux2014_x86_64 -d "$DEST" \
     "py_trees==2.6.0" "pydot==4.0.1"
-"$PYTHON" -m pip download -q --no-deps --only-binary=:all: --python-version "$VERSION" \
-    --implementation cp --platform manylinux_2_28_x86_64 -d "$DEST-alt" "numba-cuda==0.30.4"
-ls "$DEST" "$DEST-alt"
+ls "$DEST"

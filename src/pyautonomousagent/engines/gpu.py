@@ -138,20 +138,26 @@ def require_gpu() -> None:
 def no_fma() -> Iterator[None]:
     """Compile CUDA code with NVVM's ``-fma=0`` (no contraction of ``a * b + c`` into one
     rounding): numba-cuda passes ``fma`` only with ``fastmath=True``, and NVVM contracts by
-    default. Wraps ``numba.cuda.cudadrv.nvvm.compile_ir`` while the body runs."""
+    default. While the body runs, every NVVM compilation unit numba-cuda makes
+    (``numba.cuda.cudadrv.nvvm.CompilationUnit``, whichever function makes it) gets
+    ``fma=False`` in its options. (Nothing to do under the simulator, which compiles
+    nothing.)"""
     from numba.cuda.cudadrv import nvvm
 
-    original = nvvm.compile_ir
+    unit: Any = nvvm.CompilationUnit
+    if unit is None:  # the simulator's stand-in module
+        yield
+        return
+    original = unit.__init__
 
-    def compile_ir(llvmir: Any, **options: Any) -> Any:
-        options["fma"] = False
-        return original(llvmir, **options)
+    def init(self: Any, options: Any, *args: Any, **kwargs: Any) -> None:
+        original(self, {**options, "fma": False}, *args, **kwargs)
 
-    nvvm.compile_ir = compile_ir
+    unit.__init__ = init
     try:
         yield
     finally:
-        nvvm.compile_ir = original
+        unit.__init__ = original
 
 
 def load_kernel(source: str, name: str = "block_gpu") -> Any:
