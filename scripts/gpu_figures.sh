@@ -9,7 +9,7 @@
 # PYTHONPATH=src with numba-cuda, CuPy, py_trees and pydot installed). On a machine without
 # a usable GPU it stops at once (exit 2). A lent GPU machine without registry access:
 # scripts/device_wheels.sh here, then there (the wheels in .whl/):
-#   python3 -m pip install -q --no-index --no-deps --target /tmp/site .whl/py_trees* .whl/pydot*
+#   python3 -m pip install -q --no-index --no-deps --target /tmp/site .whl/*.whl
 #   PYTHONPATH=$PWD/src:/tmp/site bash scripts/gpu_figures.sh
 set -u
 export PYAA_CACHE_DIR=${PYAA_CACHE_DIR:-/tmp/pyaa_cache} PYTHONUNBUFFERED=1
@@ -72,7 +72,7 @@ step "compiled engine's compile (1M x 10)" 120 $PYAA bench patrol --agents 10000
 step "patrol 1M x 1000: compiled (all cores) vs gpu" 100 $PYAA bench patrol --agents 1000000 \
   --iterations 1000 --record-every 100 --engines compiled,gpu,compiled,gpu
 # Where auto should take the GPU (AUTO_DRONE_ITERATIONS).
-step "patrol crossover" 120 $FIG crossover 1000 100 500000
+step "patrol crossover" 120 $FIG crossover 1000 100 125000
 # Memory per drone and the largest patrol swarm on the card.
 step "memory" 90 $FIG memory 8000000 16000000
 # Gathering's 4-drone teaching run: auto keeps it off the GPU.
