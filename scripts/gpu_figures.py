@@ -123,7 +123,7 @@ def rate(path: str, gbs: str) -> int:
     return 0
 
 
-def crossover(iterations: str = "1000", every: str = "100", first: str = "62500") -> int:
+def crossover(iterations: str = "1000", every: str = "100", first: str = "1000000") -> int:
     """Where the GPU starts to pay for patrol: the whole run (set-up, the CUDA compile
     included, and loop) of ``iterations`` x swarms doubled from ``first``, on the GPU and on
     the compiled engine (all this machine's cores; its cache warm), each in a fresh process

@@ -52,7 +52,7 @@ XDIST=""
 $PY -c "import xdist" 2>/dev/null && XDIST="-n 8"
 step "device bit identity (pytest)" 200 $PY -m pytest -q -p no:cacheprovider -o addopts="" -rs \
   $XDIST tests/test_gpu_engine.py -k on_the_device
-BW=$(timeout 60 $FIG bandwidth || echo 3000)
+BW=${GPU_BANDWIDTH:-$(timeout 60 $FIG bandwidth || echo 3000)}
 echo "measured device copy bandwidth: $BW GB/s (bytes read + written, best of 20 copies of 2 GiB)"
 $FIG bytes
 # Patrol, 10,000,000 drones x 1000 iterations, record every 100 (goal: >= 1e10 drone-it/s).
@@ -60,7 +60,10 @@ step "patrol 10M x 1000 on the GPU" 120 bash -c "$PYAA bench patrol --agents 100
   --iterations 1000 --record-every 100 --engines gpu,gpu --bandwidth $BW --json \
   > $OUT/patrol-10M.json; $FIG rate $OUT/patrol-10M.json $BW"
 # Gathering, 1,000,000 drones x 200 iterations with messages in range (a 25 m datalink; the
-# gathering order at iteration 100); goal: >= 4.7e8 drone-iterations/s.
+# gathering order at iteration 100); goal: >= 4.7e8 drone-iterations/s. (On the H100,
+# 2026-11-26, it did not finish in 90 s: gathering's 4 slots and 4 surveillance points pack
+# the swarm, so every drone hears about a quarter of it and the shared-data pair table is
+# N x N/4. A fair spatial-messaging figure needs a swarm spread at constant density.)
 step "gathering 1M x 200, messages in range" 90 bash -c "$PYAA bench gathering \
   --agents 1000000 --iterations 200 --record-every 100 --engines gpu,gpu --bandwidth $BW \
   --compare 'in-range:datalink_range=25,gathering_iteration=100' --json \
@@ -72,7 +75,7 @@ step "compiled engine's compile (1M x 10)" 120 $PYAA bench patrol --agents 10000
 step "patrol 1M x 1000: compiled (all cores) vs gpu" 100 $PYAA bench patrol --agents 1000000 \
   --iterations 1000 --record-every 100 --engines compiled,gpu,compiled,gpu
 # Where auto should take the GPU (AUTO_DRONE_ITERATIONS).
-step "patrol crossover" 120 $FIG crossover 1000 100 125000
+step "patrol crossover" 120 $FIG crossover 1000 100 1000000
 # Memory per drone and the largest patrol swarm on the card.
 step "memory" 90 $FIG memory 8000000 16000000
 # Gathering's 4-drone teaching run: auto keeps it off the GPU.

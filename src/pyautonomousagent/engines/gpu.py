@@ -160,6 +160,11 @@ def no_fma() -> Iterator[None]:
         unit.__init__ = original
 
 
+def _text(name: str | bytes) -> str:
+    """A device's name as text (numba-cuda gives bytes in some versions, str in others)."""
+    return name.decode() if isinstance(name, bytes) else name
+
+
 def load_kernel(source: str, name: str = "block_gpu") -> Any:
     """Function ``name`` of generated ``source`` as a CUDA kernel (``cuda.jit``, no fast
     math). Under the simulator the njit helpers it calls with arrays run as Python (their
@@ -267,7 +272,9 @@ class GpuEngine(CompiledEngine):
         self.loop(sim, 0)
         compiled = self._messages.kernels.values() if self._messages else [self._kernel]
         compiled = [*compiled, *self._swarm_kernels]
-        if not all(fma_free(kernel) for kernel in compiled):
+        with no_fma():  # inspect_asm may compile the PTX anew (the launch linked LTO-IR)
+            clean = all(fma_free(kernel) for kernel in compiled)
+        if not clean:
             raise RuntimeError("engine gpu: the kernel's PTX has fused multiply-adds")
         self.timings.update(dict.fromkeys(TIMINGS, 0.0), compile=time.perf_counter() - start)
 
@@ -312,7 +319,7 @@ class GpuEngine(CompiledEngine):
 
         driver = int(cupy.cuda.runtime.driverGetVersion())
         return {
-            "name": cuda.get_current_device().name.decode(),
+            "name": _text(cuda.get_current_device().name),
             "driver": f"{driver // 1000}.{driver % 1000 // 10}",
             "cupy": cupy.__version__,
             "numba": numba.__version__,
