@@ -29,6 +29,12 @@ needs_device = pytest.mark.skipif(
 )
 
 
+def test_the_device_name_is_text_whether_numba_cuda_gives_bytes_or_str() -> None:
+    """numba-cuda 0.30.4 gives the name as str (seen on the lent H100), older ones bytes."""
+    assert gpu._text(b"NVIDIA H100 80GB HBM3") == "NVIDIA H100 80GB HBM3"
+    assert gpu._text("NVIDIA H100 80GB HBM3") == "NVIDIA H100 80GB HBM3"
+
+
 def test_gpu_is_a_registered_engine() -> None:
     assert "gpu" in ENGINES
     assert ENGINES.get("gpu") is gpu.GpuEngine

@@ -108,10 +108,11 @@ def gpu_problem() -> str | None:
 
 #: Drone-iterations (agents x iterations) from which "auto" takes the GPU engine where a
 #: device is present (:func:`auto_takes_gpu`); None: never. It stays None until
-#: ``scripts/gpu_figures.sh`` (its ``crossover`` step) has run on a GPU: it measures where
-#: the GPU starts to win and prints the value to put here. Until then the engine has run
-#: only in numba's CUDA simulator, and "auto" does not send anyone's run to a device path
-#: that no one has run on a device.
+#: ``scripts/gpu_figures.sh`` has shown the device's bits equal to the batched engine's and
+#: measured (its ``crossover`` step) where the GPU starts to win, printing the value to put
+#: here. On the one H100 lent so far (docs/performance.md) the comparison of bits did not
+#: run, and the GPU lost whole patrol runs up to 1,000,000 drones x 1000 iterations (its
+#: kernel compiles in about 9 s), so "auto" sends no one's run there yet.
 AUTO_DRONE_ITERATIONS: int | None = None
 
 
