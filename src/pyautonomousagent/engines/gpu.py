@@ -47,7 +47,6 @@ from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.engines.compiled import CompiledEngine, load_source
 from pyautonomousagent.engines.compiled_source import Constants, Layout, Messaging
 from pyautonomousagent.engines.gpu_records import RecordGroups
-from pyautonomousagent.engines.gpu_reduce import shape
 from pyautonomousagent.engines.gpu_source import kernel_module_source, message_module_source
 from pyautonomousagent.inputs import InputError
 from pyautonomousagent.kernels import SensorKernel
@@ -461,6 +460,8 @@ class GpuEngine(CompiledEngine):
         per iteration its device steps (``gpu_source.swarm_kernels``) over every agent, then
         one iteration of ``block_gpu``, all on the records' stream. ``count`` 0 launches each
         once on no agent (compiling them)."""
+        from pyautonomousagent.engines.gpu_reduce import shape  # numba.cuda: the [gpu] extra
+
         assert self._device is not None and self._groups is not None
         n, stream = self.swarm.size, self._groups.stream
         kf, ki = self._device[3:5]
