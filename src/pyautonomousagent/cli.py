@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import difflib
 import json
+import os
+import shutil
 import sys
 from collections import Counter
 from collections.abc import Mapping, Sequence
@@ -18,6 +20,7 @@ from pyautonomousagent.bt.leaf import LeafError
 from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.bt.text import to_text
 from pyautonomousagent.bt.trees import tree_by_name
+from pyautonomousagent.folders import Claim, hidden_folder
 from pyautonomousagent.inputs import InputError, clip, finite, shown
 from pyautonomousagent.recording import (
     DEFAULT_TRACED,
@@ -28,7 +31,9 @@ from pyautonomousagent.recording import (
 from pyautonomousagent.runs import (
     SaveError,
     add_files,
-    check_target,
+    check_output,
+    claim_existing,
+    claim_run,
     default_folder,
     save_run,
     simulate,
@@ -508,7 +513,8 @@ def _check_run_options(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """``pyaa run``: simulate, then save the data, animation and ``run.json`` as one run
-    folder (see :mod:`pyautonomousagent.runs`)."""
+    folder (see :mod:`pyautonomousagent.runs`); the folder is claimed before anything runs,
+    so a second run into it is refused."""
     _check_run_options(args)
     scenario = _scenario(args)
     if args.record_every > scenario.iterations:
@@ -520,6 +526,14 @@ def run(args: argparse.Namespace) -> int:
     if args.tree is not None:
         file_format(args.tree)  # refuse other endings before anything runs
         scenario = scenario.with_overrides(tree=str(args.tree.resolve()))
+    with claim_run(args.out or default_folder(scenario.name), args.overwrite) as held:
+        for note in held.notes:
+            print(f"pyaa: {note}", file=sys.stderr)
+        return _run_claimed(args, scenario, held)
+
+
+def _run_claimed(args: argparse.Namespace, scenario: Scenario, held: Claim) -> int:
+    """Simulate ``scenario`` and save the run into the claimed folder ``held``."""
     progress = None if not args.quiet else False
     sim = Simulation.create(
         scenario,
@@ -531,7 +545,7 @@ def run(args: argparse.Namespace) -> int:
     why = getattr(sim.engine, "why_not_fused", lambda sim: "")(sim)
     if why and not args.quiet:
         print(f"pyaa: the compiled engine ticks the tree only, not whole iterations: {why}")
-    out = check_target(args.out or default_folder(scenario.name), args.overwrite)
+    out = held.folder
     with streaming(sim, out, args.format) as stream:
         status = simulate(sim, progress)
         saved = save_run(
@@ -544,6 +558,7 @@ def run(args: argparse.Namespace) -> int:
             command=["pyaa", *sys.argv[1:]] if sys.argv else None,
             overrides=_parse_overrides(args.set, list(to_mapping(scenario)["parameters"])),
             stream=stream,
+            claim=held,
         )
     if saved.status != "complete":
         print(
@@ -600,30 +615,55 @@ def _write_views(
 
 
 def replay_command(args: argparse.Namespace) -> int:
-    """``pyaa replay``: replay.html (and Groot2 logs) of a run folder that pyaa run wrote."""
+    """``pyaa replay``: replay.html (and Groot2 logs) of a run folder that pyaa run wrote.
+
+    The page goes to ``--out`` (default ``RUN_DIR/replay.html``), the logs beside it; a run
+    folder's own files are refused (its ``replay.html`` and logs excepted), and a page
+    written into the run folder is listed in its ``run.json``."""
     folder: Path = args.run_dir
+    with claim_existing(folder) as held:
+        for note in held.notes:
+            print(f"pyaa: {note}", file=sys.stderr)
+        if not (folder / "run.json").is_file():
+            raise ScenarioError(f"{folder}: no run.json here; give a folder that pyaa run wrote")
+        views = ["replay.html", *(f"{agent}.btlog" for agent in args.btlog)]
+        out = check_output(args.out or folder / "replay.html", folder, views)
+        for name in views[1:]:
+            check_output(out.parent / name, folder, views)
+        written = _replay_into(folder, out, args)
+        if out.parent == folder.resolve():
+            add_files(folder, written)  # run.json lists them: the folder still verifies
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
+def _replay_into(folder: Path, out: Path, args: argparse.Namespace) -> list[Path]:
+    """Write the replay page of ``folder`` as ``out`` and its logs beside it: drawn in a
+    temporary folder there, then each renamed into place (no other file is touched)."""
     summary_path = folder / "run.json"
-    if not summary_path.is_file():
-        raise ScenarioError(f"{folder}: no run.json here; give a folder that pyaa run wrote")
     summary = json.loads(summary_path.read_text())
     scenario = Scenario.from_mapping(summary["scenario"], source=str(summary_path))
     states, traces = _read_run_tables(folder)
     recorder = recorder_from_tables(states, traces, summary.get("trace", {}).get("nodes", ()))
-    out = args.out.parent if args.out else folder
-    views = _write_views(
-        recorder,
-        scenario,
-        summary.get("events", []),
-        out,
-        argparse.Namespace(video=None, no_replay=False, btlog=args.btlog, follow=None, inset=False),
-        None,
-    )
-    if args.out and views.written:
-        views.written[0] = views.written[0].replace(args.out)
-    add_files(folder, views.written)  # run.json lists them: the folder still verifies
-    for path in views.written:
-        print(f"wrote {path}")
-    return 0
+    temp = hidden_folder(out, "tmp")
+    try:
+        views = _write_views(
+            recorder,
+            scenario,
+            summary.get("events", []),
+            temp,
+            argparse.Namespace(
+                video=None, no_replay=False, btlog=args.btlog, follow=None, inset=False
+            ),
+            None,
+        )
+        placed = [out] + [out.parent / path.name for path in views.written[1:]]
+        for path, target in zip(views.written, placed, strict=True):
+            os.replace(path, target)
+    finally:
+        shutil.rmtree(temp, ignore_errors=True)
+    return placed
 
 
 def _read_run_tables(folder: Path) -> tuple[Any, Any]:
