@@ -526,10 +526,14 @@ def run(args: argparse.Namespace) -> int:
     if args.tree is not None:
         file_format(args.tree)  # refuse other endings before anything runs
         scenario = scenario.with_overrides(tree=str(args.tree.resolve()))
-    with claim_run(args.out or default_folder(scenario.name), args.overwrite) as held:
-        for note in held.notes:
-            print(f"pyaa: {note}", file=sys.stderr)
+    out = args.out or default_folder(scenario.name)
+    with claim_run(out, args.overwrite, report=_note) as held:
         return _run_claimed(args, scenario, held)
+
+
+def _note(text: str) -> None:
+    """Say on stderr what pyaa did by itself (e.g. what a killed run left, repaired)."""
+    print(f"pyaa: {text}", file=sys.stderr)
 
 
 def _run_claimed(args: argparse.Namespace, scenario: Scenario, held: Claim) -> int:
@@ -623,7 +627,7 @@ def replay_command(args: argparse.Namespace) -> int:
     folder: Path = args.run_dir
     with claim_existing(folder) as held:
         for note in held.notes:
-            print(f"pyaa: {note}", file=sys.stderr)
+            _note(note)
         if not (folder / "run.json").is_file():
             raise ScenarioError(f"{folder}: no run.json here; give a folder that pyaa run wrote")
         views = ["replay.html", *(f"{agent}.btlog" for agent in args.btlog)]

@@ -44,7 +44,7 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from importlib import metadata
@@ -156,13 +156,17 @@ def check_target(folder: str | Path, overwrite: bool = False) -> Path:
 
 @contextlib.contextmanager
 def claim_run(
-    folder: str | Path, overwrite: bool = False, keep: Sequence[Path] = ()
+    folder: str | Path,
+    overwrite: bool = False,
+    keep: Sequence[Path] = (),
+    report: Callable[[str], None] | None = None,
 ) -> Iterator[Claim]:
     """Hold ``folder`` for one run: checked (:func:`check_target`), locked, and repaired.
 
     ``Claim.notes`` says what a killed writer had left and what was done about it (an
-    earlier run put back, temporary folders deleted); ``keep`` lists temporary folders of
-    this process. The lock is released on leaving (or when the process ends).
+    earlier run put back, temporary folders deleted), and each note goes to ``report`` as
+    soon as it is done, before the folder is checked again; ``keep`` lists temporary
+    folders of this process. The lock is released on leaving (or when the process ends).
 
     Raises:
         RunError: another process is writing ``folder``, or :func:`check_target` refuses it.
@@ -170,6 +174,9 @@ def claim_run(
     path = check_target(folder, overwrite)
     try:
         with claimed(path, keep, is_run_folder) as held:
+            if report is not None:
+                for note in held.notes:
+                    report(note)
             check_target(path, overwrite)  # again: recovery may have put a run back
             yield held
     except BusyError as error:
