@@ -5,6 +5,7 @@ never land on a run's own files, and mount points refused before anything is del
 from __future__ import annotations
 
 import errno
+import json
 import os
 import shutil
 import subprocess
@@ -15,8 +16,10 @@ import pytest
 
 from pyautonomousagent import folders, runs
 from pyautonomousagent.cli import main
+from pyautonomousagent.experiments import Experiment, sweep
 from pyautonomousagent.runs import RunError, claim_run, recover_run, verify
 
+from .test_experiments import same_rows
 from .test_runs import SHORT, SRC, leftovers, one_line, run_cli, snapshot, tmpfs  # noqa: F401
 
 FOLDERS_PY = str(Path(SRC) / "pyautonomousagent" / "folders.py")
@@ -290,3 +293,72 @@ def test_check_output_refuses_folders_and_run_files(earlier):
     with pytest.raises(RunError, match="is a file of the run"):
         runs.check_output(earlier / "states.parquet", earlier, ["replay.html"])
     assert runs.check_output(earlier / "x.html") == (earlier / "x.html").resolve()
+
+
+# --- sweeps ------------------------------------------------------------------------------------
+
+SMALL = {
+    "scenario": "patrol",
+    "iterations": 20,
+    "set": {"agents": 3},
+    "vary": {"low_energy_threshold": [96, 99]},
+    "seeds": 2,
+    "measures": ["minimum_energy"],
+}
+
+
+@pytest.mark.parametrize("name", ["../../x", "..", "a/b", "/tmp/x", "a\\b"])
+def test_a_sweep_name_cannot_leave_the_sweeps_folder(tmp_path, monkeypatch, capsys, name):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "exp.yaml").write_text(json.dumps({**SMALL, "name": name}))
+    assert main(["sweep", "exp.yaml", "--serial", "--quiet"]) == 2
+    assert "name must be a folder name" in one_line(capsys.readouterr().err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["exp.yaml"]  # nothing written
+
+
+def test_a_sweep_into_a_linked_folder_outside_is_refused(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "runs" / "sweeps").mkdir(parents=True)
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / "runs" / "sweeps" / "exp").symlink_to(tmp_path / "elsewhere")
+    (tmp_path / "exp.yaml").write_text(json.dumps(SMALL))
+    assert main(["sweep", "exp.yaml", "--serial", "--quiet"]) == 2
+    assert "outside runs/sweeps" in one_line(capsys.readouterr().err)
+    assert list((tmp_path / "elsewhere").iterdir()) == []
+
+
+def test_a_torn_journal_part_is_set_aside_and_its_runs_run_again(tmp_path, capsys):
+    experiment = Experiment.from_mapping(SMALL)
+    out = tmp_path / "s"
+    first = sweep(experiment, out, "serial", flush_every=1)
+    parts = sorted((out / "journal").glob("part-*.parquet"))
+    assert first.counts["ok"] == 4 and len(parts) == 4
+    parts[1].write_bytes(b"")  # empty
+    parts[2].write_bytes(parts[2].read_bytes()[:-20])  # torn: no footer
+    (out / "journal" / f".part-000009.parquet.{'0' * 32}.tmp").write_bytes(b"half")
+    notes: list[str] = []
+    again = sweep(experiment, out, "serial", resume=True, report=notes.append)
+    assert again.counts == {"ok": 2, "failed": 0, "skipped": 2}
+    assert len(notes) == 3 and notes[0].startswith("removed 1 temporary file"), notes
+    assert all("cannot be read" in n and "its runs run again" in n for n in notes[1:]), notes
+    assert same_rows(again.table, first.table, ignore=("seconds",))
+    names = sorted(p.name for p in (out / "journal").iterdir())
+    assert names == [".part-000001.parquet.torn", ".part-000002.parquet.torn"] + [
+        f"part-00000{i}.parquet" for i in (0, 3, 4)
+    ]
+    assert sweep(experiment, out, "serial", resume=True).counts["skipped"] == 4
+
+
+def test_pyaa_sweep_resume_says_in_one_line_what_it_reruns(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "exp.yaml").write_text(json.dumps(SMALL))
+    assert main(["sweep", "exp.yaml", "--serial", "--quiet"]) == 0
+    (part,) = (tmp_path / "runs" / "sweeps" / "exp" / "journal").glob("part-*.parquet")
+    part.write_bytes(b"PAR1")
+    capsys.readouterr()
+    assert main(["sweep", "exp.yaml", "--serial", "--quiet", "--resume"]) == 0
+    assert "its runs run again" in one_line(capsys.readouterr().err)
+    manifest = tmp_path / "runs" / "sweeps" / "exp" / "experiment.json"
+    manifest.write_text('{"experiment": ')  # torn
+    assert main(["sweep", "exp.yaml", "--serial", "--quiet", "--resume"]) == 2
+    assert "experiment.json cannot be read" in one_line(capsys.readouterr().err)

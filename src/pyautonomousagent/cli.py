@@ -968,12 +968,20 @@ def _experiment(args: argparse.Namespace) -> Any:
     return Experiment.from_mapping(data, source=source)
 
 
+def _inside(root: Path, name: str) -> Path:
+    """``root/name``, if it stays inside ``root`` once resolved (links too)."""
+    path = root / name
+    if path.resolve() == root.resolve() or not path.resolve().is_relative_to(root.resolve()):
+        raise ScenarioError(f"the name {name!r} would put the output outside {root}; use --out")
+    return path
+
+
 def sweep_command(args: argparse.Namespace) -> int:
     """``pyaa sweep``: run an experiment into a sweep folder (see docs/experiments.md)."""
     from pyautonomousagent.experiments import sweep
 
     experiment = _experiment(args)
-    out = args.out or Path("runs") / "sweeps" / experiment.name
+    out = args.out or _inside(Path("runs") / "sweeps", experiment.name)
     backend = "serial" if args.serial else "dask" if args.dask else "pool"
     address = None if args.dask in (None, "local") else args.dask
     if args.workers is not None and args.workers < 1:
@@ -988,6 +996,7 @@ def sweep_command(args: argparse.Namespace) -> int:
             resume=args.resume,
             save_runs=args.save_runs,
             progress=False if args.quiet else None,
+            report=_note,
         )
     except KeyboardInterrupt:
         print(

@@ -34,6 +34,7 @@ from pyautonomousagent.experiments.measures import RunData, _Evaluate
 from pyautonomousagent.experiments.runner import RunTask, execute, one_line, scenario_parameters
 from pyautonomousagent.experiments.spec import Experiment, ExperimentError, Run
 from pyautonomousagent.experiments.store import (
+    MANIFEST,
     RESULTS,
     RUNS,
     Journal,
@@ -183,6 +184,7 @@ def sweep(
     on_result: Callable[[dict[str, Any]], None] | None = None,
     flush_every: int = 50,
     flush_seconds: float = 5.0,
+    report: Callable[[str], None] | None = None,
 ) -> SweepResult:
     """Run every point x seed of ``experiment`` into the folder ``out``.
 
@@ -199,6 +201,8 @@ def sweep(
         on_result: called with each result row as it arrives.
         flush_every: journal finished runs at least every this many runs...
         flush_seconds: ...and every this many seconds.
+        report: called with each line saying what opening the folder repaired (a torn
+            journal part set aside, whose runs run again; temporary files deleted).
 
     Raises:
         ExperimentError: bad experiment, ``out`` holds another sweep, or a run too large.
@@ -227,6 +231,8 @@ def sweep(
     start = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
     journal = Journal(out, schema)
+    for note in journal.notes:
+        (report or _ignore)(note)
     done = journal.finished() if resume else set()
     todo = [run for run in runs if run.run_id not in done]
     counts = {"ok": 0, "failed": 0, "skipped": len(runs) - len(todo)}
@@ -339,8 +345,18 @@ def failed_row(task: RunTask, error: BaseException) -> dict[str, Any]:
     return row
 
 
+def _ignore(note: str) -> None:
+    """Drop ``note`` (no ``report`` given to :func:`sweep`)."""
+
+
 def _previous_manifest(out: Path, experiment: Experiment, resume: bool) -> dict[str, Any] | None:
-    previous = read_manifest(out)
+    try:
+        previous = read_manifest(out)
+    except (OSError, ValueError) as error:
+        raise ExperimentError(
+            f"{out / MANIFEST} cannot be read ({one_line(error)}); the sweep in {out} cannot "
+            "be resumed: choose another --out"
+        ) from None
     if previous is None:
         if out.is_dir() and any(out.iterdir()):
             raise ExperimentError(
