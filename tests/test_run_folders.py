@@ -16,7 +16,7 @@ import pytest
 
 from pyautonomousagent import folders, runs
 from pyautonomousagent.cli import main
-from pyautonomousagent.experiments import Experiment, sweep
+from pyautonomousagent.experiments import Experiment, ExperimentError, sweep
 from pyautonomousagent.runs import RunError, claim_run, recover_run, verify
 
 from .test_experiments import same_rows
@@ -362,3 +362,13 @@ def test_pyaa_sweep_resume_says_in_one_line_what_it_reruns(tmp_path, monkeypatch
     manifest.write_text('{"experiment": ')  # torn
     assert main(["sweep", "exp.yaml", "--serial", "--quiet", "--resume"]) == 2
     assert "experiment.json cannot be read" in one_line(capsys.readouterr().err)
+
+
+def test_a_sweep_into_a_folder_another_process_holds_is_refused(tmp_path):
+    experiment = Experiment.from_mapping(SMALL)
+    out = tmp_path / "s"
+    with folders.claimed(out), pytest.raises(ExperimentError, match="being written by another"):
+        sweep(experiment, out, "serial")
+    assert not out.exists()
+    assert sweep(experiment, out, "serial").counts["ok"] == 4
+    assert leftovers(tmp_path) == []
