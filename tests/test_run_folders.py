@@ -372,3 +372,14 @@ def test_a_sweep_into_a_folder_another_process_holds_is_refused(tmp_path):
     assert not out.exists()
     assert sweep(experiment, out, "serial").counts["ok"] == 4
     assert leftovers(tmp_path) == []
+
+
+def test_replay_removes_what_a_killed_replay_left_in_the_run_folder(earlier, capsys):
+    stale = earlier / ".replay.html.tmp-0123456789ab"
+    stale.mkdir()
+    (stale / "replay.html").write_text("half")
+    capsys.readouterr()
+    assert main(["replay", str(earlier)]) == 0
+    assert f"pyaa: removed {stale}" in capsys.readouterr().err
+    assert leftovers(earlier) == []
+    verify(earlier)

@@ -20,7 +20,7 @@ from pyautonomousagent.bt.leaf import LeafError
 from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.bt.text import to_text
 from pyautonomousagent.bt.trees import tree_by_name
-from pyautonomousagent.folders import Claim, hidden_folder
+from pyautonomousagent.folders import Claim, hidden_folder, recover
 from pyautonomousagent.inputs import InputError, clip, finite, shown
 from pyautonomousagent.recording import (
     DEFAULT_TRACED,
@@ -634,6 +634,9 @@ def replay_command(args: argparse.Namespace) -> int:
         out = check_output(args.out or folder / "replay.html", folder, views)
         for name in views[1:]:
             check_output(out.parent / name, folder, views)
+        if out.parent == folder.resolve():  # ours while the claim is held
+            for note in recover(out):
+                _note(note)
         written = _replay_into(folder, out, args)
         if out.parent == folder.resolve():
             add_files(folder, written)  # run.json lists them: the folder still verifies

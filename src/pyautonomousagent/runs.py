@@ -148,7 +148,8 @@ def check_target(folder: str | Path, overwrite: bool = False) -> Path:
                 f"use a folder inside it (--out {path / 'NAME'}), or {fix}"
             )
         path.absolute().parent.mkdir(parents=True, exist_ok=True)
-        hidden_folder(path, "probe").rmdir()  # the parent is writable
+        with contextlib.suppress(FileNotFoundError):  # a claim's recovery may have taken it
+            hidden_folder(path, "probe").rmdir()  # the parent is writable
     except OSError as error:
         raise RunError(f"cannot use output folder {path}: {_reason(error)}; {fix}") from None
     return path
