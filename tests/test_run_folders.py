@@ -180,25 +180,32 @@ sys.exit(cli.main(sys.argv[1:]))
 """
 
 
-def test_pyaa_run_killed_between_the_renames_is_put_back_by_the_next_run(earlier, capsys):
+@pytest.mark.parametrize("step", [1, 2, 3])
+def test_pyaa_run_killed_in_its_commit_is_repaired_by_the_next_run(earlier, capsys, step):
+    """Killed before the 1st rename (the earlier run aside), before the 2nd (the new run
+    in), or not at all (there is no 3rd): the next run puts back or keeps a whole run."""
     before = snapshot(earlier)
     argv = ["run", "gathering", "--out", str(earlier), *SHORT, "--no-gif", "--overwrite"]
     env = {**os.environ, "PYTHONPATH": SRC}
     done = subprocess.run(
-        [sys.executable, "-c", DIE_IN_COMMIT, "2", *argv], env=env, check=False
-    )  # dies after renaming the earlier run aside, before renaming the new one in
-    assert done.returncode == 137
-    assert not (earlier / "run.json").exists()
-    with pytest.raises(RunError, match=r"left the earlier run in .*\.run\.old-"):
-        verify(earlier)
+        [sys.executable, "-c", DIE_IN_COMMIT, str(step), *argv], env=env, check=False
+    )
+    assert done.returncode == (137 if step < 3 else 0)
+    if step == 2:
+        assert not (earlier / "run.json").exists()
+        with pytest.raises(RunError, match=r"left the earlier run in .*\.run\.old-"):
+            verify(earlier)
     capsys.readouterr()
-    assert run_cli(earlier, "--no-gif") == 2  # put back, then refused: it holds a run
+    assert run_cli(earlier, "--no-gif") == 2  # repaired, then refused: it holds a run
     err = capsys.readouterr().err.strip().splitlines()
-    assert "Traceback" not in "".join(err) and len(err) == 3, err
-    assert err[0].startswith("pyaa: restored the earlier folder in")
-    assert err[1].startswith("pyaa: removed") and ".run.tmp-" in err[1]
-    assert "holds an earlier run" in err[2]
-    assert snapshot(earlier) == before
+    assert "Traceback" not in "".join(err) and "holds an earlier run" in err[-1], err
+    if step == 1:  # the earlier run stayed; the empty folder made for it and the new run go
+        assert len(err) == 3 and ".run.old-" in err[0] and ".run.tmp-" in err[1], err
+    if step == 2:  # the earlier run is put back; the new run, not committed, goes
+        assert err[0].startswith("pyaa: restored the earlier folder in") and len(err) == 3
+        assert err[1].startswith("pyaa: removed") and ".run.tmp-" in err[1]
+    assert (snapshot(earlier) == before) == (step < 3)
+    assert verify(earlier)["seed"] == (1 if step < 3 else 0)
     assert leftovers(earlier.parent) == []
 
 

@@ -172,7 +172,7 @@ def claim_run(
     Raises:
         RunError: another process is writing ``folder``, or :func:`check_target` refuses it.
     """
-    path = check_target(folder, overwrite)
+    path = check_target(folder, overwrite=True)  # an earlier run: refused once repaired
     try:
         with claimed(path, keep, is_run_folder) as held:
             if report is not None:
