@@ -390,3 +390,13 @@ def test_replay_removes_what_a_killed_replay_left_in_the_run_folder(earlier, cap
     assert f"pyaa: removed {stale}" in capsys.readouterr().err
     assert leftovers(earlier) == []
     verify(earlier)
+
+
+def test_tree_output_never_lands_on_a_runs_own_files(earlier, capsys):
+    before = snapshot(earlier)
+    for name, fmt in (("run.json", "xml"), ("states.parquet", "yaml"), ("traces.parquet", "png")):
+        argv = ["tree", "gathering", "--format", fmt, "--out", str(earlier / name)]
+        assert main(argv) == 2
+        assert "is a file of the run in" in one_line(capsys.readouterr().err)
+    assert snapshot(earlier) == before
+    assert main(["tree", "gathering", "--format", "xml", "--out", str(earlier / "t.xml")]) == 0

@@ -840,6 +840,7 @@ def tree_command(args: argparse.Namespace) -> int:
         from pyautonomousagent.bt.draw import draw_tree
 
         target = args.out or Path(f"{name}.{fmt}")
+        check_output(target)  # never over a run's own files
         try:
             path = draw_tree(build(document), target, title=name)
         except OSError as error:
@@ -866,7 +867,9 @@ def tree_command(args: argparse.Namespace) -> int:
 
 
 def _write_output(path: Path, text: str) -> None:
-    """Write ``text`` to ``path``; an OSError becomes one line naming the path."""
+    """Write ``text`` to ``path`` (never over a run's own files: :func:`check_output`); an
+    OSError becomes one line naming the path."""
+    check_output(path)
     try:
         path.write_text(text, encoding="utf-8")
     except OSError as error:
@@ -1022,6 +1025,8 @@ def plot_command(args: argparse.Namespace) -> int:
     """``pyaa plot``: a measure against a parameter, mean and interval over seeds."""
     from pyautonomousagent.experiments.plot import plot_measure, read_results, summarize
 
+    if args.out is not None:
+        check_output(args.out)  # never over a run's own files
     table, _ = read_results(args.sweep)
     for row in summarize(table, args.measure, args.x, args.by, args.interval):
         group = f"{args.by}={row['by']} " if args.by else ""
