@@ -400,3 +400,17 @@ def test_tree_output_never_lands_on_a_runs_own_files(earlier, capsys):
         assert "is a file of the run in" in one_line(capsys.readouterr().err)
     assert snapshot(earlier) == before
     assert main(["tree", "gathering", "--format", "xml", "--out", str(earlier / "t.xml")]) == 0
+
+
+def test_recovery_never_deletes_an_earlier_run_it_cannot_put_back(earlier, tmp_path):
+    aside = tmp_path / ".run.old-0123456789ab"
+    aside.mkdir()
+    earlier.rename(aside / "run")
+    earlier.mkdir()
+    (earlier / "notes.txt").write_text("someone else's")  # not a run, not empty
+    (note,) = recover_run(earlier)
+    assert note == f"{aside} holds an earlier run, left by a writer that was stopped; check it"
+    verify(aside / "run")
+    assert [p.name for p in earlier.iterdir()] == ["notes.txt"]
+    with pytest.raises(RunError, match="left the earlier run in"):
+        verify(earlier)

@@ -513,8 +513,9 @@ def _check_run_options(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """``pyaa run``: simulate, then save the data, animation and ``run.json`` as one run
-    folder (see :mod:`pyautonomousagent.runs`); the folder is claimed before anything runs,
-    so a second run into it is refused."""
+    folder (see :mod:`pyautonomousagent.runs`); the folder is claimed once the simulation is
+    set up (bad input writes nothing) and before it runs, so a second run into it is
+    refused."""
     _check_run_options(args)
     scenario = _scenario(args)
     if args.record_every > scenario.iterations:
@@ -526,19 +527,6 @@ def run(args: argparse.Namespace) -> int:
     if args.tree is not None:
         file_format(args.tree)  # refuse other endings before anything runs
         scenario = scenario.with_overrides(tree=str(args.tree.resolve()))
-    out = args.out or default_folder(scenario.name)
-    with claim_run(out, args.overwrite, report=_note) as held:
-        return _run_claimed(args, scenario, held)
-
-
-def _note(text: str) -> None:
-    """Say on stderr what pyaa did by itself (e.g. what a killed run left, repaired)."""
-    print(f"pyaa: {text}", file=sys.stderr)
-
-
-def _run_claimed(args: argparse.Namespace, scenario: Scenario, held: Claim) -> int:
-    """Simulate ``scenario`` and save the run into the claimed folder ``held``."""
-    progress = None if not args.quiet else False
     sim = Simulation.create(
         scenario,
         seed=args.seed,
@@ -549,6 +537,19 @@ def _run_claimed(args: argparse.Namespace, scenario: Scenario, held: Claim) -> i
     why = getattr(sim.engine, "why_not_fused", lambda sim: "")(sim)
     if why and not args.quiet:
         print(f"pyaa: the compiled engine ticks the tree only, not whole iterations: {why}")
+    out = args.out or default_folder(scenario.name)
+    with claim_run(out, args.overwrite, report=_note) as held:
+        return _run_claimed(args, scenario, sim, held)
+
+
+def _note(text: str) -> None:
+    """Say on stderr what pyaa did by itself (e.g. what a killed run left, repaired)."""
+    print(f"pyaa: {text}", file=sys.stderr)
+
+
+def _run_claimed(args: argparse.Namespace, scenario: Scenario, sim: Simulation, held: Claim) -> int:
+    """Run ``sim`` (of ``scenario``) and save the run into the claimed folder ``held``."""
+    progress = None if not args.quiet else False
     out = held.folder
     with streaming(sim, out, args.format) as stream:
         status = simulate(sim, progress)
