@@ -265,17 +265,25 @@ def sweep(
             journal.flush()
             if owned:
                 chosen.close()
-            table = write_results(journal, out)
-            statuses = table["status"].to_pylist()
-            manifest.update(
-                counts=counts,  # this session's
-                results={state: statuses.count(state) for state in ("ok", "failed")},
-                finished_at=_now(),
-                seconds=time.perf_counter() - start,
-            )
-            write_manifest(out, manifest)
+            table = _finish(journal, out, manifest, counts, start)
     workers_text = f"{chosen.name} x {manifest['backend']['workers']}"
     return SweepResult(out, table, counts, time.perf_counter() - start, workers_text)
+
+
+def _finish(
+    journal: Journal, out: Path, manifest: dict[str, Any], counts: dict[str, int], start: float
+) -> pa.Table:
+    """Write the results and the final manifest; the results."""
+    table = write_results(journal, out)
+    statuses = table["status"].to_pylist()
+    manifest.update(
+        counts=counts,  # this session's
+        results={state: statuses.count(state) for state in ("ok", "failed")},
+        finished_at=_now(),
+        seconds=time.perf_counter() - start,
+    )
+    write_manifest(out, manifest)
+    return table
 
 
 def _tasks(
