@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import difflib
 import json
+import os
+import shutil
 import sys
 from collections import Counter
 from collections.abc import Mapping, Sequence
@@ -18,6 +20,7 @@ from pyautonomousagent.bt.leaf import LeafError
 from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.bt.text import to_text
 from pyautonomousagent.bt.trees import tree_by_name
+from pyautonomousagent.folders import Claim, hidden_folder, recover
 from pyautonomousagent.inputs import InputError, clip, finite, shown
 from pyautonomousagent.recording import (
     DEFAULT_TRACED,
@@ -28,7 +31,9 @@ from pyautonomousagent.recording import (
 from pyautonomousagent.runs import (
     SaveError,
     add_files,
-    check_target,
+    check_output,
+    claim_existing,
+    claim_run,
     default_folder,
     save_run,
     simulate,
@@ -508,7 +513,9 @@ def _check_run_options(args: argparse.Namespace) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """``pyaa run``: simulate, then save the data, animation and ``run.json`` as one run
-    folder (see :mod:`pyautonomousagent.runs`)."""
+    folder (see :mod:`pyautonomousagent.runs`); the folder is claimed once the simulation is
+    set up (bad input writes nothing) and before it runs, so a second run into it is
+    refused."""
     _check_run_options(args)
     scenario = _scenario(args)
     if args.record_every > scenario.iterations:
@@ -520,7 +527,6 @@ def run(args: argparse.Namespace) -> int:
     if args.tree is not None:
         file_format(args.tree)  # refuse other endings before anything runs
         scenario = scenario.with_overrides(tree=str(args.tree.resolve()))
-    progress = None if not args.quiet else False
     sim = Simulation.create(
         scenario,
         seed=args.seed,
@@ -531,7 +537,20 @@ def run(args: argparse.Namespace) -> int:
     why = getattr(sim.engine, "why_not_fused", lambda sim: "")(sim)
     if why and not args.quiet:
         print(f"pyaa: the compiled engine ticks the tree only, not whole iterations: {why}")
-    out = check_target(args.out or default_folder(scenario.name), args.overwrite)
+    out = args.out or default_folder(scenario.name)
+    with claim_run(out, args.overwrite, report=_note) as held:
+        return _run_claimed(args, scenario, sim, held)
+
+
+def _note(text: str) -> None:
+    """Say on stderr what pyaa did by itself (e.g. what a killed run left, repaired)."""
+    print(f"pyaa: {text}", file=sys.stderr)
+
+
+def _run_claimed(args: argparse.Namespace, scenario: Scenario, sim: Simulation, held: Claim) -> int:
+    """Run ``sim`` (of ``scenario``) and save the run into the claimed folder ``held``."""
+    progress = None if not args.quiet else False
+    out = held.folder
     with streaming(sim, out, args.format) as stream:
         status = simulate(sim, progress)
         saved = save_run(
@@ -544,6 +563,7 @@ def run(args: argparse.Namespace) -> int:
             command=["pyaa", *sys.argv[1:]] if sys.argv else None,
             overrides=_parse_overrides(args.set, list(to_mapping(scenario)["parameters"])),
             stream=stream,
+            claim=held,
         )
     if saved.status != "complete":
         print(
@@ -600,30 +620,58 @@ def _write_views(
 
 
 def replay_command(args: argparse.Namespace) -> int:
-    """``pyaa replay``: replay.html (and Groot2 logs) of a run folder that pyaa run wrote."""
+    """``pyaa replay``: replay.html (and Groot2 logs) of a run folder that pyaa run wrote.
+
+    The page goes to ``--out`` (default ``RUN_DIR/replay.html``), the logs beside it; a run
+    folder's own files are refused (its ``replay.html`` and logs excepted), and a page
+    written into the run folder is listed in its ``run.json``."""
     folder: Path = args.run_dir
+    with claim_existing(folder) as held:
+        for note in held.notes:
+            _note(note)
+        if not (folder / "run.json").is_file():
+            raise ScenarioError(f"{folder}: no run.json here; give a folder that pyaa run wrote")
+        views = ["replay.html", *(f"{agent}.btlog" for agent in args.btlog)]
+        out = check_output(args.out or folder / "replay.html", folder, views)
+        for name in views[1:]:
+            check_output(out.parent / name, folder, views)
+        if out.parent == folder.resolve():  # ours while the claim is held
+            for note in recover(out):
+                _note(note)
+        written = _replay_into(folder, out, args)
+        if out.parent == folder.resolve():
+            add_files(folder, written)  # run.json lists them: the folder still verifies
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
+def _replay_into(folder: Path, out: Path, args: argparse.Namespace) -> list[Path]:
+    """Write the replay page of ``folder`` as ``out`` and its logs beside it: drawn in a
+    temporary folder there, then each renamed into place (no other file is touched)."""
     summary_path = folder / "run.json"
-    if not summary_path.is_file():
-        raise ScenarioError(f"{folder}: no run.json here; give a folder that pyaa run wrote")
     summary = json.loads(summary_path.read_text())
     scenario = Scenario.from_mapping(summary["scenario"], source=str(summary_path))
     states, traces = _read_run_tables(folder)
     recorder = recorder_from_tables(states, traces, summary.get("trace", {}).get("nodes", ()))
-    out = args.out.parent if args.out else folder
-    views = _write_views(
-        recorder,
-        scenario,
-        summary.get("events", []),
-        out,
-        argparse.Namespace(video=None, no_replay=False, btlog=args.btlog, follow=None, inset=False),
-        None,
-    )
-    if args.out and views.written:
-        views.written[0] = views.written[0].replace(args.out)
-    add_files(folder, views.written)  # run.json lists them: the folder still verifies
-    for path in views.written:
-        print(f"wrote {path}")
-    return 0
+    temp = hidden_folder(out, "tmp")
+    try:
+        views = _write_views(
+            recorder,
+            scenario,
+            summary.get("events", []),
+            temp,
+            argparse.Namespace(
+                video=None, no_replay=False, btlog=args.btlog, follow=None, inset=False
+            ),
+            None,
+        )
+        placed = [out] + [out.parent / path.name for path in views.written[1:]]
+        for path, target in zip(views.written, placed, strict=True):
+            os.replace(path, target)
+    finally:
+        shutil.rmtree(temp, ignore_errors=True)
+    return placed
 
 
 def _read_run_tables(folder: Path) -> tuple[Any, Any]:
@@ -793,6 +841,7 @@ def tree_command(args: argparse.Namespace) -> int:
         from pyautonomousagent.bt.draw import draw_tree
 
         target = args.out or Path(f"{name}.{fmt}")
+        check_output(target)  # never over a run's own files
         try:
             path = draw_tree(build(document), target, title=name)
         except OSError as error:
@@ -819,7 +868,9 @@ def tree_command(args: argparse.Namespace) -> int:
 
 
 def _write_output(path: Path, text: str) -> None:
-    """Write ``text`` to ``path``; an OSError becomes one line naming the path."""
+    """Write ``text`` to ``path`` (never over a run's own files: :func:`check_output`); an
+    OSError becomes one line naming the path."""
+    check_output(path)
     try:
         path.write_text(text, encoding="utf-8")
     except OSError as error:
@@ -924,12 +975,20 @@ def _experiment(args: argparse.Namespace) -> Any:
     return Experiment.from_mapping(data, source=source)
 
 
+def _inside(root: Path, name: str) -> Path:
+    """``root/name``, if it stays inside ``root`` once resolved (links too)."""
+    path = root / name
+    if path.resolve() == root.resolve() or not path.resolve().is_relative_to(root.resolve()):
+        raise ScenarioError(f"the name {name!r} would put the output outside {root}; use --out")
+    return path
+
+
 def sweep_command(args: argparse.Namespace) -> int:
     """``pyaa sweep``: run an experiment into a sweep folder (see docs/experiments.md)."""
     from pyautonomousagent.experiments import sweep
 
     experiment = _experiment(args)
-    out = args.out or Path("runs") / "sweeps" / experiment.name
+    out = args.out or _inside(Path("runs") / "sweeps", experiment.name)
     backend = "serial" if args.serial else "dask" if args.dask else "pool"
     address = None if args.dask in (None, "local") else args.dask
     if args.workers is not None and args.workers < 1:
@@ -944,6 +1003,7 @@ def sweep_command(args: argparse.Namespace) -> int:
             resume=args.resume,
             save_runs=args.save_runs,
             progress=False if args.quiet else None,
+            report=_note,
         )
     except KeyboardInterrupt:
         print(
@@ -966,6 +1026,8 @@ def plot_command(args: argparse.Namespace) -> int:
     """``pyaa plot``: a measure against a parameter, mean and interval over seeds."""
     from pyautonomousagent.experiments.plot import plot_measure, read_results, summarize
 
+    if args.out is not None:
+        check_output(args.out)  # never over a run's own files
     table, _ = read_results(args.sweep)
     for row in summarize(table, args.measure, args.x, args.by, args.interval):
         group = f"{args.by}={row['by']} " if args.by else ""

@@ -20,8 +20,15 @@ time and the status:
 The convention for an existing folder: a folder holding a run (it has ``run.json``) is
 replaced only when asked (``overwrite=True``, ``pyaa run --overwrite``); the earlier run is
 then renamed aside, the new one renamed in, and the earlier one deleted. Any other folder
-that is not empty is never written into. An interrupted run does not replace an earlier
-run: it is saved beside it, as ``NAME-interrupted-YYYYMMDD-HHMMSS``.
+that is not empty is never written into, nor is a mount point (it cannot be renamed). An
+interrupted run does not replace an earlier run: it is saved beside it, as
+``NAME-interrupted-YYYYMMDD-HHMMSS``.
+
+One writer at a time: :func:`claim_run` locks the folder (``.NAME.lock`` beside it) before
+the run starts, and a second writer is refused with a :class:`RunError`. Taking the claim
+also repairs what a killed writer left (:func:`pyautonomousagent.folders.recover`): an
+earlier run it had renamed aside is put back, its temporary folders are deleted, and
+:attr:`Claim.notes` says so.
 """
 
 from __future__ import annotations
@@ -35,10 +42,9 @@ import re
 import shutil
 import signal
 import sys
-import tempfile
 import threading
 import time
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from importlib import metadata
@@ -46,6 +52,15 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pyautonomousagent.bt.files import is_tree_file
+from pyautonomousagent.folders import (
+    BusyError,
+    Claim,
+    claimed,
+    commit,
+    hidden_folder,
+    hidden_folders,
+    lock_path,
+)
 from pyautonomousagent.inputs import InputError, shown
 from pyautonomousagent.recording import node_list, write_table
 from pyautonomousagent.simulation.scenario import to_mapping
@@ -78,12 +93,14 @@ class SavedRun:
         status: one of :data:`STATUSES`.
         files: the files written, ``run.json`` last.
         note: why the run is not complete, or where it went instead of the asked folder.
+        notes: what taking the folder repaired (see :func:`claim_run`), one line each.
     """
 
     folder: Path
     status: str
     files: list[Path] = field(default_factory=list)
     note: str = ""
+    notes: list[str] = field(default_factory=list)
 
 
 def default_folder(name: str) -> Path:
@@ -106,7 +123,8 @@ def check_target(folder: str | Path, overwrite: bool = False) -> Path:
 
     Raises:
         RunError: it is a file, it holds an earlier run and ``overwrite`` is false, it is
-            a folder of other files, or its parent cannot be created or written.
+            a folder of other files, it is a mount point, or its parent cannot be created
+            or written.
     """
     path = Path(folder)
     fix = "choose another folder with --out (out= in Python)"
@@ -124,12 +142,64 @@ def check_target(folder: str | Path, overwrite: bool = False) -> Path:
                     f"output folder {path} holds an earlier run; pass --overwrite "
                     f"(overwrite=True) to replace it, or {fix}"
                 )
-        parent = path.absolute().parent
-        parent.mkdir(parents=True, exist_ok=True)
-        os.rmdir(tempfile.mkdtemp(prefix=f".{path.name}.probe-", dir=parent))  # writable?
+        if os.path.ismount(path):
+            raise RunError(
+                f"output folder {path} is a mount point, which a run cannot be renamed into; "
+                f"use a folder inside it (--out {path / 'NAME'}), or {fix}"
+            )
+        path.absolute().parent.mkdir(parents=True, exist_ok=True)
+        with contextlib.suppress(FileNotFoundError):  # a claim's recovery may have taken it
+            hidden_folder(path, "probe").rmdir()  # the parent is writable
     except OSError as error:
         raise RunError(f"cannot use output folder {path}: {_reason(error)}; {fix}") from None
     return path
+
+
+@contextlib.contextmanager
+def claim_run(
+    folder: str | Path,
+    overwrite: bool = False,
+    keep: Sequence[Path] = (),
+    report: Callable[[str], None] | None = None,
+) -> Iterator[Claim]:
+    """Hold ``folder`` for one run: checked (:func:`check_target`), locked, and repaired.
+
+    ``Claim.notes`` says what a killed writer had left and what was done about it (an
+    earlier run put back, temporary folders deleted), and each note goes to ``report`` as
+    soon as it is done, before the folder is checked again; ``keep`` lists temporary
+    folders of this process. The lock is released on leaving (or when the process ends).
+
+    Raises:
+        RunError: another process is writing ``folder``, or :func:`check_target` refuses it.
+    """
+    path = check_target(folder, overwrite=True)  # an earlier run: refused once repaired
+    try:
+        with claimed(path, keep, is_run_folder) as held:
+            if report is not None:
+                for note in held.notes:
+                    report(note)
+            check_target(path, overwrite)  # again: recovery may have put a run back
+            yield held
+    except BusyError as error:
+        raise RunError(
+            f"output folder {path} is being written by another run ({error.strerror}); "
+            "wait for it to finish, or choose another folder with --out (out= in Python)"
+        ) from None
+    except OSError as error:
+        if error.filename != str(lock_path(path)):
+            raise
+        raise RunError(f"cannot use output folder {path}: {_reason(error)}") from None
+
+
+def recover_run(folder: str | Path) -> list[str]:
+    """Repair what a killed ``pyaa run`` left at ``folder``: put an earlier run back, delete
+    its temporary folders; one line per thing done (see :mod:`pyautonomousagent.folders`).
+
+    Raises:
+        RunError: another process is writing ``folder``.
+    """
+    with claim_existing(folder) as held:
+        return held.notes
 
 
 def simulate(sim: Simulation, progress: bool | None = None) -> str:
@@ -158,6 +228,7 @@ def save_run(
     command: Sequence[str] | None = None,
     overrides: Mapping[str, Any] | None = None,
     stream: StatesStream | None = None,
+    claim: Claim | None = None,
 ) -> SavedRun:
     """Save ``sim``'s data, animation and ``run.json`` into ``folder``, all or nothing.
 
@@ -175,21 +246,48 @@ def save_run(
         overrides: the parameter overrides to record.
         stream: the states written while the run went on (:func:`streaming` for ``folder``
             and ``fmt``): finished here instead of writing the table.
+        claim: the caller's :func:`claim_run` on ``folder``; without it, ``folder`` is
+            claimed here for the time of the saving (what it repaired: ``SavedRun.notes``).
 
     Raises:
-        RunError: the folder cannot be used (before anything is written).
+        RunError: the folder cannot be used, or another run is writing it (before
+            anything is written).
         SaveError: writing failed; the temporary folder is removed, an earlier run is intact.
     """
     if status not in STATUSES:
         raise ValueError(f"status must be one of {', '.join(STATUSES)}, got {shown(status)}")
-    target = check_target(folder, overwrite or status != "complete")
-    if status != "complete" and is_run_folder(target):
-        stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
-        target = check_target(target.with_name(f"{target.name}-{status}-{stamp}"))
-    saved = SavedRun(target, status)
-    if target != Path(folder):
-        saved.note = f"{folder} holds an earlier run, kept; this run was saved as {target}"
-    temp = stream.path.parent if stream is not None else _temp_folder(target)
+    if views is None and animation and status == "complete":
+        from pyautonomousagent.render.views import Views
+
+        views = Views(progress=progress)
+    keep = [stream.path.parent] if stream is not None else []
+    with contextlib.ExitStack() as held:
+        if claim is None or claim.folder != Path(folder):
+            claim = held.enter_context(claim_run(folder, overwrite or status != "complete", keep))
+        saved = SavedRun(claim.folder, status, notes=list(claim.notes))
+        if status != "complete" and is_run_folder(saved.folder):
+            stamp = datetime.now(UTC).strftime("%Y%m%d-%H%M%S")
+            beside = saved.folder.with_name(f"{saved.folder.name}-{status}-{stamp}")
+            saved.folder = held.enter_context(claim_run(beside)).folder
+            saved.note = f"{folder} holds an earlier run, kept; this run was saved as {beside}"
+        temp = keep[0] if keep else _temp_folder(saved.folder)
+        _save_into(sim, saved, temp, views, fmt, stream, overwrite, command, overrides)
+    return saved
+
+
+def _save_into(
+    sim: Simulation,
+    saved: SavedRun,
+    temp: Path,
+    views: Views | None,
+    fmt: str,
+    stream: StatesStream | None,
+    overwrite: bool,
+    command: Sequence[str] | None,
+    overrides: Mapping[str, Any] | None,
+) -> None:
+    """Write the run into ``temp`` and commit it to ``saved.folder`` (see :func:`save_run`)."""
+    target = saved.folder
     try:
         start = time.perf_counter()
         with _held_interrupts() as caught:
@@ -204,15 +302,11 @@ def save_run(
         sim.timings["write_data"] = time.perf_counter() - start
         if caught:
             saved.status, saved.note = "interrupted", "Ctrl-C while writing the data: no views"
-        if views is None and animation:
-            from pyautonomousagent.render.views import Views
-
-            views = Views(progress=progress)
         if views is not None and saved.status == "complete":
             _write_views(sim, temp, views, saved)
         with _held_interrupts():
             _write_json(temp / SUMMARY, summarise(sim, saved, temp, command, overrides))
-            _commit(temp, target)
+            commit(temp, target, replace=overwrite)
     except OSError as error:
         shutil.rmtree(temp, ignore_errors=True)
         where = f"; the earlier run in {target} is intact" if is_run_folder(target) else ""
@@ -221,13 +315,12 @@ def save_run(
         shutil.rmtree(temp, ignore_errors=True)
         raise
     saved.files = [target / path.name for path in saved.files] + [target / SUMMARY]
-    return saved
 
 
 def _temp_folder(target: Path) -> Path:
     """A new temporary folder beside ``target`` (``.NAME.tmp-*``), where a run is written."""
     try:
-        return Path(tempfile.mkdtemp(prefix=f".{target.name}.tmp-", dir=target.absolute().parent))
+        return hidden_folder(target, "tmp")
     except OSError as error:
         raise SaveError(f"cannot write in {target.absolute().parent}: {_reason(error)}") from None
 
@@ -356,7 +449,8 @@ def verify(folder: str | Path) -> dict[str, Any]:
     """``run.json`` of a run folder, after checking every file it lists against its hash.
 
     Raises:
-        RunError: a file is missing or differs from what ``run.json`` recorded.
+        RunError: a file is missing or differs from what ``run.json`` recorded; where a
+            killed ``pyaa run`` left the earlier run renamed aside, the message names it.
     """
     folder = Path(folder)
     try:
@@ -365,8 +459,19 @@ def verify(folder: str | Path) -> dict[str, Any]:
             if file_record(folder / entry["name"]) != entry:
                 raise RunError(f"{folder / entry['name']} differs from {SUMMARY}")
     except (OSError, ValueError, KeyError, TypeError) as error:
-        raise RunError(f"{folder} is not a complete run folder: {error}") from None
+        raise RunError(f"{folder} is not a complete run folder: {error}{_aside(folder)}") from None
     return dict(summary)
+
+
+def _aside(folder: Path) -> str:
+    """Where a killed run left the earlier run of ``folder``, as the end of a message."""
+    for kind, path in hidden_folders(folder):
+        if kind == "old" and is_run_folder(path / folder.name):
+            return (
+                f"; a run killed while replacing it left the earlier run in {path / folder.name}"
+                f", which the next pyaa run into {folder} (runs.recover_run) puts back"
+            )
+    return ""
 
 
 def add_files(folder: str | Path, paths: Sequence[Path]) -> None:
@@ -380,9 +485,63 @@ def add_files(folder: str | Path, paths: Sequence[Path]) -> None:
         if path.resolve().parent == folder.resolve():
             records[path.name] = file_record(path)
     summary["files"] = list(records.values())
-    temp = folder / f".{SUMMARY}.tmp"
-    _write_json(temp, summary)
-    os.replace(temp, folder / SUMMARY)
+    temp = folder / f".{SUMMARY}.{os.getpid()}.tmp"
+    try:
+        _write_json(temp, summary)
+        os.replace(temp, folder / SUMMARY)
+    finally:
+        temp.unlink(missing_ok=True)
+
+
+def run_files(folder: Path) -> set[str]:
+    """The names of a run folder's own files: ``run.json`` and those it lists (none if
+    ``folder`` holds no run)."""
+    try:
+        summary = json.loads((folder / SUMMARY).read_text(encoding="utf-8"))
+        listed = {str(entry["name"]) for entry in summary["files"]}
+    except (OSError, ValueError, KeyError, TypeError):
+        return {SUMMARY} if is_run_folder(folder) else set()
+    return listed | {SUMMARY}
+
+
+def check_output(path: str | Path, run: Path | None = None, views: Sequence[str] = ()) -> Path:
+    """``path`` made absolute (links resolved), if writing it harms no run folder.
+
+    Refused: a folder, and any run folder's own files (:func:`run_files`), except the
+    ``views`` of the folder ``run`` (``pyaa replay`` rewrites them and lists them again).
+
+    Raises:
+        RunError: ``path`` is one of those.
+    """
+    resolved = Path(path).resolve()
+    if resolved.is_dir():
+        raise RunError(f"{path} is a folder; give a file name")
+    here = resolved.parent
+    ours = run is not None and here == run.resolve() and resolved.name in views
+    if resolved.name in run_files(here) and not ours:
+        raise RunError(
+            f"{path} is a file of the run in {here}, which nothing but pyaa run writes; "
+            "choose another file"
+        )
+    return resolved
+
+
+@contextlib.contextmanager
+def claim_existing(folder: str | Path) -> Iterator[Claim]:
+    """Hold the run folder ``folder`` while files are added to it (``pyaa replay``); what a
+    killed writer left is repaired first (``Claim.notes``).
+
+    Raises:
+        RunError: its parent folder does not exist, or another process is writing it.
+    """
+    path = Path(folder)
+    if not path.absolute().parent.is_dir():
+        raise RunError(f"{path}: no such folder; give a folder that pyaa run wrote")
+    try:
+        with claimed(path, complete=is_run_folder) as held:
+            yield held
+    except BusyError as error:
+        raise RunError(f"{path} is being written by another run ({error.strerror})") from None
 
 
 def versions(
@@ -410,19 +569,6 @@ def _write_json(path: Path, data: Mapping[str, Any]) -> None:
         file.write(json.dumps(data, indent=2, default=str) + "\n")
         file.flush()
         os.fsync(file.fileno())
-
-
-def _commit(temp: Path, target: Path) -> None:
-    """Put the finished folder ``temp`` in place of ``target`` (renames only)."""
-    if target.is_dir():
-        if any(target.iterdir()):
-            old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=temp.parent))
-            os.replace(target, old / target.name)
-            os.replace(temp, target)
-            shutil.rmtree(old, ignore_errors=True)
-            return
-        target.rmdir()
-    os.replace(temp, target)
 
 
 @contextlib.contextmanager

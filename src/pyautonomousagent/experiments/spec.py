@@ -258,7 +258,7 @@ class _Reader:
             else None,
             engine=self.text(data.get("engine", "auto"), "engine"),
             record_every=self.whole(data.get("record_every", 1), "record_every", 1),
-            name=self.text(data.get("name", "experiment"), "name"),
+            name=self.folder_name(data.get("name", "experiment"), "name"),
         )
         self.columns(experiment)
         grid = math.prod(len(values) for values in experiment.vary.values())
@@ -271,6 +271,15 @@ class _Reader:
         if not isinstance(value, str) or not value:
             raise self.fail(path, "a non-empty string", value)
         return value
+
+    def folder_name(self, value: Any, path: str) -> str:
+        """A name that is one folder's name (it names the sweep's folder in runs/sweeps)."""
+        text = self.text(value, path)
+        if text in (".", "..") or any(c in text for c in "/\\\0") or len(text) > 200:
+            raise self.fail(
+                path, "a folder name (no / or \\, not . or .., at most 200 characters)", value
+            )
+        return text
 
     def whole(self, value: Any, path: str, minimum: int) -> int:
         if isinstance(value, bool) or not isinstance(value, int) or value < minimum:

@@ -8,15 +8,21 @@
     OUT/results.parquet        one row per run (the journal's last row of each run)
     OUT/runs/NAME=VALUE/.../seed=S/data.parquet   each run's recorded data (optional)
 
-Every file is written to a temporary name and renamed, so an interrupted or killed sweep
-leaves whole files only: the journal holds exactly the runs that finished, and
-``--resume`` runs the others.
+Every file is written to a temporary name, flushed to disk (fsync) and renamed, so an
+interrupted or killed sweep, or a machine that stops, leaves whole files only: the journal
+holds exactly the runs that finished, and ``--resume`` runs the others. A journal part that
+cannot be read all the same (a torn file left by an older version, a disk that lied) is
+set aside as ``journal/.part-*.parquet.torn`` when the journal is opened, so that its runs
+run again, and :attr:`Journal.notes` says so; temporary files a killed sweep left are
+deleted.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import re
 import uuid
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -26,6 +32,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
+from pyautonomousagent.folders import sync_folder
 from pyautonomousagent.recording import parquet_options
 
 MANIFEST = "experiment.json"
@@ -34,25 +41,50 @@ JOURNAL = "journal"
 RUNS = "runs"
 
 
+#: The temporary files :func:`atomic_write_bytes` and :func:`atomic_write_table` write.
+TEMPORARY = re.compile(r"\..+\.[0-9a-f]{32}\.tmp")
+
+
 def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file and a rename."""
+    """Write ``data`` to ``path`` through a temporary file, an fsync and a rename."""
     temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
     try:
-        temporary.write_bytes(data)
+        with temporary.open("wb") as file:
+            file.write(data)
+            file.flush()
+            os.fsync(file.fileno())
         os.replace(temporary, path)
+        sync_folder(path.parent)
     finally:
         temporary.unlink(missing_ok=True)
 
 
 def atomic_write_table(table: pa.Table, path: Path) -> None:
     """Write ``table`` as Parquet (the run data's options) to ``path`` through a temporary
-    file and a rename."""
+    file, an fsync and a rename."""
     temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
     try:
         pq.write_table(table, temporary, **parquet_options(table.schema))
+        fd = os.open(temporary, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
         os.replace(temporary, path)
+        sync_folder(path.parent)
     finally:
         temporary.unlink(missing_ok=True)
+
+
+def remove_temporaries(folder: Path) -> int:
+    """Delete the temporary files a killed writer left in ``folder``; how many."""
+    removed = 0
+    with contextlib.suppress(OSError):
+        for path in folder.iterdir():
+            if TEMPORARY.fullmatch(path.name) and path.is_file():
+                path.unlink(missing_ok=True)
+                removed += 1
+    return removed
 
 
 def column_type(values: Sequence[Any]) -> pa.DataType:
@@ -103,18 +135,43 @@ class Journal:
         self.folder.mkdir(parents=True, exist_ok=True)
         self.schema = schema
         self.buffer: list[dict[str, Any]] = []
-        parts = self.parts()
-        self.next_part = int(parts[-1].stem.split("-")[1]) + 1 if parts else 0
+        #: What opening the journal repaired, one line each (torn parts set aside...).
+        self.notes: list[str] = []
+        self._check_parts()
+        parts = sorted(self.folder.glob("part-*.parquet")) + self._torn()
+        numbers = [int(p.name.split("-")[1].split(".")[0]) for p in parts]
+        self.next_part = max(numbers) + 1 if numbers else 0
 
     def parts(self) -> list[Path]:
         """The journal's files, in the order they were written."""
         return sorted(self.folder.glob("part-*.parquet"))
 
+    def _torn(self) -> list[Path]:
+        return sorted(self.folder.glob(".part-*.parquet.torn"))
+
+    def _check_parts(self) -> None:
+        """Read every part; one that cannot be read is set aside, with a note."""
+        removed = remove_temporaries(self.folder)
+        if removed:
+            self.notes.append(f"removed {removed} temporary file(s) a stopped sweep left")
+        for path in self.parts():
+            try:
+                self._read_part(path)
+            except (pa.ArrowException, OSError, ValueError, KeyError) as error:
+                aside = path.with_name(f".{path.name}.torn")
+                os.replace(path, aside)
+                reason = str(error).splitlines()[0][:120] if str(error) else type(error).__name__
+                self.notes.append(
+                    f"journal part {path} cannot be read ({reason}): set aside as {aside.name}, "
+                    "its runs run again"
+                )
+
+    def _read_part(self, path: Path) -> pa.Table:
+        return pq.read_table(path).select(self.schema.names).cast(self.schema)
+
     def read(self) -> pa.Table:
         """Every row written so far (flushed), in journal order."""
-        tables = [
-            pq.read_table(p).select(self.schema.names).cast(self.schema) for p in self.parts()
-        ]
+        tables = [self._read_part(p) for p in self.parts()]
         return pa.concat_tables(tables) if tables else self.schema.empty_table()
 
     def append(self, row: Mapping[str, Any]) -> None:
@@ -156,11 +213,18 @@ def write_results(journal: Journal, out: Path) -> pa.Table:
 
 
 def read_manifest(out: Path) -> dict[str, Any] | None:
-    """The folder's manifest, or None if there is none."""
+    """The folder's manifest, or None if there is none.
+
+    Raises:
+        ValueError: it is not JSON, or not a mapping (torn).
+        OSError: it cannot be read.
+    """
     path = out / MANIFEST
     if not path.exists():
         return None
-    data: dict[str, Any] = json.loads(path.read_text())
+    data = json.loads(path.read_text(encoding="utf-8"))
+    if not isinstance(data, dict):
+        raise ValueError(f"{path} holds no mapping")
     return data
 
 

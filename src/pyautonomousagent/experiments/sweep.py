@@ -15,12 +15,13 @@ its message and the sweep goes on; ``resume=True`` skips the runs already done.
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import json
 import math
 import pickle
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -34,6 +35,7 @@ from pyautonomousagent.experiments.measures import RunData, _Evaluate
 from pyautonomousagent.experiments.runner import RunTask, execute, one_line, scenario_parameters
 from pyautonomousagent.experiments.spec import Experiment, ExperimentError, Run
 from pyautonomousagent.experiments.store import (
+    MANIFEST,
     RESULTS,
     RUNS,
     Journal,
@@ -42,6 +44,7 @@ from pyautonomousagent.experiments.store import (
     write_manifest,
     write_results,
 )
+from pyautonomousagent.folders import BusyError, claimed
 from pyautonomousagent.progress import Progress
 from pyautonomousagent.runs import versions
 from pyautonomousagent.simulation.run import scenario_tree
@@ -183,6 +186,7 @@ def sweep(
     on_result: Callable[[dict[str, Any]], None] | None = None,
     flush_every: int = 50,
     flush_seconds: float = 5.0,
+    report: Callable[[str], None] | None = None,
 ) -> SweepResult:
     """Run every point x seed of ``experiment`` into the folder ``out``.
 
@@ -199,6 +203,8 @@ def sweep(
         on_result: called with each result row as it arrives.
         flush_every: journal finished runs at least every this many runs...
         flush_seconds: ...and every this many seconds.
+        report: called with each line saying what opening the folder repaired (a torn
+            journal part set aside, whose runs run again; temporary files deleted).
 
     Raises:
         ExperimentError: bad experiment, ``out`` holds another sweep, or a run too large.
@@ -216,53 +222,68 @@ def sweep(
     )
     owned = isinstance(backend, str)
     chosen = make_backend(backend, workers, address) if isinstance(backend, str) else backend
+    held = contextlib.ExitStack()
     try:
         check_memory(run_bytes(experiment, scenario, len(probe.columns), save_runs), chosen)
         if chosen.name == "pool":
             _check_picklable(_tasks(experiment, scenario, runs[:1], None)[0])
+        held.enter_context(_claim(out, report or _ignore))
+        previous = _previous_manifest(out, experiment, resume)  # again, now that it is ours
     except ExperimentError:
+        held.close()
         if owned:
             chosen.close()
         raise
-    start = time.perf_counter()
-    out.mkdir(parents=True, exist_ok=True)
-    journal = Journal(out, schema)
-    done = journal.finished() if resume else set()
-    todo = [run for run in runs if run.run_id not in done]
-    counts = {"ok": 0, "failed": 0, "skipped": len(runs) - len(todo)}
-    manifest = _manifest(experiment, scenario, runs, chosen, previous)
-    try:
-        write_manifest(out, manifest)
-        tasks = _tasks(experiment, scenario, todo, out / RUNS if save_runs else None)
-        _execute(
-            tasks,
-            chosen,
-            journal,
-            counts,
-            experiment.name,
-            progress,
-            on_result,
-            (flush_every, flush_seconds),
-        )
-        manifest["status"] = "finished"
-    except BaseException:
-        manifest["status"] = "interrupted"
-        raise
-    finally:
-        journal.flush()
-        if owned:
-            chosen.close()
-        table = write_results(journal, out)
-        statuses = table["status"].to_pylist()
-        manifest.update(
-            counts=counts,  # this session's
-            results={state: statuses.count(state) for state in ("ok", "failed")},
-            finished_at=_now(),
-            seconds=time.perf_counter() - start,
-        )
-        write_manifest(out, manifest)
+    with held:
+        start = time.perf_counter()
+        out.mkdir(parents=True, exist_ok=True)
+        journal = Journal(out, schema)
+        for note in journal.notes:
+            (report or _ignore)(note)
+        done = journal.finished() if resume else set()
+        todo = [run for run in runs if run.run_id not in done]
+        counts = {"ok": 0, "failed": 0, "skipped": len(runs) - len(todo)}
+        manifest = _manifest(experiment, scenario, runs, chosen, previous)
+        try:
+            write_manifest(out, manifest)
+            tasks = _tasks(experiment, scenario, todo, out / RUNS if save_runs else None)
+            _execute(
+                tasks,
+                chosen,
+                journal,
+                counts,
+                experiment.name,
+                progress,
+                on_result,
+                (flush_every, flush_seconds),
+            )
+            manifest["status"] = "finished"
+        except BaseException:
+            manifest["status"] = "interrupted"
+            raise
+        finally:
+            journal.flush()
+            if owned:
+                chosen.close()
+            table = _finish(journal, out, manifest, counts, start)
     workers_text = f"{chosen.name} x {manifest['backend']['workers']}"
     return SweepResult(out, table, counts, time.perf_counter() - start, workers_text)
+
+
+def _finish(
+    journal: Journal, out: Path, manifest: dict[str, Any], counts: dict[str, int], start: float
+) -> pa.Table:
+    """Write the results and the final manifest; the results."""
+    table = write_results(journal, out)
+    statuses = table["status"].to_pylist()
+    manifest.update(
+        counts=counts,  # this session's
+        results={state: statuses.count(state) for state in ("ok", "failed")},
+        finished_at=_now(),
+        seconds=time.perf_counter() - start,
+    )
+    write_manifest(out, manifest)
+    return table
 
 
 def _tasks(
@@ -339,8 +360,34 @@ def failed_row(task: RunTask, error: BaseException) -> dict[str, Any]:
     return row
 
 
+@contextlib.contextmanager
+def _claim(out: Path, report: Callable[[str], None]) -> Iterator[None]:
+    """Hold the sweep folder ``out`` for this process (the lock :func:`sweep` and ``pyaa run``
+    share: see :mod:`pyautonomousagent.folders`)."""
+    try:
+        with claimed(out) as held:
+            for note in held.notes:
+                report(note)
+            yield
+    except BusyError as error:
+        raise ExperimentError(
+            f"{out} is being written by another sweep or run ({error.strerror}); wait for it "
+            "to finish, or choose another --out"
+        ) from None
+
+
+def _ignore(note: str) -> None:
+    """Drop ``note`` (no ``report`` given to :func:`sweep`)."""
+
+
 def _previous_manifest(out: Path, experiment: Experiment, resume: bool) -> dict[str, Any] | None:
-    previous = read_manifest(out)
+    try:
+        previous = read_manifest(out)
+    except (OSError, ValueError) as error:
+        raise ExperimentError(
+            f"{out / MANIFEST} cannot be read ({one_line(error)}); the sweep in {out} cannot "
+            "be resumed: choose another --out"
+        ) from None
     if previous is None:
         if out.is_dir() and any(out.iterdir()):
             raise ExperimentError(
