@@ -109,6 +109,10 @@ def _parser() -> argparse.ArgumentParser:
         "--tree", type=Path, metavar="FILE", help="run this tree file (.xml, .yaml) instead"
     )
     _add_view_options(run)
+    leaves = sub.add_parser(
+        "leaves", help="list the leaves a scenario's tree may use, with their docs and ports"
+    )
+    leaves.add_argument("scenario", help="a registered scenario name or a scenario .yaml file")
     _add_bench(sub)
     _add_replay(sub)
     _add_experiments(sub)
@@ -725,6 +729,40 @@ def _describe(scenario: Scenario) -> str:
     return "\n".join(lines)
 
 
+def leaves_command(name: str) -> int:
+    """``pyaa leaves``: the leaf types that fit a scenario's mission, each with its one-line
+    doc, ports (type, the scenario parameter that gives the default, its value) and
+    blackboard keys; then the general leaves, which fit any mission."""
+    from pyautonomousagent.simulation.fit import fitting_leaves, is_general
+
+    scenario = load(name)
+    fits = fitting_leaves(scenario)
+    own = [cls for cls in fits if not is_general(cls)]
+    print(
+        f"{len(own)} leaves fit scenario {scenario.name} (mission "
+        f"{scenario.mission_type.name}); a port left out of the tree takes the parameter shown:"
+    )
+    values = vars(scenario.parameters)
+    for cls in own:
+        print(f"  {cls.type_name}: {_first_line(cls.__doc__)}")
+        for port in cls.ports:
+            doc = f"; {port.doc}" if port.doc else ""
+            print(
+                f"      {port.name} ({port.hint()}) = {port.default} "
+                f"({values.get(port.default)!r}){doc}"
+            )
+        if cls.keys:
+            print(f"      blackboard: {', '.join(cls.keys)}")
+    general = [cls.type_name for cls in fits if is_general(cls)]
+    print(f"general leaves, for any mission (docs/tree-files.md): {', '.join(general)}")
+    return 0
+
+
+def _first_line(doc: str | None) -> str:
+    """The first sentence line of a docstring ("" for none)."""
+    return (doc or "").strip().split("\n", 1)[0].strip().replace("``", "")
+
+
 def _tree_source(source: str) -> tuple[Document, str, dict[str, Any]]:
     """The tree document ``source`` names (a tree file, or a scenario's tree), a name, and
     the parameters that give leaf ports their defaults (every mission's, for a bare file)."""
@@ -1007,6 +1045,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return run(args)
         if args.command == "scenarios":
             return scenarios_command(args.name)
+        if args.command == "leaves":
+            return leaves_command(args.scenario)
         if args.command == "bench":
             return bench_command(args)
         if args.command in EXPERIMENT_COMMANDS:
