@@ -19,14 +19,17 @@ from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.bt.text import to_text
 from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.inputs import InputError, clip, finite, shown
+from pyautonomousagent.names import AgentNames
 from pyautonomousagent.recording import (
     DEFAULT_TRACED,
     Recorder,
     read_table,
     recorder_from_tables,
+    traced_agents,
 )
 from pyautonomousagent.runs import (
     SaveError,
+    SavedRun,
     add_files,
     check_target,
     default_folder,
@@ -93,7 +96,8 @@ def _parser() -> argparse.ArgumentParser:
         type=int,
         default=1,
         metavar="K",
-        help="record every K-th iteration (default: 1, all)",
+        help="record every K-th iteration (default: 1, all; longer than the run: the initial "
+        "and final state)",
     )
     run.add_argument("--no-gif", action="store_true", help="skip the animation (Phase 7)")
     run.add_argument("--frame-every", type=int, help="iterations between animation frames")
@@ -419,9 +423,11 @@ def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
         line = f"  {result.case.engine}: {result.case.agents} agents -> {mb}"
         print(line, file=sys.stderr, flush=True)
 
-    # Without --record-every a probe records the initial state only.
+    # Without --record-every a probe records the initial and the final state only.
     every = max(args.record_every) if args.record_every else args.iterations + 1
-    recording = f"recording every {every}" if args.record_every else "recording the initial state"
+    recording = (
+        f"recording every {every}" if args.record_every else "recording the initial and final state"
+    )
     found = {}
     for engine in engines:
         if engine == "pyfly":
@@ -515,12 +521,7 @@ def run(args: argparse.Namespace) -> int:
     folder (see :mod:`pyautonomousagent.runs`)."""
     _check_run_options(args)
     scenario = _scenario(args)
-    if args.record_every > scenario.iterations:
-        raise ScenarioError(
-            f"--record-every {args.record_every} is longer than the run "
-            f"({scenario.iterations} iterations): only the initial state would be recorded; "
-            f"use at most {scenario.iterations}"
-        )
+    _check_agent_options(args, scenario)
     if args.tree is not None:
         file_format(args.tree)  # refuse other endings before anything runs
         scenario = scenario.with_overrides(tree=str(args.tree.resolve()))
@@ -550,21 +551,57 @@ def run(args: argparse.Namespace) -> int:
             stream=stream,
         )
     if saved.status != "complete":
-        print(
-            f"pyaa: {saved.status} at iteration {sim.world.iteration} of "
-            f"{scenario.iterations}; saved a partial run marked {saved.status!r} in "
-            f"{saved.folder}{'; ' + saved.note if saved.note else ''}",
-            file=sys.stderr,
-        )
+        print(_not_complete(saved, sim.world.iteration, scenario.iterations), file=sys.stderr)
         return 130 if saved.status == "interrupted" else 1
     if not args.quiet:
         _print_summary(sim, saved.files)
     return 0
 
 
+def _not_complete(saved: SavedRun, done: int, iterations: int) -> str:
+    """What ``pyaa run`` says of a run saved incomplete: the data is partial, or the data is
+    complete (every iteration) and only the views failed or were interrupted."""
+    note = f"; {saved.note}" if saved.note else ""
+    if done < iterations:
+        return (
+            f"pyaa: {saved.status} at iteration {done} of {iterations}; saved a partial run "
+            f"marked {saved.status!r} in {saved.folder}{note}"
+        )
+    return (
+        f"pyaa: the data is complete (all {iterations} iterations) and saved in "
+        f"{saved.folder}; only the views are missing, the run is marked {saved.status!r}"
+        f"{note} (pyaa replay {saved.folder} writes replay.html from the data)"
+    )
+
+
+def _check_agent_options(args: argparse.Namespace, scenario: Scenario) -> None:
+    """``--follow``, ``--btlog`` and ``--trace`` name agents of the scenario: checked before
+    the run, each error naming its option."""
+    names = AgentNames(scenario.mission_type.agent_prefix, scenario.agents)
+    agents = [("--follow", args.follow)] if args.follow is not None else []
+    for flag, agent in [*agents, *(("--btlog", agent) for agent in args.btlog)]:
+        if agent not in names:
+            raise ScenarioError(
+                f"{flag}: no agent named {shown(agent)}; agents are {names[0]}..{names[-1]}"
+            )
+    if args.trace is None:
+        return
+    items = args.trace.split(",")
+    if not all(item.strip() for item in items):
+        raise ScenarioError(
+            "--trace needs agent names, counts or 'all' separated by commas, e.g. "
+            f"drone2,drone7 or 5; got {shown(args.trace)}"
+        )
+    try:
+        traced_agents(names, items)
+    except ValueError as error:
+        raise ScenarioError(f"--{error}") from None
+
+
 def _trace_spec(args: argparse.Namespace) -> str | None:
-    """The agents to trace: ``--trace``, plus the agents ``--btlog`` and ``--inset`` need."""
-    needed = list(args.btlog) + ([args.follow] if args.inset and args.follow else [])
+    """The agents to trace: ``--trace``, plus the agents ``--btlog`` and ``--inset`` need
+    (the followed agent, by default the first)."""
+    needed = list(args.btlog) + (["1" if args.follow is None else args.follow] * args.inset)
     if not needed:
         return args.trace
     return ",".join([args.trace or str(DEFAULT_TRACED), *needed])

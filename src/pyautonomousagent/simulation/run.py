@@ -234,7 +234,8 @@ class Simulation:
             engine: name of the decision engine (see :data:`ENGINES`), or "auto"
                 (:func:`choose_engine`; the compiled engine also where this run's compiled
                 loop is in the cache already).
-            record_every: record every K-th iteration (and the initial state).
+            record_every: record every K-th iteration (and the initial state); a K longer
+                than the run records the initial and the final state.
             tree: a tree description (or a tree file's path) to use instead of the
                 scenario's own.
             implementation: the X8's implementation, "pyfly" or "vectorised", instead of
@@ -251,6 +252,7 @@ class Simulation:
                 :mod:`~pyautonomousagent.simulation.fit`).
         """
         scenario, tree = _checked(scenario, seed, engine, record_every, tree)
+        record_every = min(record_every, max(scenario.iterations, 1))  # initial and final
         tree = tree or scenario_tree(scenario)
         auto = engine == "auto"
         if auto:
