@@ -73,6 +73,7 @@ from pyautonomousagent.missions.vacuum.room import (
     CleaningGrid,
     Rectangle,
     Room,
+    check_inside,
     read_obstacles,
 )
 
@@ -151,8 +152,9 @@ class VacuumMission(Mission):
 
     @classmethod
     def check(cls, scenario: Scenario, reader: Reader) -> None:
-        """drone2d motion; start positions in the room and clear of obstacles; a sonar that
-        sees farther than one step; a turn range and a grid that make sense."""
+        """drone2d motion; obstacles and start positions in the room, the starts clear of
+        the obstacles; a sonar that sees farther than one step; a turn range and a grid
+        that make sense."""
         p = scenario.parameters
         if scenario.model != "drone2d":
             raise reader.fail("model", "drone2d (the stop rule predicts its next step)",
@@ -180,6 +182,7 @@ class VacuumMission(Mission):
                 f"a number > 0 giving at most {MAX_CELLS} cells",
                 p.cell_size,
             )
+        check_inside(reader, scenario.objects.obstacles, scenario.world, "world.obstacles")
         room = Room(width, height, scenario.objects.obstacles)
         for i, point in enumerate(scenario.objects.start_positions):
             where = f"world.start_positions[{i}]"
