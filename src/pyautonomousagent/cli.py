@@ -28,8 +28,8 @@ from pyautonomousagent.recording import (
     traced_agents,
 )
 from pyautonomousagent.runs import (
-    SaveError,
     SavedRun,
+    SaveError,
     add_files,
     check_target,
     default_folder,

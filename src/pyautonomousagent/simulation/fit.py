@@ -5,7 +5,7 @@ port (written in the tree, or the scenario parameter the port's default names), 
 blackboard keys it declares, and the state columns, blackboard keys and world objects it
 reads or writes when ticked. The last are found by ticking the leaf once on a *probe*: two
 agents of the scenario's mission, placed as in Phase 1, in a world of their own (no run is
-touched), whose views raise :class:`Missing` for anything the mission lacks. A leaf that
+touched), whose views raise :class:`MissingError` for anything the mission lacks. A leaf that
 fails on the probe for any other reason is left to the run: the probe looks for what the
 mission lacks, not for a leaf's own mistakes.
 
@@ -42,7 +42,7 @@ PROBE_AGENTS = 2
 NAMED_FITS = 4
 
 
-class Missing(AttributeError):
+class MissingError(AttributeError):
     """What a probe's views raise for a column, key or world object the mission lacks (an
     AttributeError, so a leaf's own ``getattr(agents, name, default)`` still works)."""
 
@@ -54,12 +54,12 @@ class Missing(AttributeError):
 def _view_getattr(view: AgentView, key: str) -> Any:
     if key.startswith("__"):
         raise AttributeError(key)
-    raise Missing("state column", key)
+    raise MissingError("state column", key)
 
 
 def _view_setattr(view: AgentView, key: str, value: Any) -> None:
     if not any(key in vars(kind) for kind in type(view).__mro__):  # columns: descriptors
-        raise Missing("state column", key)
+        raise MissingError("state column", key)
     object.__setattr__(view, key, value)
 
 
@@ -67,21 +67,21 @@ def _board_column(board: BlackboardView, key: str) -> np.ndarray:
     try:
         return board._board[key]
     except KeyError:
-        raise Missing("blackboard key", key) from None
+        raise MissingError("blackboard key", key) from None
 
 
 class _ProbeObjects(Values):
-    """The world objects of a probe: an unknown one raises :class:`Missing`."""
+    """The world objects of a probe: an unknown one raises :class:`MissingError`."""
 
     def __getattr__(self, key: str) -> Any:
         if key.startswith("__"):
             raise AttributeError(key)
-        raise Missing("world object", key)
+        raise MissingError("world object", key)
 
 
 @dataclass
 class Probe:
-    """A few agents of a scenario's mission, whose views raise :class:`Missing`.
+    """A few agents of a scenario's mission, whose views raise :class:`MissingError`.
 
     Attributes:
         scenario: the scenario probed.
@@ -155,7 +155,7 @@ def misfit(node: Node, probe: Probe) -> str | None:
             warnings.simplefilter("ignore")
             made.evaluate(probe.swarm.agent(0), probe.world)
             made.evaluate(probe.swarm.agents(), probe.world)
-    except Missing as error:
+    except MissingError as error:
         return f"it uses {error}, which the mission's agents and world do not have"
     except Exception:  # the leaf's own matter: the run shows it
         return None
@@ -213,9 +213,7 @@ def check_tree(tree: Node, scenario: Scenario, keys: Mapping[str, Any] | None = 
             raise TreeError(_refusal(node, reason, scenario, keys))
 
 
-def _refusal(
-    node: Node, reason: str, scenario: Scenario, keys: Mapping[str, Any] | None
-) -> str:
+def _refusal(node: Node, reason: str, scenario: Scenario, keys: Mapping[str, Any] | None) -> str:
     """The message of :func:`check_tree` for ``node``, which does not fit ``scenario``."""
     mission = scenario.mission_type.name
     owners = [] if is_general(LEAF_TYPES.get(node.type)) else leaf_missions(node.type)

@@ -57,12 +57,13 @@ def check_inside(reader: Reader, obstacles: tuple[Obstacle, ...], size: tuple[fl
     width, height = size
     for i, obstacle in enumerate(obstacles):
         x0, y0, x1, y1 = extent(obstacle)
-        if not (0.0 <= x0 and x1 <= width and 0.0 <= y0 and y1 <= height):
+        if not (0.0 <= x0 <= x1 <= width and 0.0 <= y0 <= y1 <= height):
             raise ScenarioError(
                 f"{reader.source}: {path}[{i}] (a {obstacle.shape} spanning x {x0:g}..{x1:g}, "
                 f"y {y0:g}..{y1:g}) must lie inside the room [0, {width:g}] x [0, {height:g}]; "
                 "move it or enlarge the world"
             )
+
 
 MAX_OBSTACLES = 1000
 """The most obstacles a room may have (the sonar looks at every one for every robot)."""
