@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from pyautonomousagent.bt.blackboard import tree_blackboard_keys
 from pyautonomousagent.bt.leaf import LEAF_TYPES, Leaf, make_leaf
 from pyautonomousagent.bt.spec import Node, TreeError, leaf
 from pyautonomousagent.datalink import Datalink
@@ -197,7 +198,8 @@ def check_tree(tree: Node, scenario: Scenario, keys: Mapping[str, Any] | None = 
     Args:
         tree: the tree to run.
         scenario: the scenario it is run in.
-        keys: the blackboard keys the tree writes besides the mission's, key -> dtype.
+        keys: the blackboard keys the tree writes besides the mission's, key -> dtype
+            (default: found in the tree, ``bt.blackboard.tree_blackboard_keys``).
 
     Raises:
         TreeError: the first leaf that does not fit: its name and type, why, the missions
@@ -206,6 +208,8 @@ def check_tree(tree: Node, scenario: Scenario, keys: Mapping[str, Any] | None = 
     nodes = [node for node in tree.leaves() if node.type in LEAF_TYPES]
     if not nodes:
         return
+    if keys is None:
+        keys = tree_blackboard_keys(tree, scenario.create_mission().blackboard())
     probe = Probe.of(scenario, keys)
     for node in nodes:
         reason = misfit(node, probe)
