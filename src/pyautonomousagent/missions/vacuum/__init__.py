@@ -19,7 +19,8 @@ iterations fused (``kernels.py``), and so does the GPU engine (``device.py``: th
 steps on the device, the lowest robot row winning a cell by an atomic minimum):
 
 - world objects (``world:``): ``obstacles``, a list of ``{shape: rect, x, y, width,
-  height}`` (lower-left corner) and ``{shape: circle, x, y, radius}``; ``start_positions``,
+  height}`` (lower-left corner) and ``{shape: circle, x, y, radius}``, each wholly inside
+  the room (:func:`~pyautonomousagent.missions.vacuum.room.check_inside`); ``start_positions``,
   [x, y] per robot (cycled);
 - parameters: ``robot_speed``, ``collision_distance``, ``sonar_range``, ``avoid_min_angle``,
   ``avoid_max_angle``, ``cell_size`` (see :attr:`VacuumMission.parameters`); the avoid
@@ -134,7 +135,7 @@ class VacuumMission(Mission):
     world_objects: ClassVar[tuple[WorldObject, ...]] = (
         WorldObject("obstacles", read_obstacles, (),
                     "obstacles: {shape: rect, x, y, width, height} (lower-left corner) or "
-                    "{shape: circle, x, y, radius}, world units"),
+                    "{shape: circle, x, y, radius}, world units, inside the room"),
         WorldObject("start_positions", read_positions,
                     doc="start positions [x, y], used in turn by robots 1, 2, ... (cycled)"),
     )  # fmt: skip
