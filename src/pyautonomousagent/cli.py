@@ -423,11 +423,10 @@ def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
         line = f"  {result.case.engine}: {result.case.agents} agents -> {mb}"
         print(line, file=sys.stderr, flush=True)
 
-    # Without --record-every a probe records the initial and the final state only.
+    # Without --record-every a probe records the initial state only: a run records the initial
+    # and the final state (record_every past its end), and a probe stops long before the end.
     every = max(args.record_every) if args.record_every else args.iterations + 1
-    recording = (
-        f"recording every {every}" if args.record_every else "recording the initial and final state"
-    )
+    recording = f"recording every {every}" if args.record_every else "recording the initial state"
     found = {}
     for engine in engines:
         if engine == "pyfly":
