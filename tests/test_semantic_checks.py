@@ -53,6 +53,12 @@ def test_options_naming_agents_are_checked_before_the_run(
     assert not out.exists() and list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("trace", [",,", "drone1,", "", ["drone2", ""]])
+def test_simulation_create_refuses_an_empty_trace_item(trace: Any) -> None:
+    with pytest.raises(ScenarioError, match="trace: give agent names, counts or 'all'"):
+        Simulation.create(load("gathering").with_overrides(iterations=2), trace=trace)
+
+
 def test_inset_traces_the_first_agent_even_with_trace_0(tmp_path: Path) -> None:
     out = tmp_path / "out"
     argv = ["run", "gathering", "--iterations", "3", "--out", str(out), "--quiet"]
