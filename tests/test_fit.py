@@ -154,3 +154,16 @@ def test_pyaa_leaves_of_an_unknown_scenario_is_one_line(capsys) -> None:
     assert main(["leaves", "no-such-scenario"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "unknown scenario" in err
+
+
+def test_pyaa_leaves_of_a_user_s_mission_lists_its_own_leaves(tmp_path, capsys) -> None:
+    from pyautonomousagent.testing import scoped_registrations
+    from tests.test_missions_doc import write_example
+
+    with scoped_registrations():
+        scenario = write_example(tmp_path)
+        assert main(["leaves", str(scenario)]) == 0
+        text = capsys.readouterr().out
+        assert "Action_Fly_To_Depot_A: " in text and "Action_Deliver_S: " in text
+        assert "Action_Vacuum_S" not in text
+        assert leaf_missions("Action_Deliver_S") == []  # no registered scenario of it
