@@ -203,3 +203,15 @@ def test_lesson_04_refuses_a_scenario_that_is_no_scenario() -> None:
         register_leaf(ConditionShelterNear)
         with pytest.raises(ExerciseError, match="`scenario` should be the lesson's Scenario"):
             check_exercise(4, leaf_type=ConditionShelterNear, scenario="shelters.yaml")
+
+
+def test_replay_checks_btlog_agents_before_writing(tmp_path: Path, capsys) -> None:
+    run = tmp_path / "run"
+    argv = ["run", "gathering", "--iterations", "3", "--no-gif", "--no-replay", "--quiet"]
+    assert main([*argv, "--trace", "drone2", "--out", str(run)]) == 0
+    for agent, message in (("nobody", "no agent named 'nobody'"), ("drone1", "not traced")):
+        assert main(["replay", str(run), "--btlog", agent]) == 2
+        err = capsys.readouterr().err
+        _one_line(err)
+        assert f"--btlog: {message}" in err or message in err
+    assert sorted(p.name for p in run.iterdir()) == ["run.json", "states.parquet", "traces.parquet"]

@@ -649,6 +649,7 @@ def replay_command(args: argparse.Namespace) -> int:
     scenario = Scenario.from_mapping(summary["scenario"], source=str(summary_path))
     states, traces = _read_run_tables(folder)
     recorder = recorder_from_tables(states, traces, summary.get("trace", {}).get("nodes", ()))
+    _check_btlog(recorder, args.btlog)
     out = args.out.parent if args.out else folder
     views = _write_views(
         recorder,
@@ -664,6 +665,22 @@ def replay_command(args: argparse.Namespace) -> int:
     for path in views.written:
         print(f"wrote {path}")
     return 0
+
+
+def _check_btlog(recorder: Recorder, agents: Sequence[str]) -> None:
+    """``pyaa replay --btlog``: each agent is one of the run's, and traced; checked before
+    anything is written."""
+    names = list(recorder.names)
+    traced = [names[i] for i in recorder.traced]
+    for agent in agents:
+        if agent not in names:
+            known = f"agents are {names[0]}..{names[-1]}" if names else "the run has no agents"
+            raise ScenarioError(f"--btlog: no agent named {shown(agent)}; {known}")
+        if agent not in traced:
+            raise ScenarioError(
+                f"--btlog: agent {agent!r} was not traced in this run (traced: "
+                f"{', '.join(traced) or 'none'}); run it again with --btlog {agent}"
+            )
 
 
 def _read_run_tables(folder: Path) -> tuple[Any, Any]:
