@@ -5,9 +5,10 @@ port (written in the tree, or the scenario parameter the port's default names), 
 blackboard keys it declares, and the state columns, blackboard keys and world objects it
 reads or writes when ticked. The last are found by ticking the leaf once on a *probe*: two
 agents of the scenario's mission, placed as in Phase 1, in a world of their own (no run is
-touched), whose views raise :class:`MissingError` for anything the mission lacks. A leaf that
-fails on the probe for any other reason is left to the run: the probe looks for what the
-mission lacks, not for a leaf's own mistakes.
+touched; its world is at iteration 0, before any run's first tick), whose views raise
+:class:`MissingError` for anything the mission lacks. A leaf that fails on the probe for
+any other reason is left to the run: the probe looks for what the mission lacks, not for a
+leaf's own mistakes. (A leaf that logs its ticks sees the probe's at iteration 0.)
 
 - :func:`check_tree`: refuse, before a run, a tree with a leaf that does not fit, naming the
   leaf, why, the missions it belongs to and the leaves that do fit;
