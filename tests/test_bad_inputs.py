@@ -340,7 +340,7 @@ CLI_CASES: list[tuple[list[str], str]] = [
     ([*RUN, "--seed", "x"], "--seed"),
     ([*RUN, "--record-every", "0"], "--record-every"),
     ([*RUN, "--record-every", "-1"], "--record-every"),
-    ([*RUN, "--record-every", "9000"], "longer than the run"),
+    ([*RUN, "--trace", ",,"], "--trace needs agent names"),
     ([*RUN, "--record-every", "x"], "--record-every"),
     ([*RUN, "--frame-every", "0"], "frame_every"),
     ([*RUN, "--frame-every", "-2"], "frame_every"),

@@ -92,7 +92,7 @@ def test_an_embedded_replay_fills_the_width_and_opens_full_page(tmp_path: Path) 
 
 def test_every_lesson_has_a_check() -> None:
     assert set(CHECKS) >= {"02", "06"}
-    with pytest.raises(ValueError, match="no exercise for lesson 9"):
+    with pytest.raises(ExerciseError, match="no exercise for lesson 9"):
         check_exercise(9)
 
 

@@ -63,7 +63,7 @@ def test_the_initial_state_of_agents_alike_is_not_stored_in_full(monkeypatch):
     stored = set(sim.recorder.columns.stored)
     assert stored == {"heading"}  # the drones start alike but for it (requested: its twin)
     sim.run(progress=False)
-    assert len(to_table(sim.recorder)) == 50
+    assert len(to_table(sim.recorder)) == 2 * 50  # record_every past the end: first and last
 
 
 def test_a_long_bearing_in_pieces_has_the_bits_of_one_piece():

@@ -74,7 +74,8 @@ def logged_leaves(tree: Node, log: list[tuple[int, str, int]]) -> Iterator[None]
             class Logged(base):  # type: ignore[misc, valid-type]
                 def evaluate(self, agents: Any, world: Any) -> Any:
                     result = super().evaluate(agents, world)
-                    if 0 in np.atleast_1d(agents.indices):
+                    probe = world.iteration == 0  # simulation.fit's check before the run
+                    if 0 in np.atleast_1d(agents.indices) and not probe:
                         first = int(np.asarray(result).ravel()[0])
                         log.append((world.iteration, names[self.stream], first))
                     return result

@@ -164,7 +164,7 @@ def test_cli_trace_option_and_its_errors(tmp_path, capsys):
     capsys.readouterr()
     assert main([*args, "--out", str(tmp_path / "bad"), "--trace", "drone9"]) == 2
     error = capsys.readouterr().err.strip()
-    assert error.startswith("pyaa: error: trace: no agent named 'drone9'") and "\n" not in error
+    assert error.startswith("pyaa: error: --trace: no agent named 'drone9'") and "\n" not in error
 
 
 @pytest.mark.parametrize("agents", [1, 5, 16, 17, 200])

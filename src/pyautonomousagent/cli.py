@@ -22,13 +22,16 @@ from pyautonomousagent.bt.text import to_text
 from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.folders import Claim, hidden_folder, recover
 from pyautonomousagent.inputs import InputError, clip, finite, shown
+from pyautonomousagent.names import AgentNames
 from pyautonomousagent.recording import (
     DEFAULT_TRACED,
     Recorder,
     read_table,
     recorder_from_tables,
+    traced_agents,
 )
 from pyautonomousagent.runs import (
+    SavedRun,
     SaveError,
     add_files,
     check_output,
@@ -98,7 +101,8 @@ def _parser() -> argparse.ArgumentParser:
         type=int,
         default=1,
         metavar="K",
-        help="record every K-th iteration (default: 1, all)",
+        help="record every K-th iteration (default: 1, all; longer than the run: the initial "
+        "and final state)",
     )
     run.add_argument("--no-gif", action="store_true", help="skip the animation (Phase 7)")
     run.add_argument("--frame-every", type=int, help="iterations between animation frames")
@@ -114,6 +118,10 @@ def _parser() -> argparse.ArgumentParser:
         "--tree", type=Path, metavar="FILE", help="run this tree file (.xml, .yaml) instead"
     )
     _add_view_options(run)
+    leaves = sub.add_parser(
+        "leaves", help="list the leaves a scenario's tree may use, with their docs and ports"
+    )
+    leaves.add_argument("scenario", help="a registered scenario name or a scenario .yaml file")
     _add_bench(sub)
     _add_replay(sub)
     _add_experiments(sub)
@@ -420,7 +428,8 @@ def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
         line = f"  {result.case.engine}: {result.case.agents} agents -> {mb}"
         print(line, file=sys.stderr, flush=True)
 
-    # Without --record-every a probe records the initial state only.
+    # Without --record-every a probe records the initial state only: a run records the initial
+    # and the final state (record_every past its end), and a probe stops long before the end.
     every = max(args.record_every) if args.record_every else args.iterations + 1
     recording = f"recording every {every}" if args.record_every else "recording the initial state"
     found = {}
@@ -518,12 +527,7 @@ def run(args: argparse.Namespace) -> int:
     refused."""
     _check_run_options(args)
     scenario = _scenario(args)
-    if args.record_every > scenario.iterations:
-        raise ScenarioError(
-            f"--record-every {args.record_every} is longer than the run "
-            f"({scenario.iterations} iterations): only the initial state would be recorded; "
-            f"use at most {scenario.iterations}"
-        )
+    _check_agent_options(args, scenario)
     if args.tree is not None:
         file_format(args.tree)  # refuse other endings before anything runs
         scenario = scenario.with_overrides(tree=str(args.tree.resolve()))
@@ -566,21 +570,57 @@ def _run_claimed(args: argparse.Namespace, scenario: Scenario, sim: Simulation, 
             claim=held,
         )
     if saved.status != "complete":
-        print(
-            f"pyaa: {saved.status} at iteration {sim.world.iteration} of "
-            f"{scenario.iterations}; saved a partial run marked {saved.status!r} in "
-            f"{saved.folder}{'; ' + saved.note if saved.note else ''}",
-            file=sys.stderr,
-        )
+        print(_not_complete(saved, sim.world.iteration, scenario.iterations), file=sys.stderr)
         return 130 if saved.status == "interrupted" else 1
     if not args.quiet:
         _print_summary(sim, saved.files)
     return 0
 
 
+def _not_complete(saved: SavedRun, done: int, iterations: int) -> str:
+    """What ``pyaa run`` says of a run saved incomplete: the data is partial, or the data is
+    complete (every iteration) and only the views failed or were interrupted."""
+    note = f"; {saved.note}" if saved.note else ""
+    if done < iterations:
+        return (
+            f"pyaa: {saved.status} at iteration {done} of {iterations}; saved a partial run "
+            f"marked {saved.status!r} in {saved.folder}{note}"
+        )
+    return (
+        f"pyaa: the data is complete (all {iterations} iterations) and saved in "
+        f"{saved.folder}; only the views are missing, the run is marked {saved.status!r}"
+        f"{note} (pyaa replay {saved.folder} writes replay.html from the data)"
+    )
+
+
+def _check_agent_options(args: argparse.Namespace, scenario: Scenario) -> None:
+    """``--follow``, ``--btlog`` and ``--trace`` name agents of the scenario: checked before
+    the run, each error naming its option."""
+    names = AgentNames(scenario.mission_type.agent_prefix, scenario.agents)
+    agents = [("--follow", args.follow)] if args.follow is not None else []
+    for flag, agent in [*agents, *(("--btlog", agent) for agent in args.btlog)]:
+        if agent not in names:
+            raise ScenarioError(
+                f"{flag}: no agent named {shown(agent)}; agents are {names[0]}..{names[-1]}"
+            )
+    if args.trace is None:
+        return
+    items = args.trace.split(",")
+    if not all(item.strip() for item in items):
+        raise ScenarioError(
+            "--trace needs agent names, counts or 'all' separated by commas, e.g. "
+            f"drone2,drone7 or 5; got {shown(args.trace)}"
+        )
+    try:
+        traced_agents(names, items)
+    except ValueError as error:
+        raise ScenarioError(f"--{error}") from None
+
+
 def _trace_spec(args: argparse.Namespace) -> str | None:
-    """The agents to trace: ``--trace``, plus the agents ``--btlog`` and ``--inset`` need."""
-    needed = list(args.btlog) + ([args.follow] if args.inset and args.follow else [])
+    """The agents to trace: ``--trace``, plus the agents ``--btlog`` and ``--inset`` need
+    (the followed agent, by default the first)."""
+    needed = list(args.btlog) + (["1" if args.follow is None else args.follow] * args.inset)
     if not needed:
         return args.trace
     return ",".join([args.trace or str(DEFAULT_TRACED), *needed])
@@ -654,6 +694,7 @@ def _replay_into(folder: Path, out: Path, args: argparse.Namespace) -> list[Path
     scenario = Scenario.from_mapping(summary["scenario"], source=str(summary_path))
     states, traces = _read_run_tables(folder)
     recorder = recorder_from_tables(states, traces, summary.get("trace", {}).get("nodes", ()))
+    _check_btlog(recorder, args.btlog)
     temp = hidden_folder(out, "tmp")
     try:
         views = _write_views(
@@ -672,6 +713,22 @@ def _replay_into(folder: Path, out: Path, args: argparse.Namespace) -> list[Path
     finally:
         shutil.rmtree(temp, ignore_errors=True)
     return placed
+
+
+def _check_btlog(recorder: Recorder, agents: Sequence[str]) -> None:
+    """``pyaa replay --btlog``: each agent is one of the run's, and traced; checked before
+    anything is written."""
+    names = list(recorder.names)
+    traced = [names[i] for i in recorder.traced]
+    for agent in agents:
+        if agent not in names:
+            known = f"agents are {names[0]}..{names[-1]}" if names else "the run has no agents"
+            raise ScenarioError(f"--btlog: no agent named {shown(agent)}; {known}")
+        if agent not in traced:
+            raise ScenarioError(
+                f"--btlog: agent {agent!r} was not traced in this run (traced: "
+                f"{', '.join(traced) or 'none'}); run it again with --btlog {agent}"
+            )
 
 
 def _read_run_tables(folder: Path) -> tuple[Any, Any]:
@@ -771,6 +828,40 @@ def _describe(scenario: Scenario) -> str:
             f"{param.default!r}, {owner}: {param.doc}"
         )
     return "\n".join(lines)
+
+
+def leaves_command(name: str) -> int:
+    """``pyaa leaves``: the leaf types that fit a scenario's mission, each with its one-line
+    doc, ports (type, the scenario parameter that gives the default, its value) and
+    blackboard keys; then the general leaves, which fit any mission."""
+    from pyautonomousagent.simulation.fit import fitting_leaves, is_general
+
+    scenario = load(name)
+    fits = fitting_leaves(scenario)
+    own = [cls for cls in fits if not is_general(cls)]
+    print(
+        f"{len(own)} leaves fit scenario {scenario.name} (mission "
+        f"{scenario.mission_type.name}); a port left out of the tree takes the parameter shown:"
+    )
+    values = vars(scenario.parameters)
+    for cls in own:
+        print(f"  {cls.type_name}: {_first_line(cls.__doc__)}")
+        for port in cls.ports:
+            doc = f"; {port.doc}" if port.doc else ""
+            print(
+                f"      {port.name} ({port.hint()}) = {port.default} "
+                f"({values.get(port.default)!r}){doc}"
+            )
+        if cls.keys:
+            print(f"      blackboard: {', '.join(cls.keys)}")
+    general = [cls.type_name for cls in fits if is_general(cls)]
+    print(f"general leaves, for any mission (docs/tree-files.md): {', '.join(general)}")
+    return 0
+
+
+def _first_line(doc: str | None) -> str:
+    """The first sentence line of a docstring ("" for none)."""
+    return (doc or "").strip().split("\n", 1)[0].strip().replace("``", "")
 
 
 def _tree_source(source: str) -> tuple[Document, str, dict[str, Any]]:
@@ -1069,6 +1160,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return run(args)
         if args.command == "scenarios":
             return scenarios_command(args.name)
+        if args.command == "leaves":
+            return leaves_command(args.scenario)
         if args.command == "bench":
             return bench_command(args)
         if args.command in EXPERIMENT_COMMANDS:

@@ -11,7 +11,10 @@ Both are also importable from :mod:`pyautonomousagent.testing`.
 
 from __future__ import annotations
 
+import difflib
 import html
+import inspect
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,6 +24,7 @@ import numpy as np
 
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.status import NAMES
+from pyautonomousagent.inputs import shown
 
 __all__ = [
     "CHECKS",
@@ -192,11 +196,32 @@ def check_exercise(lesson: str | int, **answers: Any) -> None:
     Args:
         lesson: the lesson's number (``2`` or ``"02"``).
         answers: the lesson's answer variables by name, as its exercise cell asks.
+
+    Raises:
+        ExerciseError: an answer is missing, of the wrong kind (a word where a number is
+            due, ...) or wrong; or there is no such lesson or answer name. Its message is
+            the hint; a notebook shows no traceback.
     """
-    number = f"{int(lesson):02d}"
-    if number not in CHECKS:
-        raise ValueError(f"no exercise for lesson {lesson!r}; lessons are {sorted(CHECKS)}")
-    print(f"\u2714 Well done! {CHECKS[number](**answers)}")
+    number = _lesson_number(lesson)
+    check = CHECKS[number]
+    known = list(inspect.signature(check).parameters)
+    for name in answers:
+        if name not in known:
+            close = difflib.get_close_matches(name, known, n=1)
+            hint = f" (did you mean `{close[0]}`?)" if close else ""
+            raise ExerciseError(f"Lesson {number}'s check has no answer `{name}`{hint}; give "
+                                f"{', '.join(f'{k}=...' for k in known)}.")  # fmt: skip
+    print(f"\u2714 Well done! {check(**answers)}")
+
+
+def _lesson_number(lesson: Any) -> str:
+    """``lesson`` as a key of :data:`CHECKS` ("02"), or ExerciseError naming the lessons."""
+    text = str(lesson).strip() if isinstance(lesson, int | str) else ""
+    number = f"{int(text):02d}" if text.isascii() and text.isdigit() else ""
+    if isinstance(lesson, bool) or number not in CHECKS:
+        raise ExerciseError(f"There is no exercise for lesson {shown(lesson)}: give a lesson's "
+                            f"number, one of {', '.join(sorted(CHECKS))}.")  # fmt: skip
+    return number
 
 
 def _given(name: str, value: Any, what: str) -> Any:
@@ -205,6 +230,20 @@ def _given(name: str, value: Any, what: str) -> Any:
         raise ExerciseError(f"Not answered yet: set `{name}` to {what} in the exercise cell, "
                             "run it, then run this cell again.")  # fmt: skip
     return value
+
+
+def _number(name: str, value: Any, what: str) -> float:
+    """``value`` as a float, or ExerciseError if it is missing, a word or no number."""
+    value = _given(name, value, what)
+    number: float | None = None
+    if not isinstance(value, bool | str | bytes):
+        try:
+            number = float(value)
+        except (TypeError, ValueError, OverflowError):
+            number = None
+    if number is None:
+        raise ExerciseError(f"`{name}` should be {what}, got {shown(value)}.")
+    return number
 
 
 def _status_list(name: str, value: Any, length: int) -> list[str]:
@@ -295,8 +334,8 @@ def _check_06(table: Any = None, best: Any = None) -> str:
     means = {v: float(np.mean([r["minimum_energy"] for r in rows if r["energy_use"] == v]))
              for v in values}  # fmt: skip
     expected = min(means, key=lambda v: means[v])
-    best = _given("best", best, "the energy_use value with the lowest mean minimum energy")
-    if not np.isclose(float(best), expected):
+    best = _number("best", best, "the energy_use value with the lowest mean minimum energy")
+    if not np.isclose(best, expected):
         raise ExerciseError(f"Not quite: energy_use = {best} does not have the lowest mean "
                             "minimum energy in your table.\nHint: group the rows by energy_use "
                             "and average minimum_energy over the seeds.")  # fmt: skip
@@ -312,8 +351,8 @@ def _coordinates(name: str, value: Any, length: int) -> np.ndarray:
     value = _given(name, value, f"{length} numbers")
     try:
         numbers = np.asarray(value, dtype=float).ravel()
-    except (TypeError, ValueError):
-        raise ExerciseError(f"`{name}` should be {length} numbers, got {value!r}.") from None
+    except (TypeError, ValueError, OverflowError):
+        raise ExerciseError(f"`{name}` should be {length} numbers, got {shown(value)}.") from None
     if numbers.size != length or not np.isfinite(numbers).all():
         raise ExerciseError(f"`{name}` should be {length} finite numbers, got {value!r}.")
     return numbers
@@ -405,7 +444,11 @@ def _check_05(tree_file: Any = None) -> str:
     from pyautonomousagent.scenarios import load
     from pyautonomousagent.simulation.run import Simulation
 
-    path = Path(_given("tree_file", tree_file, "the name of your YAML tree file"))
+    given = _given("tree_file", tree_file, "the name of your YAML tree file")
+    if not isinstance(given, str | os.PathLike) or not str(given).strip():
+        raise ExerciseError(f"`tree_file` should be the name of your YAML tree file, like "
+                            f"'slow.yaml', got {shown(given)}.")  # fmt: skip
+    path = Path(given)
     if path.suffix not in (".yaml", ".yml"):
         raise ExerciseError(f"{path} is not a YAML file: save your tree as slow.yaml.")
     if not path.is_file():
@@ -449,9 +492,9 @@ def smallest_compiled_swarm(iterations: int) -> int:
 
 @_lesson("07")
 def _check_07(agents: Any = None) -> str:
-    got = _given("agents", agents, "a whole number of drones")
-    if isinstance(got, bool) or not float(got).is_integer():
-        raise ExerciseError(f"`agents` should be a whole number of drones, got {got!r}.")
+    got = _number("agents", agents, "a whole number of drones")
+    if not got.is_integer():
+        raise ExerciseError(f"`agents` should be a whole number of drones, got {agents!r}.")
     expected = smallest_compiled_swarm(4000)
     if int(got) != expected:
         where = (
@@ -476,6 +519,7 @@ def _check_04(leaf_type: Any = None, scenario: Any = None) -> str:
     from pyautonomousagent.bt.spec import inverter, leaf, reactive_sequence
     from pyautonomousagent.bt.status import FAILURE, SUCCESS
     from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.simulation.scenario import Scenario
     from pyautonomousagent.testing import check_leaf
 
     name = "Condition_Shelter_Near"
@@ -488,6 +532,10 @@ def _check_04(leaf_type: Any = None, scenario: Any = None) -> str:
     if LEAF_TYPES.get(name) is not leaf_type:
         raise ExerciseError("Your leaf is not registered: put `@register_leaf` above the class.")
     scenario = _given("scenario", scenario, "the lesson's scenario")
+    if not isinstance(scenario, Scenario):
+        kind = type(scenario).__name__
+        raise ExerciseError(f"`scenario` should be the lesson's Scenario (load(...) of its "
+                            f"scenario file), got {kind} {shown(scenario)}.")  # fmt: skip
     distance = 30.0
     probe = reactive_sequence(
         "probe_tree",
@@ -546,11 +594,7 @@ def x8_climb_time(altitude: float, within: float = 1.0, iterations: int = 3000) 
 
 @_lesson("08")
 def _check_08(climb_time: Any = None) -> str:
-    got = _given("climb_time", climb_time, "a time in seconds")
-    try:
-        seconds = float(got)
-    except (TypeError, ValueError):
-        raise ExerciseError(f"`climb_time` should be a number of seconds, got {got!r}.") from None
+    seconds = _number("climb_time", climb_time, "a number of seconds")
     expected = x8_climb_time(60.0)
     if not abs(seconds - expected) < 0.005:
         hint = "later" if seconds < expected else "earlier"

@@ -29,7 +29,7 @@ import pyarrow as pa
 
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.status import INVALID, NAMES, RUNNING
-from pyautonomousagent.inputs import InputError
+from pyautonomousagent.inputs import InputError, shown
 from pyautonomousagent.names import AgentNames
 from pyautonomousagent.state import CONTROL_COLUMNS, MOTION_COLUMNS, Swarm
 
@@ -280,7 +280,8 @@ def traced_agents(names: Sequence[str], trace: int | str | Sequence[str] | None)
             agents are all traced: ``"4,drone57"`` is the first four and drone57.
 
     Raises:
-        ValueError: a name that is no agent's, or a negative count; the message names it.
+        ValueError: a name that is no agent's, a negative count, or an empty item (``",,"``);
+            the message names it.
     """
     if trace is None:
         trace = DEFAULT_TRACED
@@ -289,6 +290,10 @@ def traced_agents(names: Sequence[str], trace: int | str | Sequence[str] | None)
             raise ValueError(f"trace: a count of agents must be >= 0, got {trace}")
         return list(range(min(trace, len(names))))
     items = trace.split(",") if isinstance(trace, str) else list(trace)
+    if not all(str(item).strip() for item in items):
+        raise ValueError(
+            f"trace: give agent names, counts or 'all' separated by commas, got {shown(trace)}"
+        )
     index = {name: i for i, name in enumerate(names)}
     chosen: set[int] = set()
     for item in (str(t).strip() for t in items):

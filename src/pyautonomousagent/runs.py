@@ -77,7 +77,9 @@ SUMMARY = "run.json"
 
 
 class RunError(InputError):
-    """An output folder that cannot be used (one line: the folder, the reason, the fix)."""
+    """A run that cannot be saved (one line: the reason, the fix): an output folder that
+    cannot be used, or a :func:`save_run` of something that is no simulation, or of a
+    simulation that never ran."""
 
 
 class SaveError(OSError):
@@ -250,12 +252,13 @@ def save_run(
             claimed here for the time of the saving (what it repaired: ``SavedRun.notes``).
 
     Raises:
-        RunError: the folder cannot be used, or another run is writing it (before
-            anything is written).
+        RunError: ``sim`` is no :class:`~pyautonomousagent.simulation.run.Simulation`, or
+            it never ran (no iteration done), or ``status`` is not one of :data:`STATUSES`,
+            or the folder cannot be used, or another run is writing it (all before anything
+            is written).
         SaveError: writing failed; the temporary folder is removed, an earlier run is intact.
     """
-    if status not in STATUSES:
-        raise ValueError(f"status must be one of {', '.join(STATUSES)}, got {shown(status)}")
+    _check_saveable(sim, status)
     if views is None and animation and status == "complete":
         from pyautonomousagent.render.views import Views
 
@@ -315,6 +318,25 @@ def _save_into(
         shutil.rmtree(temp, ignore_errors=True)
         raise
     saved.files = [target / path.name for path in saved.files] + [target / SUMMARY]
+
+
+def _check_saveable(sim: Any, status: Any) -> None:
+    """RunError unless ``sim`` is a simulation that ran and ``status`` one of :data:`STATUSES`."""
+    from pyautonomousagent.simulation.run import Simulation
+
+    if not isinstance(sim, Simulation):
+        raise RunError(
+            "save_run saves a Simulation (sim = Simulation.create(load(NAME)); "
+            f"simulate(sim)), got {type(sim).__name__} {shown(sim)}"
+        )
+    if status not in STATUSES:
+        raise RunError(f"status must be one of {', '.join(STATUSES)}, got {shown(status)}")
+    if sim.world.iteration == 0 and sim.scenario.iterations > 0 and status == "complete":
+        raise RunError(
+            "the simulation never ran (0 of its "
+            f"{sim.scenario.iterations} iterations): run it first with simulate(sim) or "
+            "sim.run(), then save it"
+        )
 
 
 def _temp_folder(target: Path) -> Path:

@@ -95,11 +95,19 @@ def summarize(
     """Per (``by``, ``x``) group of the runs that succeeded: ``n``, ``mean``, ``low``, ``high``.
 
     Raises:
-        ExperimentError: an unknown column or interval, or no successful run.
+        ExperimentError: an unknown column or interval, a measure that is not a number
+            column, or no successful run.
     """
     if interval not in INTERVALS:
         raise ExperimentError(f"unknown interval {interval!r}; choose from {', '.join(INTERVALS)}")
     values = _column(table, measure, "measure")
+    kind = table[measure].type
+    if not (pa.types.is_integer(kind) or pa.types.is_floating(kind) or pa.types.is_null(kind)):
+        numeric = [n for n in table.column_names if pa.types.is_floating(table[n].type)]
+        raise ExperimentError(
+            f"{measure!r} is not a measure (its values are {kind}, not numbers); "
+            f"measures are the number columns, e.g. {', '.join(numeric[:8])}"
+        )
     xs = _column(table, x, "parameter")
     groups = _column(table, by, "parameter") if by else [None] * len(xs)
     status = _column(table, "status", "column")

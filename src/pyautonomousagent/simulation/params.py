@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import sys
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from types import SimpleNamespace
@@ -24,6 +25,9 @@ class ScenarioError(InputError):
 
 
 Point = tuple[float, float]
+#: The largest whole number a scenario may give (2**53: every smaller one is a float exactly,
+#: and it fits the 64-bit integers of the swarm's arrays).
+MAX_WHOLE = 2**53
 
 
 @dataclass(frozen=True)
@@ -139,13 +143,17 @@ class Reader:
         above: float | None = None,
         maximum: float | None = None,
     ) -> Any:
-        """A finite number of type ``kind`` (int or float) within the given bounds."""
+        """A finite number of type ``kind`` (int or float) within the given bounds (a whole
+        number at most :data:`MAX_WHOLE` in size)."""
         whole = kind is int
         must = "a whole number" if whole else "a number"
         if isinstance(value, bool) or not isinstance(value, int | float):
             raise self.fail(path, must, value)
-        if not math.isfinite(value):
+        if isinstance(value, float) and not math.isfinite(value):
             raise self.fail(path, f"a finite {must[2:]}", value)
+        limit = MAX_WHOLE if whole else sys.float_info.max
+        if abs(value) > limit:  # exact for ints of any size: no overflow
+            raise self.fail(path, f"{must} between -{limit:g} and {limit:g}", value)
         if whole and float(value) != int(value):
             raise self.fail(path, must, value)
         if minimum is not None and value < minimum:

@@ -28,6 +28,7 @@ from pyautonomousagent.randomness import CounterRandom
 from pyautonomousagent.recording import Recorder, check_memory, to_table, trace_table, traced_agents
 from pyautonomousagent.registry import Registry
 from pyautonomousagent.simulation import phases
+from pyautonomousagent.simulation.fit import check_tree
 from pyautonomousagent.simulation.mission import MessageType, Mission
 from pyautonomousagent.simulation.motion import Model, build_model
 from pyautonomousagent.simulation.scenario import Scenario, ScenarioError, to_mapping
@@ -233,7 +234,8 @@ class Simulation:
             engine: name of the decision engine (see :data:`ENGINES`), or "auto"
                 (:func:`choose_engine`; the compiled engine also where this run's compiled
                 loop is in the cache already).
-            record_every: record every K-th iteration (and the initial state).
+            record_every: record every K-th iteration (and the initial state); a K longer
+                than the run records the initial and the final state.
             tree: a tree description (or a tree file's path) to use instead of the
                 scenario's own.
             implementation: the X8's implementation, "pyfly" or "vectorised", instead of
@@ -244,9 +246,13 @@ class Simulation:
 
         Raises:
             TypeError, ValueError: a bad argument, named in the message;
-            ScenarioError: a bad scenario field; InputError: a run that cannot fit in memory.
+            ScenarioError: a bad scenario field; InputError: a run that cannot fit in memory;
+            TreeError: a leaf of the tree that does not fit the scenario's mission (it names
+                the leaf, why, its mission and the leaves that fit: see
+                :mod:`~pyautonomousagent.simulation.fit`).
         """
         scenario, tree = _checked(scenario, seed, engine, record_every, tree)
+        record_every = min(record_every, max(scenario.iterations, 1))  # initial and final
         tree = tree or scenario_tree(scenario)
         auto = engine == "auto"
         if auto:
@@ -254,9 +260,10 @@ class Simulation:
         mission = scenario.create_mission()
         _check_fits(scenario, mission, tree, engine, record_every)
         start = time.perf_counter()
+        declared = tree_blackboard_keys(tree, mission.blackboard())  # scripts' entries
+        check_tree(tree, scenario, declared)  # every leaf fits the mission
         rng = np.random.default_rng(seed)
         world = _world(scenario, seed)
-        declared = tree_blackboard_keys(tree, mission.blackboard())  # scripts' entries
         swarm = phases.create_agents(mission, world, rng, declared)
         world.agent_index = agent_index(swarm.names)
         model = build_model(scenario, swarm, engine, seed, implementation)

@@ -19,7 +19,8 @@ iterations fused (``kernels.py``), and so does the GPU engine (``device.py``: th
 steps on the device, the lowest robot row winning a cell by an atomic minimum):
 
 - world objects (``world:``): ``obstacles``, a list of ``{shape: rect, x, y, width,
-  height}`` (lower-left corner) and ``{shape: circle, x, y, radius}``; ``start_positions``,
+  height}`` (lower-left corner) and ``{shape: circle, x, y, radius}``, each wholly inside
+  the room (:func:`~pyautonomousagent.missions.vacuum.room.check_inside`); ``start_positions``,
   [x, y] per robot (cycled);
 - parameters: ``robot_speed``, ``collision_distance``, ``sonar_range``, ``avoid_min_angle``,
   ``avoid_max_angle``, ``cell_size`` (see :attr:`VacuumMission.parameters`); the avoid
@@ -73,6 +74,7 @@ from pyautonomousagent.missions.vacuum.room import (
     CleaningGrid,
     Rectangle,
     Room,
+    check_inside,
     read_obstacles,
 )
 
@@ -133,7 +135,7 @@ class VacuumMission(Mission):
     world_objects: ClassVar[tuple[WorldObject, ...]] = (
         WorldObject("obstacles", read_obstacles, (),
                     "obstacles: {shape: rect, x, y, width, height} (lower-left corner) or "
-                    "{shape: circle, x, y, radius}, world units"),
+                    "{shape: circle, x, y, radius}, world units, inside the room"),
         WorldObject("start_positions", read_positions,
                     doc="start positions [x, y], used in turn by robots 1, 2, ... (cycled)"),
     )  # fmt: skip
@@ -151,8 +153,9 @@ class VacuumMission(Mission):
 
     @classmethod
     def check(cls, scenario: Scenario, reader: Reader) -> None:
-        """drone2d motion; start positions in the room and clear of obstacles; a sonar that
-        sees farther than one step; a turn range and a grid that make sense."""
+        """drone2d motion; obstacles and start positions in the room, the starts clear of
+        the obstacles; a sonar that sees farther than one step; a turn range and a grid
+        that make sense."""
         p = scenario.parameters
         if scenario.model != "drone2d":
             raise reader.fail("model", "drone2d (the stop rule predicts its next step)",
@@ -180,6 +183,7 @@ class VacuumMission(Mission):
                 f"a number > 0 giving at most {MAX_CELLS} cells",
                 p.cell_size,
             )
+        check_inside(reader, scenario.objects.obstacles, scenario.world, "world.obstacles")
         room = Room(width, height, scenario.objects.obstacles)
         for i, point in enumerate(scenario.objects.start_positions):
             where = f"world.start_positions[{i}]"

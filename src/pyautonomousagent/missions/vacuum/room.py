@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from pyautonomousagent.arrays import sincos_degrees
-from pyautonomousagent.mission import Reader
+from pyautonomousagent.mission import Reader, ScenarioError
 
 
 @dataclass(frozen=True)
@@ -39,6 +39,31 @@ class Circle:
 
 
 Obstacle = Rectangle | Circle
+
+
+def extent(obstacle: Obstacle) -> tuple[float, float, float, float]:
+    """The smallest box holding ``obstacle``: (x0, y0, x1, y1), world units."""
+    if isinstance(obstacle, Rectangle):
+        o = obstacle
+        return o.x, o.y, o.x + o.width, o.y + o.height
+    c = obstacle
+    return c.x - c.radius, c.y - c.radius, c.x + c.radius, c.y + c.radius
+
+
+def check_inside(reader: Reader, obstacles: tuple[Obstacle, ...], size: tuple[float, float],
+                 path: str) -> None:  # fmt: skip
+    """Raise ScenarioError naming the first obstacle not wholly inside the room
+    ``[0, width] x [0, height]`` (one touching a wall is inside)."""
+    width, height = size
+    for i, obstacle in enumerate(obstacles):
+        x0, y0, x1, y1 = extent(obstacle)
+        if not (0.0 <= x0 <= x1 <= width and 0.0 <= y0 <= y1 <= height):
+            raise ScenarioError(
+                f"{reader.source}: {path}[{i}] (a {obstacle.shape} spanning x {x0:g}..{x1:g}, "
+                f"y {y0:g}..{y1:g}) must lie inside the room [0, {width:g}] x [0, {height:g}]; "
+                "move it or enlarge the world"
+            )
+
 
 MAX_OBSTACLES = 1000
 """The most obstacles a room may have (the sonar looks at every one for every robot)."""
