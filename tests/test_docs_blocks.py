@@ -14,10 +14,13 @@ rules (also in docs/about-this-site.md, "How the pages are tested"):
   ``pyaa run``, ``bench`` and ``sweep`` without one), ``--agents`` at most :data:`AGENTS`
   (a list keeps its values up to it; ``pyaa bench`` its first only: each case is a process),
   ``--record-every`` at most the iterations, ``--seeds`` at most :data:`SEEDS`, ``--repeat``
-  1; a sweep without ``--workers`` or ``--dask`` runs ``--serial``. A ``pyaa run`` without
+  1; a sweep without ``--workers`` or ``--dask`` runs ``--serial``, without ``--seeds``
+  gets ``--seeds 2``. A ``pyaa run`` without
   ``--out`` gets ``--overwrite``: each line is an example on its own, and several write the
   default folder.
 - A block after ``<!-- file: PATH -->`` is written to PATH in the page's folder, not run.
+- A block after ``<!-- files: PAGE -->`` (``docs/missions.md``) runs after the file blocks
+  of that page are written to its page's folder: an example that builds on another page's.
 - A block after ``<!-- skip: REASON -->`` is not run: its test is skipped with that reason.
 - Blocks in other languages (``xml``, ``yaml``, ``text``, output listings) are not run; an
   unlabelled block that holds a command is an error (label it ``sh``).
@@ -55,7 +58,7 @@ SEEDS = 2
 PYTHON = {"python", "py", "python3"}
 SHELL = {"sh", "bash", "shell", "console"}
 FENCE = re.compile(r"^(?P<indent>\s*)(?P<fence>`{3,}|~{3,})\s*(?P<info>.*)$")
-MARKER = re.compile(r"^\s*<!--\s*(?P<kind>skip|file):\s*(?P<value>.*?)\s*-->\s*$")
+MARKER = re.compile(r"^\s*<!--\s*(?P<kind>skip|file|files):\s*(?P<value>.*?)\s*-->\s*$")
 COMMAND_START = re.compile(r"^\s*(\$ )?(pyaa|python3?|pip|make) ")
 
 
@@ -69,6 +72,7 @@ class Block:
     text: str
     skip: str = ""  # the reason of a <!-- skip: ... --> marker
     file: str = ""  # the path of a <!-- file: ... --> marker
+    files: str = ""  # the page of a <!-- files: ... --> marker
 
     @property
     def runs(self) -> bool:
@@ -97,7 +101,7 @@ def blocks(path: Path) -> list[Block]:
             if same and len(close["fence"]) >= len(fence) and not close["info"].strip():
                 break
             end += 1
-        body = "\n".join(line[indent:] if line[:indent].isspace() else line.lstrip()
+        body = "\n".join(line[indent:] if not line[:indent].strip() else line.lstrip()
                          for line in lines[i + 1 : end])  # fmt: skip
         lang = info.split()[0] if info else ""
         before = i - 1
@@ -113,6 +117,7 @@ def blocks(path: Path) -> list[Block]:
                     text=body + "\n",
                     skip=marker["value"] if marker and marker["kind"] == "skip" else "",
                     file=marker["value"] if marker and marker["kind"] == "file" else "",
+                    files=marker["value"] if marker and marker["kind"] == "files" else "",
                 )
             )
         i = end + 1
@@ -182,6 +187,8 @@ def shorten(argv: list[str]) -> list[str]:
         out[where] = out[where].split(",")[0]
     if command == "sweep" and not {"--workers", "--dask", "--serial"} & set(out):
         out.append("--serial")  # no pool of processes to start
+    if command == "sweep" and "--seeds" not in out:  # an experiment file's seeds
+        out += ["--seeds", str(SEEDS)]
     if command in ("run", "bench", "sweep") and "--iterations" not in out:
         out += ["--iterations", str(ITERATIONS)]
     if command == "run" and "--out" not in out and "--overwrite" not in out:
@@ -241,6 +248,9 @@ class Page:
         cwd = Path.cwd()
         os.chdir(self.folder)
         try:
+            for other in (b for b in ALL_BLOCKS if block.files and b.page == block.files):
+                if other.file:
+                    self.run(other)
             if block.file:
                 target = self.folder / block.file
                 target.parent.mkdir(parents=True, exist_ok=True)
@@ -289,6 +299,8 @@ def test_block_runs(
 ) -> None:
     if block.skip:
         pytest.skip(f"marked in {block.id}: {block.skip}")
+    if "x8-" in block.text:
+        pytest.importorskip("pyfly", reason="needs the [x8] extra (pyfly-fixed-wing)")
     page = page_of(pages, block.page, tmp_path_factory)
     own = [b for b in ALL_BLOCKS if b.page == block.page]
     index = own.index(block)
@@ -324,6 +336,9 @@ def test_no_unlabelled_block_holds_a_command() -> None:
 
 
 def test_markers_mark_blocks_that_would_run() -> None:
+    pages = {b.page for b in ALL_BLOCKS}
+    sources = [b.id for b in ALL_BLOCKS if b.files and b.files not in pages]
+    assert not sources, f"<!-- files: PAGE --> names no page with blocks: {sources}"
     useless = [b.id for b in ALL_BLOCKS if b.skip and not b.runs]
     assert not useless, f"a skip marker before a block that is not run anyway: {useless}"
     unreasoned = [b.id for b in ALL_BLOCKS if b.skip and len(b.skip) < 10]
