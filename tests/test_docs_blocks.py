@@ -240,6 +240,7 @@ class Page:
     """A page being run: its folder, its Python namespace, its shell variables."""
 
     folder: Path
+    scope: contextlib.ExitStack = field(default_factory=contextlib.ExitStack)
     namespace: dict[str, Any] = field(default_factory=dict)
     variables: dict[str, str] = field(default_factory=dict)
     done: int = 0  # blocks of the page handled so far
@@ -281,15 +282,22 @@ def pages(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Page]]
     else:
         os.environ["PYAA_CACHE_DIR"] = saved
     for page in made.values():
+        page.scope.close()
         page.namespace.clear()
 
 
 def page_of(pages: dict[str, Page], name: str, tmp_path_factory: pytest.TempPathFactory) -> Page:
+    """The page ``name``, started if it was not: the pages run one after the other, each in
+    its own registrations (two pages may load the same mission file from their folders)."""
     if name not in pages:
+        for other in pages.values():
+            other.scope.close()
         folder = tmp_path_factory.mktemp(re.sub(r"\W", "_", name))
         for linked in ("examples", "scripts"):
             (folder / linked).symlink_to(ROOT / linked, target_is_directory=True)
         pages[name] = Page(folder)
+        pages[name].scope.enter_context(scoped_registrations())
+        pages[name].scope.enter_context(MEASURES.scoped())
     return pages[name]
 
 
@@ -354,4 +362,4 @@ def test_shorten() -> None:
         "bench", "patrol", "--agents", "1", "--iterations", "20",
     ]  # fmt: skip
     assert shorten(["run", "gathering", "--out", "runs/g3"])[-2:] == ["--iterations", "20"]
-    assert list(commands("a \\\n  b\n\nc  # note\n")) == ["a   b", "c  # note"]
+    assert list(commands("a \\\n  b\n\nc  # note\n")) == ["a    b", "c  # note"]
