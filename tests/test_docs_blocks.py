@@ -15,9 +15,11 @@ rules (also in docs/about-this-site.md, "How the pages are tested"):
   (a list keeps its values up to it; ``pyaa bench`` its first only: each case is a process),
   ``--record-every`` at most the iterations, ``--seeds`` at most :data:`SEEDS`, ``--repeat``
   1; a sweep without ``--workers`` or ``--dask`` runs ``--serial``, without ``--seeds``
-  gets ``--seeds 2``. A ``pyaa run`` without
-  ``--out`` gets ``--overwrite``: each line is an example on its own, and several write the
-  default folder.
+  gets ``--seeds 2``. A ``pyaa run`` without ``--out`` gets ``--overwrite``: each line is an
+  example on its own, and several write the default folder.
+- A line that needs an optional extra this installation lacks (``--video mp4``:
+  imageio-ffmpeg) is left out, and its block's test, once the other lines ran, is skipped
+  naming it; a block about the X8 is skipped without the ``[x8]`` extra.
 - A block after ``<!-- file: PATH -->`` is written to PATH in the page's folder, not run.
 - A block after ``<!-- files: PAGE -->`` (``docs/missions.md``) runs after the file blocks
   of that page are written to its page's folder: an example that builds on another page's.
@@ -29,6 +31,7 @@ rules (also in docs/about-this-site.md, "How the pages are tested"):
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import io
 import os
 import re
@@ -60,6 +63,9 @@ SHELL = {"sh", "bash", "shell", "console"}
 FENCE = re.compile(r"^(?P<indent>\s*)(?P<fence>`{3,}|~{3,})\s*(?P<info>.*)$")
 MARKER = re.compile(r"^\s*<!--\s*(?P<kind>skip|file|files):\s*(?P<value>.*?)\s*-->\s*$")
 COMMAND_START = re.compile(r"^\s*(\$ )?(pyaa|python3?|pip|make) ")
+#: Options whose line needs an optional extra: without it the line is left out and the
+#: block's test, once its other lines ran, is skipped naming it.
+EXTRAS = {"--video": ("imageio_ffmpeg", "the [video] extra")}
 
 
 @dataclass(frozen=True)
@@ -196,8 +202,17 @@ def shorten(argv: list[str]) -> list[str]:
     return out
 
 
-def run_command(line: str, variables: dict[str, str]) -> str:
-    """Run one shell line of a block; what it printed. AssertionError if it failed."""
+def missing_extra(argv: list[str]) -> str:
+    """The extra the command needs and this installation lacks, or ""."""
+    for option, (module, extra) in EXTRAS.items():
+        if option in argv and importlib.util.find_spec(module) is None:
+            return extra
+    return ""
+
+
+def run_command(line: str, variables: dict[str, str], left_out: list[str]) -> str:
+    """Run one shell line of a block; what it printed. AssertionError if it failed; a line
+    that needs a missing extra is added to ``left_out`` instead."""
     assignment = re.fullmatch(r"([A-Za-z_]\w*)=(\S*)", line)
     if assignment:
         variables[assignment[1]] = assignment[2]
@@ -205,6 +220,9 @@ def run_command(line: str, variables: dict[str, str]) -> str:
     expanded = re.sub(r"\$\{?([A-Za-z_]\w*)\}?", lambda m: variables.get(m[1], ""), line)
     argv = shlex.split(expanded, comments=True)
     if not argv:
+        return ""
+    if missing_extra(argv):
+        left_out.append(f"{line!r} (needs {missing_extra(argv)})")
         return ""
     out = io.StringIO()
     code: Any
@@ -263,8 +281,11 @@ class Page:
                 with contextlib.redirect_stdout(io.StringIO()):
                     exec(code, self.namespace)  # noqa: S102 - the page's own code
             elif block.lang in SHELL:
+                left_out: list[str] = []
                 for line in commands(block.text):
-                    run_command(line, self.variables)
+                    run_command(line, self.variables, left_out)
+                if left_out:
+                    pytest.skip(f"{block.id}: the other lines ran; left out: {left_out}")
         finally:
             os.chdir(cwd)
 
@@ -316,6 +337,8 @@ def test_block_runs(
         if earlier.file or (earlier.runs and not earlier.skip):
             try:
                 page.run(earlier)
+            except pytest.skip.Exception:
+                pass  # it ran but for a line that needs a missing extra
             except BaseException as error:
                 page.done = index + 1
                 failed = f"an earlier block of the page, {earlier.id}, failed"
