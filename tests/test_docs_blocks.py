@@ -23,6 +23,7 @@ rules (also in docs/about-this-site.md, "How the pages are tested"):
 - A block after ``<!-- file: PATH -->`` is written to PATH in the page's folder, not run.
 - A block after ``<!-- files: PAGE -->`` (``docs/missions.md``) runs after the file blocks
   of that page are written to its page's folder: an example that builds on another page's.
+- A block after ``<!-- output: COMMAND -->`` must be what the ``pyaa`` command prints.
 - A block after ``<!-- skip: REASON -->`` is not run: its test is skipped with that reason.
 - Blocks in other languages (``xml``, ``yaml``, ``text``, output listings) are not run; an
   unlabelled block that holds a command is an error (label it ``sh``).
@@ -61,7 +62,7 @@ SEEDS = 2
 PYTHON = {"python", "py", "python3"}
 SHELL = {"sh", "bash", "shell", "console"}
 FENCE = re.compile(r"^(?P<indent>\s*)(?P<fence>`{3,}|~{3,})\s*(?P<info>.*)$")
-MARKER = re.compile(r"^\s*<!--\s*(?P<kind>skip|file|files):\s*(?P<value>.*?)\s*-->\s*$")
+MARKER = re.compile(r"^\s*<!--\s*(?P<kind>skip|file|files|output):\s*(?P<value>.*?)\s*-->\s*$")
 COMMAND_START = re.compile(r"^\s*(\$ )?(pyaa|python3?|pip|make) ")
 #: Options whose line needs an optional extra: without it the line is left out and the
 #: block's test, once its other lines ran, is skipped naming it.
@@ -79,10 +80,11 @@ class Block:
     skip: str = ""  # the reason of a <!-- skip: ... --> marker
     file: str = ""  # the path of a <!-- file: ... --> marker
     files: str = ""  # the page of a <!-- files: ... --> marker
+    output: str = ""  # the command of a <!-- output: ... --> marker
 
     @property
     def runs(self) -> bool:
-        return not self.file and (self.lang in PYTHON or self.lang in SHELL)
+        return bool(self.output) or not self.file and (self.lang in PYTHON or self.lang in SHELL)
 
     @property
     def id(self) -> str:
@@ -124,6 +126,7 @@ def blocks(path: Path) -> list[Block]:
                     skip=marker["value"] if marker and marker["kind"] == "skip" else "",
                     file=marker["value"] if marker and marker["kind"] == "file" else "",
                     files=marker["value"] if marker and marker["kind"] == "files" else "",
+                    output=marker["value"] if marker and marker["kind"] == "output" else "",
                 )
             )
         i = end + 1
@@ -270,7 +273,12 @@ class Page:
             for other in (b for b in ALL_BLOCKS if block.files and b.page == block.files):
                 if other.file:
                     self.run(other)
-            if block.file:
+            if block.output:
+                printed = run_command(block.output, self.variables, [])
+                shown = [line.rstrip() for line in printed.strip().splitlines()]
+                wrong = f"{block.output} prints:\n{printed}"
+                assert shown == block.text.strip().splitlines(), wrong
+            elif block.file:
                 target = self.folder / block.file
                 target.parent.mkdir(parents=True, exist_ok=True)
                 target.write_text(block.text, encoding="utf-8")
