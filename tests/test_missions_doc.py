@@ -27,7 +27,7 @@ FILE_BLOCK = re.compile(r"<!-- file: (\S+) -->\n```\w*\n(.*?)```", re.DOTALL)
 def write_example(folder: Path) -> Path:
     """The files of docs/missions.md's example, written into ``folder``; the scenario path."""
     text = (ROOT / "docs" / "missions.md").read_text(encoding="utf-8")
-    files = dict(FILE_BLOCK.findall(text))
+    files = {Path(name).name: content for name, content in FILE_BLOCK.findall(text)}
     assert set(files) == {"mission.py", "courier.xml", "scenario.yaml"}
     for name, content in files.items():
         (folder / name).write_text(content, encoding="utf-8")

@@ -1,15 +1,14 @@
-"""The lesson notebooks run from start to end, their exercises check right and wrong answers,
-and the README's Python examples run."""
+"""The lesson notebooks run from start to end, and their exercises check right and wrong
+answers. (The README's Python examples run with every other block of the pages:
+``tests/test_docs_blocks.py``.)"""
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import nbformat
 import pytest
 
-from pyautonomousagent.testing import scoped_registrations
 from tests.lesson_runner import LESSONS, SOLUTIONS, errors, execute, lesson_paths, tagged
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -62,22 +61,6 @@ def test_an_unanswered_exercise_fails_with_a_friendly_message(tmp_path: Path) ->
     assert error.ename == "ExerciseError"
     assert error.traceback[0].startswith("\u2718 Not answered yet: set `root_statuses`")
     assert not any("Traceback" in line or "File " in line for line in error.traceback)
-
-
-def readme_python_blocks() -> list[str]:
-    text = (ROOT / "README.md").read_text()
-    return re.findall(r"```python\n(.*?)```", text, flags=re.S)
-
-
-def test_readme_examples_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    blocks = readme_python_blocks()
-    assert len(blocks) >= 2
-    monkeypatch.chdir(tmp_path)
-    namespace: dict[str, object] = {}
-    with scoped_registrations():  # the README registers a hand-written leaf
-        for block in blocks:
-            exec(compile(block, "README.md", "exec"), namespace)  # noqa: S102
-    assert namespace["table"].num_rows == 4 * 8001  # type: ignore[attr-defined]
 
 
 def test_the_pytrees_floor_script_ticks_its_tree() -> None:

@@ -274,6 +274,18 @@ def test_cli_run_with_a_tree_file(tmp_path, capsys):
     assert code == 2 and "a tree file must end in .xml, .yaml or .yml" in err
 
 
+def test_cli_run_with_a_built_in_tree_name(tmp_path, capsys):
+    """``--tree patrol`` names a built-in tree, as a scenario's ``tree: patrol`` does (the
+    README flies the X8 through it)."""
+    out = tmp_path / "run"
+    args = ["run", "patrol", "--tree", "patrol", "--iterations", "20", "--agents", "2"]
+    assert main([*args, "--no-gif", "--quiet", "--out", str(out)]) == 0
+    summary = json.loads((out / "run.json").read_text())
+    assert summary["scenario"]["tree"] == "patrol"
+    code, _, err = cli(["run", "patrol", "--tree", "patrl", "--quiet"], capsys)
+    assert code == 2 and "patrl" in err and "patrol" in err and ".xml" in err
+
+
 def test_a_copied_scenario_finds_the_packaged_tree_file(tmp_path):
     (tmp_path / "copy.yaml").write_text((packaged("gathering.yaml")).read_text())
     assert load(str(tmp_path / "copy.yaml")).tree == str(packaged("gathering.xml"))

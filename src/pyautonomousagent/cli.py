@@ -115,7 +115,10 @@ def _parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     run.add_argument(
-        "--tree", type=Path, metavar="FILE", help="run this tree file (.xml, .yaml) instead"
+        "--tree",
+        metavar="FILE|NAME",
+        help="run this tree instead: a tree file (.xml, .yaml) or a built-in tree "
+        "(gathering, patrol)",
     )
     _add_view_options(run)
     leaves = sub.add_parser(
@@ -520,6 +523,17 @@ def _check_run_options(args: argparse.Namespace) -> None:
         raise ScenarioError(f"--seed must be a whole number >= 0, got {args.seed}")
 
 
+def _tree_option(value: str) -> str:
+    """``--tree``: a built-in tree's name (``patrol``) as it is, as a scenario's ``tree:``
+    takes it, or a tree file's absolute path; refused before anything runs: a name that is
+    no built-in tree (naming the closest) and a file of another ending."""
+    if not Path(value).suffix:
+        tree_by_name(value)
+        return value
+    file_format(value)
+    return str(Path(value).resolve())
+
+
 def run(args: argparse.Namespace) -> int:
     """``pyaa run``: simulate, then save the data, animation and ``run.json`` as one run
     folder (see :mod:`pyautonomousagent.runs`); the folder is claimed once the simulation is
@@ -529,8 +543,7 @@ def run(args: argparse.Namespace) -> int:
     scenario = _scenario(args)
     _check_agent_options(args, scenario)
     if args.tree is not None:
-        file_format(args.tree)  # refuse other endings before anything runs
-        scenario = scenario.with_overrides(tree=str(args.tree.resolve()))
+        scenario = scenario.with_overrides(tree=_tree_option(args.tree))
     sim = Simulation.create(
         scenario,
         seed=args.seed,

@@ -8,7 +8,7 @@ from pyautonomousagent.bt import (
     scripted,  # noqa: F401  (registers the Scripted test leaf)
 )
 from pyautonomousagent.bt.files import load_tree, save_tree
-from pyautonomousagent.bt.leaf import Leaf, LeafError, Port, register_leaf
+from pyautonomousagent.bt.leaf import Leaf, LeafError, Port, leaf_type, register_leaf
 from pyautonomousagent.bt.spec import (
     Node,
     fallback,
@@ -39,6 +39,7 @@ __all__ = [
     "fallback",
     "inverter",
     "leaf",
+    "leaf_type",
     "load_tree",
     "reactive_fallback",
     "reactive_sequence",
