@@ -84,7 +84,7 @@ def theirs(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-def _wait_until_written(path: Path, seconds: float = 20.0) -> None:
+def _wait_until_written(path: Path, seconds: float = 60.0) -> None:
     """Wait until FileLogger2's writer thread has written transitions and the file has
     stopped growing (the thread may still run after ``flush``, on a loaded machine)."""
     size, steady, deadline = -1, 0, time.monotonic() + seconds
