@@ -143,7 +143,7 @@ class Loader(yaml.SafeLoader):
             self._sizes[id(node)] = self._size(node)
         return node
 
-    def _check_alias(self, event: yaml.AliasEvent) -> None:
+    def _check_alias(self, event: Any) -> None:
         """Refuse an alias to a node still being composed: one that holds the alias itself
         (``a: &x [*x]``), which would make a value that contains itself."""
         node = self.anchors.get(event.anchor)
