@@ -893,19 +893,18 @@ def _add_experiments(sub: Any) -> None:
 
 
 def _experiment(args: argparse.Namespace) -> Any:
-    import yaml
-
+    """The experiment of ``pyaa sweep``: an experiment file (a .yaml with ``scenario``) or
+    a scenario to sweep, with the options added (see docs/experiments.md)."""
     from pyautonomousagent.experiments import Experiment
-    from pyautonomousagent.experiments.spec import parse_vary
+    from pyautonomousagent.experiments.spec import read_file, with_options
 
     source = args.experiment
     data: dict[str, Any] = {"scenario": source, "name": Path(source).stem + "-sweep"}
     if source.endswith((".yaml", ".yml")) and Path(source).is_file():
-        loaded = yaml.safe_load(Path(source).read_text())
+        loaded = read_file(source)
         if isinstance(loaded, dict) and "scenario" in loaded:
             data = {"name": Path(source).stem, **loaded}
-    data["vary"] = {**(data.get("vary") or {}), **parse_vary(args.vary)}
-    data["set"] = {**(data.get("set") or {}), **_parse_overrides(args.set)}
+    data = with_options(data, source, args.vary, _parse_overrides(args.set))
     if args.agents is not None:
         data["set"]["agents"] = args.agents
     measures: list[Any] = []

@@ -287,6 +287,12 @@ def load_yaml(text: str, file: str) -> Any:
     except YamlLimitError as error:
         line, problem = yaml_error_line(error)
         raise InputError(f"{file}:{line}: {problem}; {error.fix}") from None
+    except yaml.constructor.ConstructorError as error:  # a tag: !!python/..., !!int x
+        line, problem = yaml_error_line(error)
+        raise InputError(
+            f"{file}:{line}: not valid YAML ({problem}); write plain values (numbers, text, "
+            "true/false, lists, mappings): tags such as !!python are not read"
+        ) from None
     except yaml.YAMLError as error:
         line, problem = yaml_error_line(error)
         raise InputError(
@@ -352,3 +358,21 @@ def _unreadable(path: Path, what: str, error: Exception) -> InputError:
     return InputError(
         f"{path}: the {what} cannot be read ({reason}); it is damaged or not a Parquet file"
     )
+
+
+def plain_value(text: str) -> Any:
+    """``text`` typed as a plain YAML 1.2 scalar, by the same rules as :class:`Loader`:
+    true/false, a whole number, a number, null (None), else the text itself (a command-line
+    value: ``30`` is a number, ``1:30`` and ``yes`` are text).
+
+    Raises:
+        InputError: the text looks like a value that cannot be built (an impossible date).
+    """
+    loader = Loader("")
+    try:
+        tag = loader.resolve(yaml.ScalarNode, text, (True, False))
+        return loader.construct_object(yaml.ScalarNode(tag, text))
+    except (yaml.YAMLError, ValueError, OverflowError) as error:
+        raise InputError(f"{shown(text)} cannot be read ({clip(str(error), 120)})") from None
+    finally:
+        loader.dispose()
