@@ -19,12 +19,7 @@ from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.bt.text import to_text
 from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.inputs import InputError, clip, finite, shown
-from pyautonomousagent.recording import (
-    DEFAULT_TRACED,
-    Recorder,
-    read_table,
-    recorder_from_tables,
-)
+from pyautonomousagent.recording import DEFAULT_TRACED, Recorder
 from pyautonomousagent.runs import (
     SaveError,
     add_files,
@@ -600,15 +595,14 @@ def _write_views(
 
 
 def replay_command(args: argparse.Namespace) -> int:
-    """``pyaa replay``: replay.html (and Groot2 logs) of a run folder that pyaa run wrote."""
+    """``pyaa replay``: replay.html (and Groot2 logs) of a run folder that pyaa run wrote
+    (every file of it checked first, see :mod:`pyautonomousagent.run_inputs`)."""
+    from pyautonomousagent.run_inputs import read_recorder, read_summary
+
     folder: Path = args.run_dir
-    summary_path = folder / "run.json"
-    if not summary_path.is_file():
-        raise ScenarioError(f"{folder}: no run.json here; give a folder that pyaa run wrote")
-    summary = json.loads(summary_path.read_text())
-    scenario = Scenario.from_mapping(summary["scenario"], source=str(summary_path))
-    states, traces = _read_run_tables(folder)
-    recorder = recorder_from_tables(states, traces, summary.get("trace", {}).get("nodes", ()))
+    summary = read_summary(folder)
+    scenario = Scenario.from_mapping(summary["scenario"], source=str(folder / "run.json"))
+    recorder = read_recorder(folder, summary.get("trace", {}).get("nodes", []))
     out = args.out.parent if args.out else folder
     views = _write_views(
         recorder,
@@ -624,16 +618,6 @@ def replay_command(args: argparse.Namespace) -> int:
     for path in views.written:
         print(f"wrote {path}")
     return 0
-
-
-def _read_run_tables(folder: Path) -> tuple[Any, Any]:
-    """The states and traces tables of a run folder (Parquet or CSV); traces may be None."""
-    for fmt in ("parquet", "csv"):
-        states = folder / f"states.{fmt}"
-        if states.is_file():
-            traces = folder / f"traces.{fmt}"
-            return read_table(states), read_table(traces) if traces.is_file() else None
-    raise ScenarioError(f"{folder}: no states.parquet or states.csv; give a folder pyaa run wrote")
 
 
 def _print_summary(sim: Simulation, written: list[Path]) -> None:
