@@ -975,7 +975,7 @@ def experiments_command(args: argparse.Namespace) -> int:
             print(f"{name:22s} {measure.unit:12s} {measure.doc}")
         return 0
     except (ExperimentError, ExpressionError, BackendError) as error:
-        print(f"pyaa: error: {error}", file=sys.stderr)
+        print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
         return 2
 
 

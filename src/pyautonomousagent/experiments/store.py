@@ -26,6 +26,7 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
+from pyautonomousagent.inputs import InputError, load_json, read_text
 from pyautonomousagent.recording import parquet_options
 
 MANIFEST = "experiment.json"
@@ -155,12 +156,22 @@ def write_results(journal: Journal, out: Path) -> pa.Table:
     return table
 
 
+#: Largest manifest read, bytes (it names the experiment, not each run).
+MAX_MANIFEST_BYTES = 50_000_000
+
+
 def read_manifest(out: Path) -> dict[str, Any] | None:
-    """The folder's manifest, or None if there is none."""
+    """The folder's manifest, or None if there is none.
+
+    Raises:
+        InputError: the manifest is unreadable, too large, not JSON or not a JSON object.
+    """
     path = out / MANIFEST
     if not path.exists():
         return None
-    data: dict[str, Any] = json.loads(path.read_text())
+    data = load_json(read_text(path, "sweep manifest", MAX_MANIFEST_BYTES), str(path))
+    if not isinstance(data, dict):
+        raise InputError(f"{path}: the sweep manifest must be a JSON object; run the sweep again")
     return data
 
 
