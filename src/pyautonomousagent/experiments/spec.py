@@ -406,6 +406,8 @@ class _Reader:
                 lo, hi = (self.whole(a, f"{path}.{kind}", -(2**62)) for a in args)
             if hi < lo:
                 raise self.fail(f"{path}.{kind}", "a pair [lo, hi] with lo <= hi", args)
+            if not math.isfinite(hi - lo) or max(abs(lo), abs(hi)) > 2**62:
+                raise self.fail(f"{path}.{kind}", "a pair [lo, hi] within +-2**62", args)
             out[name] = (kind, [lo, hi])
         return {
             "count": self.count(data["count"], "sample.count"),
