@@ -487,3 +487,61 @@ def test_replay_of_a_damaged_run_is_one_line(file, damage, named, run_folder, tm
 def test_replay_of_a_good_run_works(run_folder, tmp_path, capsys):
     assert main(["replay", str(run_folder), "--out", str(tmp_path / "r.html")]) == 0
     assert (tmp_path / "r.html").stat().st_size > 1000
+
+
+# ------------------------------------------------------- tree files and scenarios, fuzzed
+
+TREE_YAML_WORDS = [
+    "tree:", "trees:", "main_tree_to_execute:", "subtree_ports:", "type:", "children:",
+    "name:", "ID:", "Sequence", "Fallback", "Inverter", "Repeat", "num_cycles:", "SubTree",
+    "Script", "code:", "SetBlackboard", "output_key:", "value:", "Scripted", "statuses:",
+    "[[1]]", "[[300]]", "Condition_Low_Energy_Level", "threshold:", "Parallel",
+    "success_count:", "-1", "3", "x", "{", "}", "[", "]", ",", "\n", "  ", "- ", "&a", "*a",
+    "'{t}'", "_autoremap:", "true", "1:30", "Switch2", "variable:", "case_1:", "'a < 1'", "T",
+]  # fmt: skip
+TREE_XML_WORDS = [
+    '<root BTCPP_format="4">', "</root>", '<BehaviorTree ID="T">', "</BehaviorTree>",
+    "<Sequence>", "</Sequence>", '<SubTree ID="T"/>', '<SubTree ID="U" x="{y}"/>',
+    '<BehaviorTree ID="U">', '<Script code="x := 1"/>', "<Script/>", "<AlwaysSuccess/>",
+    '<SetBlackboard output_key="k" value="{k}"/>', '<Repeat num_cycles="-1">', "</Repeat>",
+    '<Parallel success_count="-3">', "</Parallel>", '<Scripted statuses="[[1]]"/>',
+    '<Scripted statuses="[[1],[1,2]]"/>', '<Condition_Low_Energy_Level threshold="{t}"/>',
+    '<Switch2 variable="{m}" case_1="a" case_2="1">', "</Switch2>",
+    "<Precondition if=\"a &lt; 'b'\" else=\"FAILURE\">", "</Precondition>", "<!-- c -->",
+]  # fmt: skip
+
+
+@FUZZ
+@given(
+    st.lists(st.sampled_from(TREE_YAML_WORDS), max_size=40).map(" ".join),
+    st.lists(st.sampled_from(TREE_XML_WORDS), max_size=30).map("".join),
+)
+def test_fuzz_tree_files(yaml_text, xml_text):
+    from pyautonomousagent.bt.files import from_text_format
+    from pyautonomousagent.bt.leaf import LeafError
+    from pyautonomousagent.bt.spec import TreeError
+
+    for text, fmt in ((yaml_text, "yaml"), (xml_text, "xml")):
+        try:
+            from_text_format(text, fmt)
+        except (TreeError, LeafError) as error:
+            assert "\n" not in str(error)
+
+
+SCENARIO_KEYS = ["agents", "iterations", "world", "parameters", "model", "mission", "tree", "x8",
+                 "initial_heading", "frame_every", "name"]  # fmt: skip
+
+
+@FUZZ
+@given(st.dictionaries(st.sampled_from(SCENARIO_KEYS), JSONISH, max_size=3))
+def test_fuzz_scenario_mappings(change):
+    import yaml
+
+    from pyautonomousagent.scenarios import SCENARIOS
+    from pyautonomousagent.simulation import Scenario, ScenarioError
+
+    base = yaml.safe_load(SCENARIOS.get("patrol").read_text())
+    try:
+        Scenario.from_mapping({**base, **change}, source="f.yaml")
+    except ScenarioError as error:
+        assert "\n" not in str(error)
