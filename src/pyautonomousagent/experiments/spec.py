@@ -49,6 +49,8 @@ from pyautonomousagent.registry import UnknownNameError
 
 #: The most runs one experiment may hold.
 MAX_RUNS = 1_000_000
+#: Largest whole number a sweep takes (seeds and counts are int64 columns of the results).
+INT64_MAX = 2**63 - 1
 #: Columns of the results that parameters and measures may not be called.
 RESERVED = ("run", "run_id", "seed", "status", "error", "seconds", "worker")
 _KEYS = (
@@ -321,8 +323,11 @@ class _Reader:
         return value
 
     def whole(self, value: Any, path: str, minimum: int) -> int:
+        """A whole number from ``minimum`` to int64's largest (results are int64 columns)."""
         if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
             raise self.fail(path, f"a whole number >= {minimum}", value)
+        if value > INT64_MAX:
+            raise self.fail(path, f"a whole number <= {INT64_MAX} (int64)", value)
         return value
 
     def count(self, value: Any, path: str) -> int:
