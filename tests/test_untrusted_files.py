@@ -252,6 +252,8 @@ SPECS = [
     ("base_60", "scenario: patrol\nvary: {low_energy_threshold: [1:30]}\n", "'1:30'"),
     ("date", "scenario: patrol\nvary: {refuel_rate: [2024-01-01]}\n", "number, a string"),
     ("nan", "scenario: patrol\nvary: {refuel_rate: [.nan, 1]}\n", "a finite number"),
+    ("seed", SPEC + "seeds: [100000000000000000000]\n", "seeds[0] must be a whole number <="),
+    ("record_every", SPEC + "record_every: 100000000000000000000\n", "(int64)"),
     (
         "uniform",
         "scenario: patrol\nsample: {count: 2, seed: 1, parameters: "
