@@ -392,6 +392,13 @@ def test_plot_of_a_good_sweep_works(sweep_folder, capsys):
     assert main(["plot", str(sweep_folder), "--measure", "refuels", "--x", "refuel_rate"]) == 0
 
 
+def test_plot_against_a_column_of_lists_is_one_line(tmp_path, capsys):
+    table = pa.table({"status": ["ok"], "refuels": [1.0], "rate": [[1, 2]]})
+    pq.write_table(table, tmp_path / "results.parquet")
+    line = refused(["plot", str(tmp_path), "--measure", "refuels", "--x", "rate"], capsys)
+    assert "parameter 'rate' is a column of lists" in line
+
+
 PLOT_DAMAGE: list[tuple[str, str, Any, str]] = [
     ("text_column", "", None, "measure 'label' is a column of string, not numbers"),
     ("truncated", "results.parquet", lambda b: b[: len(b) // 2], "cannot be read"),

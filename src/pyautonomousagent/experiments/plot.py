@@ -89,6 +89,8 @@ def _column(table: pa.Table, name: str, what: str) -> list[Any]:
         raise ExperimentError(
             f"unknown {what} {name!r}{hint}; the results have {', '.join(table.column_names)}"
         )
+    if pa.types.is_nested(table.schema.field(name).type):
+        raise ExperimentError(f"{what} {name!r} is a column of lists or records, not values")
     return table[name].to_pylist()
 
 
