@@ -464,11 +464,20 @@ REPLAY_DAMAGE: list[tuple[str, str, Any, str]] = [
     ("traces", "traces.parquet", lambda f: b"PAR1", "traces table cannot be read"),
     ("columns", "states.parquet",
      lambda f: _parquet(pa.table({"iteration": [0], "agent": ["a"]})), "no column 'x'"),
-    ("rows", "states.parquet",
-     lambda f: _parquet(pa.table({k: [0.0, 1.0, 2.0] for k in ("iteration", "x", "y",
-                                                                 "heading")} | {"agent": ["a", "b", "a"]})),  # noqa: E501
+    ("rows", "states.parquet", lambda f: _parquet(_states(iteration=[0, 1, 2])),
      "tables do not fit together"),
+    ("float_iterations", "states.parquet", lambda f: _parquet(_states()),
+     "column 'iteration' must hold whole numbers"),
+    ("text_positions", "states.parquet",
+     lambda f: _parquet(_states(iteration=[0, 1, 2], x=list("123"))),
+     "column 'x' must hold numbers"),
 ]  # fmt: skip
+
+
+def _states(**columns: list[Any]) -> pa.Table:
+    """A states table of three rows (floats), with ``columns`` replaced."""
+    data: dict[str, list[Any]] = {k: [0.0, 1.0, 2.0] for k in ("iteration", "x", "y", "heading")}
+    return pa.table({**data, "agent": ["a", "b", "a"], **columns})
 
 
 def _parquet(table: pa.Table) -> bytes:

@@ -130,6 +130,7 @@ def read_recorder(folder: Path, nodes: list[Mapping[str, Any]]) -> Recorder:
             break
     else:
         raise InputError(f"{folder}: no states.parquet or states.csv; {FIX}")
+    _check_numbers(states, path)
     if not nodes and traces is not None and traces.schema.metadata:
         text = traces.schema.metadata.get(b"pyautonomousagent.nodes", b"[]")
         nodes = load_json(text.decode("utf-8", "replace"), f"{traces_path} (metadata)")
@@ -140,6 +141,16 @@ def read_recorder(folder: Path, nodes: list[Mapping[str, Any]]) -> Recorder:
         raise InputError(
             f"{path}: the tables do not fit together ({clip(str(error), 160)}); {FIX}"
         ) from None
+
+
+def _check_numbers(states: pa.Table, path: Path) -> None:
+    """The iteration must be whole numbers, the positions and headings numbers."""
+    for name in STATES_COLUMNS:
+        kind = states.schema.field(name).type
+        whole = pa.types.is_integer(kind)
+        if name != "agent" and not (whole or (name != "iteration" and pa.types.is_floating(kind))):
+            must = "whole numbers" if name == "iteration" else "numbers"
+            raise InputError(f"{path}: column {name!r} must hold {must}, not {kind}; {FIX}")
 
 
 def _table(path: Path, what: str, columns: tuple[str, ...] = ()) -> pa.Table:
