@@ -317,7 +317,7 @@ def test_many_unnamed_leaves_are_named_in_linear_time():
 
 
 def test_the_largest_tree_allowed_is_built():
-    text = subtree_bomb(14)  # 2**14 - 1 nodes once inlined: within the limit of 100,000
+    text = subtree_bomb(14)  # 2**14 - 1 nodes once inlined: within the limit of 32,767
     with deadline():
         tree = from_text_format(text, "xml")
     assert len(tree.leaves()) == 2**13

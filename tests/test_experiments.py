@@ -251,7 +251,10 @@ def test_grid_ranges_samples_and_run_keys() -> None:
         ({"record_every": 0}, "record_every must be a whole number >= 1"),
         ({"set": {"iterations": 9}}, "iterations given twice, as 'iterations' and in 'set'"),
         (
-            {"vary": {"agents": list(range(1, 1001)), "refuel_rate": list(range(1001))}},
+            {
+                "set": {},
+                "vary": {"agents": list(range(1, 1001)), "refuel_rate": list(range(1001))},
+            },
             "at most 1000000 runs",
         ),
         (
@@ -272,7 +275,7 @@ def test_bad_experiments_are_refused_in_one_line(change: dict, message: str) -> 
     ("change", "message"),
     [
         ({"vary": {"low_energy_thresold": [1, 2]}}, "did you mean 'low_energy_threshold'"),
-        ({"vary": {"agents": [2, -1]}}, "agents must be a whole number >= 1, got -1"),
+        ({"set": {}, "vary": {"agents": [2, -1]}}, "agents must be a whole number >= 1, got -1"),
         ({"measures": [{"low": "mean(enrgy)"}]}, "unknown column 'enrgy' (did you mean"),
         ({"scenario": "patrl"}, "did you mean 'patrol'"),
         ({"vary": {"tree": ["nothere.xml"]}}, "tree: no file 'nothere.xml'"),
@@ -333,8 +336,9 @@ def test_experiment_files_are_read_with_the_input_limits(tmp_path, text, message
 
 def test_vary_values_are_read_with_the_input_limits() -> None:
     assert parse_vary(["x=1,2.5,a"]) == {"x": [1, 2.5, "a"]}
-    with pytest.raises(ExperimentError, match="--vary"):
-        parse_vary(["x=[1,"])
+    assert parse_vary(["x=[1,"]) == {"x": ["[1"]}  # text, for the parameter's schema to refuse
+    with pytest.raises(ExperimentError, match="--vary x"):
+        parse_vary(["x=2024-02-30"])
 
 
 # --- sweeps in this process --------------------------------------------------------------

@@ -26,8 +26,6 @@ from pyautonomousagent.names import AgentNames
 from pyautonomousagent.recording import (
     DEFAULT_TRACED,
     Recorder,
-    read_table,
-    recorder_from_tables,
     traced_agents,
 )
 from pyautonomousagent.runs import (
@@ -702,11 +700,11 @@ def replay_command(args: argparse.Namespace) -> int:
 def _replay_into(folder: Path, out: Path, args: argparse.Namespace) -> list[Path]:
     """Write the replay page of ``folder`` as ``out`` and its logs beside it: drawn in a
     temporary folder there, then each renamed into place (no other file is touched)."""
-    summary_path = folder / "run.json"
-    summary = json.loads(summary_path.read_text())
-    scenario = Scenario.from_mapping(summary["scenario"], source=str(summary_path))
-    states, traces = _read_run_tables(folder)
-    recorder = recorder_from_tables(states, traces, summary.get("trace", {}).get("nodes", ()))
+    from pyautonomousagent.run_inputs import read_recorder, read_summary
+
+    summary = read_summary(folder)  # every file of the run checked first (run_inputs)
+    scenario = Scenario.from_mapping(summary["scenario"], source=str(folder / "run.json"))
+    recorder = read_recorder(folder, summary.get("trace", {}).get("nodes", []))
     _check_btlog(recorder, args.btlog)
     temp = hidden_folder(out, "tmp")
     try:
@@ -742,16 +740,6 @@ def _check_btlog(recorder: Recorder, agents: Sequence[str]) -> None:
                 f"--btlog: agent {agent!r} was not traced in this run (traced: "
                 f"{', '.join(traced) or 'none'}); run it again with --btlog {agent}"
             )
-
-
-def _read_run_tables(folder: Path) -> tuple[Any, Any]:
-    """The states and traces tables of a run folder (Parquet or CSV); traces may be None."""
-    for fmt in ("parquet", "csv"):
-        states = folder / f"states.{fmt}"
-        if states.is_file():
-            traces = folder / f"traces.{fmt}"
-            return read_table(states), read_table(traces) if traces.is_file() else None
-    raise ScenarioError(f"{folder}: no states.parquet or states.csv; give a folder pyaa run wrote")
 
 
 def _print_summary(sim: Simulation, written: list[Path]) -> None:
@@ -1048,19 +1036,18 @@ def _add_experiments(sub: Any) -> None:
 
 
 def _experiment(args: argparse.Namespace) -> Any:
-    import yaml
-
+    """The experiment of ``pyaa sweep``: an experiment file (a .yaml with ``scenario``) or
+    a scenario to sweep, with the options added (see docs/experiments.md)."""
     from pyautonomousagent.experiments import Experiment
-    from pyautonomousagent.experiments.spec import parse_vary
+    from pyautonomousagent.experiments.spec import read_file, with_options
 
     source = args.experiment
     data: dict[str, Any] = {"scenario": source, "name": Path(source).stem + "-sweep"}
     if source.endswith((".yaml", ".yml")) and Path(source).is_file():
-        loaded = yaml.safe_load(Path(source).read_text())
+        loaded = read_file(source)
         if isinstance(loaded, dict) and "scenario" in loaded:
             data = {"name": Path(source).stem, **loaded}
-    data["vary"] = {**(data.get("vary") or {}), **parse_vary(args.vary)}
-    data["set"] = {**(data.get("set") or {}), **_parse_overrides(args.set)}
+    data = with_options(data, source, args.vary, _parse_overrides(args.set))
     if args.agents is not None:
         data["set"]["agents"] = args.agents
     measures: list[Any] = []
@@ -1158,7 +1145,7 @@ def experiments_command(args: argparse.Namespace) -> int:
             print(f"{name:22s} {measure.unit:12s} {measure.doc}")
         return 0
     except (ExperimentError, ExpressionError, BackendError) as error:
-        print(f"pyaa: error: {error}", file=sys.stderr)
+        print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
         return 2
 
 

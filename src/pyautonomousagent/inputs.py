@@ -7,20 +7,31 @@ line naming the file, line or field and the fix:
 
 - :func:`read_text`: at most :data:`MAX_FILE_BYTES`, UTF-8 only;
 - :class:`Loader`: PyYAML's safe loader, plus: a key given twice is an error, nesting is at
-  most :data:`MAX_YAML_DEPTH` levels, and aliases may not expand the document beyond
-  :data:`MAX_YAML_NODES` nodes ("billion laughs");
+  most :data:`MAX_YAML_DEPTH` levels, aliases may not expand the document beyond
+  :data:`MAX_YAML_NODES` nodes ("billion laughs") nor refer to the node that holds them,
+  and plain scalars are typed by YAML 1.2's core schema, never YAML 1.1's rules (``1:30``
+  is text, not the base-60 number 90; ``yes`` is text; ``010`` is ten);
 - :func:`load_yaml`: the whole document with those limits, errors as :class:`InputError`;
+- :func:`load_json`: a JSON document, errors as :class:`InputError` with the line;
+- :func:`read_parquet`: a Parquet table with the columns a reader needs, errors as
+  :class:`InputError`;
 - :func:`shown`: a value for a message, cut to :data:`MAX_SHOWN` characters;
 - :func:`finite`: a number that is neither NaN nor infinite.
 """
 
 from __future__ import annotations
 
+import json
 import math
+import re
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
+
+if TYPE_CHECKING:
+    import pyarrow as pa
 
 #: Largest scenario or tree file read, bytes (the packaged ones are about 3 KB).
 MAX_FILE_BYTES = 2_000_000
@@ -117,6 +128,8 @@ class Loader(yaml.SafeLoader):
         self._sizes: dict[int, int] = {}
 
     def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node | None:
+        if self.check_event(yaml.AliasEvent):
+            self._check_alias(self.peek_event())
         self._depth += 1
         if self._depth > MAX_YAML_DEPTH:
             raise YamlLimitError(
@@ -129,6 +142,17 @@ class Loader(yaml.SafeLoader):
         if node is not None and id(node) not in self._sizes:
             self._sizes[id(node)] = self._size(node)
         return node
+
+    def _check_alias(self, event: Any) -> None:
+        """Refuse an alias to a node still being composed: one that holds the alias itself
+        (``a: &x [*x]``), which would make a value that contains itself."""
+        node = self.anchors.get(event.anchor)
+        if node is not None and id(node) not in self._sizes:  # sized once composed
+            raise YamlLimitError(
+                event.start_mark,
+                f"alias *{event.anchor} refers to the value that contains it",
+                "a value cannot include itself; write the inner value out",
+            )
 
     def _size(self, node: yaml.Node) -> int:
         """Nodes in ``node`` with every alias expanded; refuses a key given twice."""
@@ -156,6 +180,80 @@ class Loader(yaml.SafeLoader):
                 "write the values out instead of nesting aliases",
             )
         return size
+
+
+#: YAML 1.2 core schema's numbers (YAML 1.1's base-60 ``1:30``, octal ``010`` and ``1_000``
+#: are not numbers: they stay text, for the schema of the field to judge).
+_INT = r"[-+]?[0-9]+"
+_INT_BASED = r"0o[0-7]+|0x[0-9a-fA-F]+"
+_FLOAT = r"[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?"
+_SPECIAL = {".inf": math.inf, "+.inf": math.inf, "-.inf": -math.inf, ".nan": math.nan}
+#: Plain scalars typed by the core schema: tag, pattern, first characters. Dates keep
+#: YAML 1.1's timestamp rule, so that an impossible date is refused, not read as text.
+_CORE_SCHEMA = (
+    ("tag:yaml.org,2002:bool", r"true|True|TRUE|false|False|FALSE", "tTfF"),
+    ("tag:yaml.org,2002:int", f"{_INT}|{_INT_BASED}", "-+0123456789"),
+    (
+        "tag:yaml.org,2002:float",
+        rf"{_FLOAT}|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN)",
+        "-+.0123456789",
+    ),
+    ("tag:yaml.org,2002:null", r"~|null|Null|NULL|", ["~", "n", "N", ""]),
+    ("tag:yaml.org,2002:merge", r"<<", "<"),
+)
+
+
+def _scalar(loader: yaml.SafeLoader, node: yaml.Node, pattern: str, what: str) -> str:
+    """The text of a scalar node; ConstructorError unless it matches ``pattern``."""
+    text = str(loader.construct_scalar(node))  # type: ignore[arg-type]
+    if not re.fullmatch(pattern, text):
+        raise yaml.constructor.ConstructorError(
+            None, None, f"{shown(text)} is not {what}", node.start_mark
+        )
+    return text
+
+
+def _core_int(loader: yaml.SafeLoader, node: yaml.Node) -> int:
+    """An int as YAML 1.2 writes it (``10``, ``0o17``, ``0x1F``), even tagged ``!!int``."""
+    text = _scalar(loader, node, f"{_INT}|{_INT_BASED}", "a YAML 1.2 whole number")
+    if text[:2] in ("0o", "0x"):
+        return int(text[2:], 8 if text[1] == "o" else 16)
+    return int(text, 10)
+
+
+def _core_float(loader: yaml.SafeLoader, node: yaml.Node) -> float:
+    """A float as YAML 1.2 writes it (``2.5``, ``1e3``, ``.inf``, ``.nan``)."""
+    text = str(loader.construct_scalar(node))  # type: ignore[arg-type]
+    if text.lower() in _SPECIAL:
+        return _SPECIAL[text.lower()]
+    return float(_scalar(loader, node, _FLOAT, "a YAML 1.2 number"))
+
+
+def _core_bool(loader: yaml.SafeLoader, node: yaml.Node) -> bool:
+    """true or false, even tagged ``!!bool``; never YAML 1.1's yes/no/on/off."""
+    text = _scalar(loader, node, "(?i:true|false)", "true or false")
+    return text.lower() == "true"
+
+
+def _core_schema(loader: type[yaml.SafeLoader]) -> None:
+    """Type ``loader``'s plain scalars by YAML 1.2's core schema (dates as YAML 1.1)."""
+    timestamps = [
+        (first, resolver)
+        for first, found in yaml.SafeLoader.yaml_implicit_resolvers.items()
+        for resolver in found
+        if resolver[0] == "tag:yaml.org,2002:timestamp"
+    ]
+    loader.yaml_implicit_resolvers = {}
+    for tag, pattern, first in _CORE_SCHEMA:
+        loader.add_implicit_resolver(tag, re.compile(f"^(?:{pattern})$"), list(first))
+    for first, (tag, regexp) in timestamps:
+        loader.add_implicit_resolver(tag, regexp, [first])
+    loader.add_constructor("tag:yaml.org,2002:int", _core_int)
+    loader.add_constructor("tag:yaml.org,2002:float", _core_float)
+    loader.add_constructor("tag:yaml.org,2002:bool", _core_bool)
+
+
+_core_schema(Loader)
 
 
 class YamlLimitError(yaml.MarkedYAMLError):
@@ -189,6 +287,12 @@ def load_yaml(text: str, file: str) -> Any:
     except YamlLimitError as error:
         line, problem = yaml_error_line(error)
         raise InputError(f"{file}:{line}: {problem}; {error.fix}") from None
+    except yaml.constructor.ConstructorError as error:  # a tag: !!python/..., !!int x
+        line, problem = yaml_error_line(error)
+        raise InputError(
+            f"{file}:{line}: not valid YAML ({problem}); write plain values (numbers, text, "
+            "true/false, lists, mappings): tags such as !!python are not read"
+        ) from None
     except yaml.YAMLError as error:
         line, problem = yaml_error_line(error)
         raise InputError(
@@ -200,3 +304,75 @@ def load_yaml(text: str, file: str) -> Any:
     finally:
         if loader is not None:
             loader.dispose()
+
+
+def load_json(text: str, file: str) -> Any:
+    """The JSON document in ``text`` (from ``file``).
+
+    Raises:
+        InputError: ``file:line: not valid JSON (problem)``, one line.
+    """
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as error:
+        raise InputError(
+            f"{file}:{error.lineno}: not valid JSON ({error.msg} at column {error.colno}); "
+            "the file is damaged or not the one pyaa wrote"
+        ) from None
+    except RecursionError:
+        raise InputError(f"{file}: not valid JSON (nested too deeply)") from None
+
+
+def read_parquet(path: str | Path, what: str, columns: Iterable[str] = ()) -> pa.Table:
+    """The table in the Parquet file at ``path`` (a ``what``), which must have ``columns``.
+
+    Only the file's footer is read to check the columns, before any data.
+
+    Raises:
+        InputError: the file cannot be read, is not Parquet (truncated, damaged) or lacks
+            one of ``columns``.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    path = Path(path)
+    errors = (OSError, pa.ArrowException, ValueError)
+    try:
+        names = pq.read_schema(path).names
+    except errors as error:
+        raise _unreadable(path, what, error) from None
+    missing = [name for name in columns if name not in names]
+    if missing:
+        raise InputError(
+            f"{path}: the {what} has no column {shown(missing[0])}; give a {what} that pyaa wrote"
+        )
+    try:
+        return pq.read_table(path)
+    except errors as error:
+        raise _unreadable(path, what, error) from None
+
+
+def _unreadable(path: Path, what: str, error: Exception) -> InputError:
+    """One line: the file at ``path`` (a ``what``) cannot be read, and why."""
+    reason = clip(str(error) or type(error).__name__, 160)
+    return InputError(
+        f"{path}: the {what} cannot be read ({reason}); it is damaged or not a Parquet file"
+    )
+
+
+def plain_value(text: str) -> Any:
+    """``text`` typed as a plain YAML 1.2 scalar, by the same rules as :class:`Loader`:
+    true/false, a whole number, a number, null (None), else the text itself (a command-line
+    value: ``30`` is a number, ``1:30`` and ``yes`` are text).
+
+    Raises:
+        InputError: the text looks like a value that cannot be built (an impossible date).
+    """
+    loader = Loader("")
+    try:
+        tag = loader.resolve(yaml.ScalarNode, text, (True, False))
+        return loader.construct_object(yaml.ScalarNode(tag, text))
+    except (yaml.YAMLError, ValueError, OverflowError) as error:
+        raise InputError(f"{shown(text)} cannot be read ({clip(str(error), 120)})") from None
+    finally:
+        loader.dispose()

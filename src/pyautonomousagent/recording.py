@@ -27,7 +27,8 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
-from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.bt.limits import check_size
+from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.bt.status import INVALID, NAMES, RUNNING
 from pyautonomousagent.inputs import InputError, shown
 from pyautonomousagent.names import AgentNames
@@ -121,6 +122,8 @@ class Recorder:
             ],
         }
         self.nodes: list[Node] = list(tree.walk()) if tree is not None else []
+        if check_size(len(self.nodes)):  # a node index is recorded as an int16
+            raise TreeError(f"the tree {check_size(len(self.nodes))} in a recorded run")
         self._leaf_rows = np.array(
             [i for i, node in enumerate(self.nodes) if not node.is_control], dtype=np.int16
         )

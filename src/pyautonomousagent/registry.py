@@ -124,7 +124,7 @@ class Registry(Generic[T]):
         return self.get(name)
 
     def __contains__(self, name: object) -> bool:
-        return name in self._entries
+        return isinstance(name, str) and name in self._entries  # a list from a file: False
 
     def __iter__(self) -> Iterator[str]:
         return iter(list(self._entries))

@@ -348,6 +348,11 @@ class _Builder:
             except LeafError as error:
                 fix = f"write {key} as {cls.port_hint(key)}"
                 raise self.fail(node.line_of(key), str(error), fix) from None
+        for key in cls.required_ports():
+            if key not in params:
+                raise self.fail(
+                    node.line, f"{node.tag} needs port {key!r}", f"add {key}: {cls.port_hint(key)}"
+                )
         return params
 
 

@@ -132,6 +132,11 @@ class Leaf:
         return cls(**values)
 
     @classmethod
+    def required_ports(cls) -> list[str]:
+        """The ports a tree must give (the others default to the scenario's parameters)."""
+        return []
+
+    @classmethod
     def port_names(cls) -> list[str]:
         """The names of the ports a tree may set."""
         return [p.name for p in cls.ports]

@@ -3,15 +3,18 @@
 A few KB of SubTrees, each used twice by the next, inline to billions of nodes; a tree
 nested thousands of levels deep overflows Python's stack. :func:`check_document` measures
 the main tree as it would be once inlined (size and depth), without inlining it, and
-refuses it with one line naming the file and the fix.
+refuses it with one line naming the file and the fix. :func:`check_size` tells the
+recorder that a tree built in Python has more nodes than a recording can index (the
+engines themselves tick larger trees).
 """
 
 from __future__ import annotations
 
 from pyautonomousagent.bt.document import SUBTREE, Document, RawNode, TreeFileError
 
-#: Most nodes of a tree once its SubTrees are inlined.
-MAX_TREE_NODES = 100_000
+#: Most nodes of a tree once its SubTrees are inlined: a recording stores the active leaf
+#: of each agent as a node index in an int16 (-1: none), so indices end at 32,766.
+MAX_TREE_NODES = 32_767
 #: Deepest nesting of a tree once its SubTrees are inlined (the root is level 1).
 MAX_TREE_DEPTH = 64
 
@@ -69,6 +72,13 @@ def inlined_size(document: Document) -> tuple[int, int]:
     return size[document.main], depth[document.main]
 
 
+def check_size(nodes: int) -> str:
+    """The problem with a tree of ``nodes`` nodes, or "" if it is small enough."""
+    if nodes <= MAX_TREE_NODES:
+        return ""
+    return f"has {nodes} nodes, more than the {MAX_TREE_NODES} allowed"
+
+
 def check_document(document: Document) -> None:
     """Refuse a document whose main tree, inlined, is too big or too deep.
 
@@ -77,13 +87,13 @@ def check_document(document: Document) -> None:
     """
     nodes, levels = inlined_size(document)
     line = document.lines.get(document.main, 0)
-    if nodes > MAX_TREE_NODES:
+    if check_size(nodes):
         raise TreeFileError(
             document.file,
             line,
             f"tree {document.main!r} has {nodes} nodes once its SubTrees are inlined, more "
             f"than the {MAX_TREE_NODES} allowed",
-            "use each SubTree fewer times (every use is a copy)",
+            "use fewer nodes, or each SubTree fewer times (every use is a copy)",
         )
     if levels > MAX_TREE_DEPTH:
         raise TreeFileError(

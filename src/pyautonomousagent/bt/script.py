@@ -15,10 +15,16 @@ cannot be concatenated (``..`` is refused).
 :class:`~pyautonomousagent.state.AgentView`: one agent (numbers) or a group (arrays, one
 entry per agent: the batched engine's "array expressions over the agents a tick reaches").
 A syntax error is a :class:`ScriptError` with the column; callers add the file and line.
+
+Scripts come from files, so the parser is bounded: at most :data:`MAX_SCRIPT_CHARS`
+characters, nested at most :data:`MAX_SCRIPT_DEPTH` levels (parentheses, operators,
+ternaries), whole numbers within int64 and other numbers finite; anything else is a
+ScriptError, never a RecursionError or OverflowError.
 """
 
 from __future__ import annotations
 
+import math
 import re
 import zlib
 from collections.abc import Callable
@@ -27,8 +33,18 @@ from typing import Any
 
 import numpy as np
 
+from pyautonomousagent.inputs import InputError, shown
 
-class ScriptError(ValueError):
+#: Longest script, characters (BT.CPP scripts are a line or two).
+MAX_SCRIPT_CHARS = 10_000
+#: Deepest nesting of a script: parentheses, unary operators, ternaries and chains of binary
+#: operators (``a + b + c`` is two levels).
+MAX_SCRIPT_DEPTH = 64
+#: Largest whole number a script may write (the blackboard's int64).
+MAX_INT = 2**63 - 1
+
+
+class ScriptError(InputError):
     """Code that is not a valid script; ``column`` is 1-based within the code."""
 
     def __init__(self, message: str, column: int) -> None:
@@ -36,12 +52,14 @@ class ScriptError(ValueError):
         self.column = column
 
 
+_SPACE = re.compile(r"\s*", re.ASCII)
 _TOKEN = re.compile(
-    r"\s*(?:(?P<number>0[xX][0-9a-fA-F]+|\d+\.\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?"
+    r"(?:(?P<number>0[xX][0-9a-fA-F]+|\d+\.\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?"
     r"|\d+(?:[eE][-+]?\d+)?)"
     r"|(?P<string>'[^']*')"
     r"|(?P<name>@?[A-Za-z_][A-Za-z0-9_]*)"
-    r"|(?P<op>:=|\+=|-=|\*=|/=|==|!=|<=|>=|&&|\|\||\.\.|[-+*/()<>!~&|^?:;=]))"
+    r"|(?P<op>:=|\+=|-=|\*=|/=|==|!=|<=|>=|&&|\|\||\.\.|[-+*/()<>!~&|^?:;=]))",
+    re.ASCII,
 )
 
 ASSIGNMENTS = (":=", "=", "+=", "-=", "*=", "/=")
@@ -51,6 +69,9 @@ BINARY = {
     "<": 7, "<=": 7, ">": 7, ">=": 7, "+": 8, "-": 8, "*": 9, "/": 9,
 }  # fmt: skip
 COMPARISONS = ("==", "!=", "<", "<=", ">", ">=", "&&", "||")
+#: The operators that take a string (an enum value): BT.CPP also orders strings
+#: alphabetically and joins them with ``+``, which enum values cannot do.
+STRING_OPERATORS = ("==", "!=")
 
 
 def enum_code(text: str) -> int:
@@ -68,17 +89,14 @@ class Token:
 
 def tokens(code: str) -> list[Token]:
     """The tokens of ``code``; ScriptError at the first character that starts none."""
-    out, pos = [], 0
+    out, pos = [], _SPACE.match(code).end()  # type: ignore[union-attr]
     while pos < len(code):
-        if code[pos:].strip() == "":
-            break
         match = _TOKEN.match(code, pos)
-        if match is None or match.end() == pos:
-            column = pos + len(code[pos:]) - len(code[pos:].lstrip()) + 1
-            raise ScriptError(f"unexpected character {code[column - 1]!r}", column)
+        if match is None:
+            raise ScriptError(f"unexpected character {code[pos]!r}", pos + 1)
         kind = match.lastgroup or "op"
-        out.append(Token(kind, match.group(kind), match.start(kind) + 1))
-        pos = match.end()
+        out.append(Token(kind, match.group(kind), pos + 1))
+        pos = _SPACE.match(code, match.end()).end()  # type: ignore[union-attr]
     out.append(Token("end", "", len(code) + 1))
     return out
 
@@ -89,9 +107,13 @@ Ast = tuple[Any, ...]
 
 
 class _Parser:
+    """Recursive descent, one level of Python's stack per nesting level, bounded by
+    :data:`MAX_SCRIPT_DEPTH` (:meth:`nested`)."""
+
     def __init__(self, code: str) -> None:
         self.toks = tokens(code)
         self.pos = 0
+        self.depth = 0
 
     def peek(self) -> Token:
         return self.toks[self.pos]
@@ -104,13 +126,26 @@ class _Parser:
         self.pos += 1
         return tok
 
+    def nested(self, parse: Callable[[], Ast]) -> Ast:
+        """``parse()`` one level deeper; ScriptError beyond :data:`MAX_SCRIPT_DEPTH`."""
+        if self.depth >= MAX_SCRIPT_DEPTH:
+            raise ScriptError(_too_deep(), self.peek().column)
+        self.depth += 1
+        try:
+            return parse()
+        finally:
+            self.depth -= 1
+
     def statements(self) -> list[Ast]:
         out = []
         while self.peek().kind != "end":
             if self.peek().text == ";":
                 self.take()
                 continue
+            column = self.peek().column
             out.append(self.statement())
+            if _depth(out[-1]) > MAX_SCRIPT_DEPTH:
+                raise ScriptError(_too_deep(), column)
             if self.peek().kind != "end":
                 self.take(";")
         return out
@@ -128,9 +163,9 @@ class _Parser:
         condition = self.binary(1)
         if self.peek().text == "?":
             self.take()
-            yes = self.expression()
+            yes = self.nested(self.expression)
             self.take(":")
-            return ("ternary", condition, yes, self.expression())
+            return ("ternary", condition, yes, self.nested(self.expression))
         return condition
 
     def binary(self, level: int) -> Ast:
@@ -144,22 +179,23 @@ class _Parser:
             if prec is None or prec < level:
                 return left
             self.take()
-            left = ("binary", tok.text, left, self.binary(prec + 1))
+            right = self.binary(prec + 1)  # at most one call per precedence level
+            _check_strings(tok, left, right)
+            left = ("binary", tok.text, left, right)
 
     def unary(self) -> Ast:
         tok = self.peek()
         if tok.kind == "op" and tok.text in ("!", "-", "~", "+"):
             self.take()
-            return ("unary", tok.text, self.unary())
+            operand = self.nested(self.unary)
+            _check_strings(tok, operand)
+            return ("unary", tok.text, operand)
         return self.atom()
 
     def atom(self) -> Ast:
         tok = self.take()
         if tok.kind == "number":
-            text = tok.text
-            if text.lower().startswith("0x"):
-                return ("num", int(text, 16))
-            return ("num", float(text) if any(c in text for c in ".eE") else int(text))
+            return ("num", _number(tok))
         if tok.kind == "string":
             return ("str", tok.text[1:-1])
         if tok.kind == "name":
@@ -167,11 +203,55 @@ class _Parser:
                 return ("bool", tok.text == "true")
             return ("key", _key(tok))
         if tok.text == "(":
-            inner = self.expression()
+            inner = self.nested(self.expression)
             self.take(")")
             return inner
         found = repr(tok.text) if tok.kind != "end" else "the end"
         raise ScriptError(f"expected a value, found {found}", tok.column)
+
+
+def _too_deep() -> str:
+    return (
+        f"the script nests more than {MAX_SCRIPT_DEPTH} levels deep (parentheses, operators); "
+        "split it into several statements separated by ';'"
+    )
+
+
+def _depth(node: Ast) -> int:
+    """Levels of an AST (a leaf is 1), measured without recursion."""
+    deepest, stack = 0, [(node, 1)]
+    while stack:
+        part, level = stack.pop()
+        deepest = max(deepest, level)
+        stack.extend((inner, level + 1) for inner in part[1:] if isinstance(inner, tuple))
+    return deepest
+
+
+def _number(tok: Token) -> int | float:
+    """A number literal; ScriptError if a whole number is beyond int64 or a number infinite."""
+    text = tok.text
+    if text.lower().startswith("0x"):
+        value: int | float = int(text, 16) if len(text) <= 20 else MAX_INT + 1
+    elif any(c in text for c in ".eE"):
+        value = float(text)
+    else:
+        value = int(text) if len(text) <= 19 else MAX_INT + 1
+    if isinstance(value, int) and value > MAX_INT:
+        raise ScriptError(f"whole number {shown(text, 30)} is beyond int64", tok.column)
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ScriptError(f"number {shown(text, 30)} is too large", tok.column)
+    return value
+
+
+def _check_strings(tok: Token, *operands: Ast) -> None:
+    """ScriptError if operator ``tok`` is applied to a string literal other than by == or !=."""
+    if tok.text in STRING_OPERATORS or all(o[0] != "str" for o in operands):
+        return
+    raise ScriptError(
+        f"operator {tok.text!r} cannot take a string: a string is an enum value here, which "
+        "only == and != compare (BehaviorTree.CPP would order or join the text)",
+        tok.column,
+    )
 
 
 def _key(tok: Token) -> str:
@@ -318,7 +398,12 @@ class Script:
 def parse(code: str) -> Script:
     """The :class:`Script` of ``code``; ScriptError (with the column) if it is not one."""
     if not isinstance(code, str):
-        raise ScriptError(f"a script is text, got {code!r}", 1)
+        raise ScriptError(f"a script is text, got {shown(code)}", 1)
+    if len(code) > MAX_SCRIPT_CHARS:
+        raise ScriptError(
+            f"the script has {len(code)} characters, more than the {MAX_SCRIPT_CHARS} allowed",
+            MAX_SCRIPT_CHARS + 1,
+        )
     statements = _Parser(code).statements()
     if not statements:
         raise ScriptError("the script is empty", 1)

@@ -49,6 +49,10 @@ class _PortsByName(Leaf):
         return cls.hints.get(name, "text")
 
     @classmethod
+    def required_ports(cls) -> list[str]:
+        return list(cls.names)
+
+    @classmethod
     def parse_port(cls, name: str, value: Any, where: str) -> Any:
         text = value if isinstance(value, str) else _literal_text(value)
         cls.check(name, text, where)
@@ -112,6 +116,8 @@ class _ScriptLeaf(_PortsByName):
 
     @classmethod
     def declared(cls, params: Mapping[str, Any], known: dict[str, str]) -> dict[str, str]:
+        if "code" not in params:
+            return {}  # create() names the missing port
         return parse(_literal_text(params["code"])).assigned(known)
 
     def __repr__(self) -> str:
@@ -189,6 +195,8 @@ class SetBlackboard(_PortsByName):
 
     @classmethod
     def declared(cls, params: Mapping[str, Any], known: dict[str, str]) -> dict[str, str]:
+        if "value" not in params or "output_key" not in params:
+            return {}  # create() names the missing port
         value, kind = literal(_literal_text(params["value"]))
         kind = known.get(value, "float") if kind == "key" else kind
         key = _literal_text(params["output_key"])

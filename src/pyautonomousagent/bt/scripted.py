@@ -7,7 +7,6 @@ first), one column per agent. It changes nothing else.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from typing import Any, ClassVar
 
@@ -15,6 +14,7 @@ import numpy as np
 
 from pyautonomousagent.bt.leaf import Leaf, LeafError, register_leaf
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
+from pyautonomousagent.inputs import InputError, load_json
 from pyautonomousagent.state import AgentView
 from pyautonomousagent.world import World
 
@@ -34,13 +34,16 @@ class Scripted(Leaf):
     def create(cls, params: Mapping[str, Any], defaults: Mapping[str, Any], where: str) -> Leaf:
         if set(params) != {"statuses"}:
             raise LeafError(f"{where}: Scripted takes exactly one port, 'statuses'")
-        table = np.asarray(params["statuses"], dtype=np.int8)
+        try:
+            table = np.asarray(params["statuses"], dtype=np.int64)
+        except (ValueError, TypeError, OverflowError):  # ragged, text, beyond int64
+            table = np.zeros(0, dtype=np.int64)
         if table.ndim != 2 or not np.isin(table, RETURNABLE).all():
             raise LeafError(
                 f"{where}: statuses must be a (ticks, agents) table of the codes 1 (SUCCESS), "
                 "2 (FAILURE) and 3 (RUNNING); a leaf never returns 0 (INVALID)"
             )
-        return cls(statuses=table)
+        return cls(statuses=table.astype(np.int8))
 
     @classmethod
     def port_names(cls) -> list[str]:
@@ -51,8 +54,8 @@ class Scripted(Leaf):
         """``statuses`` as a list of rows; text (from XML) is read as JSON."""
         if isinstance(value, str):
             try:
-                value = json.loads(value)
-            except json.JSONDecodeError:
+                value = load_json(value, f"{where}: statuses")
+            except InputError:  # not JSON, or nested too deeply
                 raise LeafError(f"{where}: statuses must be JSON, e.g. [[1, 2], [3, 1]]") from None
         cls.create({"statuses": value}, {}, where)
         return value

@@ -10,17 +10,16 @@ band, written as PNG or SVG. Failed runs, and runs where the measure is NaN, are
 from __future__ import annotations
 
 import difflib
-import json
 import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pyarrow as pa
-import pyarrow.parquet as pq
 
 from pyautonomousagent.experiments.spec import ExperimentError
-from pyautonomousagent.experiments.store import MANIFEST, RESULTS
+from pyautonomousagent.experiments.store import MANIFEST, RESULTS, read_manifest
+from pyautonomousagent.inputs import InputError, read_parquet
 
 #: Intervals :func:`summarize` knows: Student-t 95 % confidence interval of the mean, one
 #: standard deviation either side, the smallest to the largest value, or none.
@@ -73,10 +72,14 @@ def read_results(source: str | Path | pa.Table) -> tuple[pa.Table, dict[str, Any
     file = path / RESULTS if path.is_dir() else path
     if not file.exists():
         raise ExperimentError(f"no sweep results at {file}; run pyaa sweep first")
-    measures: dict[str, Any] = {}
-    if (folder / MANIFEST).exists():
-        measures = json.loads((folder / MANIFEST).read_text()).get("measures", {})
-    return pq.read_table(file), measures
+    try:
+        table = read_parquet(file, "sweep results", ("status",))
+        measures = (read_manifest(folder) or {}).get("measures", {})
+    except InputError as error:
+        raise ExperimentError(str(error)) from None
+    if not isinstance(measures, dict) or not all(isinstance(m, dict) for m in measures.values()):
+        raise ExperimentError(f"{folder / MANIFEST}: 'measures' must map names to descriptions")
+    return table, measures
 
 
 def _column(table: pa.Table, name: str, what: str) -> list[Any]:
@@ -86,7 +89,27 @@ def _column(table: pa.Table, name: str, what: str) -> list[Any]:
         raise ExperimentError(
             f"unknown {what} {name!r}{hint}; the results have {', '.join(table.column_names)}"
         )
+    if pa.types.is_nested(table.schema.field(name).type):
+        raise ExperimentError(f"{what} {name!r} is a column of lists or records, not values")
     return table[name].to_pylist()
+
+
+def _numbers(table: pa.Table, name: str) -> list[Any]:
+    """The measure column ``name``; ExperimentError unless it holds numbers (or true/false)."""
+    values = _column(table, name, "measure")
+    kind = table.schema.field(name).type
+    numbers = (pa.types.is_integer, pa.types.is_floating, pa.types.is_boolean, pa.types.is_null)
+    if not any(is_kind(kind) for is_kind in numbers):
+        numeric = [
+            f.name
+            for f in table.schema
+            if pa.types.is_integer(f.type) or pa.types.is_floating(f.type)
+        ]
+        raise ExperimentError(
+            f"measure {name!r} is a column of {kind}, not numbers: {name!r} is not a measure; "
+            f"plot one of {', '.join(numeric) or 'no column'}"
+        )
+    return values
 
 
 def summarize(
@@ -100,14 +123,7 @@ def summarize(
     """
     if interval not in INTERVALS:
         raise ExperimentError(f"unknown interval {interval!r}; choose from {', '.join(INTERVALS)}")
-    values = _column(table, measure, "measure")
-    kind = table[measure].type
-    if not (pa.types.is_integer(kind) or pa.types.is_floating(kind) or pa.types.is_null(kind)):
-        numeric = [n for n in table.column_names if pa.types.is_floating(table[n].type)]
-        raise ExperimentError(
-            f"{measure!r} is not a measure (its values are {kind}, not numbers); "
-            f"measures are the number columns, e.g. {', '.join(numeric[:8])}"
-        )
+    values = _numbers(table, measure)
     xs = _column(table, x, "parameter")
     groups = _column(table, by, "parameter") if by else [None] * len(xs)
     status = _column(table, "status", "column")

@@ -22,7 +22,10 @@ Written as YAML (or given on the command line, which builds the same mapping)::
     record_every: 1
 
 :meth:`Experiment.from_mapping` validates it; every error is an :class:`ExperimentError`
-naming the source, the field and what it must be.
+naming the source, the field and what it must be. :func:`read_file` reads the file as
+every input file is read (bounded, UTF-8, YAML 1.2 numbers, no key given twice, no Python
+tags), and :func:`with_options` adds the command line's ``--vary`` and ``--set`` to it,
+refusing a parameter both fixed and varied, or varied twice.
 """
 
 from __future__ import annotations
@@ -41,11 +44,13 @@ import numpy as np
 
 from pyautonomousagent.experiments.expression import ExpressionError
 from pyautonomousagent.experiments.measures import MEASURES, Measure, expression_measure
-from pyautonomousagent.inputs import InputError, load_yaml, read_text
+from pyautonomousagent.inputs import InputError, load_yaml, plain_value, read_text
 from pyautonomousagent.registry import UnknownNameError
 
 #: The most runs one experiment may hold.
 MAX_RUNS = 1_000_000
+#: Largest whole number a sweep takes (seeds and counts are int64 columns of the results).
+INT64_MAX = 2**63 - 1
 #: Columns of the results that parameters and measures may not be called.
 RESERVED = ("run", "run_id", "seed", "status", "error", "seconds", "worker")
 _KEYS = (
@@ -63,7 +68,7 @@ _KEYS = (
 _DISTRIBUTIONS = ("uniform", "integers", "choice")
 
 
-class ExperimentError(ValueError):
+class ExperimentError(InputError):
     """Bad experiment input; the message names the source, the field and the fix."""
 
 
@@ -125,12 +130,7 @@ class Experiment:
     @classmethod
     def from_file(cls, path: str | Path) -> Experiment:
         """Read and validate an experiment YAML file."""
-        path = Path(path)
-        try:
-            data = load_yaml(read_text(path, "experiment file"), str(path))
-        except InputError as error:
-            raise ExperimentError(str(error)) from None
-        return cls.from_mapping(data, source=str(path))
+        return cls.from_mapping(read_file(path), source=str(path))
 
     @property
     def parameters(self) -> list[str]:
@@ -181,6 +181,37 @@ class Experiment:
             }
             data["sample"] = {**self.sample, "parameters": params}
         return data
+
+
+def read_file(path: str | Path) -> Any:
+    """The YAML document of the experiment file at ``path``, not yet validated.
+
+    Raises:
+        ExperimentError: the file cannot be read, is too large, not UTF-8 or not valid YAML
+            (a key given twice, a ``!!python`` tag, ...), naming the file and line.
+    """
+    try:
+        return load_yaml(read_text(path, "experiment file"), str(path))
+    except InputError as error:
+        raise ExperimentError(str(error)) from None
+
+
+def with_options(
+    data: Mapping[str, Any], source: str, vary: Sequence[str], fixed: Mapping[str, Any]
+) -> dict[str, Any]:
+    """``data`` (an experiment mapping) with the command line's ``--vary`` options and
+    ``--set`` values added; an option replaces the file's entry of the same name.
+
+    Raises:
+        ExperimentError: the file's ``vary`` or ``set`` is not a mapping, or ``--vary``
+            names a parameter twice.
+    """
+    reader = _Reader(source)
+    out = dict(data)
+    for key, added in (("vary", parse_vary(vary)), ("set", dict(fixed))):
+        given = reader.mapping(out.get(key) or {}, key)
+        out[key] = {**given, **added}
+    return out
 
 
 def run_key(point: Mapping[str, Any], seed: int) -> str:
@@ -242,6 +273,7 @@ class _Reader:
             )
         vary = self.vary(data.get("vary") or {})
         sample = self.sample(data["sample"]) if data.get("sample") is not None else None
+        self.overlap(fixed, list(vary))
         if not vary and not sample:
             raise ExperimentError(
                 f"{self.source}: nothing varies; give 'vary' (a grid) or 'sample' (random points)"
@@ -256,7 +288,7 @@ class _Reader:
             iterations=self.whole(data["iterations"], "iterations", 1)
             if data.get("iterations") is not None
             else None,
-            engine=self.text(data.get("engine", "auto"), "engine"),
+            engine=self.engine(data.get("engine", "auto")),
             record_every=self.whole(data.get("record_every", 1), "record_every", 1),
             name=self.folder_name(data.get("name", "experiment"), "name"),
         )
@@ -266,6 +298,24 @@ class _Reader:
         if total > MAX_RUNS:
             raise self.fail("the experiment", f"at most {MAX_RUNS} runs", f"{total} runs")
         return experiment
+
+    def overlap(self, fixed: Mapping[str, Any], varied: Sequence[str]) -> None:
+        """Refuse a parameter that is both fixed (``set``) and varied on the grid (a sampled
+        parameter replaces its fixed value: ``set`` then gives the base scenario)."""
+        both = [name for name in varied if name in fixed]
+        if both:
+            raise ExperimentError(
+                f"{self.source}: parameter {both[0]!r} is both fixed ('set') and varied; "
+                "keep one of them"
+            )
+
+    def engine(self, value: Any) -> str:
+        from pyautonomousagent.simulation.run import ENGINES  # the engines import numba
+
+        known = ("auto", *ENGINES.names())
+        if value not in known:
+            raise self.fail("engine", f"one of {', '.join(known)}", value)
+        return str(value)
 
     def text(self, value: Any, path: str) -> str:
         if not isinstance(value, str) or not value:
@@ -282,8 +332,11 @@ class _Reader:
         return text
 
     def whole(self, value: Any, path: str, minimum: int) -> int:
+        """A whole number from ``minimum`` to int64's largest (results are int64 columns)."""
         if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
             raise self.fail(path, f"a whole number >= {minimum}", value)
+        if value > INT64_MAX:
+            raise self.fail(path, f"a whole number <= {INT64_MAX} (int64)", value)
         return value
 
     def count(self, value: Any, path: str) -> int:
@@ -321,8 +374,10 @@ class _Reader:
         if not isinstance(value, list) or not value:
             raise self.fail(path, "a non-empty list of values or {from: A, to: B, step: S}", value)
         for i, item in enumerate(value):
-            if isinstance(item, list | dict) or item is None:
+            if not isinstance(item, bool | int | float | str):
                 raise self.fail(f"{path}[{i}]", "a number, a string or true/false", item)
+            if isinstance(item, float) and not math.isfinite(item):
+                raise self.fail(f"{path}[{i}]", "a finite number", item)
         kinds = {
             "bool" if isinstance(v, bool) else "str" if isinstance(v, str) else "number"
             for v in value
@@ -365,6 +420,8 @@ class _Reader:
                 lo, hi = (self.whole(a, f"{path}.{kind}", -(2**62)) for a in args)
             if hi < lo:
                 raise self.fail(f"{path}.{kind}", "a pair [lo, hi] with lo <= hi", args)
+            if not math.isfinite(hi - lo) or max(abs(lo), abs(hi)) > 2**62:
+                raise self.fail(f"{path}.{kind}", "a pair [lo, hi] within +-2**62", args)
             out[name] = (kind, [lo, hi])
         return {
             "count": self.count(data["count"], "sample.count"),
@@ -432,24 +489,39 @@ class _Reader:
 
 def parse_vary(items: Sequence[str]) -> dict[str, Any]:
     """``--vary`` options as the file's ``vary`` mapping: ``name=1,2,3`` (a list) or
-    ``name=20:50:5`` (20, 25, ..., 50, inclusive)."""
+    ``name=20:50:5`` (20, 25, ..., 50, inclusive). Values are typed as plain YAML 1.2
+    scalars (:func:`~pyautonomousagent.inputs.plain_value`: ``30`` a number, ``1:30``
+    text), for the parameter's own schema to check.
+
+    Raises:
+        ExperimentError: an option without ``=``, a range of other than three parts, or a
+            parameter given twice.
+    """
     vary: dict[str, Any] = {}
     for item in items:
         name, sep, text = item.partition("=")
-        if not sep or not name.strip() or not text.strip():
+        name = name.strip()
+        if not sep or not name or not text.strip():
             raise ExperimentError(f"--vary needs NAME=V1,V2,... or NAME=FROM:TO:STEP, got {item!r}")
+        if name in vary:
+            raise ExperimentError(f"--vary {name} is given twice; give its values in one --vary")
         parts = text.split(":")
         if len(parts) == 3:
-            start, stop, step = (_vary_value(p) for p in parts)
-            vary[name.strip()] = {"from": start, "to": stop, "step": step}
+            start, stop, step = (_vary_value(p, name) for p in parts)
+            vary[name] = {"from": start, "to": stop, "step": step}
+        elif len(parts) > 1 and all(isinstance(_vary_value(p, name), int | float) for p in parts):
+            raise ExperimentError(
+                f"--vary {name}: a range is FROM:TO:STEP, three numbers (e.g. 20:50:5), "
+                f"got {text!r}"
+            )
         else:
-            vary[name.strip()] = [_vary_value(v) for v in text.split(",") if v.strip()]
+            vary[name] = [_vary_value(v, name) for v in text.split(",") if v.strip()]
     return vary
 
 
-def _vary_value(text: str) -> Any:
-    """One value of a ``--vary`` option, read as YAML (``20`` is a number, ``a`` a string)."""
+def _vary_value(text: str, name: str) -> Any:
+    """One value of a ``--vary`` option (``20`` is a number, ``a`` a string)."""
     try:
-        return load_yaml(text, "--vary")
+        return plain_value(text.strip())
     except InputError as error:
-        raise ExperimentError(str(error)) from None
+        raise ExperimentError(f"--vary {name}: {error}") from None

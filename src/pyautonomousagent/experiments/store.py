@@ -33,6 +33,7 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from pyautonomousagent.folders import sync_folder
+from pyautonomousagent.inputs import InputError, load_json, read_text
 from pyautonomousagent.recording import parquet_options
 
 MANIFEST = "experiment.json"
@@ -212,19 +213,22 @@ def write_results(journal: Journal, out: Path) -> pa.Table:
     return table
 
 
+#: Largest manifest read, bytes (it names the experiment, not each run).
+MAX_MANIFEST_BYTES = 50_000_000
+
+
 def read_manifest(out: Path) -> dict[str, Any] | None:
     """The folder's manifest, or None if there is none.
 
     Raises:
-        ValueError: it is not JSON, or not a mapping (torn).
-        OSError: it cannot be read.
+        InputError: the manifest is unreadable, too large, not JSON or not a JSON object.
     """
     path = out / MANIFEST
     if not path.exists():
         return None
-    data = json.loads(path.read_text(encoding="utf-8"))
+    data = load_json(read_text(path, "sweep manifest", MAX_MANIFEST_BYTES), str(path))
     if not isinstance(data, dict):
-        raise ValueError(f"{path} holds no mapping")
+        raise InputError(f"{path}: the sweep manifest must be a JSON object; run the sweep again")
     return data
 
 
