@@ -12,7 +12,7 @@ from pyautonomousagent import Simulation, arrays, jit, kernels, load
 from pyautonomousagent.bt import leaf
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.spec import Node, TreeError
-from pyautonomousagent.engines.compiled import CompiledEngine, compilable
+from pyautonomousagent.engines.compiled import MAX_COMPILED_NODES, CompiledEngine, compilable
 from pyautonomousagent.simulation.run import batched_seconds, choose_engine, scenario_tree
 from pyautonomousagent.testing import check_engines_agree
 
@@ -117,6 +117,22 @@ def test_auto_picks_compiled_where_it_can_and_batched_elsewhere() -> None:
     scripted = leaf("Scripted", "s", statuses=[[1]])
     assert choose_engine(scripted) == "batched"
     assert "no kernel" in compilable(scripted)
+
+
+@needs_numba
+def test_a_tree_over_the_node_limit_goes_to_the_batched_engine() -> None:
+    """Its generated source would grow with the square of the root's children (seconds at
+    1000): auto takes the batched engine, and the compiled engine refuses it in one line."""
+    for children, fits in ((MAX_COMPILED_NODES - 1, True), (MAX_COMPILED_NODES, False)):
+        hovers = tuple(Node("Action_Hover_S", f"hover{i}") for i in range(children))
+        tree = Node("Fallback", "root", hovers, {"memory": False})
+        assert (compilable(tree) == "") is fits, children
+    assert "more than the 256 it compiles" in compilable(tree)
+    assert choose_engine(tree) == "batched"
+    scenario = load("patrol").with_overrides(agents=3, iterations=5)
+    with pytest.raises(TreeError, match="257 nodes"):
+        Simulation.create(scenario, tree=tree, engine="compiled")
+    assert Simulation.create(scenario, tree=tree).engine.name == "batched"
 
 
 @needs_numba

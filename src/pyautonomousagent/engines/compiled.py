@@ -61,12 +61,22 @@ if TYPE_CHECKING:
     from pyautonomousagent.simulation.run import Simulation
 
 
+#: Most nodes of a tree the compiled engine takes. Its generated source grows with the square
+#: of a control node's children (each child's case halts the others): a Fallback of 1000
+#: leaves took 12 s to generate, before any compiling; the paper's trees have under 30 nodes.
+MAX_COMPILED_NODES = 256
+
+
 def compilable(tree: Node) -> str:
     """Why ``tree`` cannot run on the compiled engine, or "" when it can: numba is missing
-    (or ``PYAA_NO_JIT`` is set), a control node has no compiled form, or a leaf has no
-    kernel, reads a port from the blackboard, or must be told when halted."""
+    (or ``PYAA_NO_JIT`` is set), the tree has more than :data:`MAX_COMPILED_NODES` nodes, a
+    control node has no compiled form, or a leaf has no kernel, reads a port from the
+    blackboard, or must be told when halted."""
     if not jit.available():
         return "numba is not installed (the [fast] extra) or PYAA_NO_JIT is set"
+    nodes = sum(1 for _ in tree.walk())
+    if nodes > MAX_COMPILED_NODES:
+        return f"the tree has {nodes} nodes, more than the {MAX_COMPILED_NODES} it compiles"
     if not supported(compile_tree(tree)):
         return "a control node has no compiled form (or has scripts)"
     for node in tree.leaves():
