@@ -182,6 +182,27 @@ def test_xml_file_declares_the_leaf_library_for_groot2():
     assert '<Condition ID="Condition_Low_Energy_Level">' in text
 
 
+def test_a_scenarios_xml_declares_only_the_leaves_that_fit_it(tmp_path, capsys):
+    """Written for patrol, Groot2's palette holds patrol's leaves, not vacuum's or the X8's;
+    the file still runs (every leaf it uses is declared)."""
+    from pyautonomousagent.simulation.fit import fitting_leaves
+
+    xml = tmp_path / "patrol.xml"
+    assert cli(["tree", "patrol", "--format", "xml", "--out", str(xml)], capsys)[0] == 0
+    text = xml.read_text()
+    fitting = fitting_leaves(load("patrol"))
+    for type_name, cls in LEAF_TYPES.items():
+        if type_name == "Scripted" or type_name in BTCPP_LEAVES:
+            continue
+        assert (f'ID="{type_name}"' in text) == (cls in fitting), type_name
+    assert 'ID="Action_Vacuum_S"' not in text and 'ID="Action_Refuel_A"' in text
+    assert "leaves for this scenario" in text
+    assert load_tree(xml) == patrol_tree()
+    out = tmp_path / "run"
+    assert main(["run", "patrol", "--tree", str(xml), "--agents", "2", "--iterations", "5",
+                 "--no-gif", "--quiet", "--out", str(out)]) == 0  # fmt: skip
+
+
 def test_py_trees_only_nodes_are_declared_and_read_back():
     tree = Node("PyTreesRepeat", "r", (leaf("Action_Refuel_A"),), {"num_success": 2})
     text = to_text_format(tree, "xml")

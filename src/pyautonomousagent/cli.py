@@ -883,6 +883,18 @@ def _tree_source(source: str) -> tuple[Document, str, dict[str, Any]]:
     return document_from_node(tree_by_name(scenario.tree), scenario.tree), scenario.name, defaults
 
 
+def _scenario_leaves(source: str) -> list[str] | None:
+    """The leaf types that fit the scenario ``source`` names (for a tree written for it), or
+    None where ``source`` is a bare tree file."""
+    if source not in names() and is_tree_file(source) and not _is_scenario_file(source):
+        return None
+    from pyautonomousagent.bt.leaf import LEAF_TYPES
+    from pyautonomousagent.simulation.fit import fitting_leaves
+
+    fitting = fitting_leaves(load(source))
+    return [name for name, cls in LEAF_TYPES.items() if cls in fitting]
+
+
 def _all_defaults() -> dict[str, Any]:
     """The default of every parameter any registered mission or motion model declares."""
     from pyautonomousagent.simulation.mission import MISSIONS
@@ -942,7 +954,7 @@ def tree_command(args: argparse.Namespace) -> int:
         print(f"wrote {path}")
         return 0
     if fmt in ("xml", "yaml"):
-        text = to_text_format(document, fmt)
+        text = to_text_format(document, fmt, leaves=_scenario_leaves(args.source))
     elif fmt == "dot":
         from pyautonomousagent.bt.draw import to_dot
 

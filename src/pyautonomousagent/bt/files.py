@@ -11,6 +11,7 @@ message names the file, the line and the fix. docs/tree-files.md describes both 
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from pathlib import Path
 
 from pyautonomousagent.bt.build import build
@@ -69,10 +70,16 @@ def load_tree(path: str | Path) -> Node:
     return build(read_document(path))
 
 
-def to_text_format(tree: Node | Document, fmt: str, tree_id: str = DEFAULT_TREE_ID) -> str:
-    """``tree`` as the text of a ``"xml"`` or ``"yaml"`` file."""
+def to_text_format(
+    tree: Node | Document,
+    fmt: str,
+    tree_id: str = DEFAULT_TREE_ID,
+    leaves: Collection[str] | None = None,
+) -> str:
+    """``tree`` as the text of a ``"xml"`` or ``"yaml"`` file; an XML file's TreeNodesModel
+    lists ``leaves`` (and those in use) where given, else the whole library."""
     document = tree if isinstance(tree, Document) else document_from_node(tree, tree_id)
-    return write_xml(document) if fmt == "xml" else write_yaml(document)
+    return write_xml(document, leaves) if fmt == "xml" else write_yaml(document)
 
 
 def from_text_format(text: str, fmt: str, file: str = "<text>") -> Node:

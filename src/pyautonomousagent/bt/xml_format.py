@@ -11,6 +11,7 @@ and explicit ``<Condition ID="Condition_Low_Energy_Level" threshold="40"/>``; co
 from __future__ import annotations
 
 import json
+from collections.abc import Collection
 from dataclasses import dataclass, field
 from typing import Any
 from xml.parsers import expat
@@ -297,8 +298,10 @@ def format_value(value: Any) -> str:
     return str(value)
 
 
-def write_xml(document: Document) -> str:
-    """The document as BehaviorTree.CPP v4 XML, with a TreeNodesModel for Groot2."""
+def write_xml(document: Document, leaves: Collection[str] | None = None) -> str:
+    """The document as BehaviorTree.CPP v4 XML, with a TreeNodesModel for Groot2: the models
+    of the library's leaves, or of ``leaves`` only (e.g. those that fit a scenario) and the
+    leaves the document uses."""
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
         f'<root BTCPP_format="4" main_tree_to_execute={quoteattr(document.main)}>',
@@ -307,9 +310,10 @@ def write_xml(document: Document) -> str:
         out.append(f"  <BehaviorTree ID={quoteattr(tree_id)}>")
         _write_node(root, 2, out)
         out.append("  </BehaviorTree>")
-    out.append("  <!-- Node models for Groot2: pyAutonomousAgent's leaf library -->")
+    which = "leaf library" if leaves is None else "leaves for this scenario"
+    out.append(f"  <!-- Node models for Groot2: pyAutonomousAgent's {which} -->")
     out.append("  <TreeNodesModel>")
-    out.extend(_models(document))
+    out.extend(_models(document, leaves))
     out.append("  </TreeNodesModel>")
     out.append("</root>")
     return "\n".join(out) + "\n"
@@ -336,12 +340,15 @@ def _write_node(node: RawNode, depth: int, out: list[str]) -> None:
     out.append(f"{pad}</{node.tag}>")
 
 
-def _models(document: Document) -> list[str]:
-    """TreeNodesModel entries: every library leaf, and our non-BT.CPP nodes in use."""
+def _models(document: Document, leaves: Collection[str] | None) -> list[str]:
+    """TreeNodesModel entries: every library leaf (or those of ``leaves`` and those in use),
+    and our non-BT.CPP nodes in use."""
     used = {n.tag for root in document.trees.values() for n in root.walk()}
     out = []
     for type_name, cls in LEAF_TYPES.items():
         if type_name in BTCPP_LEAVES or (type_name == "Scripted" and type_name not in used):
+            continue
+        if leaves is not None and type_name not in leaves and type_name not in used:
             continue
         ports = []
         for port in cls.ports:
