@@ -402,6 +402,20 @@ def test_tree_output_never_lands_on_a_runs_own_files(earlier, capsys):
     assert main(["tree", "gathering", "--format", "xml", "--out", str(earlier / "t.xml")]) == 0
 
 
+def test_tree_output_never_lands_on_a_sweeps_own_files(tmp_path, capsys):
+    sweep = tmp_path / "sweep"
+    (sweep / "journal").mkdir(parents=True)
+    for name in ("experiment.json", "results.parquet", "journal/part-0.parquet"):
+        (sweep / name).write_text("the sweep's")
+    for name in ("experiment.json", "results.parquet", "journal/part-0.parquet", "journal/x"):
+        argv = ["tree", "gathering", "--format", "xml", "--out", str(sweep / name)]
+        assert main(argv) == 2
+        assert "is a file of the sweep in" in one_line(capsys.readouterr().err)
+    assert all((sweep / n).read_text() == "the sweep's" for n in ("experiment.json",
+               "results.parquet", "journal/part-0.parquet"))  # fmt: skip
+    assert main(["tree", "gathering", "--format", "xml", "--out", str(sweep / "t.xml")]) == 0
+
+
 def test_recovery_never_deletes_an_earlier_run_it_cannot_put_back(earlier, tmp_path):
     aside = tmp_path / ".run.old-0123456789ab"
     aside.mkdir()

@@ -529,12 +529,15 @@ def run_files(folder: Path) -> set[str]:
 def check_output(path: str | Path, run: Path | None = None, views: Sequence[str] = ()) -> Path:
     """``path`` made absolute (links resolved), if writing it harms no run folder.
 
-    Refused: a folder, and any run folder's own files (:func:`run_files`), except the
-    ``views`` of the folder ``run`` (``pyaa replay`` rewrites them and lists them again).
+    Refused: a folder, any run folder's own files (:func:`run_files`), except the
+    ``views`` of the folder ``run`` (``pyaa replay`` rewrites them and lists them again),
+    and a sweep folder's own files (its manifest, results and journal).
 
     Raises:
         RunError: ``path`` is one of those.
     """
+    from pyautonomousagent.experiments.store import JOURNAL, MANIFEST, RESULTS
+
     resolved = Path(path).resolve()
     if resolved.is_dir():
         raise RunError(f"{path} is a folder; give a file name")
@@ -543,6 +546,12 @@ def check_output(path: str | Path, run: Path | None = None, views: Sequence[str]
     if resolved.name in run_files(here) and not ours:
         raise RunError(
             f"{path} is a file of the run in {here}, which nothing but pyaa run writes; "
+            "choose another file"
+        )
+    sweep = here.parent if here.name == JOURNAL else here
+    if (sweep / MANIFEST).is_file() and (here != sweep or resolved.name in (MANIFEST, RESULTS)):
+        raise RunError(
+            f"{path} is a file of the sweep in {sweep}, which nothing but pyaa sweep writes; "
             "choose another file"
         )
     return resolved
