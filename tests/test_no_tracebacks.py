@@ -45,6 +45,7 @@ BASE = {
     "run": ["run", "gathering", "--iterations", "3", "--engine", "batched", "--quiet"],
     "bench": ["bench", "gathering", "--agents", "1", "--iterations", "2", "--engines", "batched"],
     "replay": ["replay", "RUN"],
+    "verify": ["verify", "RUN"],
     "sweep": ["sweep", "gathering", "--vary", "refuel_rate=1,2", "--iterations", "2", "--serial"],
     "plot": ["plot", "SWEEP", "--measure", "minimum_energy", "--x", "refuel_rate"],
     "measures": ["measures"],
@@ -112,7 +113,8 @@ def _variants(command: str, parser: argparse.ArgumentParser) -> Iterator[list[st
 
 
 def _check(argv: list[str], capsys: pytest.CaptureFixture[str]) -> None:
-    """``pyaa ARGV`` ends with 0, or 2 and one line on stderr; never an exception."""
+    """``pyaa ARGV`` ends with 0, or 2 and one line on stderr (``pyaa verify``: 1 and one
+    line, for a folder that does not verify); never an exception."""
     try:
         code = cli.main(argv)
     except AcceptedError:
@@ -123,6 +125,8 @@ def _check(argv: list[str], capsys: pytest.CaptureFixture[str]) -> None:
     assert "Traceback" not in err, (argv, err)
     if code == 2:
         assert err.count("\n") == 1 and "error:" in err, (argv, err)
+    elif code == 1 and argv[0] == "verify":  # a folder that does not verify: one line
+        assert err.count("\n") == 1 and err.startswith("pyaa: "), (argv, err)
     else:
         assert code == 0, (argv, code, err)
 

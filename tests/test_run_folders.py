@@ -294,6 +294,18 @@ def test_replay_writes_the_named_file_only(earlier, tmp_path, capsys):
     assert leftovers(earlier) == [] and leftovers(elsewhere) == []
 
 
+def test_pyaa_verify_says_one_line_and_exits_1_naming_what_differs(earlier, capsys):
+    assert main(["verify", str(earlier)]) == 0
+    (line,) = capsys.readouterr().out.splitlines()
+    assert line.startswith(f"{earlier}: complete run of ") and line.endswith("match run.json")
+    states = earlier / "states.parquet"
+    states.write_bytes(states.read_bytes() + b"x")
+    assert main(["verify", str(earlier)]) == 1
+    assert "states.parquet differs from run.json" in one_line(capsys.readouterr().err)
+    assert main(["verify", str(earlier.parent / "nothing-here")]) == 1
+    assert "is not a complete run folder" in one_line(capsys.readouterr().err)
+
+
 def test_check_output_refuses_folders_and_run_files(earlier):
     with pytest.raises(RunError, match="is a folder"):
         runs.check_output(earlier)

@@ -29,6 +29,7 @@ from pyautonomousagent.recording import (
     traced_agents,
 )
 from pyautonomousagent.runs import (
+    RunError,
     SavedRun,
     SaveError,
     add_files,
@@ -39,6 +40,7 @@ from pyautonomousagent.runs import (
     save_run,
     simulate,
     streaming,
+    verify,
 )
 from pyautonomousagent.scenarios import load, names
 from pyautonomousagent.simulation import Scenario, ScenarioError, Simulation
@@ -125,6 +127,7 @@ def _parser() -> argparse.ArgumentParser:
     leaves.add_argument("scenario", help="a registered scenario name or a scenario .yaml file")
     _add_bench(sub)
     _add_replay(sub)
+    _add_verify(sub)
     _add_experiments(sub)
     tree = sub.add_parser("tree", help="print, draw or convert a behaviour tree")
     tree.add_argument(
@@ -173,6 +176,31 @@ def _add_view_options(run: argparse.ArgumentParser) -> None:
         metavar="AGENT",
         help="also write AGENT.btlog, the agent's trace as a Groot2 log (repeatable)",
     )
+
+
+def _add_verify(sub: Any) -> None:
+    verify = sub.add_parser(
+        "verify", help="check a run folder against its run.json (exit 0, or 1 naming what differs)"
+    )
+    verify.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="a folder pyaa run wrote")
+
+
+def verify_command(folder: Path) -> int:
+    """``pyaa verify``: one line; exit 0 where every file ``run.json`` lists is there with its
+    size and hash (:func:`pyautonomousagent.runs.verify`), else 1 naming what differs."""
+    try:
+        summary = verify(folder)
+    except RunError as error:
+        print(f"pyaa: {clip(str(error))}", file=sys.stderr)
+        return 1
+    scenario = summary.get("scenario", {})
+    name = scenario.get("name", "?") if isinstance(scenario, dict) else "?"
+    print(
+        f"{folder}: {summary.get('status', '?')} run of {name}, seed {summary.get('seed', '?')}, "
+        f"{summary.get('iterations_done', '?')} iterations; its {len(summary['files'])} files "
+        "match run.json"
+    )
+    return 0
 
 
 def _add_replay(sub: Any) -> None:
@@ -1180,6 +1208,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return experiments_command(args)
         if args.command == "replay":
             return replay_command(args)
+        if args.command == "verify":
+            return verify_command(args.run_dir)
         return tree_command(args)
     except USER_ERRORS as error:
         print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
