@@ -893,11 +893,12 @@ def _first_line(doc: str | None) -> str:
     return (doc or "").strip().split("\n", 1)[0].strip().replace("``", "")
 
 
-def _tree_source(source: str) -> tuple[Document, str, dict[str, Any]]:
-    """The tree document ``source`` names (a tree file, or a scenario's tree), a name, and
-    the parameters that give leaf ports their defaults (every mission's, for a bare file)."""
+def _tree_source(source: str) -> tuple[Document, str, dict[str, Any], Scenario | None]:
+    """The tree document ``source`` names (a tree file, or a scenario's tree), a name, the
+    parameters that give leaf ports their defaults (every mission's, for a bare file), and
+    the scenario (None for a bare file)."""
     if source not in names() and is_tree_file(source) and not _is_scenario_file(source):
-        return read_document(source), Path(source).stem, _all_defaults()
+        return read_document(source), Path(source).stem, _all_defaults(), None
     looks_like_a_file = bool(Path(source).suffix) or "/" in source
     if source not in names() and looks_like_a_file and not is_tree_file(source):
         raise InputError(
@@ -907,19 +908,21 @@ def _tree_source(source: str) -> tuple[Document, str, dict[str, Any]]:
     scenario = load(source)
     defaults = vars(scenario.parameters)
     if is_tree_file(scenario.tree):
-        return read_document(scenario.tree), scenario.name, defaults
-    return document_from_node(tree_by_name(scenario.tree), scenario.tree), scenario.name, defaults
+        document = read_document(scenario.tree)
+    else:
+        document = document_from_node(tree_by_name(scenario.tree), scenario.tree)
+    return document, scenario.name, defaults, scenario
 
 
-def _scenario_leaves(source: str) -> list[str] | None:
-    """The leaf types that fit the scenario ``source`` names (for a tree written for it), or
-    None where ``source`` is a bare tree file."""
-    if source not in names() and is_tree_file(source) and not _is_scenario_file(source):
+def _scenario_leaves(scenario: Scenario | None) -> list[str] | None:
+    """The leaf types that fit ``scenario`` (for a tree written for it), or None for a bare
+    tree file (no scenario)."""
+    if scenario is None:
         return None
     from pyautonomousagent.bt.leaf import LEAF_TYPES
     from pyautonomousagent.simulation.fit import fitting_leaves
 
-    fitting = fitting_leaves(load(source))
+    fitting = fitting_leaves(scenario)
     return [name for name, cls in LEAF_TYPES.items() if cls in fitting]
 
 
@@ -967,7 +970,7 @@ def _py_trees_text(tree: Node, defaults: dict[str, Any]) -> str:
 
 def tree_command(args: argparse.Namespace) -> int:
     """``pyaa tree``: print, draw or convert a tree file or a scenario's tree."""
-    document, name, defaults = _tree_source(args.source)
+    document, name, defaults, scenario = _tree_source(args.source)
     fmt = args.format
     if fmt in ("png", "svg"):
         from pyautonomousagent.bt.draw import draw_tree
@@ -982,7 +985,7 @@ def tree_command(args: argparse.Namespace) -> int:
         print(f"wrote {path}")
         return 0
     if fmt in ("xml", "yaml"):
-        text = to_text_format(document, fmt, leaves=_scenario_leaves(args.source))
+        text = to_text_format(document, fmt, leaves=_scenario_leaves(scenario))
     elif fmt == "dot":
         from pyautonomousagent.bt.draw import to_dot
 
