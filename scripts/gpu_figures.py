@@ -7,8 +7,11 @@ python scripts/gpu_figures.py bandwidth      # measured device copy bandwidth, G
 python scripts/gpu_figures.py bytes          # bytes of state per drone (patrol)
 python scripts/gpu_figures.py rate FILE GBS  # drone-iterations/s of a bench JSON, vs GBS
 python scripts/gpu_figures.py memory N [N]   # device memory of N-drone patrol runs
-python scripts/gpu_figures.py crossover [ITERATIONS EVERY FIRST]
+python scripts/gpu_figures.py crossover ITERATIONS EVERY SIZE [SIZE ...]
                                              # the swarm where gpu starts to beat compiled
+python scripts/gpu_figures.py auto THRESHOLD      # what auto picks with that AUTO_DRONE_ITERATIONS
+python scripts/gpu_figures.py spread [ENGINE AGENTS ITERATIONS NEIGHBOURS]
+                                             # gathering spread at constant density
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ import json
 import math
 import sys
 import time
+from typing import Any
 
 import numpy as np
 
@@ -123,13 +127,14 @@ def rate(path: str, gbs: str) -> int:
     return 0
 
 
-def crossover(iterations: str = "1000", every: str = "100", first: str = "1000000") -> int:
+def crossover(iterations: str, every: str, *sizes: str) -> int:
     """Where the GPU starts to pay for patrol: the whole run (set-up, the CUDA compile
-    included, and loop) of ``iterations`` x swarms doubled from ``first``, on the GPU and on
+    included, and loop) of ``iterations`` x each of ``sizes`` drones, on the GPU and on
     the compiled engine (all this machine's cores; its cache warm), each in a fresh process
-    (``pyaa bench``'s), the two interleaved, until the GPU wins at two sizes in a row (or at
-    16,000,000 drones). The two sizes around the crossover are then run twice more each
-    (best of three). Prints the crossover, interpolated between them, and the value for
+    (``pyaa bench``'s), the two interleaved, sizes in increasing order. The largest size the
+    GPU loses and the next one, where it wins, are then run once more each (best of two).
+    Prints the crossover, interpolated between them (the difference of the two engines'
+    times is linear in the swarm between two sizes), and the value for
     ``engines.gpu.AUTO_DRONE_ITERATIONS`` (agents x iterations, rounded up)."""
     from pyautonomousagent.bench import Case, measure
 
@@ -145,32 +150,100 @@ def crossover(iterations: str = "1000", every: str = "100", first: str = "100000
                 raise SystemExit(f"crossover: {engine} at {agents} drones: {result.error}")
             times[engine] = min(times[engine], result.seconds)
         print(f"  {agents} drones x {its}: compiled {times['compiled']:.3f} s, "
-              f"gpu {times['gpu']:.3f} s", flush=True)  # fmt: skip
+              f"gpu {times['gpu']:.3f} s (best so far)", flush=True)  # fmt: skip
         return times["gpu"] - times["compiled"]
 
-    agents, wins, losing = int(first), 0, None
-    while wins < 2 and agents <= 16_000_000:
-        if run(agents) < 0:
-            wins += 1
-        else:
-            wins, losing = 0, agents
-        agents *= 2
-    if wins == 0:
-        print("crossover: the GPU did not win up to 16,000,000 drones")
-        return 1
-    if losing is None:
-        print(f"crossover: the GPU wins from the first size tried ({first} drones) on")
+    ordered = sorted(int(n) for n in sizes)
+    differences = {n: run(n) for n in ordered}
+    losing = [n for n in ordered if differences[n] >= 0]
+    if not losing:
+        print(f"crossover: the GPU wins from the smallest size tried ({ordered[0]} drones) on")
         return 0
-    for _ in range(2):
-        low, high = run(losing), run(losing * 2)
-    # the difference is linear in the swarm between the two sizes: its zero
-    if high >= 0:
-        print(f"crossover: not settled: the GPU won at {2 * losing} once, lost in the re-runs")
+    last = max(losing)
+    if last == ordered[-1]:
+        print(f"crossover: the GPU did not win up to {last} drones x {its}")
         return 1
-    at = losing + losing * low / (low - high)
+    high_n = ordered[ordered.index(last) + 1]
+    low, high = run(last), run(high_n)
+    if high >= 0:
+        print(f"crossover: not settled: the GPU won at {high_n} once, lost in the re-run")
+        return 1
+    if low < 0:
+        print(f"crossover: not settled: the GPU lost at {last} once, won in the re-run")
+        return 1
+    at = last + (high_n - last) * low / (low - high)
     print(f"crossover: {at:.0f} drones x {its} iterations (record every {k}): the GPU loses "
-          f"at {losing} and wins at {2 * losing}; AUTO_DRONE_ITERATIONS = "
+          f"at {last} and wins at {high_n}; AUTO_DRONE_ITERATIONS = "
           f"{math.ceil(at) * its}")  # fmt: skip
+    return 0
+
+
+def auto(threshold: str) -> int:
+    """What "auto" picks on this machine with ``AUTO_DRONE_ITERATIONS = threshold``: the
+    engine of gathering's 4-drone teaching run (created and run), and of patrol runs just
+    below and above the threshold (created: the GPU's kernel compiled, not run)."""
+    from pyautonomousagent import Simulation, load
+    from pyautonomousagent.engines import gpu
+
+    gpu.AUTO_DRONE_ITERATIONS = least = int(threshold)
+    sim = Simulation.create(load("gathering"), engine="auto").run(progress=False)
+    print(f"auto, AUTO_DRONE_ITERATIONS = {least}: gathering 4 x 8000 runs on {sim.engine.name}")
+    for agents in (least // 1000 // 2, 2 * least // 1000):
+        patrol = load("patrol").with_overrides(agents=agents, iterations=1000)
+        name = Simulation.create(patrol, engine="auto", record_every=100).engine.name
+        print(f"auto, AUTO_DRONE_ITERATIONS = {least}: patrol {agents} x 1000 takes {name}")
+    return 0
+
+
+def spread(
+    engine: str = "gpu", agents: str = "1000000", iterations: str = "200",
+    neighbours: str = "20",
+) -> int:  # fmt: skip
+    """Gathering with messages in range, its swarm spread at constant density: ``agents``
+    drones, each starting on its own refuelling slot and flying to its own surveillance
+    position, both drawn uniformly in a square world sized so that a drone has
+    ``neighbours`` others within the 25 m datalink range on average (side =
+    sqrt(agents * pi * 25**2 / neighbours)); every drone shares its state every iteration
+    (spatial messaging), drone1 orders the gathering at iteration 100. Prints the set-up
+    and loop times and drone-iterations per second. (The gathering scenario's own 4 slots
+    and 4 points would pack the swarm: every drone would hear a quarter of it. The points
+    are drawn in the mission's placement, wrapped here for this process only: a scenario
+    file of a million points takes minutes to read and check.)"""
+    from pyautonomousagent import Simulation, load
+    from pyautonomousagent.missions.gathering import GatheringMission
+
+    n, its = int(agents), int(iterations)
+    side = math.ceil(math.sqrt(n * math.pi * 25.0**2 / float(neighbours)))
+    place = GatheringMission.place
+
+    def spread_out(mission: Any, swarm: Any, world: Any, rng: Any) -> None:
+        place(mission, swarm, world, rng)
+        draw = np.random.default_rng(0)
+        size = swarm.size  # the run's swarm, or the fit check's probe of a few drones
+        slots, points = (draw.uniform(1.0, side - 1.0, (size, 2)) for _ in "ab")
+        s, bb = swarm.columns, swarm.blackboard
+        s["x"][:], s["y"][:] = slots.T
+        bb["x_refueling_position"][:], bb["y_refueling_position"][:] = slots.T
+        mission.set_surveillance(swarm, points)
+
+    scenario = load("gathering").with_overrides(
+        agents=n, iterations=its, size=[side, side], datalink_range=25, gathering_iteration=100
+    )
+    began = time.perf_counter()
+    setattr(GatheringMission, "place", spread_out)  # noqa: B010  (for this process only)
+    try:
+        sim = Simulation.create(scenario, seed=0, engine=engine, record_every=100)
+    finally:
+        setattr(GatheringMission, "place", place)  # noqa: B010
+    made = time.perf_counter()
+    sim.run(progress=False)
+    loop = time.perf_counter() - made
+    x, y = sim.swarm.columns["x"], sim.swarm.columns["y"]
+    print(f"gathering spread, {engine}: {n} drones x {its} iterations in a {side} m square "
+          f"({neighbours} neighbours in range on average): set-up {made - began:.1f} s, loop "
+          f"{loop:.3f} s = {n * its / loop:.3g} drone-iterations/s (goal 4.7e8); parts "
+          f"{getattr(sim.engine, 'timings', None)}; at the end x {x.min():.0f}..{x.max():.0f}, "
+          f"y {y.min():.0f}..{y.max():.0f}")  # fmt: skip
     return 0
 
 
@@ -200,10 +273,15 @@ def memory(*sizes: str) -> int:
               f"{sim.world.iteration} iterations done", flush=True)  # fmt: skip
         del sim
         gc.collect()
-        context.deallocations.clear()
+        pending = getattr(context, "deallocations", None)  # None under the simulator
+        if pending is not None:
+            pending.clear()
     if len(used) >= 2:
         (n1, u1), (n2, u2) = sorted(used.items())[-2:]
         slope = (u2 - u1) / (n2 - n1)
+        if not slope > 0:
+            print(f"memory per drone: not measurable here (device memory in use {u1}, {u2})")
+            return 1
         fixed = u1 - slope * n1
         largest = int((free0 - fixed) / slope)
         print(f"memory per drone: {slope:.0f} bytes (fixed {fixed / 2**20:.0f} MiB); the "
@@ -215,7 +293,7 @@ def memory(*sizes: str) -> int:
 def main(argv: list[str]) -> int:
     commands = {"check": check, "fma": fma, "device": device, "bandwidth": bandwidth,
                 "bytes": state_bytes, "rate": rate, "memory": memory,
-                "crossover": crossover}  # fmt: skip
+                "crossover": crossover, "spread": spread, "auto": auto}  # fmt: skip
     if not argv or argv[0] not in commands:
         print(__doc__, file=sys.stderr)
         return 2
