@@ -2,6 +2,7 @@
 
 python scripts/gpu_figures.py check          # exit 2 with the reason where no GPU is usable
 python scripts/gpu_figures.py fma            # exit 1 where no_fma leaves FMA in the PTX
+python scripts/gpu_figures.py lto            # a * b + c on the device, with and without LTO
 python scripts/gpu_figures.py device         # device, driver, CuPy and numba-cuda versions
 python scripts/gpu_figures.py bandwidth      # measured device copy bandwidth, GB/s
 python scripts/gpu_figures.py bytes          # bytes of state per drone (patrol)
@@ -51,6 +52,34 @@ def fma() -> int:
     contracted = "fma." in ptx
     print(f"no_fma with this numba-cuda: {'FMA still in the PTX' if contracted else 'no FMA'}")
     return int(contracted)
+
+
+def lto() -> int:
+    """``a * b + c`` run on the device, compiled inside ``no_fma`` with numba-cuda's LTO and
+    without: whether each rounds twice, as NumPy does (exit 1 where the engine's way,
+    without LTO, does not). a = 1 + 2**-30, b = 1 - 2**-30, c = -1: a * b rounds to 1.0,
+    so NumPy gives 0.0; a fused multiply-add gives -2**-60."""
+    from numba import cuda
+
+    from pyautonomousagent.engines.gpu import no_fma
+
+    def multiply_add(a, b, c, out):  # type: ignore[no-untyped-def]
+        out[0] = a[0] * b[0] + c[0]
+
+    values = [np.array([v]) for v in (1 + 2**-30, 1 - 2**-30, -1.0)]
+    expected = values[0][0] * values[1][0] + values[2][0]
+    wrong = 0
+    for link in (True, False):
+        out = cuda.device_array(1)
+        with no_fma():
+            kernel = cuda.jit(fastmath=False, lto=link)(multiply_add)
+            kernel[1, 1](*(cuda.to_device(v) for v in values), out)
+        got = out.copy_to_host()[0]
+        same = got == expected
+        wrong += not same and not link
+        print(f"lto={link}: a * b + c on the device = {got!r}, NumPy {expected!r}: "
+              f"{'same' if same else 'differs (contracted)'}")  # fmt: skip
+    return int(wrong > 0)
 
 
 def device() -> int:
@@ -291,7 +320,7 @@ def memory(*sizes: str) -> int:
 
 
 def main(argv: list[str]) -> int:
-    commands = {"check": check, "fma": fma, "device": device, "bandwidth": bandwidth,
+    commands = {"check": check, "fma": fma, "lto": lto, "device": device, "bandwidth": bandwidth,
                 "bytes": state_bytes, "rate": rate, "memory": memory,
                 "crossover": crossover, "spread": spread, "auto": auto}  # fmt: skip
     if not argv or argv[0] not in commands:

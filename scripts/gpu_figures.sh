@@ -22,10 +22,15 @@ PYAA="$PY -m pyautonomousagent.cli"
 exec > >(tee -a "$OUT/gpu_figures.log") 2>&1
 
 # step NAME SECONDS COMMAND...: run COMMAND under a limit of SECONDS (less where less of the
-# budget is left), logging its exit status and time; skipped with under 15 s left.
+# budget is left), logging its exit status and time; skipped with under 15 s left, or where
+# NAME matches the regular expression GPU_FIGURES_SKIP (e.g. to rerun some steps only).
 step() {
   local name=$1 limit=$2 left began rc
   shift 2
+  if [[ -n "${GPU_FIGURES_SKIP:-}" && "$name" =~ $GPU_FIGURES_SKIP ]]; then
+    echo "=== $name: not taken (GPU_FIGURES_SKIP)"
+    return 0
+  fi
   left=$((BUDGET - SECONDS))
   if ((left < 15)); then
     echo "=== $name: not taken (out of time: ${left} s of the ${BUDGET} s budget left)"
@@ -46,6 +51,8 @@ step() {
 
 $FIG check || exit 2
 step "device and versions" 30 bash -c "nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm --format=csv; nproc; $FIG device"
+# FMA contraction: a * b + c on the device with numba-cuda's LTO and without (the engine's).
+step "a * b + c with and without LTO" 30 $FIG lto
 # The same bits first: the device tests (patrol, patrol-3d, gathering with and without
 # messages in range, radiation-search, vacuum against the batched engine, 3 seeds each).
 XDIST=""
@@ -80,6 +87,6 @@ step "patrol 10M x 1000 on the GPU" 60 bash -c "$PYAA bench patrol --agents 1000
   > $OUT/patrol-10M.json; $FIG rate $OUT/patrol-10M.json $BW"
 # 1,000,000 drones: the GPU against the compiled engine on all this machine's cores,
 # interleaved: the loops (goal: the GPU's at least 5x faster).
-step "patrol 1M x 1000: compiled (all cores) vs gpu" 60 $PYAA bench patrol --agents 1000000 \
+step "patrol 1M x 1000: compiled (all cores) vs gpu" 90 $PYAA bench patrol --agents 1000000 \
   --iterations 1000 --record-every 100 --engines compiled,gpu,compiled,gpu
 echo "=== done in $SECONDS s"

@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.engines import cuda_jit
 from pyautonomousagent.engines.compiled import CompiledEngine, load_source
 from pyautonomousagent.engines.compiled_source import Constants, Layout, Messaging
 from pyautonomousagent.engines.gpu_records import RecordGroups
@@ -166,17 +167,15 @@ def _text(name: str | bytes) -> str:
 
 
 def load_kernel(source: str, name: str = "block_gpu") -> Any:
-    """Function ``name`` of generated ``source`` as a CUDA kernel (``cuda.jit``, no fast
-    math). Under the simulator the njit helpers it calls with arrays run as Python (their
-    ``py_func``): the simulator's arrays are not NumPy's."""
-    from numba import cuda
-
+    """Function ``name`` of generated ``source`` as a CUDA kernel (:func:`.cuda_jit.kernel`:
+    no fast math, no link-time optimisation). Under the simulator the njit helpers it calls
+    with arrays run as Python (their ``py_func``): the simulator's arrays are not NumPy's."""
     module = load_source(source)
     if simulating():
         for key, value in list(vars(module).items()):
             if key != "cuda" and hasattr(value, "py_func"):
                 setattr(module, key, _python(value))
-    return cuda.jit(fastmath=False)(getattr(module, name))
+    return cuda_jit.kernel(getattr(module, name))
 
 
 def _python(function: Any, made: dict[int, Any] | None = None) -> Any:

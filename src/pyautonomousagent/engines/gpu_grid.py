@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 from numba import cuda as numba_cuda
 
+from pyautonomousagent.engines.cuda_jit import kernel
 from pyautonomousagent.engines.gpu_reduce import Workspace, exclusive_scan, shape
 from pyautonomousagent.jit import njit
 
@@ -113,7 +114,7 @@ def next_message(heads: Any, ends: Any, spans: int, order: Any) -> int:
     return m
 
 
-@cuda.jit
+@kernel
 def _count(sx: Any, sy: Any, count: int, grid: Any, cell: Any, filled: Any) -> None:
     """Message ``m``'s cell into ``cell[m]``, counted in ``filled[cell]``."""
     m = cuda.grid(1)
@@ -126,7 +127,7 @@ def _count(sx: Any, sy: Any, count: int, grid: Any, cell: Any, filled: Any) -> N
     cuda.atomic.add(filled, cy * along_x + cx, 1)
 
 
-@cuda.jit
+@kernel
 def _place(cell: Any, starts: Any, filled: Any, count: int, order: Any) -> None:
     """Message ``m`` into its cell's segment of ``order``, counting ``filled`` down."""
     m = cuda.grid(1)
@@ -136,7 +137,7 @@ def _place(cell: Any, starts: Any, filled: Any, count: int, order: Any) -> None:
     order[starts[c] + cuda.atomic.add(filled, c, -1) - 1] = m
 
 
-@cuda.jit(device=True)
+@kernel(device=True)
 def _sift(values: Any, first: int, root: int, size: int) -> None:
     """Restore the max-heap ``values[first:first + size]`` below ``root``."""
     while 2 * root + 1 < size:
@@ -149,7 +150,7 @@ def _sift(values: Any, first: int, root: int, size: int) -> None:
         root = child
 
 
-@cuda.jit
+@kernel
 def _sort(starts: Any, order: Any, cells: int) -> None:
     """Cell ``c``'s segment of ``order`` sorted ascending (heapsort: O(s log s), in place)."""
     c = cuda.grid(1)

@@ -14,6 +14,8 @@ from typing import Any
 import numpy as np
 from numba import cuda as numba_cuda
 
+from pyautonomousagent.engines.cuda_jit import kernel
+
 cuda: Any = numba_cuda  # numba's stubs type cuda.grid poorly
 
 #: Threads per block of every launch.
@@ -51,7 +53,7 @@ class Workspace:
         return held[:length]
 
 
-@cuda.jit
+@kernel
 def _scan_chunks(values: Any, out: Any, sums: Any) -> None:
     """Each chunk's exclusive prefix sum of ``values`` (int64, shape (L,)) into ``out``, its
     total into ``sums[chunk]``."""
@@ -67,7 +69,7 @@ def _scan_chunks(values: Any, out: Any, sums: Any) -> None:
     sums[c] = total
 
 
-@cuda.jit
+@kernel
 def _add_chunks(out: Any, offsets: Any) -> None:
     """``out[i] += offsets[chunk of i]``."""
     i = cuda.grid(1)
@@ -88,7 +90,7 @@ def exclusive_scan(values: Any, out: Any, work: Workspace, level: int = 0) -> No
         _add_chunks[shape(values.shape[0])](out, offsets)
 
 
-@cuda.jit
+@kernel
 def _box_points(x: Any, y: Any, sx: Any, sy: Any, counts: Any, k: int, live: int,
                 out: Any) -> None:  # fmt: skip
     """Per chunk of the points (the first ``live`` agents ``x``, ``y``, then type ``k``'s
@@ -112,7 +114,7 @@ def _box_points(x: Any, y: Any, sx: Any, sy: Any, counts: Any, k: int, live: int
     out[c, 0], out[c, 1], out[c, 2], out[c, 3], out[c, 4] = low_x, high_x, low_y, high_y, bad
 
 
-@cuda.jit
+@kernel
 def _box_boxes(boxes: Any, out: Any) -> None:
     """Per chunk of ``boxes`` (shape (B, 5), as ``_box_points`` writes them), the box of
     their union into ``out[chunk]``."""
