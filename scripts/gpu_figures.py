@@ -3,6 +3,7 @@
 python scripts/gpu_figures.py check          # exit 2 with the reason where no GPU is usable
 python scripts/gpu_figures.py fma            # exit 1 where no_fma leaves FMA in the PTX
 python scripts/gpu_figures.py lto            # a * b + c on the device, with and without LTO
+python scripts/gpu_figures.py identity       # per column, the GPU's largest difference
 python scripts/gpu_figures.py device         # device, driver, CuPy and numba-cuda versions
 python scripts/gpu_figures.py bandwidth      # measured device copy bandwidth, GB/s
 python scripts/gpu_figures.py bytes          # bytes of state per drone (patrol)
@@ -21,6 +22,7 @@ import json
 import math
 import sys
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -58,28 +60,96 @@ def lto() -> int:
     """``a * b + c`` run on the device, compiled inside ``no_fma`` with numba-cuda's LTO and
     without: whether each rounds twice, as NumPy does (exit 1 where the engine's way,
     without LTO, does not). a = 1 + 2**-30, b = 1 - 2**-30, c = -1: a * b rounds to 1.0,
-    so NumPy gives 0.0; a fused multiply-add gives -2**-60."""
+    so NumPy gives 0.0; a fused multiply-add gives -2**-60. Also prints what explains a
+    contraction: the NVVM unit classes ``no_fma`` patches, the options each NVVM compile
+    of the launch got, and the launched kernel's PTX and SASS (fma/DFMA counted)."""
+    import numba_cuda
     from numba import cuda
 
-    from pyautonomousagent.engines.gpu import no_fma
+    from pyautonomousagent.engines.gpu import no_fma, nvvm_units
 
     def multiply_add(a, b, c, out):  # type: ignore[no-untyped-def]
         out[0] = a[0] * b[0] + c[0]
 
+    units = nvvm_units()
+    print(f"numba-cuda {getattr(numba_cuda, '__version__', '?')}; NVVM units patched: "
+          f"{[f'{u.__module__}.{u.__qualname__}' for u in units]}")  # fmt: skip
+    seen: list[str] = []
+    spied = [(unit, unit.__init__) for unit in units]
+    for unit, original in spied:
+
+        def spy(self, options, *args, _original=original, _unit=unit, **kwargs):  # type: ignore[no-untyped-def]
+            seen.append(f"{_unit.__module__}: {options}")
+            _original(self, options, *args, **kwargs)
+
+        unit.__init__ = spy
     values = [np.array([v]) for v in (1 + 2**-30, 1 - 2**-30, -1.0)]
     expected = values[0][0] * values[1][0] + values[2][0]
     wrong = 0
-    for link in (True, False):
-        out = cuda.device_array(1)
-        with no_fma():
+    try:
+        for link in (True, False):
+            seen.clear()
+            out = cuda.device_array(1)
             kernel = cuda.jit(fastmath=False, lto=link)(multiply_add)
-            kernel[1, 1](*(cuda.to_device(v) for v in values), out)
-        got = out.copy_to_host()[0]
-        same = got == expected
-        wrong += not same and not link
-        print(f"lto={link}: a * b + c on the device = {got!r}, NumPy {expected!r}: "
-              f"{'same' if same else 'differs (contracted)'}")  # fmt: skip
+            with no_fma():
+                kernel[1, 1](*(cuda.to_device(v) for v in values), out)
+            got = out.copy_to_host()[0]
+            wrong += got != expected and not link
+            print(f"lto={link}: a * b + c on the device = {got!r}, NumPy {expected!r}: "
+                  f"{'same' if got == expected else 'differs (contracted)'}; NVVM compiles "
+                  f"at the launch: {seen}")  # fmt: skip
+            for what, inspect in (("PTX", "inspect_asm"), ("SASS", "inspect_sass")):
+                try:
+                    text = "".join(getattr(kernel, inspect)().values())
+                except Exception as error:  # e.g. no nvdisasm for the SASS
+                    print(f"  {what}: {type(error).__name__}: {error}")
+                    continue
+                lines = [x.strip() for x in text.splitlines() if "mul" in x or "add" in x
+                         or "fma" in x.lower()]  # fmt: skip
+                print(f"  {what}: {lines[:8]}")
+    finally:
+        for unit, original in spied:
+            unit.__init__ = original
     return int(wrong > 0)
+
+
+def identity(seed: str = "1") -> int:
+    """The device cases of tests/test_gpu_engine.py (seed ``seed``), each run on the batched
+    engine and the GPU: per recorded column, how many entries differ and the largest
+    difference (in units in the last place for floats); then whether the decisions match
+    exactly (the traced statuses, the active behaviour, the events). Exit 1 where a
+    decision differs."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+    from pyautonomousagent import Simulation, load
+    from pyautonomousagent.testing import _behaviour
+    from tests.test_gpu_engine import DEVICE_CASES
+
+    decisions_differ = 0
+    for name, overrides, _ in DEVICE_CASES:
+        scenario = load(name).with_overrides(**overrides)
+        a, b = (Simulation.create(scenario, seed=int(seed), engine=e, record_every=10)
+                .run(progress=False) for e in ("batched", "gpu"))  # fmt: skip
+        ra, rb = a.recorder, b.recorder
+        columns = []
+        for key in ra.columns:
+            x, y = np.asarray(ra.column(key)), np.asarray(rb.column(key))
+            if x.tobytes() == y.tobytes():
+                continue
+            if x.dtype.kind == "f":
+                bits = np.dtype(f"i{x.dtype.itemsize}")
+                gap = np.abs(x.view(bits).astype(np.float64) - y.view(bits).astype(np.float64))
+                columns.append(f"{key}: {int((gap > 0).sum())} differ, at most {gap.max():.0f} ulp")
+            else:
+                columns.append(f"{key}: {int((x != y).sum())} differ")
+        same = {
+            "traces": np.array_equal(ra.traces[: ra.count], rb.traces[: rb.count]),
+            "behaviour": np.array_equal(_behaviour(ra), _behaviour(rb)),
+            "events": a.events == b.events,
+        }
+        decisions_differ += not all(same.values())
+        print(f"{name} {overrides}: {columns or 'every column the same'}; decisions: {same}",
+              flush=True)  # fmt: skip
+    return int(decisions_differ > 0)
 
 
 def device() -> int:
@@ -320,8 +390,8 @@ def memory(*sizes: str) -> int:
 
 
 def main(argv: list[str]) -> int:
-    commands = {"check": check, "fma": fma, "lto": lto, "device": device, "bandwidth": bandwidth,
-                "bytes": state_bytes, "rate": rate, "memory": memory,
+    commands = {"check": check, "fma": fma, "lto": lto, "identity": identity, "device": device,
+                "bandwidth": bandwidth, "bytes": state_bytes, "rate": rate, "memory": memory,
                 "crossover": crossover, "spread": spread, "auto": auto}  # fmt: skip
     if not argv or argv[0] not in commands:
         print(__doc__, file=sys.stderr)

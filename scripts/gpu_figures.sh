@@ -59,6 +59,9 @@ XDIST=""
 $PY -c "import xdist" 2>/dev/null && XDIST="-n 8"
 step "device bit identity (pytest)" 150 $PY -m pytest -q -p no:cacheprovider -o addopts="" -rs \
   $XDIST tests/test_gpu_engine.py -k on_the_device
+# Where the bits differ: per recorded column, how many entries and by how many units in the
+# last place; and whether the decisions (statuses, behaviours, events) match exactly.
+step "device differences per column (seed 1)" 120 $FIG identity 1
 BW=${GPU_BANDWIDTH:-$(timeout 60 $FIG bandwidth || echo 3000)}
 echo "measured device copy bandwidth: $BW GB/s (bytes read + written, best of 20 copies of 2 GiB)"
 $FIG bytes

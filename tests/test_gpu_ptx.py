@@ -228,3 +228,23 @@ def test_without_no_fma_nvvm_contracts_the_kernels_multiply_adds(tmp_path: Path)
     function = _function(module, where, name)
     assert "fma.rn.f64" in _ptx(function, argument_types, contract=True)
     assert "fma." not in _cached_ptx(launches[0])
+
+
+@needs_nvvm
+def test_no_fma_patches_the_nvvm_unit_of_every_module_that_defines_one(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """numba-cuda loaded under a second module name: its NVVM units get ``fma=False`` too,
+    and only while ``no_fma`` runs."""
+
+    class Unit:
+        def __init__(self, options: dict[str, Any]) -> None:
+            self.options = options
+
+    other = types.ModuleType("elsewhere.numba.cuda.cudadrv.nvvm")
+    other.CompilationUnit = Unit  # type: ignore[attr-defined]
+    monkeypatch.setitem(sys.modules, other.__name__, other)
+    assert Unit in gpu.nvvm_units() and len(gpu.nvvm_units()) == 2
+    with gpu.no_fma():
+        assert Unit({"opt": 3}).options == {"opt": 3, "fma": False}
+    assert Unit({"opt": 3}).options == {"opt": 3}

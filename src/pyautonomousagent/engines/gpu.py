@@ -24,7 +24,7 @@ alerts read the iterations the agents stopped at, copied back with the records).
 
 ``auto`` takes this engine where a device is present and the run has at least
 :data:`AUTO_DRONE_ITERATIONS` drone-iterations (:func:`auto_takes_gpu`; unset, so never,
-until that crossover is measured on a GPU).
+until the device's bits match: the crossover was measured on an H100, see the constant).
 
 Without numba-cuda, CuPy or a CUDA device, creating the engine raises
 :class:`GpuUnavailableError` (one line naming the install command). With
@@ -34,6 +34,7 @@ in Python on the CPU, for tests).
 
 from __future__ import annotations
 
+import sys
 import time
 import types
 from collections.abc import Iterator, Mapping
@@ -110,9 +111,10 @@ def gpu_problem() -> str | None:
 #: device is present (:func:`auto_takes_gpu`); None: never. It stays None until
 #: ``scripts/gpu_figures.sh`` has shown the device's bits equal to the batched engine's and
 #: measured (its ``crossover`` step) where the GPU starts to win, printing the value to put
-#: here. On the one H100 lent so far (docs/performance.md) the comparison of bits did not
-#: run, and the GPU lost whole patrol runs up to 1,000,000 drones x 1000 iterations (its
-#: kernel compiles in about 9 s), so "auto" sends no one's run there yet.
+#: here. On the H100 lent twice (docs/performance.md) the device contracted ``a * b + c``
+#: into fused multiply-adds, so positions differed from the batched engine's by one unit in
+#: the last place; the measured crossover, 1,876,028,000 drone-iterations (patrol, the
+#: kernel's ~9 s compile included), waits for bits that match.
 AUTO_DRONE_ITERATIONS: int | None = None
 
 
@@ -135,30 +137,42 @@ def require_gpu() -> None:
                              "with an NVIDIA GPU and its driver")  # fmt: skip
 
 
+def nvvm_units() -> list[Any]:
+    """Every NVVM ``CompilationUnit`` class of the loaded numba-cuda modules (one, unless
+    numba-cuda is importable under two module names: each is patched by :func:`no_fma`);
+    [] under the simulator, whose stand-in module has none."""
+    if simulating():
+        return []
+    import numba.cuda.codegen  # noqa: F401  (loads the nvvm module the code generator uses)
+
+    units = {id(unit): unit for name, module in list(sys.modules.items())
+             if name.endswith("cudadrv.nvvm")
+             and isinstance(unit := getattr(module, "CompilationUnit", None), type)}  # fmt: skip
+    return list(units.values())
+
+
 @contextmanager
 def no_fma() -> Iterator[None]:
     """Compile CUDA code with NVVM's ``-fma=0`` (no contraction of ``a * b + c`` into one
     rounding): numba-cuda passes ``fma`` only with ``fastmath=True``, and NVVM contracts by
-    default. While the body runs, every NVVM compilation unit numba-cuda makes
-    (``numba.cuda.cudadrv.nvvm.CompilationUnit``, whichever function makes it) gets
-    ``fma=False`` in its options. (Nothing to do under the simulator, which compiles
-    nothing.)"""
-    from numba.cuda.cudadrv import nvvm
+    default. While the body runs, every NVVM compilation unit numba-cuda makes (of each
+    class :func:`nvvm_units` finds, whichever function makes it) gets ``fma=False`` in its
+    options. (Nothing to do under the simulator, which compiles nothing.)"""
+    originals = [(unit, unit.__init__) for unit in nvvm_units()]
 
-    unit: Any = nvvm.CompilationUnit
-    if unit is None:  # the simulator's stand-in module
-        yield
-        return
-    original = unit.__init__
+    def patched(original: Any) -> Any:
+        def init(self: Any, options: Any, *args: Any, **kwargs: Any) -> None:
+            original(self, {**options, "fma": False}, *args, **kwargs)
 
-    def init(self: Any, options: Any, *args: Any, **kwargs: Any) -> None:
-        original(self, {**options, "fma": False}, *args, **kwargs)
+        return init
 
-    unit.__init__ = init
+    for unit, original in originals:
+        unit.__init__ = patched(original)
     try:
         yield
     finally:
-        unit.__init__ = original
+        for unit, original in originals:
+            unit.__init__ = original
 
 
 def _text(name: str | bytes) -> str:
