@@ -24,13 +24,13 @@ from typing import Any
 
 import numpy as np
 
+from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.blackboard import tree_blackboard_keys
 from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf
 from pyautonomousagent.bt.spec import Node, leaf, reactive_sequence
 from pyautonomousagent.bt.status import FAILURE, SUCCESS
 from pyautonomousagent.bt.trees import TREES
 from pyautonomousagent.datalink import Datalink
-from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES
 from pyautonomousagent.lessons import ExerciseError, check_exercise, tick_table
 from pyautonomousagent.scenarios import SCENARIOS, load
 from pyautonomousagent.simulation import phases

@@ -20,20 +20,20 @@ engine-independent ``evaluate`` once for all those agents.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from pyautonomousagent.allocator import reuse_freed_memory
+from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
+from pyautonomousagent.bt.program import PRE_CONDITIONS, case_values, compile_tree
 from pyautonomousagent.bt.script import Script, parse
 from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import (
     Node,
     TreeError,
     check_entries,
-    control_params,
     node_type,
     parallel_threshold,
 )
@@ -45,8 +45,6 @@ from pyautonomousagent.bt.status import (
     SUCCESS,
     invalid_status,
 )
-from pyautonomousagent.engines.btcpp import PRE_CONDITIONS, case_values
-from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, FROM_PYTREES
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -54,50 +52,6 @@ from pyautonomousagent.world import World
 LOOP_FOREVER = 2**62
 
 _CODES = {name: code for code, name in NAMES.items()}
-
-
-@dataclass(frozen=True)
-class Program:
-    """A tree description flattened into tick order.
-
-    Attributes:
-        nodes: the nodes, pre-order (the order of :meth:`Node.walk`).
-        parent: index of each node's parent, -1 for the root; shape (n,).
-        children: the child indices of each node.
-        end: one past the last node of each node's subtree; shape (n,).
-        params: control parameters with defaults filled in ({} for leaves).
-    """
-
-    nodes: tuple[Node, ...]
-    parent: np.ndarray
-    children: tuple[tuple[int, ...], ...]
-    end: np.ndarray
-    params: tuple[dict[str, Any], ...]
-
-
-def compile_tree(root: Node) -> Program:
-    """Flatten a (checked) tree description into a :class:`Program`."""
-    nodes: list[Node] = []
-    parent: list[int] = []
-    children: list[list[int]] = []
-    end: list[int] = []
-
-    def visit(node: Node, up: int) -> int:
-        i = len(nodes)
-        nodes.append(node)
-        parent.append(up)
-        children.append([])
-        end.append(0)
-        for child in node.children:
-            children[i].append(visit(child, i))
-        end[i] = len(nodes)
-        return i
-
-    visit(root, -1)
-    params = tuple(control_params(n) if n.is_control else {} for n in nodes)
-    return Program(
-        tuple(nodes), np.asarray(parent), tuple(tuple(c) for c in children), np.asarray(end), params
-    )
 
 
 def _some(mask: np.ndarray) -> bool:
@@ -241,7 +195,7 @@ class BatchedEngine:
                 asked = going & (status != RUNNING)
                 if key in scripts and _some(asked):
                     decided = self._truth(scripts[key], asked)
-                    np.copyto(status, FROM_PYTREES[result], where=decided)
+                    np.copyto(status, result, where=decided)
                     going &= ~decided
             if _some(going):
                 ticker(going)

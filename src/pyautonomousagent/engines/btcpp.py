@@ -23,9 +23,21 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
+from pyautonomousagent.bt import program
+from pyautonomousagent.bt import status as codes
+from pyautonomousagent.bt.program import case_values
 from pyautonomousagent.bt.script import parse
-from pyautonomousagent.bt.script_leaves import iterations, literal
+from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import parallel_threshold
+
+#: Status codes (:mod:`pyautonomousagent.bt.status`) as py_trees' statuses, and back.
+TO_PYTREES = {
+    codes.INVALID: Status.INVALID,
+    codes.SUCCESS: Status.SUCCESS,
+    codes.FAILURE: Status.FAILURE,
+    codes.RUNNING: Status.RUNNING,
+}
+FROM_PYTREES = {v: k for k, v in TO_PYTREES.items()}
 
 
 class SequenceWithMemory(py_trees.composites.Composite):
@@ -411,13 +423,6 @@ class RunOnce(py_trees.decorators.Decorator):
         return self.decorated.status
 
 
-def case_values(params: Mapping[str, Any]) -> list[Any]:
-    """A Switch's cases as the numbers they compare with (words: enum values)."""
-    cases = sorted((int(k[5:]), v) for k, v in params.items() if k.startswith("case_"))
-    return [literal(str(value).lower() if isinstance(value, bool) else str(value))[0]
-            for _, value in cases]  # fmt: skip
-
-
 class Switch(py_trees.composites.Composite):
     """BT.CPP ``Switch2``...``Switch6``: ticks the child of the first case equal to the
     agent's entry ``variable`` (else the last child); a running child of another case is
@@ -452,7 +457,8 @@ class Switch(py_trees.composites.Composite):
 
 
 #: Pre-conditions in BT.CPP's order: attribute -> the status it returns when its script holds.
-PRE_CONDITIONS = (("_failureIf", Status.FAILURE), ("_successIf", Status.SUCCESS))
+#: :data:`~pyautonomousagent.bt.program.PRE_CONDITIONS` with py_trees' statuses.
+PRE_CONDITIONS = tuple((key, TO_PYTREES[code]) for key, code in program.PRE_CONDITIONS)
 
 
 def with_scripts(behaviour: Behaviour, scripts: Mapping[str, str], agent: Any) -> Behaviour:

@@ -37,8 +37,8 @@ import numpy as np
 
 from pyautonomousagent import jit
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, leaf_type, make_leaf
+from pyautonomousagent.bt.program import Program, compile_tree
 from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_entries
-from pyautonomousagent.engines.batched import Program, compile_tree
 from pyautonomousagent.engines.compiled_source import (
     CHUNK,
     Constants,

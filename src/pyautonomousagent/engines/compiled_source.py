@@ -23,8 +23,8 @@ from typing import Any
 import numpy as np
 
 from pyautonomousagent.bt.nodes import NODE_TYPES
+from pyautonomousagent.bt.program import Program
 from pyautonomousagent.bt.status import FAILURE, NAMES, RUNNING, SUCCESS
-from pyautonomousagent.engines.batched import Program
 from pyautonomousagent.kernels import (
     ITERATION,
     HandlerKernel,

@@ -26,7 +26,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from pyautonomousagent.engines.batched import Program
+from pyautonomousagent.bt.program import Program
 from pyautonomousagent.engines.compiled_source import (
     Layout,
     Messaging,

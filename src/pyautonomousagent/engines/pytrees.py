@@ -17,22 +17,14 @@ import numpy as np
 import py_trees
 from py_trees.common import Status
 
-from pyautonomousagent.bt import status as codes
+from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
 from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params
 from pyautonomousagent.bt.status import invalid_status
-from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, with_scripts
-from pyautonomousagent.registry import Registry
+from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, TO_PYTREES, with_scripts
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
-TO_PYTREES = {
-    codes.INVALID: Status.INVALID,
-    codes.SUCCESS: Status.SUCCESS,
-    codes.FAILURE: Status.FAILURE,
-    codes.RUNNING: Status.RUNNING,
-}
-FROM_PYTREES = {v: k for k, v in TO_PYTREES.items()}
 #: id(py_trees status) -> status code: an int key hashes in C, an Enum member in Python.
 _CODE_BY_ID = {id(v): k for k, v in TO_PYTREES.items()}
 _STATUS = operator.attrgetter("status")
@@ -245,9 +237,6 @@ def _quiet(cls: type) -> type:
 
 
 BehaviourFactory = Callable[..., AgentBehaviour]
-#: Hand-written py_trees behaviours: type name -> class taking
-#: ``(name, agent, world, **params)``.
-BEHAVIOUR_TYPES: Registry[BehaviourFactory] = Registry("hand-written behaviour")
 
 
 def register_behaviour(type_name: str) -> Callable[[type[AgentBehaviour]], type[AgentBehaviour]]:

@@ -12,6 +12,7 @@ from typing import Any, Protocol
 import numpy as np
 import pyarrow as pa
 
+from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.blackboard import tree_blackboard_keys
 from pyautonomousagent.bt.files import is_tree_file, load_tree
 from pyautonomousagent.bt.spec import Node
@@ -20,7 +21,7 @@ from pyautonomousagent.datalink import Datalink, Delivery
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.compiled import CompiledEngine, compilable
 from pyautonomousagent.engines.gpu import GpuEngine, auto_takes_gpu
-from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, PyTreesEngine
+from pyautonomousagent.engines.pytrees import PyTreesEngine
 from pyautonomousagent.inputs import shown
 from pyautonomousagent.names import agent_index
 from pyautonomousagent.progress import Progress
