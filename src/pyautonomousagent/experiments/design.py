@@ -141,8 +141,9 @@ def typed(design: Design, kinds: dict[str, type]) -> Design:
     for name, (low, high) in design.bounds.items():
         kind = kinds.get(name, float)
         if kind is bool or kind not in (int, float):
+            what = {str: "text", bool: "true or false"}.get(kind, kind.__name__)
             raise ExperimentError(
-                f"design {design.method}: parameter {name!r} is {kind.__name__}, not a number; "
+                f"design {design.method}: parameter {name!r} is {what}, not a number; "
                 "vary it on a grid (--design grid)"
             )
         if kind is int:

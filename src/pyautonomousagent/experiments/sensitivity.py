@@ -15,7 +15,8 @@ measures), the design and its points in the unit cube, and gives a tidy table, o
 
 A point run with several seeds counts by the mean of its successful runs (the sensitivity of
 the seeds' mean). The bootstrap draws from the design's seed, so the same sweep always gives
-the same table. A measure that takes one value at every point has no indices (NaN).
+the same table. A measure that takes one value at every point, or has no value at some
+point (its runs failed, are not done, or the measure is NaN there), has no indices (NaN).
 :func:`read_sweep` reads what the analysis needs from a sweep folder (its results, manifest
 and ``design.parquet``), and :func:`plot_indices` draws the table.
 """
@@ -130,23 +131,16 @@ def check_measures(results: pa.Table, measures: list[str], known: list[str]) -> 
 
 def point_means(results: pa.Table, measure: str, points: int, seeds: int) -> np.ndarray:
     """The mean of ``measure`` over each point's successful runs (point = run // seeds),
-    shape (points,).
-
-    Raises:
-        ExperimentError: a point without a successful run with a value.
-    """
+    shape (points,); NaN at a point without a successful run with a value."""
     runs = results["run"].to_numpy()
     values = results[measure].to_numpy(zero_copy_only=False).astype(np.float64)
-    ok = np.asarray([s == "ok" for s in results["status"].to_pylist()]) & np.isfinite(values)
+    ok = np.asarray([s == "ok" for s in results["status"].to_pylist()], dtype=bool)
+    ok &= np.isfinite(values) & (runs < points * seeds)
     point = runs[ok] // seeds
-    counts = np.bincount(point, minlength=points)[:points]
-    if len(counts) < points or (counts == 0).any() or point.max(initial=0) >= points:
-        missing = int(np.flatnonzero(counts == 0)[0]) if (counts == 0).any() else points
-        raise ExperimentError(
-            f"measure {measure!r} has no value at point {missing} (its runs failed, are not "
-            "done yet or give NaN); finish the sweep with --resume, or leave the measure out"
-        )
-    return np.bincount(point, weights=values[ok], minlength=points) / counts
+    counts = np.bincount(point, minlength=points)
+    sums = np.bincount(point, weights=values[ok], minlength=points)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(counts > 0, sums / np.maximum(counts, 1), np.nan)
 
 
 def indices(
@@ -176,7 +170,7 @@ def _analyse(design: Design, unit: np.ndarray, y: np.ndarray) -> dict[str, list[
     """index -> [(value, 95 % half-width), one per parameter] for the point means ``y``."""
     names = INDICES[design.method]
     d = len(design.names)
-    if np.ptp(y) == 0:  # one value everywhere: no variance to share out
+    if not np.isfinite(y).all() or np.ptp(y) == 0:  # a point without a value, or no variance
         return {index: [(math.nan, math.nan)] * d for index in names}
     problem = design.problem()
     with warnings.catch_warnings():
@@ -213,7 +207,7 @@ def report(table: pa.Table, stored: StoredSweep) -> list[str]:
         unit = stored.measures.get(measure, {}).get("unit", "")
         shown = f"{measure} ({unit})" if unit and unit != measure else measure
         if all(math.isnan(r["value"]) for r in rows):
-            lines.append(f"{shown}: the same value at every point: no indices")
+            lines.append(f"{shown}: {_why_none(stored, measure)}: no indices")
             continue
         if design.method == "sobol":
             lines.append(f"{shown}: Sobol indices, {points}, 95 % confidence intervals")
@@ -232,6 +226,18 @@ def report(table: pa.Table, stored: StoredSweep) -> list[str]:
                 text = _pm(found["mu_star"])
                 lines.append(f"  {name:24s} {text:>22s} {sigma:10.4g} {mu:10.4g}")
     return lines
+
+
+def _why_none(stored: StoredSweep, measure: str) -> str:
+    """Why ``measure`` has no indices: points without a value, or one value everywhere."""
+    y = point_means(stored.results, measure, stored.design.size(), stored.seeds)
+    missing = int(np.isnan(y).sum())
+    if missing:
+        return (
+            f"no value at {missing} of {len(y)} points (runs failed or not done: --resume; "
+            "or the measure is NaN there)"
+        )
+    return f"the same value at every point ({y[0]:.6g})"
 
 
 def _pm(row: dict[str, Any]) -> str:
@@ -279,7 +285,7 @@ def _panel(ax: Any, table: pa.Table, stored: StoredSweep, measure: str) -> None:
     unit = stored.measures.get(measure, {}).get("unit", "")
     ax.set_title(f"{measure} ({unit})" if unit and unit != measure else measure, fontsize=9)
     if all(math.isnan(r["value"]) for r in rows):
-        ax.text(0.5, 0.5, "the same value at every point", ha="center", transform=ax.transAxes)
+        ax.text(0.5, 0.5, "no indices", ha="center", transform=ax.transAxes)
         ax.set_xticks([])
         ax.set_yticks([])
         return

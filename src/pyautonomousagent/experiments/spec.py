@@ -389,8 +389,10 @@ class _Reader:
             raise self.fail(f"vary.{name}", must, value)
         low = self.number(value["from"], f"vary.{name}.from")
         high = self.number(value["to"], f"vary.{name}.to")
-        if not low < high or not math.isfinite(high - low) or max(-low, high) > 2**62:
-            raise self.fail(f"vary.{name}", must + " within +-2**62", value)
+        if not low < high:
+            raise self.fail(f"vary.{name}", must, value)
+        if not math.isfinite(high - low) or max(-low, high) > 2**62:
+            raise self.fail(f"vary.{name}", "bounds within +-2**62", value)
         return low, high
 
     def overlap(self, fixed: Mapping[str, Any], varied: Sequence[str]) -> None:
@@ -610,7 +612,7 @@ def parse_vary(items: Sequence[str], bounds: bool = False) -> dict[str, Any]:
         elif len(parts) > 1 and all(isinstance(_vary_value(p, name), int | float) for p in parts):
             raise ExperimentError(
                 f"--vary {name}: a range is FROM:TO:STEP, three numbers (e.g. 20:50:5), "
-                f"got {text!r}"
+                f"got {text!r} (bounds LOW:HIGH are for --design lhs, sobol or morris)"
             )
         else:
             vary[name] = [_vary_value(v, name) for v in text.split(",") if v.strip()]
