@@ -266,10 +266,8 @@ def plot_indices(table: pa.Table, stored: StoredSweep, out: str | Path) -> Path:
     for ax in list(axes.flat)[len(measures) :]:
         ax.set_visible(False)
     method = {"sobol": "Sobol indices", "morris": "Morris screening"}[stored.design.method]
-    fig.suptitle(
-        f"{method}: {stored.design.size()} points x {stored.seeds} seeds, 95 % intervals",
-        fontsize=10,
-    )
+    seeds = f"{stored.seeds} seed{'s' * (stored.seeds > 1)}"
+    fig.suptitle(f"{method}: {stored.design.size()} points x {seeds}, 95 % intervals", fontsize=10)
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out)
