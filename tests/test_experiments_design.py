@@ -82,6 +82,26 @@ def test_morris_effects_of_a_linear_model() -> None:
     assert [v for v, _ in by_index(table, "sigma")] == pytest.approx([0, 0, 0], abs=1e-9)
 
 
+def test_several_seeds_count_by_their_mean() -> None:
+    """Two seeds per point, 1 above and 1 below the model (and a failed third that is left
+    out): the indices of the mean, the model's."""
+    experiment = bounded("morris", 6, {"a": (0, 2), "b": (-1, 0)}, seed=4)
+    one = model_results(experiment, lambda x: 3 * x[:, 0] + x[:, 1])
+    y = one["y"].to_numpy()
+    n = len(y)
+    runs = np.arange(3 * n)  # run = point * 3 + seed index
+    values = np.stack([y + 1, y - 1, np.full(n, 1e9)], axis=1).ravel()
+    status = ["ok", "ok", "failed"] * n
+    three = pa.table({"run": runs, "status": status, "y": values})
+    unit = experiment.design.unit()
+    mean = indices(three, experiment.design, unit, ["y"], seeds=3)
+    exact = indices(one, experiment.design, unit, ["y"])
+    for column in ("value", "confidence"):
+        found, known = (t[column].to_numpy() for t in (mean, exact))
+        np.testing.assert_allclose(found, known, atol=1e-12, equal_nan=True)
+    assert by_index(mean, "mu_star")[0][0] == pytest.approx(6.0)
+
+
 def test_a_constant_or_incomplete_measure_has_no_indices_and_says_why() -> None:
     experiment = bounded("sobol", 4, {"x": (0, 1), "y": (0, 1)})
     design, unit = experiment.design, experiment.design.unit()

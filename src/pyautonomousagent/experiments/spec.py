@@ -159,7 +159,9 @@ class Experiment:
 
     def points(self) -> list[dict[str, Any]]:
         """Every point: the grid crossed with the random samples (in that order), or the
-        design's points."""
+        design's points (whole numbers where the design marks a parameter so, as
+        :func:`~pyautonomousagent.experiments.design.for_scenario` does from the scenario's
+        schema: :func:`~pyautonomousagent.experiments.sweep.sweep` calls it; floats before)."""
         if self.design is not None:
             return self.design.points()
         names = list(self.vary)
