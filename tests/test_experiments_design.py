@@ -264,13 +264,24 @@ def test_pyaa_analyse_refuses_a_grid_sweep(tmp_path: Path, capsys) -> None:
     assert not (out / "sensitivity.png").exists()
 
 
-def test_without_salib_a_sobol_design_names_the_extra(monkeypatch, tmp_path, capsys) -> None:
-    for name in [m for m in sys.modules if m == "SALib" or m.startswith("SALib.")]:
+@pytest.mark.parametrize(
+    ("design", "module", "library"),
+    [
+        ("sobol", "SALib", "SALib"),
+        ("morris", "SALib", "SALib"),
+        ("lhs", "scipy.stats.qmc", "SciPy"),
+    ],
+)
+def test_without_its_library_a_design_names_the_extra(
+    design, module, library, monkeypatch, tmp_path, capsys
+) -> None:
+    for name in [m for m in sys.modules if m == module or m.startswith(module + ".")]:
         monkeypatch.delitem(sys.modules, name)
-    monkeypatch.setitem(sys.modules, "SALib", None)  # import SALib raises ImportError
+    monkeypatch.setitem(sys.modules, module, None)  # importing it raises ImportError
     out = tmp_path / "s"
-    argv = ["sweep", "patrol", "--design", "sobol", "--samples", "4", "--vary",
+    argv = ["sweep", "patrol", "--design", design, "--samples", "4", "--vary",
             "low_energy_threshold=30:45", "--out", str(out), "--serial"]  # fmt: skip
     err = one_line_error(argv, capsys)
-    assert "needs SALib" in err and 'pip install "pyautonomousagent[experiments]"' in err
+    assert f"--design {design} needs {library}, which is not installed" in err
+    assert 'pip install "pyautonomousagent[experiments]"' in err
     assert not out.exists()
