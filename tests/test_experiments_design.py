@@ -136,6 +136,23 @@ def test_designs_are_reproducible_and_typed_by_the_schema(method: str) -> None:
     assert len({(p["agents"], p["low_energy_threshold"]) for p in points}) <= len(points)
 
 
+def test_pyaa_sweep_lhs_types_its_columns_by_the_schema(tmp_path: Path) -> None:
+    """``--vary low_energy_threshold=30:45`` (whole-number bounds) stays a float column,
+    ``agents`` an int one; the design is written beside the results."""
+    out = tmp_path / "lhs"
+    argv = ["sweep", "patrol", "--design", "lhs", "--samples", "6", "--design-seed", "9",
+            "--vary", "agents=2:4", "--vary", "low_energy_threshold=30:45", "--seeds", "2",
+            "--iterations", "2", "--serial", "--quiet", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    table = pq.read_table(out / "results.parquet")
+    assert table.num_rows == 12 and table.schema.field("agents").type == pa.int64()
+    assert table.schema.field("low_energy_threshold").type == pa.float64()
+    assert set(table["agents"].to_pylist()) <= {2, 3, 4}
+    design = pq.read_table(out / "design.parquet")
+    assert design.column_names == ["point", "agents", "low_energy_threshold"]
+    assert design.num_rows == 6 and b"pyaa.design" in design.schema.metadata
+
+
 @pytest.mark.parametrize(
     ("change", "message"),
     [
