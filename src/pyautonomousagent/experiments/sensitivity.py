@@ -223,7 +223,7 @@ def report(table: pa.Table, stored: StoredSweep) -> list[str]:
                 lines.append(f"  {name:24s} {cells[0]:>20s} {cells[1]:>20s}")
             else:
                 star, sigma, mu = (found[i]["value"] for i in ("mu_star", "sigma", "mu"))
-                text = _pm(found["mu_star"])
+                text = f"{star:.4g} ± {found['mu_star']['confidence']:.2g}"
                 lines.append(f"  {name:24s} {text:>22s} {sigma:10.4g} {mu:10.4g}")
     return lines
 
