@@ -183,6 +183,20 @@ def test_the_scenario_schema_refuses_text_and_fractional_whole_numbers() -> None
             for_scenario(bounded("lhs", 4, bounds), load("patrol"))
 
 
+def test_the_worked_study_file_is_valid() -> None:
+    """examples/patrol-sensitivity.yaml: the 1536 runs docs/experiments.md describes."""
+    from pyautonomousagent.experiments.sweep import base_scenario, check
+
+    path = Path(__file__).parents[1] / "examples" / "patrol-sensitivity.yaml"
+    experiment = Experiment.from_file(path)
+    scenario = base_scenario(experiment)
+    experiment = for_scenario(experiment, scenario)
+    assert experiment.design is not None and experiment.design.integers == {"agents"}
+    assert len(experiment.runs()) == 256 * (4 + 2) == 1536
+    assert experiment.parameters == ["low_energy_threshold", "energy_use", "refuel_rate", "agents"]
+    check(experiment, scenario)
+
+
 # --- a Sobol study of patrol over 3 parameters, on the pool and on a local Dask cluster ---
 
 #: 20 runs: N = 4 base samples x (3 + 2) points, one seed; 4 drones x 2500 iterations.
