@@ -49,6 +49,7 @@ BASE = {
     "sweep": ["sweep", "gathering", "--vary", "refuel_rate=1,2", "--iterations", "2", "--serial"],
     "plot": ["plot", "SWEEP", "--measure", "minimum_energy", "--x", "refuel_rate"],
     "measures": ["measures"],
+    "analyse": ["analyse", "DESIGN"],
     "tree": ["tree", "gathering"],
 }
 
@@ -63,12 +64,14 @@ def _accept(*args: Any, **kwargs: Any) -> Any:
 
 @pytest.fixture(scope="module")
 def folders(tmp_path_factory: pytest.TempPathFactory) -> dict[str, str]:
-    """A run folder and a sweep folder, made once."""
+    """A run folder, a sweep folder and a sweep folder of a Sobol design, made once."""
     root = tmp_path_factory.mktemp("inputs")
-    run, sweep = root / "run", root / "sweep"
+    run, sweep, design = root / "run", root / "sweep", root / "design"
     assert cli.main([*BASE["run"], "--no-gif", "--out", str(run)]) == 0
     assert cli.main([*BASE["sweep"], "--out", str(sweep), "--quiet"]) == 0
-    return {"RUN": str(run), "SWEEP": str(sweep)}
+    sobol = ["--design", "sobol", "--samples", "2", "--vary", "refuel_rate=1:3"]
+    assert cli.main([*BASE["sweep"][:2], *sobol, *BASE["sweep"][4:], "--out", str(design)]) == 0
+    return {"RUN": str(run), "SWEEP": str(sweep), "DESIGN": str(design)}
 
 
 @pytest.fixture
@@ -77,6 +80,7 @@ def stubbed(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     import pyautonomousagent.bench
     import pyautonomousagent.experiments
     import pyautonomousagent.experiments.plot
+    import pyautonomousagent.experiments.sensitivity
 
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(cli, "simulate", _accept)
@@ -85,6 +89,7 @@ def stubbed(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     monkeypatch.setattr(pyautonomousagent.bench, "stress", _accept)
     monkeypatch.setattr(pyautonomousagent.experiments, "sweep", _accept)
     monkeypatch.setattr(pyautonomousagent.experiments.plot, "plot_measure", _accept)
+    monkeypatch.setattr(pyautonomousagent.experiments.sensitivity, "plot_indices", _accept)
 
 
 def _subcommands() -> dict[str, argparse.ArgumentParser]:

@@ -1015,7 +1015,7 @@ def _write_output(path: Path, text: str) -> None:
 
 # --- experiments: pyaa sweep, pyaa plot, pyaa measures (library: pyautonomousagent.experiments)
 
-EXPERIMENT_COMMANDS = ("sweep", "plot", "measures")
+EXPERIMENT_COMMANDS = ("sweep", "plot", "measures", "analyse")
 
 
 def _add_experiments(sub: Any) -> None:
@@ -1028,6 +1028,16 @@ def _add_experiments(sub: Any) -> None:
         metavar="NAME=V1,V2|FROM:TO:STEP",
         help="a parameter to vary (several: a grid), e.g. refuel_rate=1:3:1",
     )
+    sweep.add_argument(
+        "--design",
+        choices=["grid", "lhs", "sobol", "morris"],
+        help="grid (default: every combination of --vary) or a sampled design over bounds "
+        "(--vary NAME=LOW:HIGH)",
+    )
+    sweep.add_argument(
+        "--samples", type=int, metavar="N", help="a sampled design's N (sobol: a power of 2)"
+    )
+    sweep.add_argument("--design-seed", type=int, help="the sampled design's seed (default 0)")
     sweep.add_argument("--seeds", type=int, help="seeds 0..N-1 per point (default 1)")
     sweep.add_argument("--iterations", type=int, help="iterations per run")
     sweep.add_argument("--agents", type=int, help="agents per run")
@@ -1076,6 +1086,20 @@ def _add_experiments(sub: Any) -> None:
     )
     plot.add_argument("--out", type=Path, help="picture file, .png or .svg")
     sub.add_parser("measures", help="list the registered measures")
+    analyse = sub.add_parser(
+        "analyse", help="Sobol or Morris sensitivity indices of a sweep run with such a design"
+    )
+    analyse.add_argument("sweep", type=Path, help="a sweep folder (--design sobol or morris)")
+    analyse.add_argument(
+        "--measure",
+        action="append",
+        default=[],
+        metavar="M",
+        help="a measure to analyse (several: one each; default: every measure of the sweep)",
+    )
+    analyse.add_argument(
+        "--out", type=Path, help="picture file, .png or .svg (default SWEEP/sensitivity.png)"
+    )
 
 
 def _experiment(args: argparse.Namespace) -> Any:
@@ -1090,6 +1114,13 @@ def _experiment(args: argparse.Namespace) -> Any:
         loaded = read_file(source)
         if isinstance(loaded, dict) and "scenario" in loaded:
             data = {"name": Path(source).stem, **loaded}
+    for key, value in (
+        ("design", args.design),
+        ("samples", args.samples),
+        ("design_seed", args.design_seed),
+    ):
+        if value is not None:
+            data[key] = value
     data = with_options(data, source, args.vary, _parse_overrides(args.set))
     if args.agents is not None:
         data["set"]["agents"] = args.agents
@@ -1174,8 +1205,29 @@ def plot_command(args: argparse.Namespace) -> int:
     return 0
 
 
+def analyse_command(args: argparse.Namespace) -> int:
+    """``pyaa analyse``: print and draw a Sobol or Morris sweep's sensitivity indices."""
+    from pyautonomousagent.experiments import sensitivity
+
+    out = args.out if args.out is not None else args.sweep / "sensitivity.png"
+    if out.suffix.lower() not in (".png", ".svg"):
+        raise ScenarioError(f"--out {out}: use a .png or .svg name")
+    check_output(out)  # never over a run's or a sweep's own files
+    stored = sensitivity.read_sweep(args.sweep)
+    known = list(stored.measures)
+    measures = list(dict.fromkeys(args.measure)) or known
+    sensitivity.check_measures(stored.results, measures, known)
+    table = sensitivity.indices(stored.results, stored.design, stored.unit, measures, stored.seeds)
+    for line in sensitivity.report(table, stored):
+        print(line)
+    path = sensitivity.plot_indices(table, stored, out)
+    print(f"wrote {path}")
+    return 0
+
+
 def experiments_command(args: argparse.Namespace) -> int:
-    """``pyaa sweep``, ``pyaa plot`` and ``pyaa measures``; bad input is one line (exit 2)."""
+    """``pyaa sweep``, ``pyaa plot``, ``pyaa analyse`` and ``pyaa measures``; bad input is
+    one line (exit 2)."""
     from pyautonomousagent.experiments import MEASURES, ExperimentError, ExpressionError
     from pyautonomousagent.experiments.backends import BackendError
 
@@ -1184,6 +1236,8 @@ def experiments_command(args: argparse.Namespace) -> int:
             return sweep_command(args)
         if args.command == "plot":
             return plot_command(args)
+        if args.command == "analyse":
+            return analyse_command(args)
         for name, measure in MEASURES.items():
             print(f"{name:22s} {measure.unit:12s} {measure.doc}")
         return 0

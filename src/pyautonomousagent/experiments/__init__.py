@@ -1,7 +1,10 @@
-"""Experiments: parameter sweeps with seeds, measures per run, backends and plots.
+"""Experiments: parameter sweeps with seeds, measures per run, backends and plots; sampled
+designs (:mod:`~pyautonomousagent.experiments.design`) and their sensitivity indices
+(:mod:`~pyautonomousagent.experiments.sensitivity`).
 
-``pyaa sweep`` and ``pyaa plot`` are thin wrappers of :func:`sweep` and
-:func:`plot_measure`; see docs/experiments.md.
+``pyaa sweep``, ``pyaa plot`` and ``pyaa analyse`` are thin wrappers of :func:`sweep`,
+:func:`plot_measure` and :func:`~pyautonomousagent.experiments.sensitivity.indices`; see
+docs/experiments.md.
 """
 
 from pyautonomousagent.experiments.expression import Expression, ExpressionError

@@ -21,6 +21,16 @@ Written as YAML (or given on the command line, which builds the same mapping)::
     engine: auto
     record_every: 1
 
+or, instead of a grid, a sampled design over bounded parameters (see
+:mod:`~pyautonomousagent.experiments.design`)::
+
+    design: sobol                   # grid (default), lhs, sobol or morris
+    samples: 64                     # N (sobol: a power of two)
+    design_seed: 1                  # the design's own seed (default 0)
+    vary:
+      low_energy_threshold: {from: 30, to: 45}             # bounds, both ends included
+      agents: {from: 10, to: 100}                           # an int parameter stays int
+
 :meth:`Experiment.from_mapping` validates it; every error is an :class:`ExperimentError`
 naming the source, the field and what it must be. :func:`read_file` reads the file as
 every input file is read (bounded, UTF-8, YAML 1.2 numbers, no key given twice, no Python
@@ -42,6 +52,7 @@ from typing import Any
 
 import numpy as np
 
+from pyautonomousagent.experiments.design import DESIGNS, Design, design_size, is_power_of_two
 from pyautonomousagent.experiments.expression import ExpressionError
 from pyautonomousagent.experiments.measures import MEASURES, Measure, expression_measure
 from pyautonomousagent.inputs import InputError, load_yaml, plain_value, read_text
@@ -64,6 +75,9 @@ _KEYS = (
     "measures",
     "engine",
     "record_every",
+    "design",
+    "samples",
+    "design_seed",
 )
 _DISTRIBUTIONS = ("uniform", "integers", "choice")
 
@@ -105,6 +119,8 @@ class Experiment:
         engine: the decision engine.
         record_every: recording decimation of every run.
         name: the experiment's name.
+        design: a sampled design over bounded parameters (then ``vary`` is empty), or None
+            for the grid.
     """
 
     scenario: str
@@ -117,6 +133,7 @@ class Experiment:
     engine: str = "auto"
     record_every: int = 1
     name: str = "experiment"
+    design: Design | None = None
 
     @classmethod
     def from_mapping(cls, data: Any, source: str = "experiment") -> Experiment:
@@ -135,11 +152,18 @@ class Experiment:
     @property
     def parameters(self) -> list[str]:
         """The varied parameters, in column order (grid first, then sampled)."""
+        if self.design is not None:
+            return self.design.names
         sampled = list(self.sample["parameters"]) if self.sample else []
         return [*self.vary, *(p for p in sampled if p not in self.vary)]
 
     def points(self) -> list[dict[str, Any]]:
-        """Every point: the grid crossed with the random samples (in that order)."""
+        """Every point: the grid crossed with the random samples (in that order), or the
+        design's points (whole numbers where the design marks a parameter so, as
+        :func:`~pyautonomousagent.experiments.design.for_scenario` does from the scenario's
+        schema: :func:`~pyautonomousagent.experiments.sweep.sweep` calls it; floats before)."""
+        if self.design is not None:
+            return self.design.points()
         names = list(self.vary)
         grid = [
             dict(zip(names, values, strict=True))
@@ -151,11 +175,13 @@ class Experiment:
         return [{**g, **s} for g in grid for s in samples]
 
     def runs(self) -> list[Run]:
-        """Every (point, seed) in order: points outer, seeds inner."""
+        """Every (point, seed) in order: points outer, seeds inner. A design's run keys
+        hold the point's position too (two points of a design may coincide)."""
         out: list[Run] = []
-        for point in self.points():
+        for i, point in enumerate(self.points()):
+            where = i if self.design is not None else None
             for seed in self.seeds:
-                out.append(Run(len(out), point, seed, run_key(point, seed)))
+                out.append(Run(len(out), point, seed, run_key(point, seed, where)))
         return out
 
     def to_mapping(self) -> dict[str, Any]:
@@ -180,6 +206,13 @@ class Experiment:
                 k: {kind: list(args)} for k, (kind, args) in self.sample["parameters"].items()
             }
             data["sample"] = {**self.sample, "parameters": params}
+        if self.design is not None:
+            data["vary"] = {k: {"from": lo, "to": hi} for k, (lo, hi) in self.design.bounds.items()}
+            data.update(
+                design=self.design.method,
+                samples=self.design.samples,
+                design_seed=self.design.seed,
+            )
         return data
 
 
@@ -200,7 +233,8 @@ def with_options(
     data: Mapping[str, Any], source: str, vary: Sequence[str], fixed: Mapping[str, Any]
 ) -> dict[str, Any]:
     """``data`` (an experiment mapping) with the command line's ``--vary`` options and
-    ``--set`` values added; an option replaces the file's entry of the same name.
+    ``--set`` values added; an option replaces the file's entry of the same name. With a
+    sampled ``design`` in ``data``, ``--vary NAME=LOW:HIGH`` gives bounds.
 
     Raises:
         ExperimentError: the file's ``vary`` or ``set`` is not a mapping, or ``--vary``
@@ -208,15 +242,20 @@ def with_options(
     """
     reader = _Reader(source)
     out = dict(data)
-    for key, added in (("vary", parse_vary(vary)), ("set", dict(fixed))):
+    bounds = out.get("design", "grid") != "grid"
+    for key, added in (("vary", parse_vary(vary, bounds)), ("set", dict(fixed))):
         given = reader.mapping(out.get(key) or {}, key)
         out[key] = {**given, **added}
     return out
 
 
-def run_key(point: Mapping[str, Any], seed: int) -> str:
-    """A stable 16-hex-digit key of a run: the same point and seed give the same key."""
-    text = json.dumps({"point": dict(point), "seed": seed}, sort_keys=True, default=str)
+def run_key(point: Mapping[str, Any], seed: int, index: int | None = None) -> str:
+    """A stable 16-hex-digit key of a run: the same point and seed (and the point's
+    ``index`` in a design, when given) give the same key."""
+    key: dict[str, Any] = {"point": dict(point), "seed": seed}
+    if index is not None:
+        key["design_point"] = index
+    text = json.dumps(key, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
@@ -271,10 +310,11 @@ class _Reader:
             raise ExperimentError(
                 f"{self.source}: iterations given twice, as 'iterations' and in 'set'; keep one"
             )
-        vary = self.vary(data.get("vary") or {})
+        design = self.design(data)
+        vary = self.vary(data.get("vary") or {}) if design is None else {}
         sample = self.sample(data["sample"]) if data.get("sample") is not None else None
-        self.overlap(fixed, list(vary))
-        if not vary and not sample:
+        self.overlap(fixed, list(vary) if design is None else design.names)
+        if not vary and not sample and design is None:
             raise ExperimentError(
                 f"{self.source}: nothing varies; give 'vary' (a grid) or 'sample' (random points)"
             )
@@ -291,13 +331,71 @@ class _Reader:
             engine=self.engine(data.get("engine", "auto")),
             record_every=self.whole(data.get("record_every", 1), "record_every", 1),
             name=self.folder_name(data.get("name", "experiment"), "name"),
+            design=design,
         )
         self.columns(experiment)
         grid = math.prod(len(values) for values in experiment.vary.values())
+        if design is not None:
+            grid = design.size()
         total = grid * (sample["count"] if sample else 1) * len(experiment.seeds)
         if total > MAX_RUNS:
             raise self.fail("the experiment", f"at most {MAX_RUNS} runs", f"{total} runs")
         return experiment
+
+    def design(self, data: Mapping[str, Any]) -> Design | None:
+        """The sampled design of ``data`` (``design``, ``samples``, ``design_seed`` and the
+        bounds in ``vary``), or None for the grid."""
+        method = data.get("design", "grid")
+        if method not in DESIGNS:
+            raise self.fail("design", f"one of {', '.join(DESIGNS)}", method)
+        if method == "grid":
+            for key in ("samples", "design_seed"):
+                if data.get(key) is not None:
+                    raise ExperimentError(
+                        f"{self.source}: {key} is for a sampled design (lhs, sobol or morris); "
+                        "a grid runs every combination of vary"
+                    )
+            return None
+        if data.get("sample") is not None:
+            raise ExperimentError(
+                f"{self.source}: sample (random points crossed with a grid) is for the grid "
+                f"design; design {method} draws its own points: give the bounds in vary"
+            )
+        if data.get("samples") is None:
+            raise ExperimentError(
+                f"{self.source}: design {method} needs samples, the number of samples N "
+                "(e.g. --samples 64)"
+            )
+        samples = self.count(data["samples"], "samples")
+        if method == "sobol" and not is_power_of_two(samples):
+            raise self.fail("samples", "a power of two for design sobol (e.g. 32, 64)", samples)
+        grid = self.mapping(data.get("vary") or {}, "vary")
+        if not grid:
+            raise ExperimentError(
+                f"{self.source}: nothing varies; design {method} needs bounds in vary "
+                "(e.g. --vary low_energy_threshold=30:45)"
+            )
+        bounds = {name: self.bounds(value, name, method) for name, value in grid.items()}
+        seed = self.whole(data.get("design_seed", 0), "design_seed", 0)
+        if design_size(method, samples, len(bounds)) > MAX_RUNS:
+            raise self.fail("samples", f"a number giving at most {MAX_RUNS} points", samples)
+        return Design(method, samples, seed, bounds)
+
+    def bounds(self, value: Any, name: str, method: str) -> tuple[float, float]:
+        """A parameter's bounds ``{from: LOW, to: HIGH}`` with LOW < HIGH."""
+        must = (
+            f"bounds {{from: LOW, to: HIGH}} with LOW < HIGH for design {method} "
+            f"(on the command line --vary {name}=LOW:HIGH)"
+        )
+        if not isinstance(value, Mapping) or set(value) != {"from", "to"}:
+            raise self.fail(f"vary.{name}", must, value)
+        low = self.number(value["from"], f"vary.{name}.from")
+        high = self.number(value["to"], f"vary.{name}.to")
+        if not low < high:
+            raise self.fail(f"vary.{name}", must, value)
+        if not math.isfinite(high - low) or max(-low, high) > 2**62:
+            raise self.fail(f"vary.{name}", "bounds within +-2**62", value)
+        return low, high
 
     def overlap(self, fixed: Mapping[str, Any], varied: Sequence[str]) -> None:
         """Refuse a parameter that is both fixed (``set``) and varied on the grid (a sampled
@@ -487,9 +585,10 @@ class _Reader:
                 )
 
 
-def parse_vary(items: Sequence[str]) -> dict[str, Any]:
+def parse_vary(items: Sequence[str], bounds: bool = False) -> dict[str, Any]:
     """``--vary`` options as the file's ``vary`` mapping: ``name=1,2,3`` (a list) or
-    ``name=20:50:5`` (20, 25, ..., 50, inclusive). Values are typed as plain YAML 1.2
+    ``name=20:50:5`` (20, 25, ..., 50, inclusive); with ``bounds`` (a sampled design) also
+    ``name=20:50`` (bounds: ``{from: 20, to: 50}``). Values are typed as plain YAML 1.2
     scalars (:func:`~pyautonomousagent.inputs.plain_value`: ``30`` a number, ``1:30``
     text), for the parameter's own schema to check.
 
@@ -509,10 +608,13 @@ def parse_vary(items: Sequence[str]) -> dict[str, Any]:
         if len(parts) == 3:
             start, stop, step = (_vary_value(p, name) for p in parts)
             vary[name] = {"from": start, "to": stop, "step": step}
+        elif bounds and len(parts) == 2:
+            start, stop = (_vary_value(p, name) for p in parts)
+            vary[name] = {"from": start, "to": stop}
         elif len(parts) > 1 and all(isinstance(_vary_value(p, name), int | float) for p in parts):
             raise ExperimentError(
                 f"--vary {name}: a range is FROM:TO:STEP, three numbers (e.g. 20:50:5), "
-                f"got {text!r}"
+                f"got {text!r} (bounds LOW:HIGH are for --design lhs, sobol or morris)"
             )
         else:
             vary[name] = [_vary_value(v, name) for v in text.split(",") if v.strip()]

@@ -30,6 +30,7 @@ from typing import Any
 import pyarrow as pa
 
 from pyautonomousagent.experiments.backends import Backend, make_backend
+from pyautonomousagent.experiments.design import for_scenario, write_design
 from pyautonomousagent.experiments.expression import Expression
 from pyautonomousagent.experiments.measures import RunData, _Evaluate
 from pyautonomousagent.experiments.runner import RunTask, execute, one_line, scenario_parameters
@@ -211,6 +212,7 @@ def sweep(
     """
     out = Path(out)
     scenario = base_scenario(experiment)
+    experiment = for_scenario(experiment, scenario)  # a design's int parameters stay int
     probe = check(experiment, scenario)
     runs = experiment.runs()
     previous = _previous_manifest(out, experiment, resume)
@@ -246,6 +248,8 @@ def sweep(
         manifest = _manifest(experiment, scenario, runs, chosen, previous)
         try:
             write_manifest(out, manifest)
+            if experiment.design is not None:
+                write_design(out, experiment.design)
             tasks = _tasks(experiment, scenario, todo, out / RUNS if save_runs else None)
             _execute(
                 tasks,

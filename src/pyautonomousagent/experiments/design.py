@@ -1,0 +1,226 @@
+"""Designs of experiments beyond the grid: Latin hypercube, Sobol (Saltelli) and Morris.
+
+A design draws points in the unit cube ``[0, 1]^D`` (one dimension per varied parameter)
+with a library and its own seed, then scales each dimension to the parameter's bounds::
+
+    lhs     SciPy's qmc.LatinHypercube             samples points
+    sobol   SALib's Sobol' sequence (Saltelli)      samples x (D + 2) points
+    morris  SALib's Morris trajectories, 4 levels   samples x (D + 1) points
+
+The Sobol design leaves out the second-order columns (first-order and total indices only).
+A float parameter takes ``low + u * (high - low)``; a whole-number parameter (``agents``, an
+int parameter of the scenario's schema) takes ``low + floor(u * (high - low + 1))`` (at most
+``high``), so each of ``low..high`` is equally likely. The same design and seed give the same
+points, bit for bit, so a sweep's ``--resume`` finds its runs again.
+
+SALib and SciPy are optional (the ``[experiments]`` extra); they are imported only here, when
+a design is drawn or analysed.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import pyarrow as pa
+
+if TYPE_CHECKING:
+    from pyautonomousagent.experiments.spec import Experiment
+    from pyautonomousagent.simulation import Scenario
+
+#: The designs: a grid (every combination of ``vary``) and the sampled ones.
+DESIGNS = ("grid", "lhs", "sobol", "morris")
+#: Levels of the Morris grid (SALib's default, the usual choice).
+MORRIS_LEVELS = 4
+#: What to install for a sampled design.
+EXTRA = 'pip install "pyautonomousagent[experiments]"'
+
+
+@dataclass(frozen=True)
+class Design:
+    """A sampled design over bounded parameters.
+
+    Attributes:
+        method: "lhs", "sobol" or "morris".
+        samples: N: points (lhs), base samples (sobol) or trajectories (morris).
+        seed: the design's own seed (drawing the points; also the analysis' bootstrap).
+        bounds: parameter -> (low, high), in the parameter's unit, in column order.
+        integers: the parameters that take whole numbers (from the scenario's schema).
+    """
+
+    method: str
+    samples: int
+    seed: int
+    bounds: dict[str, tuple[float, float]]
+    integers: frozenset[str] = field(default_factory=frozenset)
+
+    @property
+    def names(self) -> list[str]:
+        """The parameters, in column order."""
+        return list(self.bounds)
+
+    def size(self) -> int:
+        """The number of points the design draws."""
+        return design_size(self.method, self.samples, len(self.bounds))
+
+    def unit(self) -> np.ndarray:
+        """The points in the unit cube, shape (:meth:`size`, D), float64."""
+        return unit_points(self.method, self.samples, len(self.bounds), self.seed)
+
+    def points(self) -> list[dict[str, Any]]:
+        """The points in the parameters' units (whole numbers where :attr:`integers`)."""
+        return scale(self.unit(), self.bounds, self.integers)
+
+    def problem(self) -> dict[str, Any]:
+        """SALib's problem over the unit cube (the designs are drawn and analysed there)."""
+        return unit_problem(self.names)
+
+
+def design_size(method: str, samples: int, dimensions: int) -> int:
+    """Points of a design: ``samples`` (lhs), ``samples * (D + 2)`` (sobol, first-order and
+    total indices), ``samples * (D + 1)`` (morris)."""
+    return samples * {"lhs": 1, "sobol": dimensions + 2, "morris": dimensions + 1}[method]
+
+
+def unit_problem(names: list[str]) -> dict[str, Any]:
+    """SALib's problem over the unit cube, one dimension per name."""
+    return {"num_vars": len(names), "names": list(names), "bounds": [[0.0, 1.0]] * len(names)}
+
+
+def unit_points(method: str, samples: int, dimensions: int, seed: int) -> np.ndarray:
+    """``method``'s points in ``[0, 1]^dimensions`` drawn from ``seed``.
+
+    Raises:
+        ExperimentError: the library the design needs is not installed.
+    """
+    if method == "lhs":
+        qmc = library("scipy.stats.qmc", method)
+        sampler = qmc.LatinHypercube(d=dimensions, rng=np.random.default_rng(seed))
+        return np.asarray(sampler.random(n=samples), dtype=np.float64)
+    problem = unit_problem([f"x{i}" for i in range(dimensions)])
+    if method == "sobol":
+        sobol = library("SALib.sample.sobol", method)
+        unit = sobol.sample(problem, samples, calc_second_order=False, seed=seed)
+    else:
+        morris = library("SALib.sample.morris", method)
+        unit = morris.sample(problem, samples, num_levels=MORRIS_LEVELS, seed=seed)
+    return np.asarray(unit, dtype=np.float64)
+
+
+def scale(
+    unit: np.ndarray, bounds: dict[str, tuple[float, float]], integers: frozenset[str]
+) -> list[dict[str, Any]]:
+    """Unit-cube points as parameter values (see the module docstring for the mapping)."""
+    columns: dict[str, list[Any]] = {}
+    for j, (name, (low, high)) in enumerate(bounds.items()):
+        u = unit[:, j]
+        if name in integers:
+            lo, hi = int(low), int(high)
+            whole = np.minimum(lo + np.floor(u * (hi - lo + 1)), hi)
+            columns[name] = [int(v) for v in whole]
+        else:
+            columns[name] = [float(v) for v in low + u * (high - low)]
+    rows = zip(*columns.values(), strict=True)
+    return [dict(zip(columns, values, strict=True)) for values in rows]
+
+
+def typed(design: Design, kinds: dict[str, type]) -> Design:
+    """``design`` with its whole-number parameters marked, from ``kinds`` (parameter ->
+    int or float, the scenario's schema; parameters it does not name stay float).
+
+    Raises:
+        ExperimentError: a parameter that is not a number, or a whole-number parameter with
+            bounds that are not whole numbers.
+    """
+    from pyautonomousagent.experiments.spec import ExperimentError
+
+    integers = set()
+    for name, (low, high) in design.bounds.items():
+        kind = kinds.get(name, float)
+        if kind is bool or kind not in (int, float):
+            what = {str: "text", bool: "true or false"}.get(kind, kind.__name__)
+            raise ExperimentError(
+                f"design {design.method}: parameter {name!r} is {what}, not a number; "
+                "vary it on a grid (--design grid)"
+            )
+        if kind is int:
+            if not (float(low).is_integer() and float(high).is_integer()):
+                raise ExperimentError(
+                    f"design {design.method}: parameter {name!r} takes whole numbers; give it "
+                    f"whole-number bounds, got {low}:{high}"
+                )
+            integers.add(name)
+    return replace(design, integers=frozenset(integers))
+
+
+def is_power_of_two(value: int) -> bool:
+    """True for 1, 2, 4, 8, ..."""
+    return value >= 1 and value & (value - 1) == 0
+
+
+def library(module: str, method: str) -> Any:
+    """The module ``module`` (of SALib or SciPy), or an ExperimentError naming the extra to
+    install; ``method`` is the design that needs it."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        from pyautonomousagent.experiments.spec import ExperimentError
+
+        library = module.split(".")[0].replace("scipy", "SciPy")
+        raise ExperimentError(
+            f"--design {method} needs {library}, which is not installed: {EXTRA}"
+        ) from None
+
+
+def schema_types(scenario: Scenario) -> dict[str, type]:
+    """The type (int, float, str, bool...) of every field and parameter of ``scenario``:
+    a parameter's from its schema (the type of its default), a field's from its value."""
+    from pyautonomousagent.simulation.scenario import parameter_list, to_mapping
+
+    kinds = {key: type(value) for key, value in to_mapping(scenario).items()}
+    kinds.update({p.name: p.type for _, p in parameter_list(scenario)})
+    return kinds
+
+
+def for_scenario(experiment: Experiment, scenario: Scenario) -> Experiment:
+    """``experiment`` with its design's whole-number parameters taken from ``scenario``'s
+    schema (:func:`typed`); a grid experiment unchanged."""
+    if experiment.design is None:
+        return experiment
+    return replace(experiment, design=typed(experiment.design, schema_types(scenario)))
+
+
+#: The design's file in a sweep folder.
+DESIGN_FILE = "design.parquet"
+
+
+def design_table(design: Design) -> pa.Table:
+    """The design as a table: ``point`` (its position, 0-based) and each parameter's
+    coordinate in the unit cube (0: its ``from``, 1: its ``to``); the design's method,
+    samples, seed, bounds and whole-number parameters in the schema's metadata."""
+    unit = design.unit()
+    columns = {"point": pa.array(np.arange(len(unit)), pa.int64())}
+    columns.update({name: pa.array(unit[:, j]) for j, name in enumerate(design.names)})
+    about = {
+        "method": design.method,
+        "samples": design.samples,
+        "seed": design.seed,
+        "bounds": {k: list(v) for k, v in design.bounds.items()},
+        "integers": sorted(design.integers),
+        "morris_levels": MORRIS_LEVELS,
+    }
+    return pa.table(columns).replace_schema_metadata({"pyaa.design": json.dumps(about)})
+
+
+def write_design(out: Path, design: Design) -> Path:
+    """Write :func:`design_table` as ``out/design.parquet`` (atomically); its path."""
+    from pyautonomousagent.experiments.store import atomic_write_table
+
+    path = out / DESIGN_FILE
+    atomic_write_table(design_table(design), path)
+    return path
