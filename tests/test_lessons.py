@@ -144,7 +144,7 @@ def test_check_01_right_answer(capsys: pytest.CaptureFixture[str]) -> None:
 
 def test_check_05_wrong_file_and_a_file_that_does_not_load(tmp_path: Path, monkeypatch) -> None:
     from pyautonomousagent.bt import save_tree
-    from pyautonomousagent.bt.trees import gathering_tree
+    from pyautonomousagent.missions.drones.trees import gathering_tree
 
     monkeypatch.chdir(tmp_path)
     save_tree(gathering_tree(), "unchanged.yaml")  # forgot the edit

@@ -24,9 +24,9 @@ from pyautonomousagent.bt.files import (
 )
 from pyautonomousagent.bt.leaf import LEAF_TYPES
 from pyautonomousagent.bt.spec import Node, leaf, sequence
-from pyautonomousagent.bt.trees import gathering_tree, patrol_tree
 from pyautonomousagent.bt.vocabulary import BTCPP_LEAVES
 from pyautonomousagent.cli import main
+from pyautonomousagent.missions.drones.trees import gathering_tree, patrol_tree
 
 from .strategies import trees
 

@@ -426,7 +426,7 @@ def l05_expected_tree() -> Node:
     """Lesson 05's answer: the gathering tree with the last branch cruising at 0.05."""
     from dataclasses import replace
 
-    from pyautonomousagent.bt.trees import gathering_tree
+    from pyautonomousagent.missions.drones.trees import gathering_tree
 
     def slow(node: Node) -> Node:
         if node.name == "action_navigate_to_destination_a_2":
