@@ -256,6 +256,9 @@ class CompiledEngine:
         self.loop(sim, 0, typical=min(sim.scenario.iterations, 500))
         self._marker(sim, fused).touch()
 
+    def sync(self, sim: Simulation) -> None:
+        """Nothing to finish: :meth:`loop` returns with its records and state written."""
+
     def ready(self, sim: Simulation) -> bool:
         """Whether ``sim`` runs fused and :meth:`prepare` compiled that loop before on this
         machine (numba's cache holds it: set-up takes well under a second)."""

@@ -7,7 +7,7 @@ import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 import pyarrow as pa
@@ -103,7 +103,7 @@ def _world(scenario: Scenario, seed: int) -> World:
     )
 
 
-#: Iterations an engine with a ``loop`` method runs per call (the progress bar's step).
+#: Iterations a :class:`FusedEngine` runs per call of its ``loop`` (the progress bar's step).
 FUSED = 500
 
 
@@ -119,6 +119,28 @@ class Engine(Protocol):
     def tick(self) -> None: ...
 
     def node_statuses(self) -> np.ndarray: ...
+
+
+@runtime_checkable
+class FusedEngine(Protocol):
+    """An engine that can also run whole iterations itself (Phases 2-6 fused, e.g. the
+    compiled and GPU engines): :class:`Simulation` calls :meth:`prepare` once it is built,
+    :meth:`loop` before stepping an iteration in Python, and :meth:`sync` at the end of each
+    ``run`` and ``step``."""
+
+    def prepare(self, sim: Simulation) -> None:
+        """Compile (or load) what the run will call, before its first iteration."""
+        ...
+
+    def loop(self, sim: Simulation, count: int, typical: int | None = None) -> int:
+        """Run up to ``count`` whole iterations (all but the last one's Phase 5); how many
+        were run, 0 where the next iteration cannot be fused (``Simulation.step`` runs it)."""
+        ...
+
+    def sync(self, sim: Simulation) -> None:
+        """Finish the work in flight: the recorder holds every iteration run, the swarm's
+        arrays the state."""
+        ...
 
 
 ENGINES: Registry[type[Engine]] = Registry("engine")
@@ -299,9 +321,8 @@ class Simulation:
             log.debug("engine auto: compiled, not gpu: the kernel cannot run this run")
             sim.engine = CompiledEngine(tree, swarm, world, vars(scenario.parameters))
         phases.record(sim)  # the initial state, iteration 0
-        prepare = getattr(sim.engine, "prepare", None)  # e.g. compile before the loop
-        if prepare is not None:
-            prepare(sim)
+        if isinstance(sim.engine, FusedEngine):
+            sim.engine.prepare(sim)  # e.g. compile before the loop
         sim.timings["setup"] = time.perf_counter() - start
         return sim
 
@@ -355,8 +376,7 @@ class Simulation:
         """Up to ``count`` whole iterations in one call of an engine that runs them (the
         compiled engine's ``loop``), then the last one's Phase 5; how many were run (0: none,
         step the next one)."""
-        loop = getattr(self.engine, "loop", None)
-        done = loop(self, count) if loop is not None else 0
+        done = self.engine.loop(self, count) if isinstance(self.engine, FusedEngine) else 0
         if done:
             phases.deliver_messages(self)
         return int(done)
@@ -364,9 +384,8 @@ class Simulation:
     def _settle(self) -> None:
         """Have an engine that keeps work in flight (the GPU engine's records and state)
         finish it: the recorder holds every iteration run, the swarm's arrays the state."""
-        sync = getattr(self.engine, "sync", None)
-        if sync is not None:
-            sync(self)
+        if isinstance(self.engine, FusedEngine):
+            self.engine.sync(self)
 
     def trace_table(self) -> pa.Table:
         """The traced agents' node statuses: one row per record and traced agent."""
