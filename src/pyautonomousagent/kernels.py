@@ -23,6 +23,7 @@ operation on one number, so kernels can use them.
 
 from __future__ import annotations
 
+import inspect
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -36,6 +37,29 @@ if TYPE_CHECKING:
 
 #: The name that passes the iteration number (an int) to a kernel instead of an array.
 ITERATION = "@iteration"
+
+
+def check_arity(what: str, function: Callable[..., Any], leading: tuple[str, ...],
+                passed: dict[str, int]) -> None:  # fmt: skip
+    """Raise TypeError, naming the kernel and what it is passed, where ``function`` (an
+    njit function, or plain Python) does not take exactly the ``leading`` arguments plus
+    ``passed``'s counts: a mismatch found where the kernel is declared, before the engine
+    generates and compiles any code around it. A function with ``*args`` is not checked."""
+    python = getattr(function, "py_func", function)
+    try:
+        parameters = list(inspect.signature(python).parameters.values())
+    except (TypeError, ValueError):  # a builtin or a compiled object without a signature
+        return
+    if any(p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD) for p in parameters):
+        return
+    expected = len(leading) + sum(passed.values())
+    if len(parameters) != expected:
+        given = ", ".join([*leading, *(f"{n} {k}" for k, n in passed.items() if n)])
+        names = ", ".join(p.name for p in parameters)
+        raise TypeError(
+            f"{what} {getattr(python, '__qualname__', python)!s}({names}) takes "
+            f"{len(parameters)} arguments, but is passed {expected}: {given}"
+        )
 
 
 @dataclass(frozen=True)
@@ -76,6 +100,9 @@ class Later:
     names: tuple[str, ...]
     target: str
 
+    def __post_init__(self) -> None:
+        check_arity("Later", self.function, (), {"values": len(self.names)})
+
 
 @dataclass(frozen=True)
 class LeafKernel:
@@ -97,6 +124,11 @@ class LeafKernel:
     constants: tuple[float | int, ...] = ()
     sends: Sends | None = None
     later: Later | None = None
+
+    def __post_init__(self) -> None:
+        passed = {"arrays": len(self.names), "outbox": int(self.sends is not None),
+                  "constants": len(self.constants)}  # fmt: skip
+        check_arity("LeafKernel", self.function, ("a",), passed)
 
 
 @dataclass(frozen=True)
@@ -160,6 +192,14 @@ class HandlerKernel:
     receive: Receive | None = None
     by_sender: bool = False
 
+    def __post_init__(self) -> None:
+        passed = {"arrays": len(self.names), "state arrays": len(self.state),
+                  "constants": len(self.constants)}  # fmt: skip
+        check_arity("HandlerKernel", self.function, ("t", "senders", "data", "count"), passed)
+        if self.receive is not None and self.receive.state is None:  # else: its state's size
+            check_arity("Receive", self.receive.function, ("r", "m", "t", "senders", "data"),
+                        passed)  # fmt: skip
+
 
 @dataclass(frozen=True)
 class SwarmSensorKernel:
@@ -200,6 +240,14 @@ class SwarmSensorKernel:
     collect: Callable[[Simulation, int], None] | None = None
     device: tuple[Callable[..., None], ...] = ()
 
+    def __post_init__(self) -> None:
+        passed = {"arrays": len(self.names), "state arrays": len(self.state),
+                  "constants": len(self.constants)}  # fmt: skip
+        check_arity("SwarmSensorKernel detect", self.detect, ("t",), passed)
+        check_arity("SwarmSensorKernel apply", self.apply, ("a", "moving"), passed)
+        for step in self.device:
+            check_arity("SwarmSensorKernel device step", step, ("a", "t"), passed)
+
 
 @dataclass(frozen=True)
 class SensorKernel:
@@ -225,6 +273,11 @@ class SensorKernel:
     stopped: Callable[[Simulation, Any], None] | None = None
     swarm: SwarmSensorKernel | None = None
     state: tuple[Any, ...] = ()
+
+    def __post_init__(self) -> None:
+        passed = {"arrays": len(self.names), "state arrays": len(self.state),
+                  "constants": len(self.constants)}  # fmt: skip
+        check_arity("SensorKernel", self.function, ("a",), passed)
 
 
 @njit(inline="always")
