@@ -251,10 +251,20 @@ class CompiledEngine:
         mark a fused loop compiled (see :meth:`ready`)."""
         fused = self._fusable(sim)
         if fused is None:
-            self._code(None)
+            self._compile_tick(self._code(None))
             return
         self.loop(sim, 0, typical=min(sim.scenario.iterations, 500))
         self._marker(sim, fused).touch()
+
+    def _compile_tick(self, code: ModuleType) -> None:
+        """Compile (or load from numba's cache) ``code.tick`` for this run's arguments, so
+        that the run's first iteration does not (numba compiles on a function's first call:
+        a cold compile of x8-patrol's tree took 8 s of its first iteration)."""
+        import numba
+
+        arguments = (self.world.iteration, self.status, self.current, self.pending,
+                     *self._constants, *self.arrays)  # fmt: skip
+        code.tick.compile(tuple(numba.typeof(a) for a in arguments))
 
     def ready(self, sim: Simulation) -> bool:
         """Whether ``sim`` runs fused and :meth:`prepare` compiled that loop before on this
