@@ -1,7 +1,8 @@
 """The vectorised X8's step and autopilot compiled agent by agent (numba, the ``[fast]`` extra).
 
 The NumPy code in :mod:`~pyautonomousagent.models.x8_dynamics`,
-:mod:`pyautonomousagent.models.x8` and :mod:`.autopilot` is the reference; the functions here
+:mod:`pyautonomousagent.models.x8`, :mod:`.x8_modes` and :mod:`.autopilot` is the reference;
+the functions here
 repeat its operations on one agent's numbers at a time, in the same order, so that they give the
 same bits (no ``fastmath``, no library arctangent or exponential: :func:`atan2` and :func:`exp`
 follow :func:`pyautonomousagent.arrays.arctan2` and :func:`.x8_dynamics.exp` step by step).
@@ -10,9 +11,14 @@ model uses them so for a few agents, where that beats NumPy's cost per call, and
 code above (:attr:`pyautonomousagent.models.x8.X8Vectorised.agent_by_agent`).
 
 Two calls per iteration, whatever the number of agents: :func:`advance` (Phase 2: one step
-of every moving agent, then what the loop reads of it) and :func:`control` (Phase 4: guidance,
-attitude and airspeed PIDs, elevon mixing). Their scalar constants travel in float arrays
-laid out by :func:`pack_constants` and :func:`pack_gains`.
+of every moving agent that is not parked, the ground and the phase changes it makes, what the
+loop reads of the new state, the swarm's columns) and :func:`control` (Phase 4: the phases'
+changes and the references they impose, guidance, attitude and airspeed PIDs, elevon mixing,
+the overridden PIDs' integrators cleared). Where NumPy's ``minimum`` and ``maximum`` meet
+equal numbers they return the second (with SIMD, on x86), which decides the sign of a zero:
+the ground's functions use :func:`pyautonomousagent.kernels.np_minimum` and ``np_maximum``,
+which do the same. Their scalar constants travel in float arrays laid out by
+:func:`pack_constants`, :func:`pack_gains` and :func:`pack_modes`.
 """
 
 from __future__ import annotations
