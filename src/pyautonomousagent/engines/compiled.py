@@ -416,11 +416,12 @@ class CompiledEngine:
         compiled sensors and the 2-D or 3-D drone; a tree that sends nothing with no message in
         flight, or one whose messages have compiled handlers, the messages in flight having
         reached everyone; records of the layout's columns."""
+        if not isinstance(sim.model, Drone2D | Drone3D):  # first: it is asked every iteration
+            return None
         sensors = sim.mission.compiled_sensors(sim)
         recorder = sim.recorder
         if (
             sensors is None
-            or not isinstance(sim.model, Drone2D | Drone3D)
             or sim.world.datalink.channel
             or list(recorder.columns) != list(self.layout.names)
             or not recorder.wants_statuses  # (not .behaviour: it stores it in full)
