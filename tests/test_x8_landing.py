@@ -240,6 +240,47 @@ def test_engines_make_the_same_cycle_as_the_batched_engine(engine):
         np.testing.assert_array_equal(other.recorder.column(key), values, err_msg=key)
 
 
+def numpy_reference(monkeypatch, scenario: Scenario) -> Simulation:
+    """``scenario`` run on the batched engine with the X8's NumPy code (the reference), not
+    its kernel."""
+    from pyautonomousagent.models import x8 as x8_module
+
+    original = x8_module.X8Vectorised.__init__
+
+    def forced(self, *args, **kwargs):
+        kwargs["agent_by_agent"] = False
+        original(self, *args, **kwargs)
+
+    monkeypatch.setattr(x8_module.X8Vectorised, "__init__", forced)
+    sim = Simulation.create(scenario, engine="batched")
+    monkeypatch.setattr(x8_module.X8Vectorised, "__init__", original)
+    assert not sim.model.agent_by_agent
+    return sim.run(progress=False)
+
+
+@NEEDS_NUMBA
+def test_the_compiled_engine_flies_whole_cycles_as_the_numpy_reference(monkeypatch):
+    """Issue 28: on the compiled engine the phases and the ground run in the X8's compiled
+    kernel; through a whole land-refuel-take-off cycle of each UAV its records, phases,
+    touchdowns and final states are the NumPy code's, bit for bit."""
+    scenario = short(agents=3)
+    reference = numpy_reference(monkeypatch, scenario)
+    compiled = Simulation.create(scenario, engine="compiled").run(progress=False)
+    assert compiled.engine.name == "compiled" and compiled.model.compiled
+    phases = reference.recorder.column(modes.PHASE_COLUMN)
+    for a in range(3):  # every phase of the cycle, ending in flight
+        assert set(np.unique(phases[:, a])) == set(range(len(modes.PHASES))), a
+        assert phases[-1, a] == modes.FLIGHT
+    energy = reference.recorder.column("energy")
+    assert (np.diff(energy, axis=0) > 0.0).any(axis=0).all()  # each refuelled
+    for key, values in reference.recorder.columns.items():
+        np.testing.assert_array_equal(compiled.recorder.column(key), values, err_msg=key)
+    for name in ("touchdowns", "strikes", "touchdown_sink", "touchdown_speed", "phase", "state"):
+        want = getattr(reference.model, name)
+        np.testing.assert_array_equal(getattr(compiled.model, name), want, err_msg=name)
+    assert (reference.model.touchdowns == 1).all()
+
+
 def test_the_kernel_and_the_numpy_code_land_with_the_same_bits(monkeypatch):
     from pyautonomousagent.models import x8 as x8_module
 

@@ -251,13 +251,23 @@ class CompiledEngine:
         mark a fused loop compiled (see :meth:`ready`)."""
         fused = self._fusable(sim)
         if fused is None:
-            self._code(None)
+            self._compile_tick(self._code(None))
             return
         self.loop(sim, 0, typical=min(sim.scenario.iterations, 500))
         self._marker(sim, fused).touch()
 
     def sync(self, sim: Simulation) -> None:
         """Nothing to finish: :meth:`loop` returns with its records and state written."""
+
+    def _compile_tick(self, code: ModuleType) -> None:
+        """Compile (or load from numba's cache) ``code.tick`` for this run's arguments, so
+        that the run's first iteration does not (numba compiles on a function's first call:
+        a cold compile of x8-patrol's tree took 8 s of its first iteration)."""
+        import numba
+
+        arguments = (self.world.iteration, self.status, self.current, self.pending,
+                     *self._constants, *self.arrays)  # fmt: skip
+        code.tick.compile(tuple(numba.typeof(a) for a in arguments))
 
     def ready(self, sim: Simulation) -> bool:
         """Whether ``sim`` runs fused and :meth:`prepare` compiled that loop before on this
@@ -409,11 +419,12 @@ class CompiledEngine:
         compiled sensors and the 2-D or 3-D drone; a tree that sends nothing with no message in
         flight, or one whose messages have compiled handlers, the messages in flight having
         reached everyone; records of the layout's columns."""
+        if not isinstance(sim.model, Drone2D | Drone3D):  # first: it is asked every iteration
+            return None
         sensors = sim.mission.compiled_sensors(sim)
         recorder = sim.recorder
         if (
             sensors is None
-            or not isinstance(sim.model, Drone2D | Drone3D)
             or sim.world.datalink.channel
             or list(recorder.columns) != list(self.layout.names)
             or not recorder.wants_statuses  # (not .behaviour: it stores it in full)

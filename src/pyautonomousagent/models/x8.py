@@ -255,9 +255,7 @@ class X8Model:
         s["y"][:] = f.north
         s["speed"][:] = f.airspeed if moving is None else np.where(moving, f.airspeed, 0.0)
         heading = np.mod(np.degrees(f.course), 360.0)
-        s["heading"][:] = (
-            heading if self._quiet else np.where(f.airspeed == 0.0, s["heading"], heading)
-        )
+        s["heading"][:] = np.where(f.airspeed == 0.0, s["heading"], heading)
         if modes.PHASE_COLUMN in s:
             s[modes.PHASE_COLUMN][:] = self.phase
 
@@ -392,18 +390,22 @@ class X8Vectorised(X8Model):
     def _compile(self, n: int) -> bool:
         """Pack the kernel's constants, compile (or load) the kernel and check it against the
         NumPy code (:meth:`_kernel_agrees`); if it agrees, put the controllers' state in one
-        (7, N) array (the controllers keep views of its rows). Returns whether it agreed."""
+        (7, N) array (the controllers keep views of its rows), and the touchdown records in
+        two (2, N) arrays. Returns whether it agreed."""
         self._packed = kernel.pack_constants(self.constants)
         self._gains = kernel.pack_gains(self.guidance, self.attitude, self.constants)
-        empty = np.zeros(0)
+        self._phases = kernel.pack_modes(self.modes)
+        self._none = np.zeros(0)  # a column the mission does not declare
+        empty, phase = np.zeros(0), np.zeros(0, dtype=np.int64)
         kernel.control(
-            np.zeros((kernel.FLIGHT_ROWS, 0)), empty, empty, (empty, empty, empty, empty),
-            np.zeros((7, 0)), self._gains, np.zeros((3, 0)),
+            np.zeros((kernel.FLIGHT_ROWS, 0)), (empty, empty, empty, empty), phase,
+            (self._gains, self._phases), np.zeros((7, 0)), np.zeros((3, 0)),
         )  # fmt: skip
         if not self._kernel_agrees():
             log.warning(
                 "the X8 kernel does not give the NumPy code's bits here (a stale numba cache "
-                "after a change to arrays.py or x8_dynamics.py?); using the NumPy code"
+                "after a change to arrays.py, x8_dynamics.py or x8_modes.py?); using the "
+                "NumPy code"
             )
             return False
         pids = np.zeros((7, n))
@@ -412,66 +414,82 @@ class X8Vectorised(X8Model):
         course.integral, course.previous, height.integral, height.previous = pids[:4]
         self.attitude.integral = pids[4:]
         self._pids = pids
+        counts, marks = np.zeros((2, n), dtype=np.int64), np.zeros((2, n))
+        self.touchdowns, self.strikes = counts
+        self.touchdown_sink, self.touchdown_speed = marks
+        self._ground = (self.phase, counts, marks, self._phases)
         self._flight = np.empty((kernel.FLIGHT_ROWS, n))
         return True
 
     def _kernel_agrees(self) -> bool:
         """One step of up to 8 of the UAVs, disturbed (rates, sideslip, climb, surfaces in
-        motion), by the kernel and by the NumPy code: the same bits? Compiled code keeps the
-        constants it imported when it was cached, so this guards against a stale cache."""
+        motion; the first one below the ground), by the kernel and by the NumPy code: the
+        same bits? Compiled code keeps the constants it imported when it was cached, so this
+        guards against a stale cache."""
         y = self.state[:, :8].copy()
-        wiggle = np.linspace(-1.0, 1.0, y.shape[1])
+        k = y.shape[1]
+        wiggle = np.linspace(-1.0, 1.0, k)
         y[dyn.RATES] += 0.3 * wiggle
         y[dyn.V] += 2.0 * wiggle
         y[dyn.W] -= 1.5 * wiggle
         y[dyn.ELEVON_RATES] = 4.0 * wiggle
+        y[dyn.PD, :1] = 0.5
         commands = np.array([0.2 * wiggle, -0.3 * wiggle, 0.5 + 0.4 * wiggle])
-        want = dyn.step(y, commands, self.constants)
-        got, flight = np.empty_like(y), np.empty((kernel.FLIGHT_ROWS, y.shape[1]))
-        k = self.constants
-        moving = np.ones(y.shape[1], dtype=bool)
-        kernel.advance(y, commands, moving, self._packed, k.aero, k.inertia, got, flight)
-        return np.array_equal(got, want) and np.array_equal(flight, astuple(observe(want)))
+        phase = np.zeros(k, dtype=np.int64)
+        want = self._reference_step(y, commands, phase)
+        got, flight = np.empty_like(y), np.empty((kernel.FLIGHT_ROWS, k))
+        phases = np.zeros_like(phase)
+        ground = (phases, np.zeros((2, k), dtype=np.int64), np.zeros((2, k)), self._phases)
+        columns = (np.zeros(k), np.zeros(k), np.zeros(k), np.zeros(k), self._none)
+        c = self.constants
+        kernel.advance(y, commands, np.ones(k, dtype=bool), (self._packed, c.aero, c.inertia),
+                       (got, flight), ground, columns)  # fmt: skip
+        same = np.array_equal(got, want) and np.array_equal(phases, phase)
+        return same and np.array_equal(flight, astuple(observe(want)))
 
-    def _advance(
-        self, state: np.ndarray, moving: np.ndarray, new: np.ndarray, flight: np.ndarray
-    ) -> None:
-        """The compiled step from ``state`` into ``new`` and ``flight`` (shapes as in
-        :func:`x8_kernel.advance`)."""
-        k = self.constants
-        kernel.advance(state, self.commands, moving, self._packed, k.aero, k.inertia, new, flight)
+    def _reference_step(self, y: np.ndarray, commands: np.ndarray, phase: np.ndarray) -> np.ndarray:
+        """The NumPy code's step of states ``y`` (STATES, K) under ``commands`` (COMMANDS, K),
+        then the ground (``phase`` (K,) updated), as :meth:`X8Model.land` puts it."""
+        want = dyn.step(y, commands, self.constants)
+        rows = np.flatnonzero(want[dyn.PD] >= 0.0)
+        b = want[:, rows]
+        mu = modes.friction(phase[rows], self.modes)
+        contact = modes.ground_contact(b, mu, self.modes.max_ground_pitch)
+        want[:, rows] = b
+        modes.after_contact(phase, rows, contact)
+        return want
 
     def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None:
         """Phase 2: one time step of ``settings.dt`` for the agents where ``moving`` (and not
-        parked), then the ground."""
-        moving = np.asarray(self.moving(moving), dtype=bool)
-        if self.agent_by_agent:
-            new, self._flight = np.empty_like(self.state), np.empty_like(self._flight)
-            self._advance(self.state, moving, new, self._flight)
-            self.state = new
-            rows = self.land(new, moving)
-            if rows.size:
-                self._flight[:, rows] = astuple(observe(new[:, rows]))
-            self.flight = Flight(*self._flight)
-        else:
+        parked), then the ground; agent by agent, one compiled call."""
+        if not self.agent_by_agent:
+            moving = np.asarray(self.moving(moving), dtype=bool)
             new = dyn.step(self.state, self.commands, self.constants)
             self.state = new if moving.all() else np.where(moving, new, self.state)
             self.land(self.state, moving)
             self.flight = observe(self.state)
-        self.write(s, moving)
+            self.write(s, moving)
+            return
+        new, self._flight = np.empty_like(self.state), np.empty_like(self._flight)
+        c = self.constants
+        columns = (s["x"], s["y"], s["speed"], s["heading"], s.get(modes.PHASE_COLUMN, self._none))
+        kernel.advance(self.state, self.commands, np.asarray(moving, dtype=bool),
+                       (self._packed, c.aero, c.inertia), (new, self._flight), self._ground,
+                       columns)  # fmt: skip
+        self.state = new
+        self.flight = Flight(*self._flight)
 
     def control(self, s: dict[str, np.ndarray]) -> None:
-        """Phase 4: the autopilot's commands for the requested heading and speed."""
+        """Phase 4: the autopilot's commands for the requested heading and speed (and the
+        phases' changes and overrides); agent by agent, one compiled call."""
         if not self.agent_by_agent:
             super().control(s)
             return
-        o = self.references(s)
-        heading, speed = s["requested_heading"], s["requested_speed"]
-        kernel.control(
-            self._flight, heading, speed, (o.altitude, o.roll, o.pitch, o.throttle),
-            self._pids, self._gains, self.commands,
-        )  # fmt: skip
-        self.settle(o)
+        mode = s.get(modes.MODE_COLUMN, self._none)
+        glide = s.get(modes.ALTITUDE_COLUMN, self._none)
+        requests = (s["requested_heading"], s["requested_speed"], mode, glide)
+        kernel.control(self._flight, requests, self.phase, (self._gains, self._phases),
+                       self._pids, self.commands)  # fmt: skip
 
     def _clear_attitude(self, airspeed: np.ndarray, roll: np.ndarray, pitch: np.ndarray) -> None:
         for row, held in enumerate((airspeed, roll, pitch)):

@@ -1,7 +1,8 @@
 """The vectorised X8's step and autopilot compiled agent by agent (numba, the ``[fast]`` extra).
 
 The NumPy code in :mod:`~pyautonomousagent.models.x8_dynamics`,
-:mod:`pyautonomousagent.models.x8` and :mod:`.autopilot` is the reference; the functions here
+:mod:`pyautonomousagent.models.x8`, :mod:`.x8_modes` and :mod:`.autopilot` is the reference;
+the functions here
 repeat its operations on one agent's numbers at a time, in the same order, so that they give the
 same bits (no ``fastmath``, no library arctangent or exponential: :func:`atan2` and :func:`exp`
 follow :func:`pyautonomousagent.arrays.arctan2` and :func:`.x8_dynamics.exp` step by step).
@@ -10,9 +11,14 @@ model uses them so for a few agents, where that beats NumPy's cost per call, and
 code above (:attr:`pyautonomousagent.models.x8.X8Vectorised.agent_by_agent`).
 
 Two calls per iteration, whatever the number of agents: :func:`advance` (Phase 2: one step
-of every moving agent, then what the loop reads of it) and :func:`control` (Phase 4: guidance,
-attitude and airspeed PIDs, elevon mixing). Their scalar constants travel in float arrays
-laid out by :func:`pack_constants` and :func:`pack_gains`.
+of every moving agent that is not parked, the ground and the phase changes it makes, what the
+loop reads of the new state, the swarm's columns) and :func:`control` (Phase 4: the phases'
+changes and the references they impose, guidance, attitude and airspeed PIDs, elevon mixing,
+the overridden PIDs' integrators cleared). Where NumPy's ``minimum`` and ``maximum`` meet
+equal numbers they return the second (with SIMD, on x86), which decides the sign of a zero:
+the ground's functions use :func:`pyautonomousagent.kernels.np_minimum` and ``np_maximum``,
+which do the same. Their scalar constants travel in float arrays laid out by
+:func:`pack_constants`, :func:`pack_gains` and :func:`pack_modes`.
 """
 
 from __future__ import annotations
@@ -23,8 +29,21 @@ import numpy as np
 
 from pyautonomousagent.jit import njit
 from pyautonomousagent.kernels import arctan2 as atan2  # arrays.arctan2, one pair
+from pyautonomousagent.kernels import np_maximum, np_minimum
 from pyautonomousagent.models import x8_dynamics as dyn
+from pyautonomousagent.models import x8_modes as modes
 from pyautonomousagent.models.autopilot import AttitudeController, Guidance
+from pyautonomousagent.models.x8_modes import (
+    APPROACH,
+    CLIMB_OUT,
+    FLARE,
+    FLIGHT,
+    GROUND_ROLL,
+    LAND,
+    PARKED,
+    ROLLOUT,
+    TAKE_OFF,
+)
 
 #: Rows of the flight array that :func:`advance` fills (the fields of ``x8.Flight``).
 FLIGHT_ROWS = 10
@@ -310,41 +329,6 @@ def _observe_one(y: np.ndarray, flight: np.ndarray, i: int, w: np.ndarray) -> No
     flight[9, i] = -(w[ROT + 6] * u + w[ROT + 7] * v + w[ROT + 8] * ww)
 
 
-@njit
-def advance(
-    state: np.ndarray,
-    commands: np.ndarray,
-    moving: np.ndarray,
-    c: np.ndarray,
-    aero: np.ndarray,
-    inertia: np.ndarray,
-    new: np.ndarray,
-    flight: np.ndarray,
-) -> None:
-    """One time step of every agent where ``moving``; the others are held.
-
-    Args:
-        state: the state, (STATES, N); not modified.
-        commands: actuator set points, (COMMANDS, N).
-        moving: (N,) bool.
-        c: :func:`pack_constants`; aero, inertia: ``Constants.aero`` (6, 16), ``.inertia`` (3, 7).
-        new: receives the new state, (STATES, N).
-        flight: receives ``x8.observe`` of the new state, (FLIGHT_ROWS, N): north, east,
-            altitude (m), airspeed (m/s), course, roll, pitch (rad), p, q (rad/s), climb
-            (m/s).
-    """
-    w, y, out = np.empty(WORK), np.empty(18), np.empty(18)
-    for i in range(state.shape[1]):
-        for j in range(18):
-            y[j] = state[j, i]
-        if moving[i]:
-            _step_one(y, commands, i, c, (aero, inertia), w, out)
-            y[:] = out
-        for j in range(18):
-            new[j, i] = y[j]
-        _observe_one(y, flight, i, w)
-
-
 # Indices into the gains vector of :func:`pack_gains`.
 (C_KP, C_KI, C_KD, C_LIM, C_DT, A_KP, A_KI, A_KD, A_LIM, A_DT, ALT_REF, V_MIN) = range(12)
 (KP_V, KI_V, KP_ROLL, KI_ROLL, KD_ROLL, KP_PITCH, KI_PITCH, KD_PITCH) = range(12, 20)
@@ -385,52 +369,303 @@ def _pid(error: float, state: np.ndarray, row: int, i: int, g: np.ndarray, at: i
 
 
 @njit
-def control(
+def _steer(
+    i: int,
     flight: np.ndarray,
-    heading: np.ndarray,
-    speed: np.ndarray,
-    overrides: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    requested: tuple[float, float],
+    refs: tuple[float, float, float, float],
     pids: np.ndarray,
     g: np.ndarray,
     commands: np.ndarray,
 ) -> None:
-    """Phase 4 for every agent: ``X8Vectorised.control`` (guidance, attitude, elevon mixing).
+    """``X8Model.control`` for agent i (guidance, attitude and airspeed PIDs, elevon mixing)
+    into ``commands[:, i]``; ``requested``: heading (degrees) and speed (m/s); ``refs``: the
+    phase's altitude reference (m), roll and pitch (rad) and throttle, NaN where the PIDs
+    decide (:func:`_overrides`)."""
+    target, roll_o, pitch_o, throttle_o = refs
+    error = _mod(requested[0] * (math.pi / 180.0) - flight[4, i] + math.pi, 2 * math.pi)
+    roll_ref = _pid(error - math.pi, pids, 0, i, g, C_KP)
+    pitch_ref = _pid(target - flight[2, i], pids, 2, i, g, A_KP)
+    if not math.isnan(roll_o):
+        roll_ref = roll_o
+    if not math.isnan(pitch_o):
+        pitch_ref = pitch_o
+    errors = (
+        flight[3, i] - _max(requested[1], g[V_MIN]),
+        flight[5, i] - roll_ref,
+        flight[6, i] - pitch_ref,
+    )
+    for j in range(3):
+        pids[4 + j, i] += g[ATT_DT] * errors[j]
+    throttle = -g[KP_V] * errors[0] - g[KI_V] * pids[4, i]
+    aileron = -g[KP_ROLL] * errors[1] - g[KI_ROLL] * pids[5, i] - g[KD_ROLL] * flight[7, i]
+    elevator = -g[KP_PITCH] * errors[2] - g[KI_PITCH] * pids[6, i] - g[KD_PITCH] * flight[8, i]
+    elevator = _clip(elevator, g[ELEV_MIN], g[ELEV_MAX])
+    aileron = _clip(aileron, g[AIL_MIN], g[AIL_MAX])
+    commands[0, i] = _clip(elevator - aileron, g[ELEVON_MIN], g[ELEVON_MAX])
+    commands[1, i] = _clip(elevator + aileron, g[ELEVON_MIN], g[ELEVON_MAX])
+    commands[2, i] = _clip(throttle, 0.0, 1.0)
+    if not math.isnan(throttle_o):
+        commands[2, i] = throttle_o
+
+
+# --- take-off and landing (x8_modes), agent by agent -------------------------------------
+
+# Indices into the vector of :func:`pack_modes`.
+(MD_ALTITUDE, MD_FLARE_HEIGHT, MD_FLARE_TIME, MD_SINK, MD_FLARE_PITCH, MD_FLARE_GAIN) = range(6)
+(MD_MAX_FLARE, MD_ROTATION_SPEED, MD_ROTATION_PITCH, MD_MARGIN, MD_ROLLING) = range(6, 11)
+(MD_BRAKING, MD_SIN_GROUND_PITCH) = range(11, 13)
+
+
+def pack_modes(m: modes.ModeSettings) -> np.ndarray:
+    """The phases' settings (:class:`x8_modes.ModeSettings`; m, s, m/s, rad) as the kernel
+    reads them, (13,): the last is ``sin(max_ground_pitch)``, computed as
+    :func:`x8_modes.ground_contact` computes it."""
+    return np.array(
+        [m.altitude, m.flare_height, m.flare_time, m.touchdown_sink, m.flare_pitch]
+        + [m.flare_gain, m.max_flare_pitch, m.rotation_speed, m.rotation_pitch]
+        + [m.climb_out_margin, m.friction_rolling, m.friction_braking]
+        + [math.sin(m.max_ground_pitch)],
+        dtype=np.float64,
+    )
+
+
+@njit
+def _transition(phase: int, mode: float, altitude: float, airspeed: float, m: np.ndarray) -> int:
+    """``x8_modes.transitions`` of one aircraft: its phase after Phase 4's changes, in the
+    order of the cycle; ``mode`` requested, altitude (m), airspeed (m/s)."""
+    if phase == FLIGHT and mode == LAND:
+        phase = APPROACH
+    if phase == APPROACH and mode != LAND:
+        phase = FLIGHT
+    if phase == APPROACH and altitude <= m[MD_FLARE_HEIGHT]:
+        phase = FLARE
+    if phase == PARKED and mode == TAKE_OFF:
+        phase = GROUND_ROLL
+    if phase == GROUND_ROLL and airspeed >= m[MD_ROTATION_SPEED]:
+        phase = CLIMB_OUT
+    if phase == CLIMB_OUT and altitude >= m[MD_ALTITUDE] - m[MD_MARGIN]:
+        phase = FLIGHT
+    return phase
+
+
+@njit
+def _overrides(
+    phase: int, glide: float, altitude: float, climb: float, m: np.ndarray
+) -> tuple[float, float, float, float]:
+    """``x8_modes.overrides`` of one aircraft: the altitude reference (m; ``glide`` in
+    APPROACH), roll, pitch (rad) and throttle references, NaN where the PIDs decide;
+    altitude (m) and climb (m/s, up) as flown."""
+    target = glide if phase == APPROACH else m[MD_ALTITUDE]
+    level = phase >= FLARE
+    roll = 0.0 if level else math.nan
+    pitch = 0.0 if level else math.nan
+    if phase == FLARE:
+        climb_ref = -(altitude / m[MD_FLARE_TIME] + m[MD_SINK])
+        flare = m[MD_FLARE_PITCH] + m[MD_FLARE_GAIN] * (climb_ref - climb)
+        pitch = np_minimum(np_maximum(flare, 0.0), m[MD_MAX_FLARE])
+    if phase == CLIMB_OUT:
+        pitch = m[MD_ROTATION_PITCH]
+    throttle = 0.0 if level else math.nan
+    if phase in (GROUND_ROLL, CLIMB_OUT):
+        throttle = 1.0
+    return target, roll, pitch, throttle
+
+
+@njit
+def _settle(i: int, phase: int, refs: tuple[float, float, float, float], pids: np.ndarray) -> None:
+    """``X8Model.settle`` for agent i: the integrators (and previous errors) of the PIDs whose
+    output the phase overrides cleared (``pids`` as in :func:`control`)."""
+    _, roll, pitch, throttle = refs
+    if not math.isnan(roll):
+        pids[0, i], pids[1, i], pids[5, i] = 0.0, math.nan, 0.0
+    if not math.isnan(pitch):
+        pids[2, i], pids[3, i] = 0.0, math.nan
+    if not math.isnan(throttle):
+        pids[4, i] = 0.0
+    if phase == PARKED:
+        pids[6, i] = 0.0
+
+
+@njit
+def _level(y: np.ndarray, w: np.ndarray, sin_max: float) -> tuple[float, float, float]:
+    """The attitude half of ``x8_modes.ground_contact`` for state ``y`` (18,), whose rotation
+    is in ``w[ROT:]``: the new quaternion into ``y[0:4]`` (heading kept, wings level, pitch
+    within ``[0, asin(sin_max)]``). Returns cos and sin of the heading, and whether the pitch
+    was clipped (1.0) or not (0.0)."""
+    span = math.sqrt(w[ROT + 0] * w[ROT + 0] + w[ROT + 3] * w[ROT + 3])  # cos(pitch) > 0
+    cos_yaw, sin_yaw = w[ROT + 0] / span, w[ROT + 3] / span
+    sin_pitch = -w[ROT + 6]
+    s = np_minimum(np_maximum(sin_pitch, 0.0), sin_max)
+    c = math.sqrt((1.0 - s) * (1.0 + s))
+    half_c, half_s = math.sqrt((1.0 + c) * 0.5), math.sqrt((1.0 - c) * 0.5)
+    yaw_c = math.sqrt(np_maximum(1.0 + cos_yaw, 0.0) * 0.5)
+    yaw_s = math.sqrt(np_maximum(1.0 - cos_yaw, 0.0) * 0.5)
+    if sin_yaw < 0.0:
+        yaw_s = -yaw_s
+    y[0], y[1] = yaw_c * half_c, -(yaw_s * half_s)
+    y[2], y[3] = yaw_c * half_s, yaw_s * half_c
+    return cos_yaw, sin_yaw, 1.0 if s != sin_pitch else 0.0
+
+
+@njit
+def _ground(y: np.ndarray, mu: float, sin_max: float, w: np.ndarray) -> tuple[float, float, bool]:
+    """``x8_modes.ground_contact`` of one aircraft at or below the ground, state ``y`` (18,)
+    in place; ``mu`` the friction coefficient, ``sin_max`` the sine of the largest pitch on
+    the ground. Returns the sink rate the ground took (m/s), the speed before (m/s) and
+    whether it came to rest."""
+    _rotation(y, w)
+    u, v, ww = y[10], y[11], y[12]
+    north = w[ROT + 0] * u + w[ROT + 1] * v + w[ROT + 2] * ww
+    east = w[ROT + 3] * u + w[ROT + 4] * v + w[ROT + 5] * ww
+    down = w[ROT + 6] * u + w[ROT + 7] * v + w[ROT + 8] * ww
+    cos_yaw, sin_yaw, clipped = _level(y, w, sin_max)
+    sink = np_maximum(down, 0.0)
+    along = north * cos_yaw + east * sin_yaw
+    slowed = np_maximum(abs(along) - mu * sink, 0.0)
+    along = -slowed if along < 0.0 else slowed
+    down = np_minimum(down, 0.0)
+    north, east = along * cos_yaw, along * sin_yaw
+    speed = math.sqrt(u * u + v * v + ww * ww)
+    stopped = along == 0.0 and down == 0.0
+    _rotation(y, w)  # of the new quaternion
+    y[10] = w[ROT + 0] * north + w[ROT + 3] * east + w[ROT + 6] * down
+    y[11] = w[ROT + 1] * north + w[ROT + 4] * east + w[ROT + 7] * down
+    y[12] = w[ROT + 2] * north + w[ROT + 5] * east + w[ROT + 8] * down
+    y[4], y[6], y[9] = 0.0, 0.0, 0.0
+    if clipped != 0.0 or stopped:
+        y[5] = 0.0
+    return sink, speed, stopped
+
+
+@njit
+def _touch(
+    y: np.ndarray,
+    i: int,
+    ground: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    w: np.ndarray,
+) -> None:
+    """``X8Model.land`` for agent i, at or below the ground: :func:`_ground` with the
+    friction of its phase, then ``x8_modes.after_contact`` and the touchdown records
+    (``ground`` as in :func:`advance`)."""
+    phase, counts, marks, m = ground
+    was = phase[i]
+    rolling = was in (GROUND_ROLL, CLIMB_OUT)
+    mu = m[MD_ROLLING] if rolling else m[MD_BRAKING]
+    sink, speed, stopped = _ground(y, mu, m[MD_SIN_GROUND_PITCH], w)
+    landed = was in (FLIGHT, APPROACH, FLARE)
+    now = ROLLOUT if landed else was
+    if now == ROLLOUT and stopped:
+        now = PARKED
+    phase[i] = now
+    if landed:
+        counts[0, i] += 1
+        if was != FLARE:
+            counts[1, i] += 1
+        marks[0, i], marks[1, i] = sink, speed
+
+
+@njit
+def _write(
+    flight: np.ndarray,
+    i: int,
+    moved: bool,
+    phase: np.ndarray,
+    columns: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """``X8Model.write`` for agent i: x, y (m), speed (m/s; 0 where it did not move),
+    heading (degrees in [0, 360), kept at rest) and, where the column exists (size N, else
+    0), the phase."""
+    x, y, speed, heading, phase_column = columns
+    x[i], y[i] = flight[1, i], flight[0, i]
+    speed[i] = flight[3, i] if moved else 0.0
+    if flight[3, i] != 0.0:
+        heading[i] = _mod(flight[4, i] * (180.0 / math.pi), 360.0)
+    if phase_column.shape[0] != 0:
+        phase_column[i] = phase[i]
+
+
+# --- the two calls per iteration -----------------------------------------------------------
+
+
+@njit
+def advance(
+    state: np.ndarray,
+    commands: np.ndarray,
+    moving: np.ndarray,
+    constants: tuple[np.ndarray, np.ndarray, np.ndarray],
+    out: tuple[np.ndarray, np.ndarray],
+    ground: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    columns: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """Phase 2 for every agent: ``X8Vectorised.advance`` (one time step where ``moving`` and
+    not parked, the others held; the ground; the swarm's columns).
+
+    Args:
+        state: the state, (STATES, N); not modified.
+        commands: actuator set points, (COMMANDS, N).
+        moving: (N,) bool.
+        constants: :func:`pack_constants`, ``Constants.aero`` (6, 16), ``.inertia`` (3, 7).
+        out: receive the new state, (STATES, N), and ``x8.observe`` of it,
+            (FLIGHT_ROWS, N): north, east, altitude (m), airspeed (m/s), course, roll,
+            pitch (rad), p, q (rad/s), climb (m/s).
+        ground: the phases (N,) int64, updated; touchdowns and ground strikes (2, N) int64
+            and the sink rate and speed at the latest touchdown (2, N) (m/s), updated where
+            an aircraft touches down; :func:`pack_modes`.
+        columns: the swarm's x, y (m), speed (m/s), heading (degrees) and phase columns,
+            (N,) each (the phase column (0,) where the mission has none), written.
+    """
+    c, aero, inertia = constants
+    new, flight = out
+    phase = ground[0]
+    w, y, step = np.empty(WORK), np.empty(18), np.empty(18)
+    for i in range(state.shape[1]):
+        for j in range(18):
+            y[j] = state[j, i]
+        moved = moving[i] and phase[i] != PARKED
+        if moved:
+            _step_one(y, commands, i, c, (aero, inertia), w, step)
+            y[:] = step
+            if y[9] >= 0.0:
+                _touch(y, i, ground, w)
+        for j in range(18):
+            new[j, i] = y[j]
+        _observe_one(y, flight, i, w)
+        _write(flight, i, moved, phase, columns)
+
+
+@njit
+def control(
+    flight: np.ndarray,
+    requests: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    phase: np.ndarray,
+    constants: tuple[np.ndarray, np.ndarray],
+    pids: np.ndarray,
+    commands: np.ndarray,
+) -> None:
+    """Phase 4 for every agent: ``X8Model.control`` (the phases' changes and references,
+    guidance, attitude, elevon mixing, the overridden PIDs' integrators cleared).
 
     Args:
         flight: (FLIGHT_ROWS, N), as :func:`advance` fills it.
-        heading, speed: the requested heading (degrees clockwise from north) and speed
-            (m/s), (N,).
-        overrides: ``x8_modes.Overrides``' altitude (m), roll, pitch (rad) and throttle,
-            each (N,); NaN where the PIDs decide.
+        requests: the requested heading (degrees clockwise from north) and speed (m/s),
+            (N,), and the requested mode and glide-path altitude (m), (N,) each or (0,)
+            where the mission has no such column.
+        phase: the phases, (N,) int64, updated.
+        constants: :func:`pack_gains`, :func:`pack_modes`.
         pids: controller state, (7, N), updated: course integral and previous error,
             altitude integral and previous error, integrals of the airspeed, roll and pitch
             errors.
-        g: :func:`pack_gains`.
         commands: receives the actuator set points, (COMMANDS, N).
     """
-    target, roll_o, pitch_o, throttle_o = overrides
+    heading, speed, mode, glide = requests
+    g, m = constants
     for i in range(flight.shape[1]):
-        error = _mod(heading[i] * (math.pi / 180.0) - flight[4, i] + math.pi, 2 * math.pi)
-        roll_ref = _pid(error - math.pi, pids, 0, i, g, C_KP)
-        pitch_ref = _pid(target[i] - flight[2, i], pids, 2, i, g, A_KP)
-        if not math.isnan(roll_o[i]):
-            roll_ref = roll_o[i]
-        if not math.isnan(pitch_o[i]):
-            pitch_ref = pitch_o[i]
-        errors = (
-            flight[3, i] - _max(speed[i], g[V_MIN]),
-            flight[5, i] - roll_ref,
-            flight[6, i] - pitch_ref,
-        )
-        for j in range(3):
-            pids[4 + j, i] += g[ATT_DT] * errors[j]
-        throttle = -g[KP_V] * errors[0] - g[KI_V] * pids[4, i]
-        aileron = -g[KP_ROLL] * errors[1] - g[KI_ROLL] * pids[5, i] - g[KD_ROLL] * flight[7, i]
-        elevator = -g[KP_PITCH] * errors[2] - g[KI_PITCH] * pids[6, i] - g[KD_PITCH] * flight[8, i]
-        elevator = _clip(elevator, g[ELEV_MIN], g[ELEV_MAX])
-        aileron = _clip(aileron, g[AIL_MIN], g[AIL_MAX])
-        commands[0, i] = _clip(elevator - aileron, g[ELEVON_MIN], g[ELEVON_MAX])
-        commands[1, i] = _clip(elevator + aileron, g[ELEVON_MIN], g[ELEVON_MAX])
-        commands[2, i] = _clip(throttle, 0.0, 1.0)
-        if not math.isnan(throttle_o[i]):
-            commands[2, i] = throttle_o[i]
+        p = phase[i]
+        if mode.shape[0] != 0:
+            p = _transition(p, mode[i], flight[2, i], flight[3, i], m)
+            phase[i] = p
+        target = glide[i] if glide.shape[0] != 0 else m[MD_ALTITUDE]
+        refs = _overrides(p, target, flight[2, i], flight[9, i], m)
+        _steer(i, flight, (heading[i], speed[i]), refs, pids, g, commands)
+        _settle(i, p, refs, pids)
