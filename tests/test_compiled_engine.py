@@ -275,3 +275,35 @@ def test_fused_messages_in_groups_of_agents_give_the_batched_data(
     assert function.endswith("_parallel" if parallel else "_serial")  # 3 groups of 256 either way
     assert_same_runs(batched, compiled_run)
     assert_same_shared_data(batched, compiled_run)
+
+
+@needs_numba
+@pytest.mark.parametrize("quiet", [False, True])
+def test_pyaa_run_says_when_it_compiles_and_how_long_it_took(
+    quiet: bool, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:  # fmt: skip
+    """A fused loop not yet compiled on this machine (its marker missing): a line before,
+    and one with the seconds after (from 0 s here); none with --quiet. The seconds are in
+    run.json's timings."""
+    import json
+
+    from pyautonomousagent import cli
+    from pyautonomousagent.engines import compiled
+
+    monkeypatch.setattr(compiled, "SAY_COMPILE_SECONDS", 0.0)
+    monkeypatch.setattr(CompiledEngine, "_marker", lambda self, sim, fused: tmp_path / "marker")
+    out = tmp_path / "run"
+    argv = ["run", "gathering", "--engine", "compiled", "--iterations", "20", "--no-gif",
+            "--out", str(out), *(["--quiet"] if quiet else [])]  # fmt: skip
+    assert cli.main(argv) == 0
+    said = [line for line in capsys.readouterr().err.splitlines() if "compil" in line]
+    if quiet:
+        assert said == []
+    else:
+        assert said[0].startswith("pyaa: compiling this tree's fused loop")
+        assert said[1].startswith(
+            "pyaa: compiled engine: compiling (or loading) the tree's code took"
+        )
+    timings = json.loads((out / "run.json").read_text())["timings_s"]
+    assert 0.0 < timings["compile"] <= timings["setup"]

@@ -5,11 +5,13 @@ from __future__ import annotations
 import argparse
 import difflib
 import json
+import logging
 import os
 import shutil
 import sys
 from collections import Counter
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
@@ -570,19 +572,39 @@ def run(args: argparse.Namespace) -> int:
     _check_agent_options(args, scenario)
     if args.tree is not None:
         scenario = scenario.with_overrides(tree=_tree_option(args.tree))
-    sim = Simulation.create(
-        scenario,
-        seed=args.seed,
-        engine=args.engine,
-        record_every=args.record_every,
-        trace=_trace_spec(args),
-    )
+    with _saying_compiles(not args.quiet):
+        sim = Simulation.create(
+            scenario,
+            seed=args.seed,
+            engine=args.engine,
+            record_every=args.record_every,
+            trace=_trace_spec(args),
+        )
     why = getattr(sim.engine, "why_not_fused", lambda sim: "")(sim)
     if why and not args.quiet:
         print(f"pyaa: the compiled engine ticks the tree only, not whole iterations: {why}")
     out = args.out or default_folder(scenario.name)
     with claim_run(out, args.overwrite, report=_note) as held:
         return _run_claimed(args, scenario, sim, held)
+
+
+@contextmanager
+def _saying_compiles(enabled: bool) -> Iterator[None]:
+    """While the body runs, show the ``pyautonomousagent.compile`` logger's lines (the
+    compiled engine compiling, and how long it took) on stderr as ``pyaa: ...`` lines."""
+    logger = logging.getLogger("pyautonomousagent.compile")
+    if not enabled:
+        yield
+        return
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("pyaa: %(message)s"))
+    level, logger.level = logger.level, logging.INFO
+    logger.addHandler(handler)
+    try:
+        yield
+    finally:
+        logger.removeHandler(handler)
+        logger.setLevel(level)
 
 
 def _note(text: str) -> None:
@@ -800,6 +822,8 @@ def timings_line(timings: Mapping[str, float]) -> str:
         for key, label in (("setup", "set-up"), ("simulate", "loop"), ("write_data", "writing"))
         if key in timings
     ]
+    if "compile" in timings and "setup" in timings:
+        parts[0] += f" (compiling {timings['compile']:.2f} s)"
     if "write_data" in timings and "write_data_thread" in timings:
         parts[-1] += f" after the loop (thread {timings['write_data_thread']:.2f} s CPU)"
     views = {k: timings[k] for k in ("animation", "replay") if k in timings}

@@ -24,9 +24,11 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
+import logging
 import os
 import re
 import sys
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -131,6 +133,13 @@ def load_source(source: str) -> ModuleType:
     sys.modules[name] = module
     spec.loader.exec_module(module)
     return module
+
+
+#: Where :meth:`CompiledEngine.prepare` says that it compiles, and how long it took.
+compile_log = logging.getLogger("pyautonomousagent.compile")
+#: Set-up seconds from which :meth:`CompiledEngine.prepare` says how long compiling took
+#: (loading a compiled tree from numba's cache takes well under a second).
+SAY_COMPILE_SECONDS = 1.0
 
 
 #: Agent-iterations from which :meth:`CompiledEngine.loop` runs numba's parallel function
@@ -248,13 +257,26 @@ class CompiledEngine:
 
     def prepare(self, sim: Simulation) -> None:
         """Compile (or load from numba's cache) what this run will call, before its loop;
-        mark a fused loop compiled (see :meth:`ready`)."""
+        mark a fused loop compiled (see :meth:`ready`). Its seconds go to
+        ``sim.timings["compile"]``; on the ``pyautonomousagent.compile`` logger (INFO, which
+        ``pyaa run`` shows) a line before a fused loop is compiled for the first time on this
+        machine, and one saying how long it took where that was :data:`SAY_COMPILE_SECONDS`
+        or more."""
+        began = time.perf_counter()
         fused = self._fusable(sim)
         if fused is None:
             self._compile_tick(self._code(None))
-            return
-        self.loop(sim, 0, typical=min(sim.scenario.iterations, 500))
-        self._marker(sim, fused).touch()
+        else:
+            marker = self._marker(sim, fused)
+            if not marker.exists():
+                compile_log.info("compiling this tree's fused loop for the compiled engine "
+                                 "(once on this machine: numba's cache keeps it) ...")  # fmt: skip
+            self.loop(sim, 0, typical=min(sim.scenario.iterations, 500))
+            marker.touch()
+        seconds = sim.timings["compile"] = time.perf_counter() - began
+        if seconds >= SAY_COMPILE_SECONDS:
+            compile_log.info("compiled engine: compiling (or loading) the tree's code took "
+                             "%.1f s", seconds)  # fmt: skip
 
     def sync(self, sim: Simulation) -> None:
         """Nothing to finish: :meth:`loop` returns with its records and state written."""
