@@ -1047,6 +1047,12 @@ def _add_experiments(sub: Any) -> None:
     )
     sweep.add_argument("--engine", choices=["auto", *ENGINES], help="decision engine")
     sweep.add_argument("--record-every", type=int, metavar="K", help="record every K-th iteration")
+    sweep.add_argument(
+        "--every",
+        type=int,
+        metavar="K",
+        help="also keep each measure every K iterations per run (OUT/timeseries.parquet)",
+    )
     sweep.add_argument("--out", type=Path, help="sweep folder (default: runs/sweeps/NAME)")
     sweep.add_argument("--workers", type=int, help="local processes (default: all cores)")
     where = sweep.add_mutually_exclusive_group()
@@ -1102,6 +1108,7 @@ def _experiment(args: argparse.Namespace) -> Any:
         ("iterations", args.iterations),
         ("engine", args.engine),
         ("record_every", args.record_every),
+        ("every", args.every),
         ("measures", measures or None),
     ):
         if value is not None:
@@ -1121,6 +1128,8 @@ def sweep_command(args: argparse.Namespace) -> int:
     """``pyaa sweep``: run an experiment into a sweep folder (see docs/experiments.md)."""
     from pyautonomousagent.experiments import sweep
 
+    if args.every is not None and args.every < 1:
+        raise ScenarioError(f"--every must be a whole number >= 1 (iterations), got {args.every}")
     experiment = _experiment(args)
     out = args.out or _inside(Path("runs") / "sweeps", experiment.name)
     backend = "serial" if args.serial else "dask" if args.dask else "pool"

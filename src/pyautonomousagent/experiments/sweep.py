@@ -32,13 +32,21 @@ import pyarrow as pa
 from pyautonomousagent.experiments.backends import Backend, make_backend
 from pyautonomousagent.experiments.expression import Expression
 from pyautonomousagent.experiments.measures import RunData, _Evaluate
-from pyautonomousagent.experiments.runner import RunTask, execute, one_line, scenario_parameters
+from pyautonomousagent.experiments.runner import (
+    RunTask,
+    execute,
+    one_line,
+    parameter_columns,
+    scenario_parameters,
+)
+from pyautonomousagent.experiments.series import SERIES, TIMESERIES, compact, documented
 from pyautonomousagent.experiments.spec import Experiment, ExperimentError, Run
 from pyautonomousagent.experiments.store import (
     MANIFEST,
     RESULTS,
     RUNS,
     Journal,
+    atomic_write_table,
     read_manifest,
     results_schema,
     write_manifest,
@@ -215,10 +223,14 @@ def sweep(
     runs = experiment.runs()
     previous = _previous_manifest(out, experiment, resume)
     points = experiment.points()
+    types, docs = parameter_columns(scenario)
+    docs.update({m.name: (m.unit, m.doc) for m in experiment.measures})
     schema = results_schema(
         {name: [p[name] for p in points] for name in experiment.parameters},
         [m.name for m in experiment.measures],
         scenario_parameters(scenario),
+        types=types,
+        docs=docs,
     )
     owned = isinstance(backend, str)
     chosen = make_backend(backend, workers, address) if isinstance(backend, str) else backend
@@ -265,6 +277,7 @@ def sweep(
             journal.flush()
             if owned:
                 chosen.close()
+            manifest["backend"].update(worker_stats(chosen))
             table = _finish(journal, out, manifest, counts, start)
     workers_text = f"{chosen.name} x {manifest['backend']['workers']}"
     return SweepResult(out, table, counts, time.perf_counter() - start, workers_text)
@@ -273,8 +286,12 @@ def sweep(
 def _finish(
     journal: Journal, out: Path, manifest: dict[str, Any], counts: dict[str, int], start: float
 ) -> pa.Table:
-    """Write the results and the final manifest; the results."""
+    """Write the results, the time series (if the experiment keeps one) and the final
+    manifest; the results."""
     table = write_results(journal, out)
+    if manifest["experiment"].get("every") is not None:
+        series = documented(compact(journal.folder, table), manifest["measures"])
+        atomic_write_table(series, out / TIMESERIES)
     statuses = table["status"].to_pylist()
     manifest.update(
         counts=counts,  # this session's
@@ -284,6 +301,13 @@ def _finish(
     )
     write_manifest(out, manifest)
     return table
+
+
+def worker_stats(backend: Backend) -> dict[str, Any]:
+    """What the backend says of its workers (seen, lost, runs retried), for the manifest;
+    empty for a backend that does not say."""
+    stats = getattr(backend, "stats", None)
+    return dict(stats()) if callable(stats) else {}
 
 
 def _tasks(
@@ -301,6 +325,7 @@ def _tasks(
             experiment.measures,
             folder,
             tree,
+            experiment.every,
         )
         for run in runs
     ]
@@ -329,16 +354,20 @@ def _execute(
     flush: tuple[int, float],
 ) -> None:
     """Run the tasks, journaling each result once (in batches)."""
-    bar = Progress(len(tasks), f"sweep {name}", enabled=progress)
+    bar = Progress(len(tasks), f"sweep {name}", enabled=progress, lines=True, unit="runs")
+    told = getattr(backend, "report", None)
+    if told is not None:
+        backend.report = bar.note  # type: ignore[attr-defined]  # a lost worker: one line
     seen: set[str] = set()
     last_flush = time.monotonic()
     try:
         for task, outcome in backend.map_unordered(execute, tasks):
             row = outcome if isinstance(outcome, dict) else failed_row(task, outcome)
+            series = row.pop(SERIES, None)
             if row["run_id"] in seen:  # never journal a run twice
                 continue
             seen.add(row["run_id"])
-            journal.append(row)
+            journal.append(row, series)
             counts[row["status"]] += 1
             bar.update(len(seen))
             if len(journal.buffer) >= flush[0] or time.monotonic() - last_flush >= flush[1]:
@@ -348,6 +377,8 @@ def _execute(
                 on_result(row)
     finally:
         bar.close()
+        if told is not None:
+            backend.report = told  # type: ignore[attr-defined]
 
 
 def failed_row(task: RunTask, error: BaseException) -> dict[str, Any]:
@@ -356,7 +387,7 @@ def failed_row(task: RunTask, error: BaseException) -> dict[str, Any]:
     row: dict[str, Any] = {"run": run.index, "run_id": run.run_id, **run.point, "seed": run.seed}
     row.update({m.name: math.nan for m in task.measures})
     row.update({k: v for k, v in scenario_parameters(task.scenario).items() if k not in row})
-    row.update(status="failed", error=one_line(error), seconds=math.nan)
+    row.update(status="failed", error=one_line(error), seconds=math.nan, engine=None)
     return row
 
 
