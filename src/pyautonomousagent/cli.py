@@ -1072,8 +1072,14 @@ def _add_experiments(sub: Any) -> None:
     plot = sub.add_parser("plot", help="plot a measure of a sweep against a parameter")
     plot.add_argument("sweep", type=Path, help="a sweep folder (or its results.parquet)")
     plot.add_argument("--measure", required=True, help="the measure (a results column)")
-    plot.add_argument("--x", required=True, help="the parameter on the horizontal axis")
+    plot.add_argument("--x", help="the parameter on the horizontal axis (not with --over-time)")
     plot.add_argument("--by", help="a second parameter: one line per value")
+    plot.add_argument(
+        "--over-time",
+        action="store_true",
+        help="the measure over the iterations, one line per value of --by (or the only "
+        "varied parameter), from a sweep run with --every",
+    )
     plot.add_argument(
         "--interval",
         default="ci95",
@@ -1171,6 +1177,10 @@ def plot_command(args: argparse.Namespace) -> int:
 
     if args.out is not None:
         check_output(args.out)  # never over a run's own files
+    if args.over_time:
+        return _plot_over_time(args)
+    if args.x is None:
+        raise ScenarioError("--x is needed: the parameter on the horizontal axis (or --over-time)")
     table, _ = read_results(args.sweep)
     for row in summarize(table, args.measure, args.x, args.by, args.interval):
         group = f"{args.by}={row['by']} " if args.by else ""
@@ -1179,6 +1189,33 @@ def plot_command(args: argparse.Namespace) -> int:
             f"[{row['low']:.6g}, {row['high']:.6g}]"
         )
     path = plot_measure(args.sweep, args.measure, args.x, args.by, args.out, args.interval)
+    print(f"wrote {path}")
+    return 0
+
+
+def _plot_over_time(args: argparse.Namespace) -> int:
+    """``pyaa plot --over-time``: a measure over the iterations, a line per parameter value."""
+    from pyautonomousagent.experiments.plot import (
+        lines_parameter,
+        plot_over_time,
+        read_series,
+        summarize_over_time,
+    )
+
+    if args.x is not None or args.interval != "ci95":
+        raise ScenarioError("--over-time draws iterations across and a 95 % band: leave out "
+                              "--x and --interval")  # fmt: skip
+    series, results, _, varied = read_series(args.sweep)
+    by = lines_parameter(varied, args.by)
+    rows = summarize_over_time(series, results, args.measure, by)
+    last = max(r["iteration"] for r in rows)
+    for row in (r for r in rows if r["iteration"] == last):
+        group = f"{by}={row['by']} " if by else ""
+        print(
+            f"{group}iteration {last}: n={row['n']} mean={row['mean']:.6g} "
+            f"[{row['low']:.6g}, {row['high']:.6g}]"
+        )
+    path = plot_over_time(args.sweep, args.measure, by, args.out)
     print(f"wrote {path}")
     return 0
 

@@ -99,9 +99,7 @@ def measure_at(measure: Measure, run: RunData) -> float:
         return math.nan
 
 
-def run_series(
-    run_id: str, data: RunData, measures: Sequence[Measure], every: int
-) -> pa.Table:
+def run_series(run_id: str, data: RunData, measures: Sequence[Measure], every: int) -> pa.Table:
     """The time series of one run: every measure at every checkpoint (:func:`checkpoints`),
     rows ordered by measure, then iteration; ``measures x checkpoints`` rows."""
     points = checkpoints(np.asarray(data.iterations), every)

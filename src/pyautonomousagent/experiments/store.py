@@ -238,7 +238,9 @@ class Journal:
         if not self.buffer:
             return
         if self.series:
-            atomic_write_table(pa.concat_tables(self.series), part_path(self.folder, self.next_part))
+            atomic_write_table(
+                pa.concat_tables(self.series), part_path(self.folder, self.next_part)
+            )
         rows = [{name: row.get(name) for name in self.schema.names} for row in self.buffer]
         table = pa.Table.from_pylist(rows, schema=self.schema)
         atomic_write_table(table, self.folder / f"part-{self.next_part:06d}.parquet")
