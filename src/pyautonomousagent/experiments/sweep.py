@@ -376,6 +376,7 @@ def _execute(
             if on_result is not None:
                 on_result(row)
     finally:
+        worker_stats(backend)  # a worker lost near the end is named while the bar can say so
         bar.close()
         if told is not None:
             backend.report = told  # type: ignore[attr-defined]
