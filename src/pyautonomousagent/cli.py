@@ -37,6 +37,7 @@ from pyautonomousagent.runs import (
     claim_existing,
     claim_run,
     default_folder,
+    last_recorded,
     save_run,
     simulate,
     streaming,
@@ -609,7 +610,7 @@ def _run_claimed(args: argparse.Namespace, scenario: Scenario, sim: Simulation, 
             claim=held,
         )
     if saved.status != "complete":
-        print(_not_complete(saved, sim.world.iteration, scenario.iterations), file=sys.stderr)
+        print(_not_complete(saved, last_recorded(sim), scenario.iterations), file=sys.stderr)
         return 130 if saved.status == "interrupted" else 1
     if not args.quiet:
         _print_summary(sim, saved.files)
@@ -622,8 +623,8 @@ def _not_complete(saved: SavedRun, done: int, iterations: int) -> str:
     note = f"; {saved.note}" if saved.note else ""
     if done < iterations:
         return (
-            f"pyaa: {saved.status} at iteration {done} of {iterations}; saved a partial run "
-            f"marked {saved.status!r} in {saved.folder}{note}"
+            f"pyaa: {saved.status} after iteration {done} of {iterations} (the last one "
+            f"recorded); saved a partial run marked {saved.status!r} in {saved.folder}{note}"
         )
     return (
         f"pyaa: the data is complete (all {iterations} iterations) and saved in "

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from collections.abc import Iterator, Mapping, Sequence
@@ -57,7 +58,8 @@ def _checked(
             f"scenario must be a Scenario, e.g. load({shown(scenario)}), got "
             f"{type(scenario).__name__}"
         )
-    scenario = Scenario.from_mapping(to_mapping(scenario), source=f"scenario {scenario.name!r}")
+    checked = Scenario.from_mapping(to_mapping(scenario), source=f"scenario {scenario.name!r}")
+    scenario = dataclasses.replace(checked, overrides=dict(scenario.overrides))
     for name, value, least in (("seed", seed, 0), ("record_every", record_every, 1)):
         if isinstance(value, bool) or not isinstance(value, int | np.integer):
             raise TypeError(
