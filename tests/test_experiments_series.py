@@ -80,9 +80,7 @@ def test_time_series_equals_the_saved_runs_reduced(swept) -> None:
     results = pq.read_table(swept / "results.parquet")
     assert series.column_names == ["run_id", "iteration", "measure", "value"]
     assert series.num_rows == 6 * len(experiment.measures) * 9  # iterations 0, 50, ..., 400
-    kept = {
-        (r["run_id"], r["iteration"], r["measure"]): r["value"] for r in series.to_pylist()
-    }
+    kept = {(r["run_id"], r["iteration"], r["measure"]): r["value"] for r in series.to_pylist()}
     refuelled = 0.0
     for run in experiment.runs():
         path = partition_dir(swept / "runs", run) / "data.parquet"
