@@ -28,6 +28,7 @@ from pyautonomousagent.experiments.series import TIMESERIES, checkpoints
 from pyautonomousagent.experiments.spec import ExperimentError
 from pyautonomousagent.experiments.sweep import base_scenario
 from pyautonomousagent.progress import Progress
+from tests.test_experiments import same_rows
 
 #: 6 runs of patrol, 3 drones x 400 iterations, every 50 iterations; drones refuel.
 EXPERIMENT = {
@@ -227,3 +228,23 @@ def test_a_lost_pool_worker_is_named_and_counted(tmp_path, capsys, monkeypatch) 
     backend = json.loads((out / "experiment.json").read_text())["backend"]
     assert backend["workers_lost"] == 1 and backend["runs_retried"] >= 1
     assert backend["workers_seen"] >= 3  # two at the start, one started after the loss
+
+
+def test_an_interrupted_sweep_resumes_to_the_same_time_series(swept, tmp_path) -> None:
+    experiment = Experiment.from_mapping(EXPERIMENT)
+    out = tmp_path / "sweep"
+    seen: list[str] = []
+
+    def interrupt(row: dict) -> None:
+        seen.append(row["run_id"])
+        if len(seen) == 2:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sweep(experiment, out, "serial", on_result=interrupt, flush_every=1, progress=False)
+    partial = pq.read_table(out / TIMESERIES)
+    assert set(partial["run_id"].to_pylist()) == set(seen)  # the journaled runs' series
+    sweep(experiment, out, "serial", resume=True, progress=False)
+    resumed, whole = pq.read_table(out / TIMESERIES), pq.read_table(swept / TIMESERIES)
+    assert resumed.schema.equals(whole.schema, check_metadata=True)
+    assert same_rows(resumed, whole)  # NaN where a measure is undefined at iteration 0
