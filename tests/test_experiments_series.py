@@ -248,3 +248,19 @@ def test_an_interrupted_sweep_resumes_to_the_same_time_series(swept, tmp_path) -
     resumed, whole = pq.read_table(out / TIMESERIES), pq.read_table(swept / TIMESERIES)
     assert resumed.schema.equals(whole.schema, check_metadata=True)
     assert same_rows(resumed, whole)  # NaN where a measure is undefined at iteration 0
+
+
+def test_the_start_log_reads_each_dask_start_once() -> None:
+    from pyautonomousagent.experiments.backends import StartLog
+
+    def start(when: float, key: str, worker: str) -> tuple[float, dict[str, str]]:
+        return when, {"key": key, "worker": worker}
+
+    log = StartLog()
+    pushed = [start(1.0, "k0", "a"), start(1.0, "k1", "b"), start(2.0, "k2", "a")]
+    assert log.read(pushed) == []
+    assert log.read(pushed) == []  # read again (the scheduler's whole log): nothing new
+    later = [start(3.0, "k0", "b"), start(3.0, "k3", "b")]  # k0 again, on another worker
+    assert log.read([*pushed, *later]) == [("k0", "b", "a")]
+    assert log.read(later[::-1]) == []
+    assert log.read([start(3.0, "k2", "b")]) == [("k2", "b", "a")]  # same time, not read yet

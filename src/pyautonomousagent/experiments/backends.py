@@ -244,6 +244,39 @@ class PoolBackend:
             process.join(timeout=5)
 
 
+class StartLog:
+    """The start events of a sweep's runs on Dask, read once each: which worker started each
+    run last, and the runs started again on another worker.
+
+    The scheduler stamps each event with its own clock; the events pushed to the client and
+    its log carry the same stamps, so an event is new when it is later than the last one
+    read, or at that time and not read yet.
+    """
+
+    def __init__(self) -> None:
+        self.starts: dict[str, str] = {}  # run key -> the worker that last started it
+        self.until = 0.0
+        self.at_until: set[tuple[str, str]] = set()
+
+    def read(self, events: Sequence[Any]) -> list[tuple[str, str, str]]:
+        """``(key, worker, previous worker)`` of each run in ``events`` (``(time, {"key",
+        "worker"})``, any order, read before or not) started again on another worker."""
+        again = []
+        for when, message in sorted(events, key=lambda event: event[0]):
+            ident = (str(message.get("key")), str(message.get("worker")))
+            if when < self.until or (when == self.until and ident in self.at_until):
+                continue
+            if when > self.until:
+                self.until, self.at_until = when, set()
+            self.at_until.add(ident)
+            key, worker = ident
+            before = self.starts.get(key)
+            self.starts[key] = worker
+            if before is not None and before != worker:
+                again.append((key, worker, before))
+        return again
+
+
 class DaskBackend:
     """A Dask distributed cluster.
 
@@ -296,8 +329,7 @@ class DaskBackend:
         self.tally = WorkerStats()
         #: Called with one line when a worker is lost and its runs are given again.
         self.report: Callable[[str], None] = _quiet
-        self._starts: dict[str, str] = {}  # run key -> the worker that last started it
-        self._heard: set[tuple[str, str]] = set()  # (key, worker) starts already counted
+        self._log = StartLog()
         self._inbox: list[Any] = []  # start events pushed by the scheduler (topic below)
         self._topic = f"{self._prefix}-starts"
         self._last_look = 0.0
@@ -322,28 +354,22 @@ class DaskBackend:
             events = self.client.get_events(self._topic) if force else self._inbox[:]
             del self._inbox[: len(self._inbox)]
             self.tally.see(present)
-            for event in events:
-                self._started(event[1] if isinstance(event, tuple) else event, present)
+            self.tally.see([str(message.get("worker")) for _, message in events])
+            for key, worker, before in self._log.read(events):
+                self._restarted(key, worker, before, present)
             for worker in self.tally.seen:
                 if worker not in present and self.tally.lose(worker):
                     self.report(f"dask worker {worker} lost")
 
-    def _started(self, message: Any, present: Sequence[str]) -> None:
-        """One run started on a worker; a second start of a run is a retry."""
-        key, worker = str(message.get("key")), str(message.get("worker"))
-        if (key, worker) in self._heard:
-            return
-        self._heard.add((key, worker))
-        self.tally.see([worker])
-        before = self._starts.get(key)
-        self._starts[key] = worker
-        if before is None or before == worker:
-            return
+    def _restarted(self, key: str, worker: str, before: str, present: Sequence[str]) -> None:
+        """Run ``key`` started again on ``worker`` after starting on ``before``."""
         self.tally.retried += 1
-        if before not in present and self.tally.lose(before):
+        if before in present:  # not lost (e.g. its result went missing): started again
+            self.report(f"run {key} started again on {worker} (it started on {before})")
+            return
+        if self.tally.lose(before):
             self.report(f"dask worker {before} lost")
-        run = key.rsplit("-", 1)[-1]
-        self.report(f"run {run} given again on {worker} (its worker {before} was lost)")
+        self.report(f"run {key} given again on {worker} (its worker {before} was lost)")
 
     def _worker_info(self) -> dict[str, Any]:
         info: dict[str, Any] = self.client.scheduler_info().get("workers", {})
