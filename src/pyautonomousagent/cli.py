@@ -1168,6 +1168,7 @@ def sweep_command(args: argparse.Namespace) -> int:
             f"sweep {experiment.name}: {sum(c.values())} runs ({c['ok']} ok, {c['failed']} "
             f"failed, {c['skipped']} done before) on {result.backend} in "
             f"{result.seconds:.1f} s\n  wrote {out / 'results.parquet'}"
+            + (f"\n  wrote {out / 'timeseries.parquet'}" if experiment.every else "")
         )
     return 1 if result.counts["failed"] else 0
 
