@@ -1,11 +1,12 @@
 # Two commands do all the set-up from a fresh clone:
-#   make demo   installs into .venv (with the [fast] and [pandas] extras) and runs the gathering scenario
-#               on the compiled engine into runs/gathering/
+#   make demo   installs into .venv (with the [fast] and [pandas] extras) and runs the
+#               gathering scenario on the compiled engine into runs/gathering/
 #   make lessons  installs JupyterLab (the [lessons] extra) and opens lesson 01 of notebooks/
 #   make docs   installs the [docs] extra (and the extras the lessons use) and builds the
 #               documentation site into site/ (lessons executed, warnings as errors, links checked)
 #   make test   installs the test dependencies (and the [docs], [x8], [dask], [video],
-#               [pandas] and [fast] extras, and chromium when missing) into .venv and runs the suite
+#               [pandas] and [fast] extras, and chromium when missing) into .venv and runs
+#               the suite
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
