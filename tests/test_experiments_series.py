@@ -12,6 +12,8 @@ import math
 import os
 import re
 import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -188,6 +190,18 @@ def test_a_sweep_into_a_file_prints_progress_lines(tmp_path, capsys) -> None:
     lines = re.findall(r"^sweep patrol-sweep: (\d)/4 runs \((\d+) %\), \d+ s", err, re.M)
     assert [done for done, _ in lines] == ["1", "2", "3", "4"]
     assert "\r" not in err
+
+
+def test_pyaa_sweep_with_its_output_redirected_to_a_file_writes_progress_lines(tmp_path) -> None:
+    log = tmp_path / "sweep.log"
+    argv = [sys.executable, "-m", "pyautonomousagent.cli", "sweep", "patrol", "--vary",
+            "low_energy_threshold=60,70,80", "--iterations", "20", "--agents", "2", "--serial",
+            "--out", str(tmp_path / "sweep")]  # fmt: skip
+    with log.open("w") as err:
+        done = subprocess.run(argv, stderr=err, stdout=subprocess.DEVNULL, timeout=300, check=False)
+    assert done.returncode == 0
+    text = log.read_text()
+    assert re.findall(r"^sweep patrol-sweep: (\d)/3 runs", text, re.M) == ["1", "2", "3"], text
 
 
 def test_progress_lines_come_every_5_percent_or_10_seconds(monkeypatch, tmp_path) -> None:
