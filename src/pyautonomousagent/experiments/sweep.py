@@ -10,7 +10,9 @@ Before anything runs, every varied value is checked against the scenario, expres
 measures against the recorded columns, and the estimated memory of the largest run against
 what a worker may use. Runs are journaled as they finish (see
 :mod:`pyautonomousagent.experiments.store`); a run that raises is recorded as failed with
-its message and the sweep goes on; ``resume=True`` skips the runs already done.
+its message and the sweep goes on; ``resume=True`` skips the runs already done. With the
+experiment's ``every``, each run's measures every K iterations go to ``timeseries.parquet``
+(:mod:`pyautonomousagent.experiments.series`).
 """
 
 from __future__ import annotations
@@ -207,7 +209,9 @@ def sweep(
         address: the Dask scheduler's address, e.g. ``"tcp://10.0.0.5:8786"``.
         resume: continue the sweep in ``out``: runs already done are skipped.
         save_runs: also write each run's recorded data under ``out/runs`` (hive-partitioned).
-        progress: show a progress bar with ETA (default: when standard error is a terminal).
+        progress: show progress on standard error (default): a bar with ETA on a terminal,
+            else a line every 10 s or 5 % of the runs, and a line per lost worker; False for
+            none.
         on_result: called with each result row as it arrives.
         flush_every: journal finished runs at least every this many runs...
         flush_seconds: ...and every this many seconds.
