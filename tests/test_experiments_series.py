@@ -168,6 +168,8 @@ def test_plot_over_time_bad_input_is_one_line(swept, tmp_path, capsys) -> None:
         assert main(["plot", str(swept), "--over-time", "--out", str(out), *argv]) == 2
         err = capsys.readouterr().err
         assert message in err and err.count("\n") == 1, err
+    assert main(["plot", str(swept), "--measure", "refuels", "--out", str(out)]) == 2
+    assert "--x is needed" in capsys.readouterr().err  # a plot against a parameter needs it
     assert not out.exists()
 
 
