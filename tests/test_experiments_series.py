@@ -280,3 +280,20 @@ def test_the_start_log_reads_each_dask_start_once() -> None:
     assert log.read([*pushed, *later]) == [("k0", "b", "a")]
     assert log.read(later[::-1]) == []
     assert log.read([start(3.0, "k2", "b")]) == [("k2", "b", "a")]  # same time, not read yet
+
+
+@pytest.mark.parametrize(("seconds", "expected"), [(5.0, []), (40.0, list(range(250, 1001, 50)))])
+def test_a_run_writes_progress_lines_once_it_has_taken_10_seconds(
+    monkeypatch, tmp_path, seconds, expected
+) -> None:
+    clock = [0.0]
+    monkeypatch.setattr("pyautonomousagent.progress.time.perf_counter", lambda: clock[0])
+    with (tmp_path / "log").open("w") as log:
+        bar = Progress(1000, "patrol", stream=log, lines=True, unit="iterations",
+                       first_line_after=10.0)  # fmt: skip
+        for done in range(50, 1001, 50):  # pyaa run updates every 50 iterations
+            clock[0] = done * seconds / 1000
+            bar.update(done)
+        bar.close()
+    text = (tmp_path / "log").read_text().splitlines()
+    assert [int(line.split()[1].split("/")[0]) for line in text] == expected

@@ -596,7 +596,7 @@ def _run_claimed(args: argparse.Namespace, scenario: Scenario, sim: Simulation, 
     progress = None if not args.quiet else False
     out = held.folder
     with streaming(sim, out, args.format) as stream:
-        status = simulate(sim, progress)
+        status = simulate(sim, progress, lines=not args.quiet)  # in a log: lines after 10 s
         saved = save_run(
             sim,
             out,

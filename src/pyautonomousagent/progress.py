@@ -33,6 +33,8 @@ class Progress:
         stream: where to write (standard error by default).
         lines: write progress lines where ``stream`` is not a terminal.
         unit: what is counted, named in the lines (e.g. ``"runs"``).
+        first_line_after: seconds before the first progress line (0: from the first unit);
+            work that ends sooner writes no line at all (a short run stays quiet in a log).
     """
 
     def __init__(
@@ -44,6 +46,7 @@ class Progress:
         *,
         lines: bool = False,
         unit: str = "",
+        first_line_after: float = 0.0,
     ) -> None:
         self.total = max(int(total), 1)
         self.label = label
@@ -57,6 +60,8 @@ class Progress:
         self._last_draw = 0.0
         self._last_line = self._start
         self._line_done = 0
+        self._first_line_after = first_line_after
+        self._lines_written = 0
 
     def update(self, done: int) -> None:
         """Record that ``done`` units are complete; redraw the bar, or write a line, if due."""
@@ -65,6 +70,8 @@ class Progress:
         if not self.enabled:
             return
         if self.as_lines:
+            if now - self._start < self._first_line_after:
+                return
             step = max(1, int(LINE_STEP * self.total))
             if done - self._line_done >= step or now - self._last_line >= LINE_SECONDS:
                 self._write_line(now)
@@ -108,13 +115,15 @@ class Progress:
         )
         self.stream.flush()
         self._last_line, self._line_done = now, self.done
+        self._lines_written += 1
 
     def close(self) -> None:
         """End the bar's line, or write the last progress line (if not written yet)."""
         if not self.enabled:
             return
         if self.as_lines:
-            if self._line_done != self.done or self.done == 0:
+            late = self._first_line_after > 0 and self._lines_written == 0
+            if not late and (self._line_done != self.done or self.done == 0):
                 self._write_line(time.perf_counter())
             return
         self._draw(time.perf_counter())

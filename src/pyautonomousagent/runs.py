@@ -204,14 +204,16 @@ def recover_run(folder: str | Path) -> list[str]:
         return held.notes
 
 
-def simulate(sim: Simulation, progress: bool | None = None) -> str:
+def simulate(sim: Simulation, progress: bool | None = None, *, lines: bool = False) -> str:
     """Run ``sim``'s remaining iterations; ``"complete"``, or ``"interrupted"`` on Ctrl-C.
+    ``progress`` and ``lines`` as for ``Simulation.run`` (``lines``: progress lines in a
+    log for a run that takes over 10 s).
 
     After an interruption the records hold every iteration recorded before it (a record
     is counted only once written whole), so the data saved is a valid table.
     """
     try:
-        sim.run(progress=progress)
+        sim.run(progress=progress, lines=lines)
     except KeyboardInterrupt:
         return "interrupted"
     return "complete"

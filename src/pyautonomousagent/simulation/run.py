@@ -24,7 +24,7 @@ from pyautonomousagent.engines.gpu import GpuEngine, auto_takes_gpu
 from pyautonomousagent.engines.pytrees import BEHAVIOUR_TYPES, PyTreesEngine
 from pyautonomousagent.inputs import shown
 from pyautonomousagent.names import agent_index
-from pyautonomousagent.progress import Progress
+from pyautonomousagent.progress import LINE_SECONDS, Progress
 from pyautonomousagent.randomness import CounterRandom
 from pyautonomousagent.recording import Recorder, check_memory, to_table, trace_table, traced_agents
 from pyautonomousagent.registry import Registry
@@ -328,15 +328,20 @@ class Simulation:
         phases.deliver_messages(self)
         phases.record(self)
 
-    def run(self, progress: bool | None = None, iterations: int | None = None) -> Simulation:
+    def run(
+        self, progress: bool | None = None, iterations: int | None = None, *, lines: bool = False
+    ) -> Simulation:
         """Run the scenario's remaining iterations (at most ``iterations`` of them); a
-        progress bar if ``progress`` (by default when standard error is a terminal).
-        Returns ``self``."""
+        progress bar if ``progress`` (by default when standard error is a terminal); with
+        ``lines``, where standard error is not a terminal, a progress line every 10 s or
+        5 % once the run has taken 10 s. Returns ``self``."""
         start = time.perf_counter()
         remaining = self.scenario.iterations - self.world.iteration
         if iterations is not None:
             remaining = max(0, min(remaining, iterations))
-        bar = Progress(remaining, f"{self.scenario.name} ({self.engine.name})", enabled=progress)
+        label = f"{self.scenario.name} ({self.engine.name})"
+        bar = Progress(remaining, label, enabled=progress, lines=lines, unit="iterations",
+                       first_line_after=LINE_SECONDS)  # fmt: skip
         done = 0
         try:
             while done < remaining:
