@@ -172,7 +172,14 @@ class PoolBackend:
         self.tally.see(list(self._known))
 
     def _lost(self, again: int) -> None:
-        """The pool broke: name the processes that died (not those the pool then stopped)."""
+        """The pool broke: name the processes that died (not those the pool then stopped).
+        The pool's own thread reaps its processes meanwhile, so an exit code may show a
+        moment late: wait for them (at most 2 s; the pool stops every process it had)."""
+        deadline = time.monotonic() + 2.0
+        while time.monotonic() < deadline:
+            if all(process.exitcode is not None for process in self._known.values()):
+                break
+            time.sleep(0.01)
         dead = [
             name
             for name, process in self._known.items()
@@ -207,8 +214,8 @@ class PoolBackend:
             while pending and len(running) < self.window:
                 task, tries = pending.popleft()
                 running[pool.submit(fn, task)] = (task, tries)
+            self._look()  # before a worker can die: a broken pool forgets its processes
             done, _ = wait(running, return_when=FIRST_COMPLETED)
-            self._look()
             broken = False
             again = 0
             for future in done:
