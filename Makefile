@@ -1,13 +1,13 @@
 # Two commands do all the set-up from a fresh clone:
-#   make demo   installs into .venv (with the [fast] extra) and runs the gathering scenario
-#               on the compiled engine into runs/gathering/
+#   make demo   installs into .venv (with the [fast] and [pandas] extras) and runs the
+#               gathering scenario on the compiled engine into runs/gathering/
 #   make lessons  installs JupyterLab (the [lessons] extra) and opens lesson 01 of notebooks/
 #   make docs   installs the [docs] extra (and the extras the lessons and the pages' examples
 #               use) and builds the documentation site into site/ (lessons executed,
 #               warnings as errors, links checked)
-#   make test   installs the test dependencies (and the [docs], [x8], [dask], [video], [fast]
-#               and [experiments] extras, and chromium when missing) into .venv and runs the
-#               suite
+#   make test   installs the test dependencies (and the [docs], [x8], [dask], [video], [fast],
+#               [pandas] and [experiments] extras, and chromium when missing) into .venv and
+#               runs the suite
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -20,15 +20,15 @@ $(BIN)/python:
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[fast]"
+	$(BIN)/python -m pip install --quiet -e ".[fast,pandas]"
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[test,docs,x8,dask,video,fast,experiments]"
+	$(BIN)/python -m pip install --quiet -e ".[test,docs,x8,dask,video,pandas,fast,experiments]"
 	touch $@ $(VENV)/.installed $(VENV)/.installed-docs
 
 $(VENV)/.installed-docs: pyproject.toml | $(BIN)/python
-	$(BIN)/python -m pip install --quiet -e ".[docs,x8,dask,fast,experiments]"
+	$(BIN)/python -m pip install --quiet -e ".[docs,x8,dask,pandas,fast,experiments]"
 	touch $@ $(VENV)/.installed
 
 # The compiled engine compiles the gathering tree once (seconds; numba's cache keeps it), so

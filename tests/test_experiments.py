@@ -468,7 +468,7 @@ def test_cli_sweep_then_plot(tmp_path, capsys) -> None:
     assert table["refuel_rate"].to_pylist() == [2.0] * 4  # every parameter is a column
     assert main(["plot", str(out), "--measure", "low", "--x", "low_energy_threshold"]) == 0
     printed = capsys.readouterr().out
-    assert "low_energy_threshold=96: n=2" in printed
+    assert "low_energy_threshold=96.0: n=2" in printed  # a float parameter: a float column
     assert (out / "low-vs-low_energy_threshold.png").exists()
 
 

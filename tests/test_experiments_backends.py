@@ -3,7 +3,9 @@ cluster (a real scheduler and two workers on 127.0.0.1) that loses a worker mid-
 
 from __future__ import annotations
 
+import json
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -104,7 +106,7 @@ def _stop(process: subprocess.Popen) -> None:
     process.wait(timeout=10)
 
 
-def test_dask_cluster_losing_a_worker_gives_every_result_once(on_pool, tmp_path) -> None:
+def test_dask_cluster_losing_a_worker_gives_every_result_once(on_pool, tmp_path, capsys) -> None:
     pytest.importorskip("distributed")
     from pyautonomousagent.experiments.backends import BackendError, DaskBackend
 
@@ -148,6 +150,9 @@ def test_dask_cluster_losing_a_worker_gives_every_result_once(on_pool, tmp_path)
         assert same_rows(result.table, on_pool, ignore=("seconds",))
         assert len(backend.client.scheduler_info()["workers"]) == 1
         assert "Remove worker" in (tmp_path / "scheduler.log").read_text()
+        lost = json.loads((tmp_path / "d" / "experiment.json").read_text())["backend"]
+        assert lost["workers_seen"] == 2 and lost["workers_lost"] == 1, lost
+        assert re.search(rf"dask worker {re.escape(lost['lost'][0])} lost", capsys.readouterr().err)
     finally:
         if backend is not None:
             backend.close()

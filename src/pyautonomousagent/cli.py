@@ -39,6 +39,7 @@ from pyautonomousagent.runs import (
     claim_existing,
     claim_run,
     default_folder,
+    last_recorded,
     save_run,
     simulate,
     streaming,
@@ -617,7 +618,7 @@ def _run_claimed(args: argparse.Namespace, scenario: Scenario, sim: Simulation, 
     progress = None if not args.quiet else False
     out = held.folder
     with streaming(sim, out, args.format) as stream:
-        status = simulate(sim, progress)
+        status = simulate(sim, progress, lines=not args.quiet)  # in a log: lines after 10 s
         saved = save_run(
             sim,
             out,
@@ -631,7 +632,7 @@ def _run_claimed(args: argparse.Namespace, scenario: Scenario, sim: Simulation, 
             claim=held,
         )
     if saved.status != "complete":
-        print(_not_complete(saved, sim.world.iteration, scenario.iterations), file=sys.stderr)
+        print(_not_complete(saved, last_recorded(sim), scenario.iterations), file=sys.stderr)
         return 130 if saved.status == "interrupted" else 1
     if not args.quiet:
         _print_summary(sim, saved.files)
@@ -644,8 +645,8 @@ def _not_complete(saved: SavedRun, done: int, iterations: int) -> str:
     note = f"; {saved.note}" if saved.note else ""
     if done < iterations:
         return (
-            f"pyaa: {saved.status} at iteration {done} of {iterations}; saved a partial run "
-            f"marked {saved.status!r} in {saved.folder}{note}"
+            f"pyaa: {saved.status} after iteration {done} of {iterations} (the last one "
+            f"recorded); saved a partial run marked {saved.status!r} in {saved.folder}{note}"
         )
     return (
         f"pyaa: the data is complete (all {iterations} iterations) and saved in "
@@ -1081,6 +1082,12 @@ def _add_experiments(sub: Any) -> None:
     )
     sweep.add_argument("--engine", choices=["auto", *ENGINES], help="decision engine")
     sweep.add_argument("--record-every", type=int, metavar="K", help="record every K-th iteration")
+    sweep.add_argument(
+        "--every",
+        type=int,
+        metavar="K",
+        help="also keep each measure every K iterations per run (OUT/timeseries.parquet)",
+    )
     sweep.add_argument("--out", type=Path, help="sweep folder (default: runs/sweeps/NAME)")
     sweep.add_argument("--workers", type=int, help="local processes (default: all cores)")
     where = sweep.add_mutually_exclusive_group()
@@ -1100,8 +1107,14 @@ def _add_experiments(sub: Any) -> None:
     plot = sub.add_parser("plot", help="plot a measure of a sweep against a parameter")
     plot.add_argument("sweep", type=Path, help="a sweep folder (or its results.parquet)")
     plot.add_argument("--measure", required=True, help="the measure (a results column)")
-    plot.add_argument("--x", required=True, help="the parameter on the horizontal axis")
+    plot.add_argument("--x", help="the parameter on the horizontal axis (not with --over-time)")
     plot.add_argument("--by", help="a second parameter: one line per value")
+    plot.add_argument(
+        "--over-time",
+        action="store_true",
+        help="the measure over the iterations, one line per value of --by (or the only "
+        "varied parameter), from a sweep run with --every",
+    )
     plot.add_argument(
         "--interval",
         default="ci95",
@@ -1157,6 +1170,7 @@ def _experiment(args: argparse.Namespace) -> Any:
         ("iterations", args.iterations),
         ("engine", args.engine),
         ("record_every", args.record_every),
+        ("every", args.every),
         ("measures", measures or None),
     ):
         if value is not None:
@@ -1176,6 +1190,8 @@ def sweep_command(args: argparse.Namespace) -> int:
     """``pyaa sweep``: run an experiment into a sweep folder (see docs/experiments.md)."""
     from pyautonomousagent.experiments import sweep
 
+    if args.every is not None and args.every < 1:
+        raise ScenarioError(f"--every must be a whole number >= 1 (iterations), got {args.every}")
     experiment = _experiment(args)
     out = args.out or _inside(Path("runs") / "sweeps", experiment.name)
     backend = "serial" if args.serial else "dask" if args.dask else "pool"
@@ -1207,6 +1223,7 @@ def sweep_command(args: argparse.Namespace) -> int:
             f"sweep {experiment.name}: {sum(c.values())} runs ({c['ok']} ok, {c['failed']} "
             f"failed, {c['skipped']} done before) on {result.backend} in "
             f"{result.seconds:.1f} s\n  wrote {out / 'results.parquet'}"
+            + (f"\n  wrote {out / 'timeseries.parquet'}" if experiment.every else "")
         )
     return 1 if result.counts["failed"] else 0
 
@@ -1217,6 +1234,10 @@ def plot_command(args: argparse.Namespace) -> int:
 
     if args.out is not None:
         check_output(args.out)  # never over a run's own files
+    if args.over_time:
+        return _plot_over_time(args)
+    if args.x is None:
+        raise ScenarioError("--x is needed: the parameter on the horizontal axis (or --over-time)")
     table, _ = read_results(args.sweep)
     for row in summarize(table, args.measure, args.x, args.by, args.interval):
         group = f"{args.by}={row['by']} " if args.by else ""
@@ -1245,6 +1266,33 @@ def analyse_command(args: argparse.Namespace) -> int:
     for line in sensitivity.report(table, stored):
         print(line)
     path = sensitivity.plot_indices(table, stored, out)
+    print(f"wrote {path}")
+    return 0
+
+
+def _plot_over_time(args: argparse.Namespace) -> int:
+    """``pyaa plot --over-time``: a measure over the iterations, a line per parameter value."""
+    from pyautonomousagent.experiments.plot import (
+        lines_parameter,
+        plot_over_time,
+        read_series,
+        summarize_over_time,
+    )
+
+    if args.x is not None or args.interval != "ci95":
+        raise ScenarioError("--over-time draws iterations across and a 95 % band: leave out "
+                              "--x and --interval")  # fmt: skip
+    series, results, _, varied = read_series(args.sweep)
+    by = lines_parameter(varied, args.by)
+    rows = summarize_over_time(series, results, args.measure, by)
+    last = max(r["iteration"] for r in rows)
+    for row in (r for r in rows if r["iteration"] == last):
+        group = f"{by}={row['by']} " if by else ""
+        print(
+            f"{group}iteration {last}: n={row['n']} mean={row['mean']:.6g} "
+            f"[{row['low']:.6g}, {row['high']:.6g}]"
+        )
+    path = plot_over_time(args.sweep, args.measure, by, args.out)
     print(f"wrote {path}")
     return 0
 

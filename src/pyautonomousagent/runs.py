@@ -204,14 +204,16 @@ def recover_run(folder: str | Path) -> list[str]:
         return held.notes
 
 
-def simulate(sim: Simulation, progress: bool | None = None) -> str:
+def simulate(sim: Simulation, progress: bool | None = None, *, lines: bool = False) -> str:
     """Run ``sim``'s remaining iterations; ``"complete"``, or ``"interrupted"`` on Ctrl-C.
+    ``progress`` and ``lines`` as for ``Simulation.run`` (``lines``: progress lines in a
+    log for a run that takes over 10 s).
 
     After an interruption the records hold every iteration recorded before it (a record
     is counted only once written whole), so the data saved is a valid table.
     """
     try:
-        sim.run(progress=progress)
+        sim.run(progress=progress, lines=lines)
     except KeyboardInterrupt:
         return "interrupted"
     return "complete"
@@ -245,7 +247,8 @@ def save_run(
         progress: show the animation's progress bar (default: on a terminal).
         overwrite: replace an earlier run in ``folder``.
         command: the command line to record (default ``sys.argv``).
-        overrides: the parameter overrides to record.
+        overrides: the parameter overrides to record (default: those the scenario was
+            given by ``Scenario.with_overrides`` since it was read).
         stream: the states written while the run went on (:func:`streaming` for ``folder``
             and ``fmt``): finished here instead of writing the table.
         claim: the caller's :func:`claim_run` on ``folder``; without it, ``folder`` is
@@ -415,10 +418,11 @@ def summarise(
     """The contents of ``run.json`` for ``sim`` and the files ``saved`` lists in ``folder``."""
     summary: dict[str, Any] = {
         "status": saved.status,
-        "iterations_done": int(sim.world.iteration),
+        "iterations_done": last_recorded(sim),  # the data's: after Ctrl-C, its last record
+        "iterations_run": int(sim.world.iteration),
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "command": list(sys.argv if command is None else command),
-        "overrides": dict(overrides or {}),
+        "overrides": dict(sim.scenario.overrides if overrides is None else overrides),
         "scenario": to_mapping(sim.scenario),
         "tree": tree_record(sim.scenario.tree),
         "seed": sim.seed,
@@ -440,6 +444,14 @@ def summarise(
     if saved.note:
         summary["note"] = saved.note
     return summary
+
+
+def last_recorded(sim: Simulation) -> int:
+    """The iteration of the run's last record (0 if none): the iterations its data holds.
+    A complete run always records its last iteration; a run stopped by Ctrl-C may have run
+    up to ``record_every - 1`` iterations past it (``run.json``'s ``iterations_run``)."""
+    recorder = sim.recorder
+    return int(recorder.iterations[recorder.count - 1]) if recorder.count else 0
 
 
 def tree_record(tree: str) -> dict[str, Any]:

@@ -16,13 +16,20 @@ so the same seed gives the same numbers on every backend.
 
 At most ``window`` runs are submitted at a time, so a sweep of a million runs does not hold a
 million futures.
+
+The pool and Dask backends say what happened to their workers: :meth:`stats` gives the
+workers seen, those lost and how many runs were given again (the sweep writes it into
+``experiment.json``), and ``report`` (a function of one line, set by the sweep) is called
+when a worker is lost and its runs are given again.
 """
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
 import os
 import signal
+import time
 import uuid
 from collections import deque
 from collections.abc import Callable, Iterator, Sequence
@@ -57,6 +64,49 @@ class Backend(Protocol):
 
     def close(self) -> None:
         """Stop what was started for the sweep (promptly, also mid-sweep)."""
+
+
+def _quiet(line: str) -> None:
+    """The default ``report``: say nothing."""
+
+
+class WorkerStats:
+    """The workers a backend has seen and lost, and the runs given again (no global state:
+    one per backend).
+
+    Attributes:
+        seen: every worker that ran for the sweep (a process id or a Dask address), in the
+            order first seen.
+        lost: the workers that died or left mid-sweep, in that order.
+        retried: how many times a run was given again after its worker was lost.
+    """
+
+    def __init__(self) -> None:
+        self.seen: list[str] = []
+        self.lost: list[str] = []
+        self.retried = 0
+
+    def see(self, workers: Sequence[str]) -> None:
+        """Add the workers not seen before."""
+        self.seen += [w for w in workers if w not in self.seen]
+
+    def lose(self, worker: str) -> bool:
+        """Mark ``worker`` lost; whether it was not lost before."""
+        if worker in self.lost:
+            return False
+        self.see([worker])
+        self.lost.append(worker)
+        return True
+
+    def as_dict(self) -> dict[str, Any]:
+        """``{"workers_seen", "workers_lost", "runs_retried", "seen", "lost"}``."""
+        return {
+            "workers_seen": len(self.seen),
+            "workers_lost": len(self.lost),
+            "runs_retried": self.retried,
+            "seen": list(self.seen),
+            "lost": list(self.lost),
+        }
 
 
 def physical_memory() -> int | None:
@@ -102,9 +152,47 @@ class PoolBackend:
         self._workers = workers or os.cpu_count() or 1
         self.window = window or 4 * self._workers
         self._pool: ProcessPoolExecutor | None = None
+        self._known: dict[str, Any] = {}  # process id -> process of the pool
+        self.tally = WorkerStats()
+        #: Called with one line when a worker dies and its runs are given again.
+        self.report: Callable[[str], None] = _quiet
 
     def workers(self) -> int:
         return self._workers
+
+    def stats(self) -> dict[str, Any]:
+        """Workers seen (process ids), lost, and runs given again (:class:`WorkerStats`)."""
+        return self.tally.as_dict()
+
+    def _look(self) -> None:
+        """Note the pool's processes (they start as runs are submitted)."""
+        processes = getattr(self._pool, "_processes", None) or {}
+        for pid, process in list(processes.items()):
+            self._known[f"process {pid}"] = process
+        self.tally.see(list(self._known))
+
+    def _lost(self, again: int) -> None:
+        """The pool broke: name the processes that died (not those the pool then stopped).
+        The pool's own thread reaps its processes meanwhile, so an exit code may show a
+        moment late: wait for them (at most 2 s; the pool stops every process it had)."""
+        deadline = time.monotonic() + 2.0
+        while time.monotonic() < deadline:
+            if all(process.exitcode is not None for process in self._known.values()):
+                break
+            time.sleep(0.01)
+        dead = [
+            name
+            for name, process in self._known.items()
+            if process.exitcode is not None and process.exitcode != -signal.SIGTERM
+        ]
+        for name in dead or ["a process"]:
+            if self.tally.lose(name):
+                code = self._known[name].exitcode if name in self._known else "?"
+                self.report(
+                    f"pool worker {name} died (exit code {code}); {again} run(s) given again"
+                )
+        self.tally.retried += again
+        self._known.clear()
 
     def memory_per_worker(self) -> int | None:
         total = physical_memory()
@@ -126,8 +214,10 @@ class PoolBackend:
             while pending and len(running) < self.window:
                 task, tries = pending.popleft()
                 running[pool.submit(fn, task)] = (task, tries)
+            self._look()  # before a worker can die: a broken pool forgets its processes
             done, _ = wait(running, return_when=FIRST_COMPLETED)
             broken = False
+            again = 0
             for future in done:
                 task, tries = running.pop(future)
                 error = future.exception()
@@ -135,6 +225,7 @@ class PoolBackend:
                     broken = True
                     if tries + 1 < ATTEMPTS:
                         pending.appendleft((task, tries + 1))
+                        again += 1
                     else:
                         yield task, RuntimeError(f"a worker died {ATTEMPTS} times running it")
                 else:
@@ -143,6 +234,7 @@ class PoolBackend:
                 for future, (task, tries) in running.items():
                     future.cancel()
                     pending.appendleft((task, tries))
+                self._lost(again + len(running))
                 running.clear()
                 self.close()
                 pool = self._start()
@@ -157,6 +249,39 @@ class PoolBackend:
             process.terminate()
         for process in processes:
             process.join(timeout=5)
+
+
+class StartLog:
+    """The start events of a sweep's runs on Dask, read once each: which worker started each
+    run last, and the runs started again on another worker.
+
+    The scheduler stamps each event with its own clock; the events pushed to the client and
+    its log carry the same stamps, so an event is new when it is later than the last one
+    read, or at that time and not read yet.
+    """
+
+    def __init__(self) -> None:
+        self.starts: dict[str, str] = {}  # run key -> the worker that last started it
+        self.until = 0.0
+        self.at_until: set[tuple[str, str]] = set()
+
+    def read(self, events: Sequence[Any]) -> list[tuple[str, str, str]]:
+        """``(key, worker, previous worker)`` of each run in ``events`` (``(time, {"key",
+        "worker"})``, any order, read before or not) started again on another worker."""
+        again = []
+        for when, message in sorted(events, key=lambda event: event[0]):
+            ident = (str(message.get("key")), str(message.get("worker")))
+            if when < self.until or (when == self.until and ident in self.at_until):
+                continue
+            if when > self.until:
+                self.until, self.at_until = when, set()
+            self.at_until.add(ident)
+            key, worker = ident
+            before = self.starts.get(key)
+            self.starts[key] = worker
+            if before is not None and before != worker:
+                again.append((key, worker, before))
+        return again
 
 
 class DaskBackend:
@@ -208,6 +333,50 @@ class DaskBackend:
                 ) from None
         self._window = window
         self._prefix = f"pyaa-run-{uuid.uuid4().hex[:8]}"
+        self.tally = WorkerStats()
+        #: Called with one line when a worker is lost and its runs are given again.
+        self.report: Callable[[str], None] = _quiet
+        self._log = StartLog()
+        self._inbox: list[Any] = []  # start events pushed by the scheduler (topic below)
+        self._topic = f"{self._prefix}-starts"
+        self._last_look = 0.0
+        self.client.subscribe_topic(self._topic, self._inbox.append)
+        self.tally.see(list(self._worker_info()))
+
+    def stats(self) -> dict[str, Any]:
+        """Workers seen (addresses), lost, and runs given again (:class:`WorkerStats`): read
+        from the start of every run, which each run logs to the scheduler."""
+        self._look(force=True)
+        return self.tally.as_dict()
+
+    def _look(self, force: bool = False) -> None:
+        """Count the runs started again and the workers gone (at most once a second, unless
+        ``force``: then from the scheduler's whole log of this sweep's starts)."""
+        now = time.monotonic()
+        if not force and now - self._last_look < 1.0:
+            return
+        self._last_look = now
+        with contextlib.suppress(Exception):  # a closed client: keep what was counted
+            present = list(self._worker_info())
+            events = self.client.get_events(self._topic) if force else self._inbox[:]
+            del self._inbox[: len(self._inbox)]
+            self.tally.see(present)
+            self.tally.see([str(message.get("worker")) for _, message in events])
+            for key, worker, before in self._log.read(events):
+                self._restarted(key, worker, before, present)
+            for worker in self.tally.seen:
+                if worker not in present and self.tally.lose(worker):
+                    self.report(f"dask worker {worker} lost")
+
+    def _restarted(self, key: str, worker: str, before: str, present: Sequence[str]) -> None:
+        """Run ``key`` started again on ``worker`` after starting on ``before``."""
+        self.tally.retried += 1
+        if before in present:  # not lost (e.g. its result went missing): started again
+            self.report(f"run {key} started again on {worker} (it started on {before})")
+            return
+        if self.tally.lose(before):
+            self.report(f"dask worker {before} lost")
+        self.report(f"run {key} given again on {worker} (its worker {before} was lost)")
 
     def _worker_info(self) -> dict[str, Any]:
         info: dict[str, Any] = self.client.scheduler_info().get("workers", {})
@@ -236,7 +405,7 @@ class DaskBackend:
             index, task = queue.popleft()
             key = f"{self._prefix}-{index}"
             owner[key] = task
-            return self.client.submit(fn, task, key=key, pure=False)
+            return self.client.submit(_logged, fn, task, key, self._topic, key=key, pure=False)
 
         running = as_completed([submit() for _ in range(min(window, len(queue)))])
         for future in running:
@@ -245,15 +414,29 @@ class DaskBackend:
                 outcome = future.result()
             except Exception as error:  # KilledWorker, cancelled, lost: the run failed
                 outcome = error
+            self._look()
             yield task, outcome
             future.release()
             if queue:
                 running.add(submit())
 
     def close(self) -> None:
+        self._look(force=True)
+        with contextlib.suppress(Exception):
+            self.client.unsubscribe_topic(self._topic)
         self.client.close()
         if self._cluster is not None:
             self._cluster.close()
+
+
+def _logged(fn: Callable[[T], Any], task: T, key: str, topic: str) -> Any:
+    """``fn(task)`` on a Dask worker, after logging the start (key, worker) to ``topic``."""
+    from distributed import get_worker
+
+    with contextlib.suppress(ValueError):  # not on a worker: nothing to log
+        worker = get_worker()
+        worker.log_event(topic, {"key": key, "worker": worker.address})
+    return fn(task)
 
 
 def make_backend(

@@ -240,3 +240,139 @@ def plot_measure(
     fig.savefig(out)
     plt.close(fig)
     return out
+
+
+def read_series(folder: str | Path) -> tuple[pa.Table, pa.Table, dict[str, Any], list[str]]:
+    """A sweep folder's time series, results, measure descriptions and varied parameters.
+
+    Raises:
+        ExperimentError: no sweep results, or no time series (the sweep ran without
+            ``--every``), or a file that cannot be read.
+    """
+    from pyautonomousagent.experiments.series import TIMESERIES
+
+    path = Path(folder)
+    path = path if path.is_dir() else path.parent
+    results, measures = read_results(path)
+    file = path / TIMESERIES
+    if not file.exists():
+        raise ExperimentError(
+            f"no time series in {path} (no {TIMESERIES}); run the sweep with --every K"
+        )
+    try:
+        series = read_parquet(file, "sweep time series", ("run_id", "iteration", "value"))
+        varied = (read_manifest(path) or {}).get("parameters", [])
+    except InputError as error:
+        raise ExperimentError(str(error)) from None
+    return series, results, measures, [str(v) for v in varied or []]
+
+
+def summarize_over_time(
+    series: pa.Table, results: pa.Table, measure: str, by: str | None
+) -> list[dict[str, Any]]:
+    """Per (``by`` value, iteration): ``n`` runs, the ``mean`` of ``measure`` and its
+    Student-t 95 % confidence interval ``low``, ``high`` over the runs that succeeded
+    (NaN values left out).
+
+    Raises:
+        ExperimentError: ``measure`` is not in the time series, or ``by`` not a column of
+            the results, or no run has a value.
+    """
+    import pyarrow.compute as pc
+
+    names = sorted(set(series["measure"].to_pylist()))
+    if measure not in names:
+        close = difflib.get_close_matches(measure, names, n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        raise ExperimentError(
+            f"unknown measure {measure!r} in the time series{hint}; it has {', '.join(names)}"
+        )
+    if by is not None:
+        _column(results, by, "parameter")
+    kept = series.filter(pc.equal(series["measure"], measure))
+    kept = kept.filter(pc.invert(pc.is_nan(kept["value"])))
+    ok = results.filter(pc.equal(results["status"], "ok"))
+    labels = ok.select(["run_id", by]) if by else ok.select(["run_id"])
+    joined = kept.join(labels, "run_id", join_type="inner")
+    if joined.num_rows == 0:
+        raise ExperimentError(f"no successful run has a value of {measure!r} over time")
+    keys = [by, "iteration"] if by else ["iteration"]
+    grouped = joined.group_by(keys).aggregate(
+        [("value", "mean"), ("value", "stddev", pc.VarianceOptions(ddof=1)), ("value", "count")]
+    )
+    rows = []
+    for row in grouped.to_pylist():
+        n, mean, sd = row["value_count"], row["value_mean"], row["value_stddev"]
+        half = t95(n - 1) * sd / math.sqrt(n) if n > 1 and sd is not None else 0.0
+        rows.append(
+            {"by": row.get(by) if by else None, "iteration": row["iteration"], "n": n,
+             "mean": mean, "low": mean - half, "high": mean + half}
+        )  # fmt: skip
+    return sorted(rows, key=lambda r: (_order((r["by"], None)), r["iteration"]))
+
+
+def lines_parameter(varied: list[str], by: str | None) -> str | None:
+    """The parameter whose values are the lines of a plot over time: ``by``, or else the
+    only varied parameter (None where nothing varies).
+
+    Raises:
+        ExperimentError: several parameters vary and ``by`` names none of them.
+    """
+    if by is not None or len(varied) <= 1:
+        return by or (varied[0] if varied else None)
+    raise ExperimentError(
+        f"the sweep varies {', '.join(varied)}: name the one whose values are the lines with --by"
+    )
+
+
+def plot_over_time(
+    source: str | Path,
+    measure: str,
+    by: str | None = None,
+    out: str | Path | None = None,
+    title: str | None = None,
+) -> Path:
+    """Draw ``measure`` over the iterations (mean over the runs and its 95 % confidence
+    band), one line per value of the parameter ``by`` (default: the only varied one),
+    from the sweep's ``timeseries.parquet``; write PNG or SVG and return the path.
+
+    Args:
+        source: a sweep folder run with ``--every K``.
+        measure: a measure of the time series.
+        by: the parameter whose values are the lines.
+        out: the picture (default: ``MEASURE-over-time.png`` in the sweep folder).
+        title: the title (default: says what is drawn).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    series, results, descriptions, varied = read_series(source)
+    by = lines_parameter(varied, by)
+    rows = summarize_over_time(series, results, measure, by)
+    folder = Path(source) if Path(source).is_dir() else Path(source).parent
+    out = Path(out) if out is not None else folder / f"{measure}-over-time.png"
+    if out.suffix.lower() not in (".png", ".svg"):
+        raise ExperimentError(f"plot file {out}: use a .png or .svg name")
+    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=120)
+    for group in sorted({r["by"] for r in rows}, key=lambda v: _order((v, None))):
+        line = [r for r in rows if r["by"] == group]
+        px = [r["iteration"] for r in line]
+        (drawn,) = ax.plot(px, [r["mean"] for r in line], label=f"{by} = {group}" if by else None)
+        low, high = [r["low"] for r in line], [r["high"] for r in line]
+        ax.fill_between(px, low, high, color=drawn.get_color(), alpha=0.2, linewidth=0)
+    unit = descriptions.get(measure, {}).get("unit", "")
+    ax.set_xlabel("iteration")
+    ax.set_ylabel(f"{measure} ({unit})" if unit and unit != measure else measure)
+    counts = sorted({r["n"] for r in rows})
+    n_text = f"{counts[0]}" if len(counts) == 1 else f"{counts[0]}-{counts[-1]}"
+    ax.set_title(title or f"{measure} over time (mean of {n_text} runs, 95 % CI)", fontsize=10)
+    ax.grid(True, alpha=0.3)
+    if by:
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out)
+    plt.close(fig)
+    return out

@@ -40,6 +40,8 @@ class RunTask:
         runs_dir: folder of the per-run data, or None not to save it.
         tree: the scenario's tree, read once by the sweep (so workers need not read the
             tree file), or None to read it per run (when the tree itself is varied).
+        every: keep each measure every this many iterations (the run's time series, see
+            :mod:`pyautonomousagent.experiments.series`), or None for none.
     """
 
     run: Run
@@ -49,19 +51,24 @@ class RunTask:
     measures: tuple[Measure, ...]
     runs_dir: str | None = None
     tree: Node | None = None
+    every: int | None = None
 
 
 def execute(task: RunTask) -> dict[str, Any]:
     """Run ``task``: one result row (run, run_id, parameters, seed, measures, status, error,
-    seconds). Measures that raise give NaN and the run's status "failed". The run's log
-    (e.g. one warning per drone that runs dry) is silenced: the measures count it."""
+    seconds, engine). Measures that raise give NaN and the run's status "failed". The run's
+    log (e.g. one warning per drone that runs dry) is silenced: the measures count it. With
+    ``task.every`` the row also holds the run's time series (a table) under
+    :data:`~pyautonomousagent.experiments.series.SERIES`, if the run is ok."""
     from pyautonomousagent.experiments.measures import RunData
+    from pyautonomousagent.experiments.series import SERIES, run_series
     from pyautonomousagent.simulation import Simulation
 
     run = task.run
     row: dict[str, Any] = {"run": run.index, "run_id": run.run_id, **run.point, "seed": run.seed}
     row.update({m.name: math.nan for m in task.measures})
     row.update({k: v for k, v in scenario_parameters(task.scenario).items() if k not in row})
+    row["engine"] = None
     start = time.perf_counter()
     log = logging.getLogger("pyautonomousagent")
     was_disabled, log.disabled = log.disabled, True
@@ -74,14 +81,20 @@ def execute(task: RunTask) -> dict[str, Any]:
             record_every=task.record_every,
             tree=task.tree,
             trace=0,  # the active behaviour is kept; per-node traces are not needed
-        ).run(progress=False)
+        )
+        row["engine"] = sim.engine.name
+        sim.run(progress=False)
+        row["engine"] = sim.engine.name  # the engine that ran it
         data = RunData.from_simulation(sim)
         for measure in task.measures:
             row[measure.name] = measure(data)
+        if task.every is not None:
+            row[SERIES] = run_series(run.run_id, data, task.measures, task.every)
         if task.runs_dir is not None:
             write_run_data(sim, Path(task.runs_dir), run)
     except Exception as error:  # a failing run is recorded, and the sweep goes on
         row.update(status="failed", error=one_line(error))
+        row.pop(SERIES, None)
     else:
         row.update(status="ok", error=None)
     finally:
@@ -122,3 +135,32 @@ def write_run_data(sim: Any, root: Path, run: Run) -> Path:
     target = folder / "data.parquet"
     atomic_write_table(sim.table(), target)
     return target
+
+
+#: The scenario fields a sweep may vary besides its parameters: type, unit, description.
+_FIELD_COLUMNS: dict[str, tuple[type, str, str]] = {
+    "agents": (int, "agents", "the number of agents in the run"),
+    "iterations": (int, "iterations", "the run's length"),
+    "tree": (str, "", "the behaviour tree the agents ran"),
+}
+
+
+def parameter_columns(scenario: Any) -> tuple[dict[str, Any], dict[str, tuple[str, str]]]:
+    """Each parameter's column type by its declared type (float -> float64, int -> int64,
+    bool, str -> string) and its (unit, description), for the results' schema: the
+    scenario's fields that can vary and every declared parameter of its core, motion model
+    and mission."""
+    import pyarrow as pa
+
+    from pyautonomousagent.simulation.scenario import parameter_list
+
+    arrow = {bool: pa.bool_(), int: pa.int64(), float: pa.float64(), str: pa.string()}
+    types: dict[str, Any] = {}
+    docs: dict[str, tuple[str, str]] = {}
+    for name, (kind, unit, doc) in _FIELD_COLUMNS.items():
+        types[name], docs[name] = arrow[kind], (unit, doc)
+    for _, param in parameter_list(scenario):
+        if param.type in arrow:
+            types[param.name] = arrow[param.type]
+        docs[param.name] = (param.unit, param.doc)
+    return types, docs

@@ -20,6 +20,8 @@ Written as YAML (or given on the command line, which builds the same mapping)::
     measures: [refuels, alerts, {low: "mean(energy < 30)"}]
     engine: auto
     record_every: 1
+    every: 100                      # optional: each measure every 100 iterations per run
+                                    # (timeseries.parquet; a multiple of record_every)
 
 or, instead of a grid, a sampled design over bounded parameters (see
 :mod:`~pyautonomousagent.experiments.design`)::
@@ -63,7 +65,7 @@ MAX_RUNS = 1_000_000
 #: Largest whole number a sweep takes (seeds and counts are int64 columns of the results).
 INT64_MAX = 2**63 - 1
 #: Columns of the results that parameters and measures may not be called.
-RESERVED = ("run", "run_id", "seed", "status", "error", "seconds", "worker")
+RESERVED = ("run", "run_id", "seed", "status", "error", "seconds", "worker", "engine")
 _KEYS = (
     "name",
     "scenario",
@@ -78,6 +80,7 @@ _KEYS = (
     "design",
     "samples",
     "design_seed",
+    "every",
 )
 _DISTRIBUTIONS = ("uniform", "integers", "choice")
 
@@ -121,6 +124,8 @@ class Experiment:
         name: the experiment's name.
         design: a sampled design over bounded parameters (then ``vary`` is empty), or None
             for the grid.
+        every: iterations between the time series' checkpoints (``timeseries.parquet``),
+            or None for no time series.
     """
 
     scenario: str
@@ -134,6 +139,7 @@ class Experiment:
     record_every: int = 1
     name: str = "experiment"
     design: Design | None = None
+    every: int | None = None
 
     @classmethod
     def from_mapping(cls, data: Any, source: str = "experiment") -> Experiment:
@@ -201,6 +207,8 @@ class Experiment:
             "engine": self.engine,
             "record_every": self.record_every,
         }
+        if self.every is not None:  # absent otherwise: earlier sweeps resume unchanged
+            data["every"] = self.every
         if self.sample:
             params = {
                 k: {kind: list(args)} for k, (kind, args) in self.sample["parameters"].items()
@@ -332,6 +340,7 @@ class _Reader:
             record_every=self.whole(data.get("record_every", 1), "record_every", 1),
             name=self.folder_name(data.get("name", "experiment"), "name"),
             design=design,
+            every=self.every(data.get("every"), data.get("record_every", 1)),
         )
         self.columns(experiment)
         grid = math.prod(len(values) for values in experiment.vary.values())
@@ -396,6 +405,16 @@ class _Reader:
         if not math.isfinite(high - low) or max(-low, high) > 2**62:
             raise self.fail(f"vary.{name}", "bounds within +-2**62", value)
         return low, high
+
+    def every(self, value: Any, record_every: Any) -> int | None:
+        """The time series' interval: None, or a whole number >= 1 that is a multiple of
+        ``record_every`` (every checkpoint a recorded iteration)."""
+        if value is None:
+            return None
+        every = self.whole(value, "every", 1)
+        if isinstance(record_every, int) and record_every >= 1 and every % record_every:
+            raise self.fail("every", f"a multiple of record_every ({record_every})", value)
+        return every
 
     def overlap(self, fixed: Mapping[str, Any], varied: Sequence[str]) -> None:
         """Refuse a parameter that is both fixed (``set``) and varied on the grid (a sampled

@@ -5,7 +5,9 @@
     OUT/experiment.json        the manifest: experiment, base scenario, runs, backend,
                                versions, counts, start and end times
     OUT/journal/part-*.parquet rows of finished runs, appended in batches as they finish
+    OUT/journal/series-*.parquet  the time series of a part's runs (``every``), if kept
     OUT/results.parquet        one row per run (the journal's last row of each run)
+    OUT/timeseries.parquet     each measure every K iterations per run (``every``), if kept
     OUT/runs/NAME=VALUE/.../seed=S/data.parquet   each run's recorded data (optional)
 
 Every file is written to a temporary name, flushed to disk (fsync) and renamed, so an
@@ -99,28 +101,66 @@ def column_type(values: Sequence[Any]) -> pa.DataType:
     return pa.string()
 
 
+#: Units and descriptions of the results' own columns (field metadata of results.parquet).
+RESULT_DOCS: dict[str, tuple[str, str]] = {
+    "run": ("", "the run's position in the experiment's run list (0-based)"),
+    "run_id": ("", "a stable key of the run's point and seed"),
+    "seed": ("", "the run's seed"),
+    "status": ("", "ok, or failed (the error column says why)"),
+    "error": ("", "the first line of the error of a failed run"),
+    "seconds": ("s", "wall-clock time of the run on its worker"),
+    "engine": ("", "the decision engine the run used (auto's choice, where auto)"),
+}
+
+
 def results_schema(
     parameters: Mapping[str, Sequence[Any]],
     measures: Sequence[str],
     constants: Mapping[str, Any] | None = None,
+    *,
+    types: Mapping[str, pa.DataType] | None = None,
+    docs: Mapping[str, tuple[str, str]] | None = None,
 ) -> pa.Schema:
     """The results' columns: run, run_id, each varied parameter, seed, each measure, status,
-    error, seconds, then each parameter the experiment does not vary (``constants``), so
-    that every run's row holds all its parameters."""
+    error, seconds, engine, then each parameter the experiment does not vary
+    (``constants``), so that every run's row holds all its parameters.
+
+    Args:
+        parameters: each varied parameter's values.
+        measures: the measures' names.
+        constants: the parameters not varied, name -> value.
+        types: a parameter's column type by its declared type (a float parameter varied as
+            ``20:50:10`` is float64); else the type of its values (:func:`column_type`).
+        docs: name -> (unit, description) of parameters and measures, written with
+            :data:`RESULT_DOCS` as each field's metadata (``unit``, ``description``).
+    """
+    types = types or {}
+
+    def typed(name: str, values: Sequence[Any]) -> pa.Field:
+        return pa.field(name, types.get(name) or column_type(values))
+
     fields = [pa.field("run", pa.int64()), pa.field("run_id", pa.string())]
-    fields += [pa.field(name, column_type(values)) for name, values in parameters.items()]
+    fields += [typed(name, values) for name, values in parameters.items()]
     fields.append(pa.field("seed", pa.int64()))
     fields += [pa.field(name, pa.float64()) for name in measures]
     fields += [
         pa.field("status", pa.string()),
         pa.field("error", pa.string()),
         pa.field("seconds", pa.float64()),
+        pa.field("engine", pa.string()),
     ]
     taken = {f.name for f in fields}
     for name, value in (constants or {}).items():
         if name not in taken:
-            fields.append(pa.field(name, column_type([value])))
-    return pa.schema(fields)
+            fields.append(typed(name, [value]))
+    described = {**RESULT_DOCS, **(docs or {})}
+    return pa.schema(
+        [
+            f.with_metadata(dict(zip(("unit", "description"), described.get(f.name, ("", "")),
+                                     strict=True)))
+            for f in fields
+        ]
+    )  # fmt: skip
 
 
 class Journal:
@@ -136,6 +176,8 @@ class Journal:
         self.folder.mkdir(parents=True, exist_ok=True)
         self.schema = schema
         self.buffer: list[dict[str, Any]] = []
+        #: The held runs' time series (:mod:`pyautonomousagent.experiments.series`).
+        self.series: list[pa.Table] = []
         #: What opening the journal repaired, one line each (torn parts set aside...).
         self.notes: list[str] = []
         self._check_parts()
@@ -168,26 +210,42 @@ class Journal:
                 )
 
     def _read_part(self, path: Path) -> pa.Table:
-        return pq.read_table(path).select(self.schema.names).cast(self.schema)
+        """A part, as the schema says; a column an older version did not write (``engine``)
+        is null."""
+        table = pq.read_table(path)
+        for name in self.schema.names:
+            if name not in table.column_names and name in RESULT_DOCS:
+                table = table.append_column(name, pa.nulls(table.num_rows, pa.string()))
+        return table.select(self.schema.names).cast(self.schema)
 
     def read(self) -> pa.Table:
         """Every row written so far (flushed), in journal order."""
         tables = [self._read_part(p) for p in self.parts()]
         return pa.concat_tables(tables) if tables else self.schema.empty_table()
 
-    def append(self, row: Mapping[str, Any]) -> None:
-        """Hold ``row`` until the next :meth:`flush`."""
+    def append(self, row: Mapping[str, Any], series: pa.Table | None = None) -> None:
+        """Hold ``row`` (and the run's time series, if any) until the next :meth:`flush`."""
         self.buffer.append(dict(row))
+        if series is not None:
+            self.series.append(series)
 
     def flush(self) -> None:
-        """Write the held rows as the next part (nothing if none are held)."""
+        """Write the held rows as the next part (nothing if none are held); the held time
+        series first, as ``series-N.parquet`` beside ``part-N.parquet``, so a part's runs
+        never lack their series."""
+        from pyautonomousagent.experiments.series import part_path
+
         if not self.buffer:
             return
+        if self.series:
+            atomic_write_table(
+                pa.concat_tables(self.series), part_path(self.folder, self.next_part)
+            )
         rows = [{name: row.get(name) for name in self.schema.names} for row in self.buffer]
         table = pa.Table.from_pylist(rows, schema=self.schema)
         atomic_write_table(table, self.folder / f"part-{self.next_part:06d}.parquet")
         self.next_part += 1
-        self.buffer = []
+        self.buffer, self.series = [], []
 
     def finished(self) -> set[str]:
         """The run_ids whose latest row has status "ok"."""

@@ -10,7 +10,9 @@ Before anything runs, every varied value is checked against the scenario, expres
 measures against the recorded columns, and the estimated memory of the largest run against
 what a worker may use. Runs are journaled as they finish (see
 :mod:`pyautonomousagent.experiments.store`); a run that raises is recorded as failed with
-its message and the sweep goes on; ``resume=True`` skips the runs already done.
+its message and the sweep goes on; ``resume=True`` skips the runs already done. With the
+experiment's ``every``, each run's measures every K iterations go to ``timeseries.parquet``
+(:mod:`pyautonomousagent.experiments.series`).
 """
 
 from __future__ import annotations
@@ -33,13 +35,21 @@ from pyautonomousagent.experiments.backends import Backend, make_backend
 from pyautonomousagent.experiments.design import for_scenario, write_design
 from pyautonomousagent.experiments.expression import Expression
 from pyautonomousagent.experiments.measures import RunData, _Evaluate
-from pyautonomousagent.experiments.runner import RunTask, execute, one_line, scenario_parameters
+from pyautonomousagent.experiments.runner import (
+    RunTask,
+    execute,
+    one_line,
+    parameter_columns,
+    scenario_parameters,
+)
+from pyautonomousagent.experiments.series import SERIES, TIMESERIES, compact, documented
 from pyautonomousagent.experiments.spec import Experiment, ExperimentError, Run
 from pyautonomousagent.experiments.store import (
     MANIFEST,
     RESULTS,
     RUNS,
     Journal,
+    atomic_write_table,
     read_manifest,
     results_schema,
     write_manifest,
@@ -200,7 +210,9 @@ def sweep(
         address: the Dask scheduler's address, e.g. ``"tcp://10.0.0.5:8786"``.
         resume: continue the sweep in ``out``: runs already done are skipped.
         save_runs: also write each run's recorded data under ``out/runs`` (hive-partitioned).
-        progress: show a progress bar with ETA (default: when standard error is a terminal).
+        progress: show progress on standard error (default): a bar with ETA on a terminal,
+            else a line every 10 s or 5 % of the runs, and a line per lost worker; False for
+            none.
         on_result: called with each result row as it arrives.
         flush_every: journal finished runs at least every this many runs...
         flush_seconds: ...and every this many seconds.
@@ -217,10 +229,14 @@ def sweep(
     runs = experiment.runs()
     previous = _previous_manifest(out, experiment, resume)
     points = experiment.points()
+    types, docs = parameter_columns(scenario)
+    docs.update({m.name: (m.unit, m.doc) for m in experiment.measures})
     schema = results_schema(
         {name: [p[name] for p in points] for name in experiment.parameters},
         [m.name for m in experiment.measures],
         scenario_parameters(scenario),
+        types=types,
+        docs=docs,
     )
     owned = isinstance(backend, str)
     chosen = make_backend(backend, workers, address) if isinstance(backend, str) else backend
@@ -269,6 +285,7 @@ def sweep(
             journal.flush()
             if owned:
                 chosen.close()
+            manifest["backend"].update(worker_stats(chosen))
             table = _finish(journal, out, manifest, counts, start)
     workers_text = f"{chosen.name} x {manifest['backend']['workers']}"
     return SweepResult(out, table, counts, time.perf_counter() - start, workers_text)
@@ -277,8 +294,12 @@ def sweep(
 def _finish(
     journal: Journal, out: Path, manifest: dict[str, Any], counts: dict[str, int], start: float
 ) -> pa.Table:
-    """Write the results and the final manifest; the results."""
+    """Write the results, the time series (if the experiment keeps one) and the final
+    manifest; the results."""
     table = write_results(journal, out)
+    if manifest["experiment"].get("every") is not None:
+        series = documented(compact(journal.folder, table), manifest["measures"])
+        atomic_write_table(series, out / TIMESERIES)
     statuses = table["status"].to_pylist()
     manifest.update(
         counts=counts,  # this session's
@@ -288,6 +309,13 @@ def _finish(
     )
     write_manifest(out, manifest)
     return table
+
+
+def worker_stats(backend: Backend) -> dict[str, Any]:
+    """What the backend says of its workers (seen, lost, runs retried), for the manifest;
+    empty for a backend that does not say."""
+    stats = getattr(backend, "stats", None)
+    return dict(stats()) if callable(stats) else {}
 
 
 def _tasks(
@@ -305,6 +333,7 @@ def _tasks(
             experiment.measures,
             folder,
             tree,
+            experiment.every,
         )
         for run in runs
     ]
@@ -333,16 +362,20 @@ def _execute(
     flush: tuple[int, float],
 ) -> None:
     """Run the tasks, journaling each result once (in batches)."""
-    bar = Progress(len(tasks), f"sweep {name}", enabled=progress)
+    bar = Progress(len(tasks), f"sweep {name}", enabled=progress, lines=True, unit="runs")
+    told = getattr(backend, "report", None)
+    if told is not None:
+        backend.report = bar.note  # type: ignore[attr-defined]  # a lost worker: one line
     seen: set[str] = set()
     last_flush = time.monotonic()
     try:
         for task, outcome in backend.map_unordered(execute, tasks):
             row = outcome if isinstance(outcome, dict) else failed_row(task, outcome)
+            series = row.pop(SERIES, None)
             if row["run_id"] in seen:  # never journal a run twice
                 continue
             seen.add(row["run_id"])
-            journal.append(row)
+            journal.append(row, series)
             counts[row["status"]] += 1
             bar.update(len(seen))
             if len(journal.buffer) >= flush[0] or time.monotonic() - last_flush >= flush[1]:
@@ -351,7 +384,10 @@ def _execute(
             if on_result is not None:
                 on_result(row)
     finally:
+        worker_stats(backend)  # a worker lost near the end is named while the bar can say so
         bar.close()
+        if told is not None:
+            backend.report = told  # type: ignore[attr-defined]
 
 
 def failed_row(task: RunTask, error: BaseException) -> dict[str, Any]:
@@ -360,7 +396,7 @@ def failed_row(task: RunTask, error: BaseException) -> dict[str, Any]:
     row: dict[str, Any] = {"run": run.index, "run_id": run.run_id, **run.point, "seed": run.seed}
     row.update({m.name: math.nan for m in task.measures})
     row.update({k: v for k, v in scenario_parameters(task.scenario).items() if k not in row})
-    row.update(status="failed", error=one_line(error), seconds=math.nan)
+    row.update(status="failed", error=one_line(error), seconds=math.nan, engine=None)
     return row
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from collections.abc import Iterator, Mapping, Sequence
@@ -24,7 +25,7 @@ from pyautonomousagent.engines.gpu import GpuEngine, auto_takes_gpu
 from pyautonomousagent.engines.pytrees import PyTreesEngine
 from pyautonomousagent.inputs import shown
 from pyautonomousagent.names import agent_index
-from pyautonomousagent.progress import Progress
+from pyautonomousagent.progress import LINE_SECONDS, Progress
 from pyautonomousagent.randomness import CounterRandom
 from pyautonomousagent.recording import Recorder, check_memory, to_table, trace_table, traced_agents
 from pyautonomousagent.registry import Registry
@@ -58,7 +59,8 @@ def _checked(
             f"scenario must be a Scenario, e.g. load({shown(scenario)}), got "
             f"{type(scenario).__name__}"
         )
-    scenario = Scenario.from_mapping(to_mapping(scenario), source=f"scenario {scenario.name!r}")
+    checked = Scenario.from_mapping(to_mapping(scenario), source=f"scenario {scenario.name!r}")
+    scenario = dataclasses.replace(checked, overrides=dict(scenario.overrides))
     for name, value, least in (("seed", seed, 0), ("record_every", record_every, 1)):
         if isinstance(value, bool) or not isinstance(value, int | np.integer):
             raise TypeError(
@@ -348,15 +350,20 @@ class Simulation:
         phases.deliver_messages(self)
         phases.record(self)
 
-    def run(self, progress: bool | None = None, iterations: int | None = None) -> Simulation:
+    def run(
+        self, progress: bool | None = None, iterations: int | None = None, *, lines: bool = False
+    ) -> Simulation:
         """Run the scenario's remaining iterations (at most ``iterations`` of them); a
-        progress bar if ``progress`` (by default when standard error is a terminal).
-        Returns ``self``."""
+        progress bar if ``progress`` (by default when standard error is a terminal); with
+        ``lines``, where standard error is not a terminal, a progress line every 10 s or
+        5 % once the run has taken 10 s. Returns ``self``."""
         start = time.perf_counter()
         remaining = self.scenario.iterations - self.world.iteration
         if iterations is not None:
             remaining = max(0, min(remaining, iterations))
-        bar = Progress(remaining, f"{self.scenario.name} ({self.engine.name})", enabled=progress)
+        label = f"{self.scenario.name} ({self.engine.name})"
+        bar = Progress(remaining, label, enabled=progress, lines=lines, unit="iterations",
+                       first_line_after=LINE_SECONDS)  # fmt: skip
         done = 0
         try:
             while done < remaining:

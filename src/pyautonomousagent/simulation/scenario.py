@@ -21,6 +21,7 @@ A scenario file::
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -86,6 +87,8 @@ class Scenario:
         model: the motion model, a name of :data:`MOTION_MODELS`.
         model_settings: the motion model's own settings section (e.g. ``x8:``), or None.
         mission_type: the mission class (resolved from ``mission``).
+        overrides: what :meth:`with_overrides` changed since the scenario was read, name ->
+            value, in order (``save_run`` records it in ``run.json``).
     """
 
     name: str
@@ -102,6 +105,7 @@ class Scenario:
     model: str = "drone2d"
     model_settings: Any = None
     mission_type: type[Mission] = field(default=Mission, compare=False, repr=False)
+    overrides: dict[str, Any] = field(default_factory=dict, compare=False, repr=False)
 
     @classmethod
     def from_mapping(
@@ -126,16 +130,16 @@ class Scenario:
         ``None`` values are ignored, so CLI options that were not given change nothing.
         """
         data = to_mapping(self)
-        for key, value in changes.items():
-            if value is None:
-                continue
+        applied = {k: v for k, v in changes.items() if v is not None}
+        for key, value in applied.items():
             if key in data["parameters"] and key not in data:
                 data["parameters"][key] = value
             elif key in data["world"] and key not in data:
                 data["world"][key] = value
             else:
                 data[key] = value
-        return _read(Reader(f"scenario {self.name!r}"), data, None)
+        changed = _read(Reader(f"scenario {self.name!r}"), data, None)
+        return dataclasses.replace(changed, overrides={**self.overrides, **applied})
 
     def create_mission(self) -> Mission:
         """A new instance of the scenario's mission, for one run."""
