@@ -292,6 +292,7 @@ def test_pyaa_run_says_when_it_compiles_and_how_long_it_took(
     from pyautonomousagent.engines import compiled
 
     monkeypatch.setattr(compiled, "SAY_COMPILE_SECONDS", 0.0)
+    compiled.compile_log.info("an earlier compile: logging caches that INFO is off")
     monkeypatch.setattr(CompiledEngine, "_marker", lambda self, sim, fused: tmp_path / "marker")
     out = tmp_path / "run"
     argv = ["run", "gathering", "--engine", "compiled", "--iterations", "20", "--no-gif",

@@ -599,7 +599,8 @@ def _saying_compiles(enabled: bool) -> Iterator[None]:
         return
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter("pyaa: %(message)s"))
-    level, logger.level = logger.level, logging.INFO
+    level = logger.level
+    logger.setLevel(logging.INFO)  # (setLevel, not .level =: it clears the loggers' cache)
     logger.addHandler(handler)
     try:
         yield
