@@ -4,6 +4,7 @@
 #   make lessons  installs JupyterLab (the [lessons] extra) and opens lesson 01 of notebooks/
 #   make docs   installs the [docs] extra (and the extras the lessons use) and builds the
 #               documentation site into site/ (lessons executed, warnings as errors, links checked)
+#   (demo and test also build the studio's front-end with npm: pyaa studio, docs/studio.md)
 #   make test   installs the test dependencies (and the [docs], [x8], [dask], [video] and
 #               [fast] extras, and chromium when missing) into .venv and runs the suite
 PYTHON ?= python3
@@ -17,11 +18,17 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
-$(VENV)/.installed: pyproject.toml | $(BIN)/python
+# The studio's front-end (pyaa studio): Blockly and the page's code, bundled by esbuild into
+# the package (src/pyautonomousagent/studio/static/, shipped in the wheel); needs Node.js and npm.
+STUDIO_BUNDLE := src/pyautonomousagent/studio/static/studio.js
+$(STUDIO_BUNDLE): studio/package.json studio/package-lock.json studio/build.mjs $(wildcard studio/src/*.js)
+	cd studio && npm ci --no-audit --no-fund && npm run build
+
+$(VENV)/.installed: pyproject.toml $(STUDIO_BUNDLE) | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[fast]"
 	touch $@
 
-$(VENV)/.installed-test: pyproject.toml | $(BIN)/python
+$(VENV)/.installed-test: pyproject.toml $(STUDIO_BUNDLE) | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test,docs,x8,dask,video,fast]"
 	touch $@ $(VENV)/.installed $(VENV)/.installed-docs
 
