@@ -105,9 +105,7 @@ class Studio:
     """A studio server: a session, its player and the HTTP server, on ``host:port``
     (port 0: any free port)."""
 
-    def __init__(
-        self, scenario: str, root: Path, host: str = "127.0.0.1", port: int = 0
-    ) -> None:
+    def __init__(self, scenario: str, root: Path, host: str = "127.0.0.1", port: int = 0) -> None:
         self.session = Session(scenario, root)
         self.session.set_tree(scenario_blocks(self.session))
         self.player = Player(self.session)
