@@ -257,6 +257,10 @@ function testHooks() {
       return { x: p.x, y: p.y };
     },
     tree: () => treeOf(workspace).tree,
+    warning(id) {
+      const icon = workspace.getBlockById(id).getIcon(Blockly.icons.IconType.WARNING);
+      return icon ? icon.getText() : null;
+    },
     runnable: () => state.ok,
   };
 }
