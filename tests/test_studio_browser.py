@@ -125,23 +125,28 @@ def open_empty(browser: Any, studio: Studio) -> None:
 
 
 def drag(browser: Any, start: dict[str, float], end: dict[str, float]) -> None:
-    """Press at ``start``, move in steps, release at ``end`` (viewport pixels): real pointer
-    events, as a mouse makes them."""
+    """Press at ``start`` and move toward ``end`` (viewport pixels), then move so that the
+    dragged block's connection lands on ``end``, and release: real pointer events, as a
+    mouse makes them."""
     from selenium.webdriver.common.action_chains import ActionChains
-    from selenium.webdriver.common.actions.action_builder import ActionBuilder
 
-    chain = ActionChains(browser)
-    pointer = ActionBuilder(browser).pointer_action
-    chain.w3c_actions.pointer_action.move_to_location(int(start["x"]), int(start["y"]))
-    chain.w3c_actions.pointer_action.pointer_down()
-    for k in range(1, 11):
-        x = start["x"] + (end["x"] - start["x"]) * k / 10
-        y = start["y"] + (end["y"] - start["y"]) * k / 10
-        chain.w3c_actions.pointer_action.move_to_location(int(x), int(y))
-    chain.w3c_actions.pointer_action.pause(0.1)
-    chain.w3c_actions.pointer_action.pointer_up()
-    del pointer
-    chain.perform()
+    press = ActionChains(browser)
+    pointer = press.w3c_actions.pointer_action
+    pointer.move_to_location(int(start["x"]), int(start["y"]))
+    pointer.pointer_down()
+    x, y = start["x"], start["y"]
+    for k in range(1, 9):
+        x = start["x"] + (end["x"] + 40 - start["x"]) * k / 8
+        y = start["y"] + (end["y"] + 40 - start["y"]) * k / 8
+        pointer.move_to_location(int(x), int(y))
+    press.perform()
+    corner = wait_for(lambda: browser.execute_script("return window.studio.dragged()"), 5)
+    release = ActionChains(browser)
+    pointer = release.w3c_actions.pointer_action
+    pointer.move_to_location(int(x + end["x"] - corner["x"]), int(y + end["y"] - corner["y"]))
+    pointer.pause(0.1)
+    pointer.pointer_up()
+    release.perform()
 
 
 def add_block(browser: Any, kind: str, parent: str | None) -> str:
@@ -150,17 +155,21 @@ def add_block(browser: Any, kind: str, parent: str | None) -> str:
     category = "cat-mission"
     if kind[0].isupper() and not kind.startswith(("Action_", "Condition_")):
         category = "cat-decorators" if kind in DECORATORS else "cat-control"
-    browser.find_element("id", category).click()
+    open_category = "return window.studio.openCategory()"
+    for _ in range(3):  # a click on the open category closes it
+        if browser.execute_script(open_category) == category:
+            break
+        browser.find_element("id", category).click()
+    assert browser.execute_script(open_category) == category
     block_type = f"bt_{kind}"
     start = wait_for(lambda: browser.execute_script(
         "try { return window.studio.flyoutBlock(arguments[0]); } catch (e) { return null; }",
         block_type))  # fmt: skip
     end = browser.execute_script("return window.studio.dropPoint(arguments[0])", parent)
-    grab = {"x": start["x"] + 12, "y": start["y"] + 8}
-    drag(browser, grab, {"x": end["x"] + 12, "y": end["y"] + 8})
-    return wait_for(
-        lambda: browser.execute_script("return window.studio.newest(arguments[0])", block_type)
-    )
+    newest = "return window.studio.newest(arguments[0])"
+    before = browser.execute_script(newest, block_type)
+    drag(browser, {"x": start["x"] + 12, "y": start["y"] + 8}, end)
+    return wait_for(lambda: (made := browser.execute_script(newest, block_type)) != before and made)
 
 
 def build(browser: Any, node: tuple[str, list], parent: str | None = None) -> None:
@@ -220,8 +229,9 @@ def test_an_invalid_tree_shows_the_message_on_the_block_and_cannot_run(
     add_block(browser, "Condition_Low_Energy_Level", inverter)
     add_block(browser, "Action_Refuel_A", inverter)
     message = wait_for(
-        lambda: "needs exactly 1 child" in (text := browser.find_element("id", "message").text)
-        and text
+        lambda: (
+            "needs exactly 1 child" in (text := browser.find_element("id", "message").text) and text
+        )
     )
     assert "decorator Inverter needs exactly 1 child, has 2" in message
     warning = browser.execute_script("return window.studio.warning(arguments[0])", inverter)

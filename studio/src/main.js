@@ -238,6 +238,8 @@ function testHooks() {
     workspace: () => workspace,
     flyoutBlock(type) {
       const flyout = workspace.getToolbox().getFlyout();
+      flyout.scrollToStart();
+      Blockly.renderManagement.triggerQueuedRenders(flyout.getWorkspace());
       const block = flyout.getWorkspace().getTopBlocks(false).find((b) => b.type === type);
       const c = block.previousConnection;
       const p = screen(flyout.getWorkspace(), c.x, c.y);
@@ -248,6 +250,7 @@ function testHooks() {
       return ids[ids.length - 1];
     },
     dropPoint(id) {
+      Blockly.renderManagement.triggerQueuedRenders(workspace);
       const block = id ? workspace.getBlockById(id) : workspace.getBlocksByType(ROOT, false)[0];
       const input = block.getInput("CHILDREN") || block.getInput("ROOT");
       let connection = input.connection;
@@ -256,7 +259,20 @@ function testHooks() {
       const p = screen(workspace, connection.x, connection.y);
       return { x: p.x, y: p.y };
     },
+    // The dragged block's previous connection, on the screen.
+    dragged() {
+      const block = Blockly.common.getSelected();
+      if (!block || !workspace.isDragging() || !block.getRelativeToSurfaceXY) return null;
+      const xy = block.getRelativeToSurfaceXY();
+      const offset = block.previousConnection.getOffsetInBlock();
+      const p = screen(workspace, xy.x + offset.x, xy.y + offset.y);
+      return { x: p.x, y: p.y };
+    },
     tree: () => treeOf(workspace).tree,
+    openCategory() {
+      const toolbox = workspace.getToolbox();
+      return toolbox.getFlyout().isVisible() ? toolbox.getSelectedItem()?.getId() : null;
+    },
     warning(id) {
       const icon = workspace.getBlockById(id).getIcon(Blockly.icons.IconType.WARNING);
       return icon ? icon.getText() : null;
