@@ -239,3 +239,46 @@ def test_an_invalid_tree_shows_the_message_on_the_block_and_cannot_run(
     for button in ("play", "step", "reset", "save-run"):
         assert browser.find_element("id", button).get_attribute("disabled")
     assert list(tmp_path.iterdir()) == []
+
+
+LAUGHS = """<?xml version="1.0"?>
+<!DOCTYPE lolz [<!ENTITY lol "lol"><!ENTITY lol2 "&lol;&lol;&lol;&lol;&lol;&lol;">]>
+<root BTCPP_format="4"><BehaviorTree ID="T"><Sequence name="&lol2;"/></BehaviorTree></root>
+"""
+
+
+def test_bad_input_in_the_page_gets_a_message_and_changes_nothing_on_disk(
+    browser: Any, studio: Studio, tmp_path: Path, tmp_path_factory: pytest.TempPathFactory
+) -> None:
+    files = tmp_path_factory.mktemp("uploads")
+    big = files / "big.xml"
+    big.write_bytes(b"<!--" + b"x" * 2_100_000 + b"-->")
+    laughs = files / "laughs.xml"
+    laughs.write_text(LAUGHS, encoding="utf-8")
+    browser.get(studio.url)
+    wait_for(lambda: "can run" in browser.find_element("id", "message").text)
+    message = browser.find_element("id", "message")
+
+    def shows(words: str) -> bool:
+        return words in message.text and "error" in (message.get_attribute("class") or "")
+
+    for path, words in ((big, "larger than 2000 KB"), (laughs, "<!DOCTYPE")):
+        browser.find_element("id", "upload").send_keys(str(path))
+        wait_for(lambda words=words: shows(words))
+    for field, value, words in (
+        ("energy_use", "NaN", "energy_use must be a finite number"),
+        ("agents", "0", "agents must be a whole number >= 1"),
+    ):
+        box = (
+            browser.find_element("css selector", f"input[data-param='{field}']")
+            if field != "agents"
+            else browser.find_element("id", "agents")
+        )
+        original = box.get_attribute("value")
+        box.clear()
+        box.send_keys(value)
+        browser.find_element("id", "apply").click()
+        wait_for(lambda words=words: shows(words))
+        box.clear()
+        box.send_keys(original)
+    assert list(tmp_path.iterdir()) == []
