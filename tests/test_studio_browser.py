@@ -282,3 +282,38 @@ def test_bad_input_in_the_page_gets_a_message_and_changes_nothing_on_disk(
         box.clear()
         box.send_keys(original)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_paused_at_k_the_followed_drones_colours_equal_its_trace(
+    browser: Any, studio: Studio
+) -> None:
+    from pyautonomousagent import Simulation, load
+
+    browser.get(studio.url)
+    wait_for(lambda: "can run" in browser.find_element("id", "message").text)
+    browser.find_element("id", "reset").click()
+    for k in range(1, 8):
+        browser.find_element("id", "step").click()
+        wait_for(lambda k=k: browser.execute_script("return window.studio.iteration()") == k)
+    point = browser.execute_script("return window.studio.agentPoint(1)")
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    click = ActionChains(browser)
+    click.w3c_actions.pointer_action.move_to_location(int(point["x"]), int(point["y"]))
+    click.w3c_actions.pointer_action.click()
+    click.perform()
+    wait_for(lambda: "following drone2" in browser.find_element("id", "follow").text)
+    shown = browser.execute_script(
+        "return [...document.querySelectorAll('#nodes div')].map(d => d.dataset.status)"
+    )
+    scenario = load("gathering")
+    sim = Simulation.create(scenario, seed=0, tree=load_tree(scenario.tree))
+    sim.run(progress=False, iterations=7)
+    names = {0: "invalid", 1: "success", 2: "failure", 3: "running"}
+    assert shown == [names[int(code)] for code in sim.recorder.trace(1)[-1]]
+    labels = browser.execute_script(
+        "return window.studio.workspace().getTopBlocks(true)[0].getDescendants(true)"
+        ".slice(1).map(b => b.getFieldValue('STATUS'))"
+    )
+    shown_on_blocks = [label.split()[1] if label.startswith("●") else "invalid" for label in labels]
+    assert shown_on_blocks == shown

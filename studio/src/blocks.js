@@ -8,6 +8,29 @@ const DECORATOR_COLOUR = 160;
 const CONDITION_COLOUR = 45;
 const ACTION_COLOUR = 330;
 
+/** The field on each node block that shows the followed agent's status and the count of
+ * agents that have the node active. */
+export const STATUS = "STATUS";
+
+function statusField() {
+  return new Blockly.FieldLabel("", "st-label");
+}
+
+/** Show ``status`` (success, failure, running, invalid) and ``active`` on ``block``,
+ * without an undo step or a change event (it is no edit). */
+export function showStatus(block, status, active) {
+  const field = block.getField(STATUS);
+  if (!field) return;
+  const text = `${status === "invalid" || !status ? "" : `● ${status}`} ${active ? `[${active}]` : ""}`;
+  Blockly.Events.disable();
+  try {
+    field.setValue(text.trim());
+    field.setClass(`st-label st-${status || "none"}`);
+  } finally {
+    Blockly.Events.enable();
+  }
+}
+
 /** The Blockly block type of a node tag or leaf type. */
 export function blockType(tag) {
   return `bt_${tag}`;
@@ -35,7 +58,7 @@ export function defineBlocks(palette) {
     Blockly.Blocks[blockType(control.type)] = {
       init() {
         const label = control.symbol ? `${control.symbol}  ${control.type}` : control.type;
-        this.appendDummyInput().appendField(label);
+        this.appendDummyInput().appendField(label).appendField(statusField(), STATUS);
         for (const param of control.params) {
           portField(this, param.name, param.required ? "required" : "");
         }
@@ -50,7 +73,7 @@ export function defineBlocks(palette) {
   for (const leaf of palette.leaves) {
     Blockly.Blocks[blockType(leaf.type)] = {
       init() {
-        this.appendDummyInput().appendField(leaf.type);
+        this.appendDummyInput().appendField(leaf.type).appendField(statusField(), STATUS);
         for (const port of leaf.ports) {
           portField(this, port.name, `default ${port.value ?? port.default}`);
         }

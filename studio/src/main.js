@@ -2,8 +2,8 @@
 // followed drone's tree. Talks to the server of pyautonomousagent.studio (JSON over HTTP).
 import * as Blockly from "blockly/core";
 import * as En from "blockly/msg/en";
-import { ROOT, defineBlocks, loadTree, toolbox, treeOf } from "./blocks.js";
-import { drawWorld, nearestAgent } from "./world.js";
+import { ROOT, defineBlocks, loadTree, showStatus, toolbox, treeOf } from "./blocks.js";
+import { agentPixel, drawWorld, nearestAgent } from "./world.js";
 
 Blockly.setLocale(En);
 
@@ -167,6 +167,22 @@ function showNodes(frame) {
       `${"&nbsp;&nbsp;".repeat(node.depth)}${node.name} <b>${active}</b></div>`;
   });
   box.innerHTML = rows.join("");
+  colourBlocks(frame);
+}
+
+// The blocks show the followed agent's statuses and the active counts while the run's tree
+// is the one on the canvas (an edit resets the run).
+function colourBlocks(frame) {
+  const { blocks } = treeOf(workspace);
+  const nodes = frame.nodes || [];
+  const follow = frame.follow && frame.follow.statuses;
+  blocks.forEach((block, i) => {
+    if (nodes.length === blocks.length) {
+      showStatus(block, follow ? follow[i] : "invalid", frame.active ? frame.active[i] : 0);
+    } else {
+      showStatus(block, "invalid", 0);
+    }
+  });
 }
 
 async function pollOnce() {
@@ -269,6 +285,13 @@ function testHooks() {
       return { x: p.x, y: p.y };
     },
     tree: () => treeOf(workspace).tree,
+    agentPoint(i) {
+      const canvas = $("world");
+      const p = agentPixel(canvas, state.frame, i);
+      const box = canvas.getBoundingClientRect();
+      return { x: box.left + p.x * (box.width / canvas.width), y: box.top + p.y * (box.height / canvas.height) };
+    },
+    iteration: () => state.frame && state.frame.iteration,
     openCategory() {
       const toolbox = workspace.getToolbox();
       return toolbox.getFlyout().isVisible() ? toolbox.getSelectedItem()?.getId() : null;

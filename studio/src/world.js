@@ -64,6 +64,12 @@ export function drawWorld(canvas, frame, marks, follow) {
   }
 }
 
+/** Where drone ``i`` of ``frame`` is drawn, in canvas pixels. */
+export function agentPixel(canvas, frame, i) {
+  const t = transform(canvas, frame.world);
+  return { x: t.sx(frame.x[i]), y: t.sy(frame.y[i]) };
+}
+
 /** The index of the drone nearest the click ``event`` on ``canvas`` (null: none near). */
 export function nearestAgent(canvas, frame, event) {
   if (!frame || !frame.world) return null;
