@@ -241,3 +241,14 @@ def test_pyaa_studio_without_a_bundle_says_how_to_build_it(
     assert main(["studio", "gathering", "--no-browser"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "npm run build" in err
+
+
+def test_a_notebook_cell_shows_the_studio(tmp_path: Path) -> None:
+    studio = Studio("gathering", tmp_path)
+    try:
+        html = studio._repr_html_()
+        assert f'src="{studio.url}"' in html
+        with urllib.request.urlopen(studio.url, timeout=30) as page:
+            assert b"/static/studio.js" in page.read()
+    finally:
+        studio.shutdown()

@@ -103,10 +103,19 @@ class Player:
 
 class Studio:
     """A studio server: a session, its player and the HTTP server, on ``host:port``
-    (port 0: any free port)."""
+    (port 0: any free port), reading and writing only inside ``root`` (default: the
+    current folder). In a notebook, a cell whose value is a Studio shows it (it starts
+    serving in a thread)."""
 
-    def __init__(self, scenario: str, root: Path, host: str = "127.0.0.1", port: int = 0) -> None:
-        self.session = Session(scenario, root)
+    def __init__(
+        self,
+        scenario: str = "gathering",
+        root: Path | None = None,
+        host: str = "127.0.0.1",
+        port: int = 0,
+    ) -> None:
+        self.session = Session(scenario, Path.cwd() if root is None else root)
+        self._thread: threading.Thread | None = None
         self.session.set_tree(scenario_blocks(self.session))
         self.player = Player(self.session)
         self.httpd = ThreadingHTTPServer((host, port), _handler(self))
@@ -127,15 +136,27 @@ class Studio:
             self.player.stop()
             self.httpd.server_close()
 
-    def start(self) -> threading.Thread:
-        """Serve in a thread (for notebooks and tests); returns it."""
-        thread = threading.Thread(target=self.serve, name="studio-server", daemon=True)
-        thread.start()
-        return thread
+    def start(self) -> Studio:
+        """Serve in a thread (for notebooks and tests), once; returns the studio."""
+        if self._thread is None:
+            self._thread = threading.Thread(target=self.serve, name="studio-server", daemon=True)
+            self._thread.start()
+        return self
 
     def shutdown(self) -> None:
-        """Stop serving."""
-        self.httpd.shutdown()
+        """Stop serving (a studio started with :meth:`start`: its thread ends too)."""
+        if self._thread is not None:
+            self.httpd.shutdown()
+            self._thread.join(timeout=10)
+            self._thread = None
+
+    def _repr_html_(self) -> str:
+        """The studio in a notebook's output: served in a thread, shown in a frame."""
+        self.start()
+        return (
+            f'<iframe src="{self.url}" title="pyAutonomousAgent studio" width="100%" '
+            'height="900" style="border: 1px solid #ccc"></iframe>'
+        )
 
     def info(self) -> dict[str, Any]:
         """What the page needs at start."""
