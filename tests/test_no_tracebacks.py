@@ -50,6 +50,7 @@ BASE = {
     "plot": ["plot", "SWEEP", "--measure", "minimum_energy", "--x", "refuel_rate"],
     "measures": ["measures"],
     "tree": ["tree", "gathering"],
+    "studio": ["studio", "gathering", "--no-browser", "--port", "0"],
 }
 
 
@@ -77,6 +78,7 @@ def stubbed(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     import pyautonomousagent.bench
     import pyautonomousagent.experiments
     import pyautonomousagent.experiments.plot
+    import pyautonomousagent.studio
 
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(cli, "simulate", _accept)
@@ -85,6 +87,7 @@ def stubbed(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     monkeypatch.setattr(pyautonomousagent.bench, "stress", _accept)
     monkeypatch.setattr(pyautonomousagent.experiments, "sweep", _accept)
     monkeypatch.setattr(pyautonomousagent.experiments.plot, "plot_measure", _accept)
+    monkeypatch.setattr(pyautonomousagent.studio.Studio, "serve", _accept)
 
 
 def _subcommands() -> dict[str, argparse.ArgumentParser]:

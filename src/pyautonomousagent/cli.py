@@ -225,6 +225,8 @@ def studio_command(args: argparse.Namespace) -> int:
             "&& npm ci && npm run build)", file=sys.stderr,
         )  # fmt: skip
         return 2
+    if not 0 <= args.port <= 65535:
+        raise InputError(f"--port must be a whole number from 0 to 65535, got {args.port}")
     studio = Studio(args.scenario, Path.cwd(), args.host, args.port)
     print(f"pyaa studio: {studio.url} (scenario {args.scenario}; Ctrl-C stops it)", flush=True)
     if not args.no_browser:
