@@ -185,6 +185,8 @@ def test_paused_statuses_equal_the_recorded_trace(client: Client) -> None:
     names = {0: "invalid", 1: "success", 2: "failure", 3: "running"}
     assert frame["follow"]["statuses"] == [names[int(c)] for c in sim.recorder.trace(1)[-1]]
     assert frame["follow"]["agent"] == "drone2"
+    board = frame["follow"]["blackboard"]
+    assert board["number_ticks"] == int(sim.swarm.blackboard["number_ticks"][1]) > 0
     assert frame["active"][0] == 4  # every drone has the root active
     assert frame["x"] == [round(float(v), 3) for v in sim.swarm.columns["x"]]
 

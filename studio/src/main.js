@@ -167,6 +167,10 @@ function showNodes(frame) {
       `${"&nbsp;&nbsp;".repeat(node.depth)}${node.name} <b>${active}</b></div>`;
   });
   box.innerHTML = rows.join("");
+  const board = follow && follow.blackboard ? Object.entries(follow.blackboard) : [];
+  $("blackboard").textContent = board.length
+    ? `blackboard of ${follow.agent}: ` + board.map(([k, v]) => `${k} = ${typeof v === "number" ? +v.toFixed(3) : v}`).join(", ")
+    : "";
   colourBlocks(frame);
 }
 

@@ -277,11 +277,23 @@ def frame_of(sim: Simulation, follow: int | None) -> dict[str, Any]:
         "active": active_counts(sim),
     }
     if follow is not None and 0 <= follow < swarm.size:
-        frame["follow"] = {"agent": swarm.names[follow], "statuses": statuses_of(sim, follow)}
+        frame["follow"] = {
+            "agent": swarm.names[follow],
+            "statuses": statuses_of(sim, follow),
+            "blackboard": {k: _plain(v[follow]) for k, v in swarm.blackboard.items()},
+        }
     frame["nodes"] = [
         {k: n[k] for k in ("name", "type", "depth")} for n in node_list(recorder.nodes)
     ]
     return frame
+
+
+def _plain(value: Any) -> Any:
+    """One blackboard value as JSON has it (a number that is not finite as text)."""
+    item = value.item() if isinstance(value, np.generic) else value
+    if isinstance(item, float) and not math.isfinite(item):
+        return str(item)
+    return item if isinstance(item, bool | int | float | str) else str(item)
 
 
 def _rounded(values: np.ndarray) -> list[float]:
