@@ -20,8 +20,8 @@ function statusField() {
  * without an undo step or a change event (it is no edit). */
 export function showStatus(block, status, active) {
   const field = block.getField(STATUS);
-  if (!field) return;
   const text = `${status === "invalid" || !status ? "" : `● ${status}`} ${active ? `[${active}]` : ""}`;
+  if (!field || field.getValue() === text.trim()) return;
   Blockly.Events.disable();
   try {
     field.setValue(text.trim());

@@ -8,6 +8,8 @@ import { agentPixel, drawWorld, nearestAgent } from "./world.js";
 Blockly.setLocale(En);
 
 const $ = (id) => document.getElementById(id);
+const FRAME_MS = 40; // 25 frames per second while playing, at most
+const IDLE_MS = 300;
 const state = { info: null, ok: false, follow: null, frame: null, playing: false, created: [] };
 
 async function api(path, body, raw) {
@@ -193,6 +195,7 @@ async function pollOnce() {
   const query = state.follow === null ? "" : `?follow=${state.follow}`;
   const frame = await api(`/api/frame${query}`);
   state.frame = frame;
+  state.drawn = (state.drawn || 0) + 1;
   state.playing = frame.playing;
   $("iteration").textContent = `iteration ${frame.iteration} of ${frame.iterations ?? "?"}`;
   drawWorld($("world"), frame, state.info.marks, state.follow);
@@ -202,12 +205,14 @@ async function pollOnce() {
 // One request in flight at a time: a frame that arrives late replaces the one before, so
 // frames are dropped, never queued.
 async function pollLoop() {
+  const start = performance.now();
   try {
     await pollOnce();
   } catch (error) {
     say(error.message, "error");
   }
-  setTimeout(pollLoop, state.playing ? 40 : 300);
+  const period = state.playing ? FRAME_MS : IDLE_MS;
+  setTimeout(pollLoop, Math.max(0, period - (performance.now() - start)));
 }
 
 async function saveTree(format) {
@@ -296,6 +301,7 @@ function testHooks() {
       return { x: box.left + p.x * (box.width / canvas.width), y: box.top + p.y * (box.height / canvas.height) };
     },
     iteration: () => state.frame && state.frame.iteration,
+    framesDrawn: () => state.drawn || 0,
     openCategory() {
       const toolbox = workspace.getToolbox();
       return toolbox.getFlyout().isVisible() ? toolbox.getSelectedItem()?.getId() : null;

@@ -26,6 +26,7 @@ from __future__ import annotations
 import json
 import mimetypes
 import threading
+import time
 from dataclasses import asdict
 from http import HTTPStatus
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -84,13 +85,18 @@ class Player:
         self._thread.join(timeout=5)
 
     def _loop(self) -> None:
-        carry = 0.0
+        """Every 1/PLAYER_RATE s while playing: the iterations due since the last step at
+        ``speed`` (wall time, so the rate holds however long a step takes)."""
+        due, last = 0.0, time.monotonic()
         while not self._stop.wait(1.0 / PLAYER_RATE):
+            now = time.monotonic()
+            elapsed, last = now - last, now
             if not self.playing:
-                carry = 0.0
+                due = 0.0
                 continue
-            carry += self.speed / PLAYER_RATE
-            steps, carry = int(carry), carry - int(carry)
+            due = min(due + self.speed * elapsed, self.speed)  # at most 1 s behind
+            steps = int(due)
+            due -= steps
             try:
                 reached = self.session.advance(steps)
             except REFUSED:

@@ -30,6 +30,8 @@ from pyautonomousagent.studio.trees import Block, Checked, check_blocks, tree_te
 
 #: What a saved tree or run may be called (a file or folder name in the studio's folder).
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,63}")
+#: Most agents a frame carries (the canvas draws the first ones of a larger swarm).
+MAX_DRAWN = 5000
 #: Node status codes as the recorder keeps them.
 STATUS_NAMES = {0: "invalid", 1: "success", 2: "failure", 3: "running"}
 
@@ -269,7 +271,6 @@ def frame_of(sim: Simulation, follow: int | None) -> dict[str, Any]:
         "iteration": int(sim.world.iteration),
         "iterations": int(sim.scenario.iterations),
         "world": [float(sim.scenario.world[0]), float(sim.scenario.world[1])],
-        "names": [swarm.names[i] for i in range(min(swarm.size, 5000))],
         "x": _rounded(columns["x"]),
         "y": _rounded(columns["y"]),
         "heading": _rounded(columns["heading"]) if "heading" in columns else [],
@@ -298,7 +299,7 @@ def _plain(value: Any) -> Any:
 
 def _rounded(values: np.ndarray) -> list[float]:
     """Values for drawing, 3 decimals (the canvas needs no more)."""
-    return [round(float(v), 3) for v in np.asarray(values)[:5000]]
+    return [float(v) for v in np.round(np.asarray(values, dtype=np.float64)[:MAX_DRAWN], 3)]
 
 
 def statuses_of(sim: Simulation, agent: int) -> list[str] | None:
