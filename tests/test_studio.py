@@ -254,3 +254,14 @@ def test_a_notebook_cell_shows_the_studio(tmp_path: Path) -> None:
             assert b"/static/studio.js" in page.read()
     finally:
         studio.shutdown()
+
+
+def test_another_sites_page_cannot_change_anything(studio: Studio, tmp_path: Path) -> None:
+    body = json.dumps({"name": "x", "format": "xml"}).encode()
+    for header, value in (("Origin", "http://example.com"), ("Host", "evil.example:80")):
+        request = urllib.request.Request(studio.url + "api/save-tree", data=body)
+        request.add_header(header, value)
+        with pytest.raises(urllib.error.HTTPError) as refused:
+            urllib.request.urlopen(request, timeout=30)
+        assert refused.value.code == 403
+    assert list(tmp_path.iterdir()) == []

@@ -251,6 +251,9 @@ class _Handler(BaseHTTPRequestHandler):
     def do_POST(self) -> None:  # noqa: N802 - http.server's name
         url = urlparse(self.path)
         session = self.studio.session
+        if not self._same_origin():
+            self._send(HTTPStatus.FORBIDDEN, {"error": "requests come from the studio's page"})
+            return
         body = self._body()
         if body is None:
             return
@@ -274,6 +277,17 @@ class _Handler(BaseHTTPRequestHandler):
             self.send_error(HTTPStatus.NOT_FOUND)
             return
         self._answer(lambda: route(_json(body)))
+
+    def _same_origin(self) -> bool:
+        """Whether a POST comes from the studio's own page: another site's page in the same
+        browser (its Origin) or a name that resolves here (DNS rebinding: its Host) may not
+        change anything."""
+        host = self.headers.get("Host", "")
+        own = urlparse(self.studio.url).hostname
+        if urlparse(f"//{host}").hostname not in ("127.0.0.1", "localhost", "::1", own):
+            return False
+        origin = self.headers.get("Origin")
+        return origin is None or urlparse(origin).netloc == host
 
     def _body(self) -> bytes | None:
         length = int(self.headers.get("Content-Length") or 0)
