@@ -3,7 +3,7 @@
 import * as Blockly from "blockly/core";
 import * as En from "blockly/msg/en";
 import { ROOT, defineBlocks, loadTree, showStatus, toolbox, treeOf } from "./blocks.js";
-import { agentPixel, drawWorld, nearestAgent } from "./world.js";
+import { agentPixel, drawPlot, drawWorld, nearestAgent } from "./world.js";
 
 Blockly.setLocale(En);
 
@@ -191,6 +191,17 @@ function colourBlocks(frame) {
   });
 }
 
+// The live plot's series: per iteration seen, the swarm's mean and lowest energy.
+function record(frame) {
+  if (!frame.energy || !frame.energy.length) return;
+  const series = state.series || (state.series = []);
+  if (series.length && frame.iteration < series[series.length - 1].iteration) series.length = 0;
+  if (series.length && frame.iteration === series[series.length - 1].iteration) return;
+  const values = frame.energy;
+  const mean = values.reduce((a, b) => a + b, 0) / values.length;
+  series.push({ iteration: frame.iteration, mean, low: Math.min(...values) });
+}
+
 async function pollOnce() {
   const query = state.follow === null ? "" : `?follow=${state.follow}`;
   const frame = await api(`/api/frame${query}`);
@@ -199,6 +210,8 @@ async function pollOnce() {
   state.playing = frame.playing;
   $("iteration").textContent = `iteration ${frame.iteration} of ${frame.iterations ?? "?"}`;
   drawWorld($("world"), frame, state.info.marks, state.follow);
+  record(frame);
+  drawPlot($("plot"), state.series, frame.iterations || 1);
   showNodes(frame);
 }
 
@@ -227,7 +240,7 @@ async function saveTree(format) {
 async function saveRun() {
   say("running to the end and saving ...", "");
   try {
-    const result = await api("/api/save-run", { name: $("name").value });
+    const result = await api("/api/save-run", { name: $("name").value, overwrite: $("overwrite").checked });
     say(`saved ${result.folder} (${result.status}); tree ${result.tree}`, "ok");
   } catch (error) {
     say(error.message, "error");

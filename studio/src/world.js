@@ -85,3 +85,26 @@ export function nearestAgent(canvas, frame, event) {
   }
   return best;
 }
+
+/** The live plot: mean (blue) and lowest (red) energy, percent, against the iteration. */
+export function drawPlot(canvas, series, iterations) {
+  const ctx = canvas.getContext("2d");
+  ctx.clearRect(0, 0, canvas.width, canvas.height);
+  ctx.strokeStyle = "#999";
+  ctx.strokeRect(0.5, 0.5, canvas.width - 1, canvas.height - 1);
+  ctx.fillStyle = "#333";
+  ctx.fillText("energy %: mean (blue), lowest (red)", 6, 12);
+  if (!series || series.length < 2) return;
+  const sx = (it) => (it / iterations) * (canvas.width - 2) + 1;
+  const sy = (v) => canvas.height - 2 - (Math.max(0, Math.min(100, v)) / 100) * (canvas.height - 18);
+  for (const [key, colour] of [["mean", "#1e88e5"], ["low", "#c62828"]]) {
+    ctx.beginPath();
+    ctx.strokeStyle = colour;
+    series.forEach((point, i) => {
+      const x = sx(point.iteration);
+      const y = sy(point[key]);
+      if (i === 0) ctx.moveTo(x, y); else ctx.lineTo(x, y);
+    });
+    ctx.stroke();
+  }
+}
