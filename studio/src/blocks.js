@@ -158,7 +158,7 @@ function stackOf(nodes) {
 /** Replace the workspace with the root block holding ``tree`` (null: empty). */
 export function loadTree(workspace, tree) {
   workspace.clear();
-  const root = { type: ROOT, x: 420, y: 20, deletable: false };
+  const root = { type: ROOT, x: 200, y: 20, deletable: false };
   if (tree) root.inputs = { ROOT: { block: stateOf(tree) } };
   Blockly.Events.disable();
   try {

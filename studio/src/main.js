@@ -56,7 +56,7 @@ async function checkTree() {
     const result = await api("/api/tree", { tree });
     setRunnable(result.ok);
     if (result.ok) {
-      say(`the tree can run (${blocks.length} nodes)`, "ok");
+      say(`the tree can run (${blocks.length} nodes): Play runs it from iteration 0`, "ok");
     } else {
       if (result.block >= 0 && blocks[result.block]) blocks[result.block].setWarningText(result.error);
       say(result.error, "error");

@@ -19,7 +19,6 @@ from typing import Any
 
 import numpy as np
 
-from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.inputs import InputError, shown
 from pyautonomousagent.recording import node_list
 from pyautonomousagent.runs import check_target, claim_run, save_run, simulate, streaming
@@ -328,8 +327,3 @@ def active_counts(sim: Simulation) -> list[int]:
         if parent >= 0:
             total[parent] += total[i]
     return [int(v) for v in total]
-
-
-def tree_nodes(tree: Node) -> list[dict[str, Any]]:
-    """The tree's nodes in tick order (name, type, parent, depth), as traces list them."""
-    return node_list(list(tree.walk()))
