@@ -239,6 +239,25 @@ def test_an_invalid_tree_shows_the_message_on_the_block_and_cannot_run(
     for button in ("play", "step", "reset", "save-run"):
         assert browser.find_element("id", button).get_attribute("disabled")
     assert list(tmp_path.iterdir()) == []
+    # Undo (Ctrl+Z, Blockly's) takes the second child out: the tree can run; redo puts it back.
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.keys import Keys
+
+    def keys(*held: str) -> None:
+        chain = ActionChains(browser)
+        for key in held:
+            chain.key_down(key)
+        chain.send_keys("z")
+        for key in reversed(held):
+            chain.key_up(key)
+        chain.perform()
+
+    keys(Keys.CONTROL)
+    wait_for(lambda: "can run (2 nodes)" in browser.find_element("id", "message").text)
+    assert not browser.find_element("id", "play").get_attribute("disabled")
+    keys(Keys.CONTROL, Keys.SHIFT)
+    wait_for(lambda: "needs exactly 1 child" in browser.find_element("id", "message").text)
+    assert browser.find_element("id", "play").get_attribute("disabled")
 
 
 LAUGHS = """<?xml version="1.0"?>
