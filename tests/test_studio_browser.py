@@ -3,8 +3,9 @@
 From an empty canvas the test drags the paper's gathering tree (Fig. 6) block by block out
 of the toolbox (Selenium's pointer actions), runs it, saves the run (8000 iterations, seed
 0), and checks: the saved states equal ``pyaa run gathering --tree SAVED.xml --seed 0`` bit
-for bit and ``pyaa run gathering --seed 0`` in every column (the node names, which blocks
-do not carry, aside); the saved XML loads in ``pyaa run --tree`` and in the real
+for bit and ``pyaa run gathering --seed 0`` in every column, the active leaf compared as
+its node's index (blocks made by hand are named after their types, the packaged file names
+its nodes); the saved XML loads in ``pyaa run --tree`` and in the real
 BehaviorTree.CPP (behaviortreepy). A second test builds an invalid tree and sees the
 block's message, with Run disabled.
 
@@ -179,6 +180,11 @@ def build(browser: Any, node: tuple[str, list], parent: str | None = None) -> No
         build(browser, child, made)
 
 
+def node_indices(table: Any) -> Any:
+    """The ``behaviour`` column as node indices in tick order (null: no leaf ticked)."""
+    return table.column("behaviour").combine_chunks().indices
+
+
 def shape(tree: dict[str, Any]) -> tuple[str, list]:
     return (tree["type"], [shape(child) for child in tree["children"]])
 
@@ -212,6 +218,9 @@ def test_build_the_gathering_tree_from_blocks_run_and_save(
     theirs = read_table(paper / "states.parquet")
     columns = [c for c in ours.column_names if c != "behaviour"]
     assert ours.select(columns).equals(theirs.select(columns))
+    # The active leaf: the same node (its index in tick order) in every row; only the names
+    # differ (blocks made by hand are named after their types, the packaged file names them).
+    assert node_indices(ours).equals(node_indices(theirs))
     assert load_tree(saved).walk() is not None
     btcpp = pytest.importorskip("behaviortreepy", reason="behaviortreepy is not installed")
     from .btcpp_reference import btcpp_factory_with_our_leaves, btcpp_text
