@@ -20,8 +20,11 @@ from pyautonomousagent.bt.vocabulary import tags
 from pyautonomousagent.cli import main
 from pyautonomousagent.inputs import MAX_FILE_BYTES
 from pyautonomousagent.recording import read_table
+from pyautonomousagent.scenarios import names
 from pyautonomousagent.simulation.fit import fitting_leaves
 from pyautonomousagent.studio import Studio
+from pyautonomousagent.studio.server import scenario_blocks
+from pyautonomousagent.studio.session import Session
 from pyautonomousagent.studio.trees import to_document
 
 ITERATIONS = 300
@@ -264,4 +267,17 @@ def test_another_sites_page_cannot_change_anything(studio: Studio, tmp_path: Pat
         with pytest.raises(urllib.error.HTTPError) as refused:
             urllib.request.urlopen(request, timeout=30)
         assert refused.value.code == 403
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("name", names())
+def test_every_scenario_opens_steps_and_draws(name: str, tmp_path: Path) -> None:
+    session = Session(name, tmp_path)
+    checked = session.set_tree(scenario_blocks(session))
+    assert checked.tree is not None, checked.error
+    assert session.advance(3) == 3
+    frame = session.frame(0)
+    json.dumps(frame, allow_nan=False)
+    assert len(frame["x"]) == session.scenario.agents and frame["follow"]["statuses"]
+    assert ("z" in session.sim.swarm.columns) == bool(frame["altitude"])  # type: ignore[union-attr]
     assert list(tmp_path.iterdir()) == []

@@ -59,8 +59,15 @@ export function drawWorld(canvas, frame, marks, follow) {
   ctx.strokeStyle = "#999";
   ctx.strokeRect(t.sx(0), t.sy(frame.world[1]), frame.world[0] * t.scale, frame.world[1] * t.scale);
   for (const mark of marks || []) drawMark(ctx, t, mark);
+  const altitude = frame.altitude || [];
   for (let i = 0; i < frame.x.length; i++) {
-    drawDrone(ctx, t.sx(frame.x[i]), t.sy(frame.y[i]), frame.heading[i] ?? 0, i === follow);
+    const x = t.sx(frame.x[i]);
+    const y = t.sy(frame.y[i]);
+    drawDrone(ctx, x, y, frame.heading[i] ?? 0, i === follow);
+    if (altitude.length && (i === follow || frame.x.length <= 20)) {
+      ctx.fillStyle = "#333";
+      ctx.fillText(`z ${altitude[i].toFixed(1)}`, x + 8, y + 10);
+    }
   }
 }
 

@@ -274,6 +274,7 @@ def frame_of(sim: Simulation, follow: int | None) -> dict[str, Any]:
         "y": _rounded(columns["y"]),
         "heading": _rounded(columns["heading"]) if "heading" in columns else [],
         "energy": _rounded(columns["energy"]) if "energy" in columns else [],
+        "altitude": _rounded(columns["z"]) if "z" in columns else [],
         "active": active_counts(sim),
     }
     if follow is not None and 0 <= follow < swarm.size:
