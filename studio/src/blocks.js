@@ -119,8 +119,11 @@ export function treeOf(workspace) {
   const root = workspace.getBlocksByType(ROOT, false)[0];
   const tops = root ? chain(root.getInputTargetBlock("ROOT")) : [];
   const order = [];
+  const names = new Set(); // a copied block keeps its name: the copy goes without
   const visit = (block) => {
     order.push(block);
+    const name = block.data && !names.has(block.data) ? block.data : null;
+    if (name) names.add(name);
     const ports = {};
     for (const input of block.inputList) {
       for (const field of input.fieldRow) {
@@ -130,7 +133,7 @@ export function treeOf(workspace) {
     const kids = block.getInput("CHILDREN") ? chain(block.getInputTargetBlock("CHILDREN")) : [];
     return {
       type: block.type.slice(3),
-      name: block.data || null,
+      name,
       ports,
       children: kids.map(visit),
     };
