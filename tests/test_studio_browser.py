@@ -125,10 +125,10 @@ def open_empty(browser: Any, studio: Studio) -> None:
     wait_for(lambda: "empty" in browser.find_element("id", "message").text)
 
 
-def drag(browser: Any, start: dict[str, float], end: dict[str, float]) -> None:
+def drag(browser: Any, start: dict[str, float], end: dict[str, float]) -> bool:
     """Press at ``start`` and move toward ``end`` (viewport pixels), then move so that the
     dragged block's connection lands on ``end``, and release: real pointer events, as a
-    mouse makes them."""
+    mouse makes them. False if no block was dragged (the pointer is released)."""
     from selenium.webdriver.common.action_chains import ActionChains
 
     press = ActionChains(browser)
@@ -141,36 +141,54 @@ def drag(browser: Any, start: dict[str, float], end: dict[str, float]) -> None:
         y = start["y"] + (end["y"] + 40 - start["y"]) * k / 8
         pointer.move_to_location(int(x), int(y))
     press.perform()
-    corner = wait_for(lambda: browser.execute_script("return window.studio.dragged()"), 5)
+    try:
+        corner = wait_for(lambda: browser.execute_script("return window.studio.dragged()"), 3)
+    except AssertionError:
+        corner = None
     release = ActionChains(browser)
     pointer = release.w3c_actions.pointer_action
-    pointer.move_to_location(int(x + end["x"] - corner["x"]), int(y + end["y"] - corner["y"]))
-    pointer.pause(0.1)
+    if corner is not None:
+        pointer.move_to_location(int(x + end["x"] - corner["x"]), int(y + end["y"] - corner["y"]))
+        pointer.pause(0.1)
     pointer.pointer_up()
     release.perform()
+    return corner is not None
+
+
+def open_category(browser: Any, category: str) -> None:
+    """Open a toolbox category (a click on the open one would close it)."""
+    script = "return window.studio.openCategory()"
+    for _ in range(3):
+        if browser.execute_script(script) == category:
+            return
+        browser.find_element("id", category).click()
+    assert browser.execute_script(script) == category
 
 
 def add_block(browser: Any, kind: str, parent: str | None) -> str:
     """Open the toolbox category of ``kind``, drag its block under ``parent`` (None: the
-    Tree block) as the last child; the new block's id."""
+    Tree block) as the last child; the new block's id. Each drag starts once the page has
+    checked the tree (a check may show or hide warnings, which moves blocks)."""
     category = "cat-mission"
-    if kind[0].isupper() and not kind.startswith(("Action_", "Condition_")):
+    if not kind.startswith(("Action_", "Condition_")):
         category = "cat-decorators" if kind in DECORATORS else "cat-control"
-    open_category = "return window.studio.openCategory()"
-    for _ in range(3):  # a click on the open category closes it
-        if browser.execute_script(open_category) == category:
-            break
-        browser.find_element("id", category).click()
-    assert browser.execute_script(open_category) == category
     block_type = f"bt_{kind}"
-    start = wait_for(lambda: browser.execute_script(
-        "try { return window.studio.flyoutBlock(arguments[0]); } catch (e) { return null; }",
-        block_type))  # fmt: skip
-    end = browser.execute_script("return window.studio.dropPoint(arguments[0])", parent)
     newest = "return window.studio.newest(arguments[0])"
-    before = browser.execute_script(newest, block_type)
-    drag(browser, {"x": start["x"] + 12, "y": start["y"] + 8}, end)
-    return wait_for(lambda: (made := browser.execute_script(newest, block_type)) != before and made)
+    for _ in range(3):
+        wait_for(lambda: not browser.execute_script("return window.studio.busy()"))
+        open_category(browser, category)
+        start = wait_for(lambda: browser.execute_script(
+            "try { return window.studio.flyoutBlock(arguments[0]); } catch (e) { return null; }",
+            block_type))  # fmt: skip
+        end = browser.execute_script("return window.studio.dropPoint(arguments[0])", parent)
+        before = browser.execute_script(newest, block_type)
+        if drag(browser, {"x": start["x"] + 12, "y": start["y"] + 8}, end):
+            return wait_for(
+                lambda before=before: (
+                    (made := browser.execute_script(newest, block_type)) != before and made
+                )
+            )
+    raise AssertionError(f"no {kind} block could be dragged out of the toolbox")
 
 
 def build(browser: Any, node: tuple[str, list], parent: str | None = None) -> None:

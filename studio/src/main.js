@@ -43,6 +43,16 @@ let checkTimer = null;
 let workspace = null;
 
 async function checkTree() {
+  checkTimer = null;
+  state.checking = true;
+  try {
+    await checkNow();
+  } finally {
+    state.checking = false;
+  }
+}
+
+async function checkNow() {
   const { tree, blocks, roots } = treeOf(workspace);
   for (const block of workspace.getAllBlocks(false)) block.setWarningText(null);
   if (roots > 1) {
@@ -324,6 +334,8 @@ function testHooks() {
       return icon ? icon.getText() : null;
     },
     runnable: () => state.ok,
+    // Whether a check of the tree is pending or under way (it may move blocks: warnings).
+    busy: () => checkTimer !== null || state.checking,
   };
 }
 
