@@ -8,6 +8,7 @@
 #   make test   installs the test dependencies (and the [docs], [x8], [dask], [video], [fast],
 #               [pandas] and [experiments] extras, and chromium when missing) into .venv and
 #               runs the suite
+#   (demo and test also build the studio's front-end with npm: pyaa studio, docs/studio.md)
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -19,11 +20,17 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
-$(VENV)/.installed: pyproject.toml | $(BIN)/python
+# The studio's front-end (pyaa studio): Blockly and the page's code, bundled by esbuild into
+# the package (src/pyautonomousagent/studio/static/, shipped in the wheel); needs Node.js and npm.
+STUDIO_BUNDLE := src/pyautonomousagent/studio/static/studio.js
+$(STUDIO_BUNDLE): studio/package.json studio/package-lock.json studio/build.mjs $(wildcard studio/src/*.js)
+	cd studio && npm ci --no-audit --no-fund && npm run build
+
+$(VENV)/.installed: pyproject.toml $(STUDIO_BUNDLE) | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[fast,pandas]"
 	touch $@
 
-$(VENV)/.installed-test: pyproject.toml | $(BIN)/python
+$(VENV)/.installed-test: pyproject.toml $(STUDIO_BUNDLE) | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[test,docs,x8,dask,video,pandas,fast,experiments]"
 	touch $@ $(VENV)/.installed $(VENV)/.installed-docs
 
@@ -60,10 +67,12 @@ browser:
 	  fi; \
 	fi
 
+# The suite on two workers (pytest-xdist): CI has 2 cores, and a worker waits on numba's
+# compiles and on subprocesses much of the time.
 test: $(VENV)/.installed-test browser
 	$(BIN)/ruff check src tests
 	$(BIN)/mypy src
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n 2
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check src tests

@@ -51,6 +51,7 @@ BASE = {
     "measures": ["measures"],
     "analyse": ["analyse", "DESIGN"],
     "tree": ["tree", "gathering"],
+    "studio": ["studio", "gathering", "--no-browser", "--port", "0"],
 }
 
 
@@ -81,6 +82,7 @@ def stubbed(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     import pyautonomousagent.experiments
     import pyautonomousagent.experiments.plot
     import pyautonomousagent.experiments.sensitivity
+    import pyautonomousagent.studio
 
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(cli, "simulate", _accept)
@@ -90,6 +92,7 @@ def stubbed(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     monkeypatch.setattr(pyautonomousagent.experiments, "sweep", _accept)
     monkeypatch.setattr(pyautonomousagent.experiments.plot, "plot_measure", _accept)
     monkeypatch.setattr(pyautonomousagent.experiments.sensitivity, "plot_indices", _accept)
+    monkeypatch.setattr(pyautonomousagent.studio.Studio, "serve", _accept)
 
 
 def _subcommands() -> dict[str, argparse.ArgumentParser]:

@@ -132,6 +132,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_replay(sub)
     _add_verify(sub)
     _add_experiments(sub)
+    _add_studio(sub)
     tree = sub.add_parser("tree", help="print, draw or convert a behaviour tree")
     tree.add_argument(
         "source",
@@ -203,6 +204,39 @@ def verify_command(folder: Path) -> int:
         f"{summary.get('iterations_done', '?')} iterations; its {len(summary['files'])} files "
         "match run.json"
     )
+    return 0
+
+
+def _add_studio(sub: Any) -> None:
+    studio = sub.add_parser("studio", help="build a tree from blocks in the browser, run it live")
+    studio.add_argument(
+        "scenario", nargs="?", default="gathering",
+        help="a registered scenario name or a scenario .yaml file (default: gathering)",
+    )  # fmt: skip
+    studio.add_argument("--port", type=int, default=8765, help="port (default 8765; 0: any)")
+    studio.add_argument("--host", default="127.0.0.1", help="address (default 127.0.0.1)")
+    studio.add_argument("--no-browser", action="store_true", help="do not open a browser")
+
+
+def studio_command(args: argparse.Namespace) -> int:
+    """``pyaa studio``: serve the studio in the current folder until Ctrl-C."""
+    from pyautonomousagent.studio import Studio, has_bundle
+
+    if not has_bundle():
+        print(
+            "pyaa: error: the studio's front-end is not built; run 'make demo' (or: cd studio "
+            "&& npm ci && npm run build)", file=sys.stderr,
+        )  # fmt: skip
+        return 2
+    if not 0 <= args.port <= 65535:
+        raise InputError(f"--port must be a whole number from 0 to 65535, got {args.port}")
+    studio = Studio(args.scenario, Path.cwd(), args.host, args.port)
+    print(f"pyaa studio: {studio.url} (scenario {args.scenario}; Ctrl-C stops it)", flush=True)
+    if not args.no_browser:
+        import webbrowser
+
+        webbrowser.open(studio.url)
+    studio.serve()
     return 0
 
 
@@ -1340,6 +1374,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return replay_command(args)
         if args.command == "verify":
             return verify_command(args.run_dir)
+        if args.command == "studio":
+            return studio_command(args)
         return tree_command(args)
     except USER_ERRORS as error:
         print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)

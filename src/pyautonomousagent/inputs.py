@@ -101,9 +101,19 @@ def read_text(path: str | Path, what: str, limit: int = MAX_FILE_BYTES) -> str:
     except OSError as error:
         reason = error.strerror or type(error).__name__
         raise InputError(f"cannot read {what} {path}: {reason}; check the path") from None
+    return decode_text(data, str(path), what, limit)
+
+
+def decode_text(data: bytes, name: str, what: str, limit: int = MAX_FILE_BYTES) -> str:
+    """``data`` (the content of ``name``, a ``what``) as text, with :func:`read_text`'s
+    checks: for content that arrives otherwise than as a file (an upload).
+
+    Raises:
+        InputError: ``data`` is larger than ``limit`` bytes, or is not UTF-8.
+    """
     if len(data) > limit:
         raise InputError(
-            f"{path}: the {what} is larger than {limit // 1000} KB; "
+            f"{name}: the {what} is larger than {limit // 1000} KB; "
             "a scenario or tree file is a few KB, check that this is the right file"
         )
     try:
@@ -111,7 +121,7 @@ def read_text(path: str | Path, what: str, limit: int = MAX_FILE_BYTES) -> str:
     except UnicodeDecodeError as error:
         line = data[: error.start].count(b"\n") + 1
         raise InputError(
-            f"{path}:{line}: the {what} is not UTF-8 text (byte {error.start}); save it as UTF-8"
+            f"{name}:{line}: the {what} is not UTF-8 text (byte {error.start}); save it as UTF-8"
         ) from None
 
 

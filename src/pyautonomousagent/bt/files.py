@@ -24,7 +24,7 @@ from pyautonomousagent.bt.document import (
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.xml_format import read_xml, write_xml
 from pyautonomousagent.bt.yaml_format import read_yaml, write_yaml
-from pyautonomousagent.inputs import InputError, read_text
+from pyautonomousagent.inputs import InputError, decode_text, read_text
 
 FORMATS = {".xml": "xml", ".yaml": "yaml", ".yml": "yaml"}
 
@@ -58,11 +58,24 @@ def read_document(path: str | Path) -> Document:
     try:
         text = read_text(path, "tree file")  # bounded size, UTF-8
     except InputError as error:
-        problem, _, fix = str(error).rpartition("; ")
-        raise TreeFileError(
-            str(path), 0, f"cannot read the file ({problem})", fix or "check the path"
-        ) from None
+        raise _unreadable(str(path), error) from None
     return parse_document(text, fmt, str(path))
+
+
+def document_from_bytes(data: bytes, name: str) -> Document:
+    """The tree file ``name`` whose content is ``data`` (an upload), with
+    :func:`read_document`'s checks (size, UTF-8, format by ending, XML attacks refused)."""
+    fmt = file_format(name)
+    try:
+        text = decode_text(data, name, "tree file")
+    except InputError as error:
+        raise _unreadable(name, error) from None
+    return parse_document(text, fmt, name)
+
+
+def _unreadable(name: str, error: InputError) -> TreeFileError:
+    problem, _, fix = str(error).rpartition("; ")
+    return TreeFileError(name, 0, f"cannot read the file ({problem})", fix or "check the path")
 
 
 def load_tree(path: str | Path) -> Node:

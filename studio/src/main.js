@@ -1,0 +1,351 @@
+// The studio page: the block editor (Blockly), the parameters, the live canvas and the
+// followed drone's tree. Talks to the server of pyautonomousagent.studio (JSON over HTTP).
+import * as Blockly from "blockly/core";
+import * as En from "blockly/msg/en";
+import { ROOT, defineBlocks, loadTree, showStatus, toolbox, treeOf } from "./blocks.js";
+import { agentPixel, drawPlot, drawWorld, nearestAgent } from "./world.js";
+
+Blockly.setLocale(En);
+
+const $ = (id) => document.getElementById(id);
+const FRAME_MS = 40; // 25 frames per second while playing, at most
+const IDLE_MS = 300;
+const state = { info: null, ok: false, follow: null, frame: null, playing: false, created: [] };
+
+async function api(path, body, raw) {
+  const options = body === undefined ? {} : {
+    method: "POST",
+    body: raw ? body : JSON.stringify(body),
+    headers: { "Content-Type": raw ? "application/octet-stream" : "application/json" },
+  };
+  const response = await fetch(path, options);
+  const data = await response.json();
+  if (!response.ok) throw new Error(data.error || response.statusText);
+  return data;
+}
+
+function say(text, kind) {
+  const box = $("message");
+  box.textContent = text;
+  box.className = kind || "";
+}
+
+function setRunnable(ok) {
+  state.ok = ok;
+  for (const id of ["play", "step", "reset", "save-run", "save-xml", "save-yaml"]) {
+    $(id).disabled = !ok;
+  }
+}
+
+// --- the tree -------------------------------------------------------------------------
+
+let checkTimer = null;
+let workspace = null;
+
+async function checkTree() {
+  checkTimer = null;
+  state.checking = true;
+  try {
+    await checkNow();
+  } finally {
+    state.checking = false;
+  }
+}
+
+async function checkNow() {
+  const { tree, blocks, roots } = treeOf(workspace);
+  for (const block of workspace.getAllBlocks(false)) block.setWarningText(null);
+  if (roots > 1) {
+    setRunnable(false);
+    const text = `the Tree block holds ${roots} nodes; a tree has one root: put them into a Sequence or Fallback`;
+    blocks[0].setWarningText(text);
+    say(text, "error");
+    return;
+  }
+  try {
+    const result = await api("/api/tree", { tree });
+    setRunnable(result.ok);
+    if (result.ok) {
+      say(`the tree can run (${blocks.length} nodes): Play runs it from iteration 0`, "ok");
+    } else {
+      if (result.block >= 0 && blocks[result.block]) blocks[result.block].setWarningText(result.error);
+      say(result.error, "error");
+    }
+  } catch (error) {
+    setRunnable(false);
+    say(error.message, "error");
+  }
+}
+
+function scheduleCheck() {
+  clearTimeout(checkTimer);
+  checkTimer = setTimeout(checkTree, 250);
+}
+
+function startEditor(info) {
+  defineBlocks(info.palette);
+  workspace = Blockly.inject($("blockly"), {
+    toolbox: toolbox(info.palette),
+    media: "/static/media/",
+    sounds: false,
+    trashcan: true,
+    move: { scrollbars: true, drag: true, wheel: true },
+    zoom: { controls: true, startScale: 0.8 },
+  });
+  workspace.addChangeListener((event) => {
+    if (event.type === Blockly.Events.BLOCK_CREATE) state.created.push(...event.ids);
+    if (!event.isUiEvent) scheduleCheck();
+  });
+  loadTree(workspace, info.tree);
+  scheduleCheck();
+}
+
+async function upload(file) {
+  try {
+    const data = await api(`/api/upload?name=${encodeURIComponent(file.name)}`, file, true);
+    loadTree(workspace, data.tree);
+    scheduleCheck();
+  } catch (error) {
+    say(error.message, "error");
+  }
+}
+
+// --- parameters -----------------------------------------------------------------------
+
+function buildSettings(schema) {
+  $("scenario").textContent = `${schema.scenario}: ${schema.description}`;
+  $("agents").value = schema.agents;
+  $("iterations").value = schema.iterations;
+  const box = $("params");
+  for (const p of schema.parameters) {
+    const row = document.createElement("div");
+    row.className = "param";
+    const range = p.minimum !== null || p.maximum !== null
+      ? ` [${p.minimum ?? "-inf"} .. ${p.maximum ?? "inf"}]` : "";
+    row.innerHTML = `<label></label><input><small></small>`;
+    row.children[0].textContent = p.name;
+    row.children[0].title = `${p.owner}: ${p.doc}`;
+    row.children[1].value = p.value;
+    row.children[1].dataset.param = p.name;
+    row.children[1].dataset.type = p.type;
+    row.children[2].textContent = `${p.unit}${range}`;
+    box.appendChild(row);
+  }
+}
+
+function readSettings() {
+  const parameters = {};
+  for (const input of document.querySelectorAll("#params input")) {
+    const text = input.value.trim();
+    parameters[input.dataset.param] = input.dataset.type === "str" ? text
+      : input.dataset.type === "bool" ? text === "true" : text;
+  }
+  return { parameters, agents: $("agents").value, iterations: $("iterations").value, seed: $("seed").value };
+}
+
+async function applySettings() {
+  try {
+    await api("/api/settings", readSettings());
+    await checkTree();
+    if (state.ok) await control("reset");
+    say("settings applied; the run is reset", "ok");
+  } catch (error) {
+    say(error.message, "error");
+  }
+}
+
+// --- the run --------------------------------------------------------------------------
+
+async function control(action, extra) {
+  try {
+    const result = await api("/api/control", { action, speed: Number($("speed").value), ...extra });
+    state.playing = result.playing;
+    await pollOnce();
+  } catch (error) {
+    say(error.message, "error");
+  }
+}
+
+function showNodes(frame) {
+  const box = $("nodes");
+  const follow = frame.follow;
+  $("follow").textContent = follow
+    ? `following ${follow.agent}${follow.statuses ? "" : " (not traced)"}`
+    : "Click a drone to follow it; the numbers are how many agents have each node active.";
+  const rows = (frame.nodes || []).map((node, i) => {
+    const status = follow && follow.statuses ? follow.statuses[i] : "invalid";
+    const active = frame.active ? frame.active[i] : 0;
+    return `<div data-node="${i}" data-status="${status}"><span class="st ${status}"></span>` +
+      `${"&nbsp;&nbsp;".repeat(node.depth)}${node.name} <b>${active}</b></div>`;
+  });
+  box.innerHTML = rows.join("");
+  const board = follow && follow.blackboard ? Object.entries(follow.blackboard) : [];
+  $("blackboard").textContent = board.length
+    ? `blackboard of ${follow.agent}: ` + board.map(([k, v]) => `${k} = ${typeof v === "number" ? +v.toFixed(3) : v}`).join(", ")
+    : "";
+  colourBlocks(frame);
+}
+
+// The blocks show the followed agent's statuses and the active counts while the run's tree
+// is the one on the canvas (an edit resets the run).
+function colourBlocks(frame) {
+  const { blocks } = treeOf(workspace);
+  const nodes = frame.nodes || [];
+  const follow = frame.follow && frame.follow.statuses;
+  blocks.forEach((block, i) => {
+    if (nodes.length === blocks.length) {
+      showStatus(block, follow ? follow[i] : "invalid", frame.active ? frame.active[i] : 0);
+    } else {
+      showStatus(block, "invalid", 0);
+    }
+  });
+}
+
+// The live plot's series: per iteration seen, the swarm's mean and lowest energy.
+function record(frame) {
+  if (!frame.energy || !frame.energy.length) return;
+  const series = state.series || (state.series = []);
+  if (series.length && frame.iteration < series[series.length - 1].iteration) series.length = 0;
+  if (series.length && frame.iteration === series[series.length - 1].iteration) return;
+  const values = frame.energy;
+  const mean = values.reduce((a, b) => a + b, 0) / values.length;
+  series.push({ iteration: frame.iteration, mean, low: Math.min(...values) });
+}
+
+async function pollOnce() {
+  const query = state.follow === null ? "" : `?follow=${state.follow}`;
+  const frame = await api(`/api/frame${query}`);
+  state.frame = frame;
+  state.drawn = (state.drawn || 0) + 1;
+  state.playing = frame.playing;
+  $("iteration").textContent = `iteration ${frame.iteration} of ${frame.iterations ?? "?"}`;
+  drawWorld($("world"), frame, state.info.marks, state.follow);
+  record(frame);
+  drawPlot($("plot"), state.series, frame.iterations || 1);
+  showNodes(frame);
+}
+
+// One request in flight at a time: a frame that arrives late replaces the one before, so
+// frames are dropped, never queued.
+async function pollLoop() {
+  const start = performance.now();
+  try {
+    await pollOnce();
+  } catch (error) {
+    say(error.message, "error");
+  }
+  const period = state.playing ? FRAME_MS : IDLE_MS;
+  setTimeout(pollLoop, Math.max(0, period - (performance.now() - start)));
+}
+
+async function saveTree(format) {
+  try {
+    const result = await api("/api/save-tree", { name: $("name").value, format });
+    say(`wrote ${result.file}`, "ok");
+  } catch (error) {
+    say(error.message, "error");
+  }
+}
+
+async function saveRun() {
+  say("running to the end and saving ...", "");
+  try {
+    const result = await api("/api/save-run", { name: $("name").value, overwrite: $("overwrite").checked });
+    say(`saved ${result.folder} (${result.status}); tree ${result.tree}`, "ok");
+  } catch (error) {
+    say(error.message, "error");
+  }
+}
+
+function wire() {
+  $("start-scenario").onclick = () => { loadTree(workspace, state.info.tree); scheduleCheck(); };
+  $("start-empty").onclick = () => { loadTree(workspace, null); scheduleCheck(); };
+  $("upload").onchange = (event) => event.target.files[0] && upload(event.target.files[0]);
+  $("save-xml").onclick = () => saveTree("xml");
+  $("save-yaml").onclick = () => saveTree("yaml");
+  $("save-run").onclick = saveRun;
+  $("apply").onclick = applySettings;
+  $("play").onclick = () => control("play");
+  $("pause").onclick = () => control("pause");
+  $("step").onclick = () => control("step", { steps: 1 });
+  $("reset").onclick = () => control("reset");
+  $("speed").onchange = () => state.playing && control("play");
+  $("world").onclick = (event) => {
+    const agent = nearestAgent($("world"), state.frame, event);
+    state.follow = agent;
+    pollOnce();
+  };
+}
+
+// Helpers for the browser test (positions on the screen; the test then drags with real
+// pointer events).
+function testHooks() {
+  const screen = (ws, x, y) => Blockly.utils.svgMath.wsToScreenCoordinates(
+    ws, new Blockly.utils.Coordinate(x, y));
+  window.studio = {
+    workspace: () => workspace,
+    flyoutBlock(type) {
+      const flyout = workspace.getToolbox().getFlyout();
+      flyout.scrollToStart();
+      Blockly.renderManagement.triggerQueuedRenders(flyout.getWorkspace());
+      const block = flyout.getWorkspace().getTopBlocks(false).find((b) => b.type === type);
+      const c = block.previousConnection;
+      const p = screen(flyout.getWorkspace(), c.x, c.y);
+      return { x: p.x, y: p.y };
+    },
+    newest(type) {
+      const ids = state.created.filter((id) => workspace.getBlockById(id)?.type === type);
+      return ids[ids.length - 1];
+    },
+    dropPoint(id) {
+      Blockly.renderManagement.triggerQueuedRenders(workspace);
+      const block = id ? workspace.getBlockById(id) : workspace.getBlocksByType(ROOT, false)[0];
+      const input = block.getInput("CHILDREN") || block.getInput("ROOT");
+      let connection = input.connection;
+      const stack = block.getInputTargetBlock(input.name);
+      if (stack) connection = stack.lastConnectionInStack(true) || connection;
+      const p = screen(workspace, connection.x, connection.y);
+      return { x: p.x, y: p.y };
+    },
+    // The dragged block's previous connection, on the screen.
+    dragged() {
+      const block = Blockly.common.getSelected();
+      if (!block || !workspace.isDragging() || !block.getRelativeToSurfaceXY) return null;
+      const xy = block.getRelativeToSurfaceXY();
+      const offset = block.previousConnection.getOffsetInBlock();
+      const p = screen(workspace, xy.x + offset.x, xy.y + offset.y);
+      return { x: p.x, y: p.y };
+    },
+    tree: () => treeOf(workspace).tree,
+    agentPoint(i) {
+      const canvas = $("world");
+      const p = agentPixel(canvas, state.frame, i);
+      const box = canvas.getBoundingClientRect();
+      return { x: box.left + p.x * (box.width / canvas.width), y: box.top + p.y * (box.height / canvas.height) };
+    },
+    iteration: () => state.frame && state.frame.iteration,
+    framesDrawn: () => state.drawn || 0,
+    openCategory() {
+      const toolbox = workspace.getToolbox();
+      return toolbox.getFlyout().isVisible() ? toolbox.getSelectedItem()?.getId() : null;
+    },
+    warning(id) {
+      const icon = workspace.getBlockById(id).getIcon(Blockly.icons.IconType.WARNING);
+      return icon ? icon.getText() : null;
+    },
+    runnable: () => state.ok,
+    // Whether a check of the tree is pending or under way (it may move blocks: warnings).
+    busy: () => checkTimer !== null || state.checking,
+  };
+}
+
+async function main() {
+  state.info = await api("/api/info");
+  buildSettings(state.info.schema);
+  startEditor(state.info);
+  wire();
+  testHooks();
+  pollLoop();
+}
+
+main().catch((error) => say(error.message, "error"));

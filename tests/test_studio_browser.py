@@ -1,0 +1,395 @@
+"""The studio in a real headless Chromium, offline, driven with real pointer events.
+
+From an empty canvas the test drags the paper's gathering tree (Fig. 6) block by block out
+of the toolbox (Selenium's pointer actions), runs it, saves the run (8000 iterations, seed
+0), and checks: the saved states equal ``pyaa run gathering --tree SAVED.xml --seed 0`` bit
+for bit and ``pyaa run gathering --seed 0`` in every column, the active leaf compared as
+its node's index (blocks made by hand are named after their types, the packaged file names
+its nodes); the saved XML loads in ``pyaa run --tree`` and in the real
+BehaviorTree.CPP (behaviortreepy). A second test builds an invalid tree and sees the
+block's message, with Run disabled.
+
+Needs Debian's ``chromium`` and ``chromium-driver``, selenium, and the built front-end
+(``make test`` builds it); skipped, with the reason, without them.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from pyautonomousagent.bt.files import load_tree
+from pyautonomousagent.cli import main
+from pyautonomousagent.recording import read_table
+from pyautonomousagent.studio import Studio, has_bundle
+
+CHROMIUM = "/usr/bin/chromium"
+GATHERING = (
+    "ReactiveSequence", [
+        ("Action_Transmit_Shared_Data_S", []),
+        ("ReactiveFallback", [
+            ("Sequence", [
+                ("Condition_Gathering_Moment", []),
+                ("Action_Transmit_Gathering_Message_S", []),
+            ]),
+            ("Sequence", [
+                ("Condition_Low_Energy_Level", []),
+                ("Action_Set_Destination_Equal_To_Refueling_S", []),
+                ("Fallback", [
+                    ("ReactiveSequence", [
+                        ("Inverter", [("Condition_Destination_Reached", [])]),
+                        ("Action_Navigate_To_Destination_A", []),
+                    ]),
+                    ("Sequence", [
+                        ("Action_Refuel_A", []),
+                        ("Action_Set_Destination_Equal_To_Surveillance_S", []),
+                    ]),
+                ]),
+            ]),
+            ("Action_Navigate_To_Destination_A", []),
+        ]),
+    ],
+)  # fmt: skip
+"""The paper's gathering tree (Fig. 6): node type, children."""
+DECORATORS = {"Inverter"}
+
+
+def _driver_path() -> str | None:
+    return shutil.which("chromedriver") or (
+        "/usr/bin/chromedriver" if Path("/usr/bin/chromedriver").exists() else None
+    )
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
+    if not Path(CHROMIUM).exists() or _driver_path() is None:
+        pytest.skip("no chromium/chromedriver: apt-get install chromium chromium-driver")
+    if not has_bundle():
+        pytest.skip("the studio's front-end is not built: cd studio && npm ci && npm run build")
+    from selenium.webdriver.chrome.service import Service
+
+    options = webdriver.ChromeOptions()
+    options.binary_location = CHROMIUM
+    profile = tempfile.mkdtemp(prefix="pyaa-chromium-")
+    for flag in (
+        "--headless=new",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--window-size=1500,2000",
+        # Offline: every host but the studio's resolves to nothing, every proxy is refused.
+        "--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1",
+        "--proxy-server=http://127.0.0.1:9",
+        f"--user-data-dir={profile}",
+    ):
+        options.add_argument(flag)
+    driver = webdriver.Chrome(service=Service(_driver_path()), options=options)
+    yield driver
+    driver.quit()
+    shutil.rmtree(profile, ignore_errors=True)
+
+
+@pytest.fixture
+def studio(tmp_path: Path) -> Iterator[Studio]:
+    server = Studio("gathering", tmp_path)
+    server.start()
+    yield server
+    server.shutdown()
+
+
+def wait_for(check: Callable[[], Any], seconds: float = 20.0) -> Any:
+    """``check()``'s first truthy value within ``seconds``; fails the test otherwise."""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        value = check()
+        if value:
+            return value
+        time.sleep(0.1)
+    raise AssertionError(f"not reached in {seconds} s: {check}")
+
+
+def open_empty(browser: Any, studio: Studio) -> None:
+    browser.get(studio.url)
+    wait_for(lambda: browser.execute_script("return !!window.studio"))
+    browser.find_element("id", "start-empty").click()
+    wait_for(lambda: "empty" in browser.find_element("id", "message").text)
+
+
+def drag(browser: Any, start: dict[str, float], end: dict[str, float]) -> bool:
+    """Press at ``start`` and move toward ``end`` (viewport pixels), then move so that the
+    dragged block's connection lands on ``end``, and release: real pointer events, as a
+    mouse makes them. False if no block was dragged (the pointer is released)."""
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    press = ActionChains(browser)
+    pointer = press.w3c_actions.pointer_action
+    pointer.move_to_location(int(start["x"]), int(start["y"]))
+    pointer.pointer_down()
+    x, y = start["x"], start["y"]
+    for k in range(1, 9):
+        x = start["x"] + (end["x"] + 40 - start["x"]) * k / 8
+        y = start["y"] + (end["y"] + 40 - start["y"]) * k / 8
+        pointer.move_to_location(int(x), int(y))
+    press.perform()
+    try:
+        corner = wait_for(lambda: browser.execute_script("return window.studio.dragged()"), 3)
+    except AssertionError:
+        corner = None
+    release = ActionChains(browser)
+    pointer = release.w3c_actions.pointer_action
+    if corner is not None:
+        pointer.move_to_location(int(x + end["x"] - corner["x"]), int(y + end["y"] - corner["y"]))
+        pointer.pause(0.1)
+    pointer.pointer_up()
+    release.perform()
+    return corner is not None
+
+
+def open_category(browser: Any, category: str) -> None:
+    """Open a toolbox category (a click on the open one would close it)."""
+    script = "return window.studio.openCategory()"
+    for _ in range(3):
+        if browser.execute_script(script) == category:
+            return
+        browser.find_element("id", category).click()
+    assert browser.execute_script(script) == category
+
+
+def add_block(browser: Any, kind: str, parent: str | None) -> str:
+    """Open the toolbox category of ``kind``, drag its block under ``parent`` (None: the
+    Tree block) as the last child; the new block's id. Each drag starts once the page has
+    checked the tree (a check may show or hide warnings, which moves blocks)."""
+    category = "cat-mission"
+    if not kind.startswith(("Action_", "Condition_")):
+        category = "cat-decorators" if kind in DECORATORS else "cat-control"
+    block_type = f"bt_{kind}"
+    newest = "return window.studio.newest(arguments[0])"
+    for _ in range(3):
+        wait_for(lambda: not browser.execute_script("return window.studio.busy()"))
+        open_category(browser, category)
+        start = wait_for(lambda: browser.execute_script(
+            "try { return window.studio.flyoutBlock(arguments[0]); } catch (e) { return null; }",
+            block_type))  # fmt: skip
+        end = browser.execute_script("return window.studio.dropPoint(arguments[0])", parent)
+        before = browser.execute_script(newest, block_type)
+        if drag(browser, {"x": start["x"] + 12, "y": start["y"] + 8}, end):
+            return wait_for(
+                lambda before=before: (
+                    (made := browser.execute_script(newest, block_type)) != before and made
+                )
+            )
+    raise AssertionError(f"no {kind} block could be dragged out of the toolbox")
+
+
+def build(browser: Any, node: tuple[str, list], parent: str | None = None) -> None:
+    kind, children = node
+    made = add_block(browser, kind, parent)
+    for child in children:
+        build(browser, child, made)
+
+
+def node_indices(table: Any) -> Any:
+    """The ``behaviour`` column as node indices in tick order (null: no leaf ticked)."""
+    return table.column("behaviour").combine_chunks().indices
+
+
+def shape(tree: dict[str, Any]) -> tuple[str, list]:
+    return (tree["type"], [shape(child) for child in tree["children"]])
+
+
+def test_build_the_gathering_tree_from_blocks_run_and_save(
+    browser: Any, studio: Studio, tmp_path: Path
+) -> None:
+    open_empty(browser, studio)
+    assert browser.find_element("id", "play").get_attribute("disabled")
+    build(browser, GATHERING)
+    assert shape(browser.execute_script("return window.studio.tree()")) == GATHERING
+    wait_for(lambda: browser.execute_script("return window.studio.runnable()"))
+    assert not browser.find_element("id", "play").get_attribute("disabled")
+    browser.find_element("id", "step").click()
+    wait_for(lambda: "iteration 1 of 8000" in browser.find_element("id", "iteration").text)
+    name = browser.find_element("id", "name")
+    name.clear()
+    name.send_keys("fig6")
+    browser.find_element("id", "save-run").click()
+    wait_for(lambda: "saved runs/fig6" in browser.find_element("id", "message").text, 300)
+    saved = tmp_path / "fig6.xml"
+    ours = read_table(tmp_path / "runs/fig6/states.parquet")
+    assert ours.num_rows == 4 * 8001
+    out = tmp_path / "cli-tree"
+    assert main(["run", "gathering", "--tree", str(saved), "--seed", "0", "--out", str(out),
+                 "--no-gif", "--quiet"]) == 0  # fmt: skip
+    assert ours.equals(read_table(out / "states.parquet"))
+    paper = tmp_path / "cli-paper"
+    args = ["run", "gathering", "--seed", "0", "--out", str(paper), "--no-gif", "--quiet"]
+    assert main(args) == 0
+    theirs = read_table(paper / "states.parquet")
+    columns = [c for c in ours.column_names if c != "behaviour"]
+    assert ours.select(columns).equals(theirs.select(columns))
+    # The active leaf: the same node (its index in tick order) in every row; only the names
+    # differ (blocks made by hand are named after their types, the packaged file names them).
+    assert node_indices(ours).equals(node_indices(theirs))
+    assert load_tree(saved).walk() is not None
+    btcpp = pytest.importorskip("behaviortreepy", reason="behaviortreepy is not installed")
+    from .btcpp_reference import btcpp_factory_with_our_leaves, btcpp_text
+
+    del btcpp
+    factory = btcpp_factory_with_our_leaves()
+    assert factory.create_tree_from_text(btcpp_text(saved.read_text())).root_node() is not None
+
+
+def test_an_invalid_tree_shows_the_message_on_the_block_and_cannot_run(
+    browser: Any, studio: Studio, tmp_path: Path
+) -> None:
+    open_empty(browser, studio)
+    inverter = add_block(browser, "Inverter", None)
+    add_block(browser, "Condition_Low_Energy_Level", inverter)
+    add_block(browser, "Action_Refuel_A", inverter)
+    message = wait_for(
+        lambda: (
+            "needs exactly 1 child" in (text := browser.find_element("id", "message").text) and text
+        )
+    )
+    assert "decorator Inverter needs exactly 1 child, has 2" in message
+    warning = browser.execute_script("return window.studio.warning(arguments[0])", inverter)
+    assert "needs exactly 1 child" in (warning or "")
+    for button in ("play", "step", "reset", "save-run"):
+        assert browser.find_element("id", button).get_attribute("disabled")
+    assert list(tmp_path.iterdir()) == []
+    # Undo (Ctrl+Z, Blockly's) takes the second child out: the tree can run; redo puts it back.
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.keys import Keys
+
+    def keys(*held: str) -> None:
+        chain = ActionChains(browser)
+        for key in held:
+            chain.key_down(key)
+        chain.send_keys("z")
+        for key in reversed(held):
+            chain.key_up(key)
+        chain.perform()
+
+    keys(Keys.CONTROL)
+    wait_for(lambda: "can run (2 nodes)" in browser.find_element("id", "message").text)
+    assert not browser.find_element("id", "play").get_attribute("disabled")
+    keys(Keys.CONTROL, Keys.SHIFT)
+    wait_for(lambda: "needs exactly 1 child" in browser.find_element("id", "message").text)
+    assert browser.find_element("id", "play").get_attribute("disabled")
+
+
+LAUGHS = """<?xml version="1.0"?>
+<!DOCTYPE lolz [<!ENTITY lol "lol"><!ENTITY lol2 "&lol;&lol;&lol;&lol;&lol;&lol;">]>
+<root BTCPP_format="4"><BehaviorTree ID="T"><Sequence name="&lol2;"/></BehaviorTree></root>
+"""
+
+
+def test_bad_input_in_the_page_gets_a_message_and_changes_nothing_on_disk(
+    browser: Any, studio: Studio, tmp_path: Path, tmp_path_factory: pytest.TempPathFactory
+) -> None:
+    files = tmp_path_factory.mktemp("uploads")
+    big = files / "big.xml"
+    big.write_bytes(b"<!--" + b"x" * 2_100_000 + b"-->")
+    laughs = files / "laughs.xml"
+    laughs.write_text(LAUGHS, encoding="utf-8")
+    browser.get(studio.url)
+    wait_for(lambda: "can run" in browser.find_element("id", "message").text)
+    message = browser.find_element("id", "message")
+
+    def shows(words: str) -> bool:
+        return words in message.text and "error" in (message.get_attribute("class") or "")
+
+    for path, words in ((big, "larger than 2000 KB"), (laughs, "<!DOCTYPE")):
+        browser.find_element("id", "upload").send_keys(str(path))
+        wait_for(lambda words=words: shows(words))
+    for field, value, words in (
+        ("energy_use", "NaN", "energy_use must be a finite number"),
+        ("agents", "0", "agents must be a whole number >= 1"),
+    ):
+        box = (
+            browser.find_element("css selector", f"input[data-param='{field}']")
+            if field != "agents"
+            else browser.find_element("id", "agents")
+        )
+        original = box.get_attribute("value")
+        box.clear()
+        box.send_keys(value)
+        browser.find_element("id", "apply").click()
+        wait_for(lambda words=words: shows(words))
+        box.clear()
+        box.send_keys(original)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_paused_at_k_the_followed_drones_colours_equal_its_trace(
+    browser: Any, studio: Studio
+) -> None:
+    from pyautonomousagent import Simulation, load
+
+    browser.get(studio.url)
+    wait_for(lambda: "can run" in browser.find_element("id", "message").text)
+    browser.find_element("id", "reset").click()
+    for k in range(1, 8):
+        browser.find_element("id", "step").click()
+        wait_for(lambda k=k: browser.execute_script("return window.studio.iteration()") == k)
+    point = browser.execute_script("return window.studio.agentPoint(1)")
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    click = ActionChains(browser)
+    click.w3c_actions.pointer_action.move_to_location(int(point["x"]), int(point["y"]))
+    click.w3c_actions.pointer_action.click()
+    click.perform()
+    wait_for(lambda: "following drone2" in browser.find_element("id", "follow").text)
+    shown = browser.execute_script(
+        "return [...document.querySelectorAll('#nodes div')].map(d => d.dataset.status)"
+    )
+    scenario = load("gathering")
+    sim = Simulation.create(scenario, seed=0, tree=load_tree(scenario.tree))
+    sim.run(progress=False, iterations=7)
+    names = {0: "invalid", 1: "success", 2: "failure", 3: "running"}
+    assert shown == [names[int(code)] for code in sim.recorder.trace(1)[-1]]
+    labels = browser.execute_script(
+        "return window.studio.workspace().getTopBlocks(true)[0].getDescendants(true)"
+        ".slice(1).map(b => b.getFieldValue('STATUS'))"
+    )
+    shown_on_blocks = [label.split()[1] if label.startswith("●") else "invalid" for label in labels]
+    assert shown_on_blocks == shown
+
+
+def test_a_notebook_cell_shows_the_studio_and_a_step_in_the_page_advances_it(
+    browser: Any, tmp_path: Path
+) -> None:
+    """A real kernel (nbclient, as the lessons run) evaluates ``Studio(...)`` as a cell's
+    value; the frame it outputs is opened in Chromium, and Step there advances the run the
+    kernel serves. (JupyterLab itself is not started here.)"""
+    import re
+
+    nbformat = pytest.importorskip("nbformat", reason="nbformat is not installed")
+    nbclient = pytest.importorskip("nbclient", reason="nbclient is not installed")
+    cells = [
+        f"from pathlib import Path\nfrom pyautonomousagent.studio import Studio\n"
+        f"studio = Studio('gathering', Path({str(tmp_path)!r}))\nstudio",
+        "studio.session.sim.world.iteration",
+    ]
+    notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(c) for c in cells[:1]])
+    client = nbclient.NotebookClient(notebook, kernel_name="python3", timeout=120)
+    with client.setup_kernel():
+        client.execute_cell(notebook.cells[0], 0)
+        html = notebook.cells[0].outputs[0]["data"]["text/html"]
+        url = re.search(r'<iframe src="([^"]+)"', html).group(1)
+        browser.get(url)
+        wait_for(lambda: "can run" in browser.find_element("id", "message").text)
+        browser.find_element("id", "step").click()
+        wait_for(lambda: "iteration 1 of 8000" in browser.find_element("id", "iteration").text)
+        notebook.cells.append(nbformat.v4.new_code_cell(cells[1]))
+        client.execute_cell(notebook.cells[1], 1)
+        assert notebook.cells[1].outputs[0]["data"]["text/plain"] == "1"
