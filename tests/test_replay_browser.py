@@ -10,60 +10,27 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
-import tempfile
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from pyautonomousagent.bt.status import NAMES
 from pyautonomousagent.cli import main
 from pyautonomousagent.recording import read_table
+from tests.chromium import offline_chromium
 
-CHROMIUM = "/usr/bin/chromium"
 NODES = ("sequence_gathering", "condition_low_energy_level", "action_navigate_to_destination_a_1")
 """Three nodes whose shown status is checked."""
 AT = 5001
 """The iteration scrubbed to: the first after the gathering order (given at 5000)."""
 
 
-def _driver_path() -> str | None:
-    return shutil.which("chromedriver") or (
-        "/usr/bin/chromedriver" if Path("/usr/bin/chromedriver").exists() else None
-    )
-
-
 @pytest.fixture(scope="module")
-def browser():
-    webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
-    if not Path(CHROMIUM).exists() or _driver_path() is None:
-        pytest.skip("no chromium/chromedriver: apt-get install chromium chromium-driver")
-    from selenium.webdriver.chrome.service import Service
-
-    options = webdriver.ChromeOptions()
-    options.binary_location = CHROMIUM
-    profile = tempfile.mkdtemp(prefix="pyaa-chromium-")
-    for flag in (
-        "--headless=new",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--disable-quic",
-        "--no-first-run",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--window-size=1400,900",
-        # The network is off: every host resolves to nothing, every proxy is refused.
-        "--host-resolver-rules=MAP * ~NOTFOUND",
-        "--proxy-server=http://127.0.0.1:9",
-        f"--user-data-dir={profile}",
-    ):
-        options.add_argument(flag)
-    options.set_capability("goog:loggingPrefs", {"browser": "ALL"})
-    driver = webdriver.Chrome(service=Service(_driver_path()), options=options)
-    yield driver
-    driver.quit()
-    shutil.rmtree(profile, ignore_errors=True)
+def browser() -> Iterator[Any]:
+    with offline_chromium(1400, 900, console=True) as driver:
+        yield driver
 
 
 @pytest.fixture(scope="module")

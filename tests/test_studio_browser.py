@@ -15,8 +15,6 @@ Needs Debian's ``chromium`` and ``chromium-driver``, selenium, and the built fro
 
 from __future__ import annotations
 
-import shutil
-import tempfile
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -28,8 +26,8 @@ from pyautonomousagent.bt.files import load_tree
 from pyautonomousagent.cli import main
 from pyautonomousagent.recording import read_table
 from pyautonomousagent.studio import Studio, has_bundle
+from tests.chromium import offline_chromium
 
-CHROMIUM = "/usr/bin/chromium"
 GATHERING = (
     "ReactiveSequence", [
         ("Action_Transmit_Shared_Data_S", []),
@@ -60,43 +58,12 @@ GATHERING = (
 DECORATORS = {"Inverter"}
 
 
-def _driver_path() -> str | None:
-    return shutil.which("chromedriver") or (
-        "/usr/bin/chromedriver" if Path("/usr/bin/chromedriver").exists() else None
-    )
-
-
 @pytest.fixture(scope="module")
 def browser() -> Iterator[Any]:
-    webdriver = pytest.importorskip("selenium.webdriver", reason="selenium is not installed")
-    if not Path(CHROMIUM).exists() or _driver_path() is None:
-        pytest.skip("no chromium/chromedriver: apt-get install chromium chromium-driver")
     if not has_bundle():
         pytest.skip("the studio's front-end is not built: cd studio && npm ci && npm run build")
-    from selenium.webdriver.chrome.service import Service
-
-    options = webdriver.ChromeOptions()
-    options.binary_location = CHROMIUM
-    profile = tempfile.mkdtemp(prefix="pyaa-chromium-")
-    for flag in (
-        "--headless=new",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--no-first-run",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--window-size=1500,2000",
-        # Offline: every host but the studio's resolves to nothing, every proxy is refused.
-        "--host-resolver-rules=MAP * ~NOTFOUND, EXCLUDE 127.0.0.1",
-        "--proxy-server=http://127.0.0.1:9",
-        f"--user-data-dir={profile}",
-    ):
-        options.add_argument(flag)
-    driver = webdriver.Chrome(service=Service(_driver_path()), options=options)
-    yield driver
-    driver.quit()
-    shutil.rmtree(profile, ignore_errors=True)
+    with offline_chromium(1500, 2000) as driver:
+        yield driver
 
 
 @pytest.fixture

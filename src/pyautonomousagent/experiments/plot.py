@@ -232,14 +232,7 @@ def plot_measure(
     band = {"ci95": ", 95 % CI", "sd": ", ± 1 sd", "range": ", min to max", "none": ""}
     default = f"{measure} vs {x} (mean of {n_text} runs{band[interval]})"
     ax.set_title(title or default, fontsize=10)
-    ax.grid(True, alpha=0.3)
-    if by:
-        ax.legend(fontsize=8)
-    fig.tight_layout()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out)
-    plt.close(fig)
-    return out
+    return _saved(fig, ax, by, out)
 
 
 def read_series(folder: str | Path) -> tuple[pa.Table, pa.Table, dict[str, Any], list[str]]:
@@ -368,6 +361,14 @@ def plot_over_time(
     counts = sorted({r["n"] for r in rows})
     n_text = f"{counts[0]}" if len(counts) == 1 else f"{counts[0]}-{counts[-1]}"
     ax.set_title(title or f"{measure} over time (mean of {n_text} runs, 95 % CI)", fontsize=10)
+    return _saved(fig, ax, by, out)
+
+
+def _saved(fig: Any, ax: Any, by: str | None, out: Path) -> Path:
+    """Finish a plot (grid; a legend where lines are ``by`` a parameter) and save it to
+    ``out`` (its folder made); ``out``."""
+    import matplotlib.pyplot as plt
+
     ax.grid(True, alpha=0.3)
     if by:
         ax.legend(fontsize=8)
