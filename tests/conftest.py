@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -131,3 +131,14 @@ def executed_lessons(tmp_path_factory: pytest.TempPathFactory) -> Path:
     dest = tmp_path_factory.mktemp("lessons")
     execute_lessons(dest)
     return dest
+
+
+@pytest.fixture
+def studio(tmp_path: Path) -> Iterator[Any]:
+    """A studio server on the gathering scenario in the test's folder, shut down after."""
+    from pyautonomousagent.studio import Studio
+
+    server = Studio("gathering", tmp_path)
+    server.start()
+    yield server
+    server.shutdown()

@@ -7,7 +7,6 @@ from __future__ import annotations
 import json
 import urllib.error
 import urllib.request
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -50,14 +49,6 @@ class Client:
         status, answer = self.call(path, data, raw)
         assert status == 200, answer
         return answer
-
-
-@pytest.fixture
-def studio(tmp_path: Path) -> Iterator[Studio]:
-    server = Studio("gathering", tmp_path)
-    server.start()
-    yield server
-    server.shutdown()
 
 
 @pytest.fixture

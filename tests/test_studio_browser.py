@@ -66,14 +66,6 @@ def browser() -> Iterator[Any]:
         yield driver
 
 
-@pytest.fixture
-def studio(tmp_path: Path) -> Iterator[Studio]:
-    server = Studio("gathering", tmp_path)
-    server.start()
-    yield server
-    server.shutdown()
-
-
 def wait_for(check: Callable[[], Any], seconds: float = 20.0) -> Any:
     """``check()``'s first truthy value within ``seconds``; fails the test otherwise."""
     end = time.monotonic() + seconds
