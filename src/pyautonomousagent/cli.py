@@ -859,7 +859,7 @@ def timings_line(timings: Mapping[str, float]) -> str:
         if key in timings
     ]
     if "compile" in timings and "setup" in timings:
-        parts[0] += f" (compiling {timings['compile']:.2f} s)"
+        parts[0] += f" (of which compiling or loading the tree's code {timings['compile']:.2f} s)"
     if "write_data" in timings and "write_data_thread" in timings:
         parts[-1] += f" after the loop (thread {timings['write_data_thread']:.2f} s CPU)"
     views = {k: timings[k] for k in ("animation", "replay") if k in timings}
