@@ -23,6 +23,7 @@ operation on one number, so kernels can use them.
 
 from __future__ import annotations
 
+import functools
 import inspect
 import math
 from collections.abc import Callable
@@ -45,21 +46,31 @@ def check_arity(what: str, function: Callable[..., Any], leading: tuple[str, ...
     njit function, or plain Python) does not take exactly the ``leading`` arguments plus
     ``passed``'s counts: a mismatch found where the kernel is declared, before the engine
     generates and compiles any code around it. A function with ``*args`` is not checked."""
+    names = _parameter_names(function)
+    expected = len(leading) + sum(passed.values())
+    if names is not None and len(names) != expected:
+        given = ", ".join([*leading, *(f"{n} {k}" for k, n in passed.items() if n)])
+        python = getattr(function, "py_func", function)
+        raise TypeError(
+            f"{what} {getattr(python, '__qualname__', python)!s}({', '.join(names)}) takes "
+            f"{len(names)} arguments, but is passed {expected}: {given}"
+        )
+
+
+@functools.lru_cache(maxsize=4096)
+def _parameter_names(function: Callable[..., Any]) -> tuple[str, ...] | None:
+    """``function``'s parameter names (its ``py_func``'s for an njit function), or None where
+    it has ``*args``/``**kwargs`` or no signature. Kept per function: missions make their
+    sensor kernels anew whenever the engine asks (in a run stepped on the CPU, every
+    iteration), and ``inspect.signature`` costs about 15 us."""
     python = getattr(function, "py_func", function)
     try:
         parameters = list(inspect.signature(python).parameters.values())
     except (TypeError, ValueError):  # a builtin or a compiled object without a signature
-        return
+        return None
     if any(p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD) for p in parameters):
-        return
-    expected = len(leading) + sum(passed.values())
-    if len(parameters) != expected:
-        given = ", ".join([*leading, *(f"{n} {k}" for k, n in passed.items() if n)])
-        names = ", ".join(p.name for p in parameters)
-        raise TypeError(
-            f"{what} {getattr(python, '__qualname__', python)!s}({names}) takes "
-            f"{len(parameters)} arguments, but is passed {expected}: {given}"
-        )
+        return None
+    return tuple(p.name for p in parameters)
 
 
 @dataclass(frozen=True)
