@@ -19,8 +19,8 @@ import pytest
 
 from pyautonomousagent.cli import main
 from pyautonomousagent.experiments import Experiment, ExperimentError, sweep
-from pyautonomousagent.experiments.design import for_scenario
 from pyautonomousagent.experiments.sensitivity import StoredSweep, indices, read_sweep, report
+from pyautonomousagent.experiments.spec import for_scenario
 from pyautonomousagent.scenarios import load
 from tests.test_experiments import same_rows
 

@@ -27,8 +27,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import pyarrow as pa
 
+from pyautonomousagent.experiments.errors import ExperimentError
+
 if TYPE_CHECKING:
-    from pyautonomousagent.experiments.spec import Experiment
     from pyautonomousagent.simulation import Scenario
 
 #: The designs: a grid (every combination of ``vary``) and the sampled ones.
@@ -135,8 +136,6 @@ def typed(design: Design, kinds: dict[str, type]) -> Design:
         ExperimentError: a parameter that is not a number, or a whole-number parameter with
             bounds that are not whole numbers.
     """
-    from pyautonomousagent.experiments.spec import ExperimentError
-
     integers = set()
     for name, (low, high) in design.bounds.items():
         kind = kinds.get(name, float)
@@ -169,8 +168,6 @@ def library(module: str, method: str) -> Any:
     try:
         return importlib.import_module(module)
     except ImportError:
-        from pyautonomousagent.experiments.spec import ExperimentError
-
         library = module.split(".")[0].replace("scipy", "SciPy")
         raise ExperimentError(
             f"--design {method} needs {library}, which is not installed: {EXTRA}"
@@ -185,14 +182,6 @@ def schema_types(scenario: Scenario) -> dict[str, type]:
     kinds = {key: type(value) for key, value in to_mapping(scenario).items()}
     kinds.update({p.name: p.type for _, p in parameter_list(scenario)})
     return kinds
-
-
-def for_scenario(experiment: Experiment, scenario: Scenario) -> Experiment:
-    """``experiment`` with its design's whole-number parameters taken from ``scenario``'s
-    schema (:func:`typed`); a grid experiment unchanged."""
-    if experiment.design is None:
-        return experiment
-    return replace(experiment, design=typed(experiment.design, schema_types(scenario)))
 
 
 #: The design's file in a sweep folder.

@@ -48,17 +48,28 @@ import itertools
 import json
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pyautonomousagent.experiments.design import DESIGNS, Design, design_size, is_power_of_two
+from pyautonomousagent.experiments.design import (
+    DESIGNS,
+    Design,
+    design_size,
+    is_power_of_two,
+    schema_types,
+    typed,
+)
+from pyautonomousagent.experiments.errors import ExperimentError
 from pyautonomousagent.experiments.expression import ExpressionError
 from pyautonomousagent.experiments.measures import MEASURES, Measure, expression_measure
 from pyautonomousagent.inputs import InputError, load_yaml, plain_value, read_text
 from pyautonomousagent.registry import UnknownNameError
+
+if TYPE_CHECKING:
+    from pyautonomousagent.simulation import Scenario
 
 #: The most runs one experiment may hold.
 MAX_RUNS = 1_000_000
@@ -83,10 +94,6 @@ _KEYS = (
     "every",
 )
 _DISTRIBUTIONS = ("uniform", "integers", "choice")
-
-
-class ExperimentError(InputError):
-    """Bad experiment input; the message names the source, the field and the fix."""
 
 
 @dataclass(frozen=True)
@@ -166,7 +173,7 @@ class Experiment:
     def points(self) -> list[dict[str, Any]]:
         """Every point: the grid crossed with the random samples (in that order), or the
         design's points (whole numbers where the design marks a parameter so, as
-        :func:`~pyautonomousagent.experiments.design.for_scenario` does from the scenario's
+        :func:`for_scenario` does from the scenario's
         schema: :func:`~pyautonomousagent.experiments.sweep.sweep` calls it; floats before)."""
         if self.design is not None:
             return self.design.points()
@@ -646,3 +653,12 @@ def _vary_value(text: str, name: str) -> Any:
         return plain_value(text.strip())
     except InputError as error:
         raise ExperimentError(f"--vary {name}: {error}") from None
+
+
+def for_scenario(experiment: Experiment, scenario: Scenario) -> Experiment:
+    """``experiment`` with its design's whole-number parameters taken from ``scenario``'s
+    schema (:func:`~pyautonomousagent.experiments.design.typed`); a grid experiment
+    unchanged."""
+    if experiment.design is None:
+        return experiment
+    return replace(experiment, design=typed(experiment.design, schema_types(scenario)))

@@ -32,7 +32,7 @@ from typing import Any
 import pyarrow as pa
 
 from pyautonomousagent.experiments.backends import Backend, make_backend
-from pyautonomousagent.experiments.design import for_scenario, write_design
+from pyautonomousagent.experiments.design import write_design
 from pyautonomousagent.experiments.expression import Expression
 from pyautonomousagent.experiments.measures import RunData, _Evaluate
 from pyautonomousagent.experiments.runner import (
@@ -43,7 +43,7 @@ from pyautonomousagent.experiments.runner import (
     scenario_parameters,
 )
 from pyautonomousagent.experiments.series import SERIES, TIMESERIES, compact, documented
-from pyautonomousagent.experiments.spec import Experiment, ExperimentError, Run
+from pyautonomousagent.experiments.spec import Experiment, ExperimentError, Run, for_scenario
 from pyautonomousagent.experiments.store import (
     MANIFEST,
     RESULTS,
