@@ -11,6 +11,7 @@ import pytest
 from pyautonomousagent.lessons import (
     CHECKS,
     ExerciseError,
+    check_exercise,
     embedded_replay,
     l02_tree,
     l05_expected_tree,
@@ -18,7 +19,7 @@ from pyautonomousagent.lessons import (
     tick_table,
     x8_climb_time,
 )
-from pyautonomousagent.testing import check_exercise, scoped_registrations
+from pyautonomousagent.testing import scoped_registrations
 
 
 def test_tick_table_shows_a_reactive_sequence_halting_its_action() -> None:

@@ -5,8 +5,6 @@
 - :func:`check_exercise`: the check cell at the end of each lesson. It works the answer out
   itself (the answer is not in the notebook), prints a friendly verdict, and raises
   :class:`ExerciseError` with a hint when the answer is missing or wrong.
-
-Both are also importable from :mod:`pyautonomousagent.testing`.
 """
 
 from __future__ import annotations

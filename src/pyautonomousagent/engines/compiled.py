@@ -60,7 +60,7 @@ from pyautonomousagent.world import World
 if TYPE_CHECKING:
     from pyautonomousagent.datalink import Datalink, Delivery
     from pyautonomousagent.recording import Recorder
-    from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.simulation.engine_api import LoopView
 
 
 #: Most nodes of a tree the compiled engine takes. Its generated source grows with the square
@@ -255,7 +255,7 @@ class CompiledEngine:
                 data = {f: box[3 + j, rows] for j, f in enumerate(sends.fields)}
                 datalink.send(rows, sends.type, data, (box[1, rows], box[2, rows]))
 
-    def prepare(self, sim: Simulation) -> None:
+    def prepare(self, sim: LoopView) -> None:
         """Compile (or load from numba's cache) what this run will call, before its loop;
         mark a fused loop compiled (see :meth:`ready`). Its seconds go to
         ``sim.timings["compile"]``; on the ``pyautonomousagent.compile`` logger (INFO, which
@@ -278,7 +278,7 @@ class CompiledEngine:
             compile_log.info("compiled engine: compiling (or loading) the tree's code took "
                              "%.1f s", seconds)  # fmt: skip
 
-    def sync(self, sim: Simulation) -> None:
+    def sync(self, sim: LoopView) -> None:
         """Nothing to finish: :meth:`loop` returns with its records and state written."""
 
     def _compile_tick(self, code: ModuleType) -> None:
@@ -291,17 +291,17 @@ class CompiledEngine:
                      *self._constants, *self.arrays)  # fmt: skip
         code.tick.compile(tuple(numba.typeof(a) for a in arguments))
 
-    def ready(self, sim: Simulation) -> bool:
+    def ready(self, sim: LoopView) -> bool:
         """Whether ``sim`` runs fused and :meth:`prepare` compiled that loop before on this
         machine (numba's cache holds it: set-up takes well under a second)."""
         fused = self._fusable(sim)
         return fused is not None and self._marker(sim, fused).exists()
 
-    def fuses(self, sim: Simulation) -> bool:
+    def fuses(self, sim: LoopView) -> bool:
         """Whether :meth:`loop` can run ``sim``'s iterations (from its start)."""
         return self._fusable(sim) is not None
 
-    def why_not_fused(self, sim: Simulation) -> str:
+    def why_not_fused(self, sim: LoopView) -> str:
         """Why :meth:`loop` cannot run ``sim``'s iterations from its start (then each
         iteration runs Phases 2 and 4-6 in NumPy and ticks the compiled tree), or ""."""
         if self._fusable(sim) is not None:
@@ -314,7 +314,7 @@ class CompiledEngine:
             return "a message type the tree sends has no compiled handler"
         return "the C library's sin/cos do not give NumPy's bits on this CPU"
 
-    def _marker(self, sim: Simulation, fused: Fused) -> Path:
+    def _marker(self, sim: LoopView, fused: Fused) -> Path:
         """The file saying that the fused function ``sim``'s loop calls is in numba's cache."""
         function = self._function(fused, min(sim.scenario.iterations, 500))
         return cache_folder() / f"{module_name(self._source(fused)[0])}.{function}.compiled"
@@ -333,7 +333,7 @@ class CompiledEngine:
         """Status codes after the last tick, shape (nodes in tick order, N), int8."""
         return self.status.copy()
 
-    def loop(self, sim: Simulation, count: int, typical: int | None = None) -> int:
+    def loop(self, sim: LoopView, count: int, typical: int | None = None) -> int:
         """Run up to ``count`` whole iterations in compiled code; return how many were run:
         0 where this run cannot be fused now (then call ``sim.step()``). Phases 2-6 of
         each, except the last one's Phase 5: its messages wait on the datalink's channel,
@@ -376,7 +376,7 @@ class CompiledEngine:
             self._send(sim.world.datalink)
         return int(done)
 
-    def _inbox(self, sim: Simulation, messaging: Messaging) -> list[Any]:
+    def _inbox(self, sim: LoopView, messaging: Messaging) -> list[Any]:
         """The arguments of ``block_messages_*`` after the common ones: the datalink's range,
         ``order``, ``counts``, ``lowest``, each type's inbox (senders, data) filled with
         ``sim.inbox`` (deliveries that reached everyone, checked by :meth:`_fusable`), and
@@ -405,7 +405,7 @@ class CompiledEngine:
         lowest = np.zeros(len(types), dtype=np.int64)
         return [sim.world.datalink.range, order, counts, lowest, *inboxes, *state]
 
-    def _messaging(self, sim: Simulation) -> Messaging | None:
+    def _messaging(self, sim: LoopView) -> Messaging | None:
         """The compiled handling of the messages the tree sends, or None where a type sent
         has no compiled handler in ``sim`` (or one that reads a field not sent)."""
         types = tuple(dict.fromkeys(self._sends(i).type for i in self.layout.outboxes))
@@ -436,7 +436,7 @@ class CompiledEngine:
         dtypes = [*(recorder.columns.dtypes[k] for k in self.layout.names), np.dtype(np.int16)]
         return [np.empty((0, self.swarm.size), dtype) for dtype in dtypes]
 
-    def _fusable(self, sim: Simulation) -> Fused | None:
+    def _fusable(self, sim: LoopView) -> Fused | None:
         """What :meth:`loop` calls where it can run ``sim`` now, else None: the mission's
         compiled sensors and the 2-D or 3-D drone; a tree that sends nothing with no message in
         flight, or one whose messages have compiled handlers, the messages in flight having
@@ -473,7 +473,7 @@ class CompiledEngine:
 
     @staticmethod
     def _after(
-        sim: Simulation, sensors: SensorKernel, start: int, count: int, stopped: np.ndarray
+        sim: LoopView, sensors: SensorKernel, start: int, count: int, stopped: np.ndarray
     ) -> None:
         """The bookkeeping of a fused run: the sensors' alerts and what the swarm sensor
         kept, in order of iteration (an iteration's alerts first, as Phase 2 raises them),

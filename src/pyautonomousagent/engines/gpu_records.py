@@ -45,7 +45,7 @@ from pyautonomousagent.kernels import SensorKernel
 from pyautonomousagent.recording import Recorder
 
 if TYPE_CHECKING:
-    from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.simulation.engine_api import LoopView
 
 #: Slots of record rows, used in turn: one being written by a kernel while another is copied.
 SLOTS = 2
@@ -154,7 +154,7 @@ class RecordGroups:
         """Groups launched whose records the recorder does not hold yet."""
         return len(self._flight)
 
-    def slot(self, sim: Simulation) -> Slot:
+    def slot(self, sim: LoopView) -> Slot:
         """The next slot, free: its group handed over first if it is still in flight (the
         host waits for its copy); its ``stopped`` reset and its "began" event recorded on
         :attr:`stream`, for the kernel launched next."""
@@ -209,13 +209,13 @@ class RecordGroups:
         enqueue_s = time.perf_counter() - began
         self._flight.append(Group(slot, start, count, row0, rows, sensors, launch_s, enqueue_s))
 
-    def settle(self, sim: Simulation) -> None:
+    def settle(self, sim: LoopView) -> None:
         """Hand every group in flight over to the recorder, in order (the host waits for
         their copies)."""
         while self._flight:
             self._hand_over(sim, self._flight.popleft())
 
-    def _hand_over(self, sim: Simulation, group: Group) -> None:
+    def _hand_over(self, sim: LoopView, group: Group) -> None:
         """Wait for ``group``'s copy, store its rows in the recorder and do its bookkeeping
         (``CompiledEngine._after``: alerts, the recorder's count, its listeners), the clock
         kept at the engine's iteration."""

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
-import functools
 import logging
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol, TypeGuard, runtime_checkable
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -31,6 +30,7 @@ from pyautonomousagent.randomness import CounterRandom
 from pyautonomousagent.recording import Recorder, check_memory, to_table, trace_table, traced_agents
 from pyautonomousagent.registry import Registry
 from pyautonomousagent.simulation import phases
+from pyautonomousagent.simulation.engine_api import Engine, fuses
 from pyautonomousagent.simulation.fit import check_tree
 from pyautonomousagent.simulation.mission import MessageType, Mission
 from pyautonomousagent.simulation.motion import Model, build_model
@@ -108,53 +108,6 @@ def _world(scenario: Scenario, seed: int) -> World:
 
 #: Iterations a :class:`FusedEngine` runs per call of its ``loop`` (the progress bar's step).
 FUSED = 500
-
-
-class Engine(Protocol):
-    """What the loop needs of a decision engine (Phase 3)."""
-
-    name: str
-
-    def __init__(
-        self, tree: Node, swarm: Swarm, world: World, defaults: Mapping[str, Any]
-    ) -> None: ...
-
-    def tick(self) -> None: ...
-
-    def node_statuses(self) -> np.ndarray: ...
-
-
-@runtime_checkable
-class FusedEngine(Protocol):
-    """An engine that can also run whole iterations itself (Phases 2-6 fused, e.g. the
-    compiled and GPU engines): :class:`Simulation` calls :meth:`prepare` once it is built,
-    :meth:`loop` before stepping an iteration in Python, and :meth:`sync` at the end of each
-    ``run`` and ``step``."""
-
-    def prepare(self, sim: Simulation) -> None:
-        """Compile (or load) what the run will call, before its first iteration."""
-        ...
-
-    def loop(self, sim: Simulation, count: int, typical: int | None = None) -> int:
-        """Run up to ``count`` whole iterations (all but the last one's Phase 5); how many
-        were run, 0 where the next iteration cannot be fused (``Simulation.step`` runs it)."""
-        ...
-
-    def sync(self, sim: Simulation) -> None:
-        """Finish the work in flight: the recorder holds every iteration run, the swarm's
-        arrays the state."""
-        ...
-
-
-def fuses(engine: Engine) -> TypeGuard[FusedEngine]:
-    """Whether ``engine`` is a :class:`FusedEngine` (by its class, decided once per class:
-    ``isinstance`` of a protocol costs 6-14 us, and the loop asks twice an iteration)."""
-    return _fusing_class(type(engine))
-
-
-@functools.cache
-def _fusing_class(kind: type) -> bool:
-    return issubclass(kind, FusedEngine)
 
 
 ENGINES: Registry[type[Engine]] = Registry("engine")
