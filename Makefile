@@ -68,11 +68,12 @@ browser:
 	fi
 
 # The suite on two workers (pytest-xdist): CI has 2 cores, and a worker waits on numba's
-# compiles and on subprocesses much of the time.
+# compiles and on subprocesses much of the time. Tests of one xdist_group run on one worker
+# (the lessons, executed once for the tests that read them, not once per worker).
 test: $(VENV)/.installed-test browser
 	$(BIN)/ruff check src tests
 	$(BIN)/mypy src
-	$(BIN)/python -m pytest -n 2
+	$(BIN)/python -m pytest -n 2 --dist loadgroup
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check src tests
