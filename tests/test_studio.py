@@ -76,6 +76,9 @@ def test_palette_is_built_from_the_registries(client: Client) -> None:
     low = leaves["Condition_Low_Energy_Level"]
     assert low["doc"].startswith("SUCCESS if the energy level")
     assert low["ports"][0]["name"] == "threshold" and low["ports"][0]["value"] == 40.0
+    assert low["name"] == "condition_low_energy_level"  # a new block's name: the loader's
+    controls = {c["type"]: c for c in info["palette"]["controls"]}
+    assert controls["ReactiveSequence"]["name"] == "reactive_sequence"
     names = [p["name"] for p in info["schema"]["parameters"]]
     assert "low_energy_threshold" in names
     energy = next(p for p in info["schema"]["parameters"] if p["name"] == "energy_use")
@@ -127,6 +130,28 @@ def test_an_unknown_port_is_flagged_on_its_block(client: Client) -> None:
     tree["children"][0]["ports"]["bogus"] = "1"
     answer = client.ok("/api/tree", {"tree": tree})
     assert answer["block"] == 1 and "has no port 'bogus'" in answer["error"]
+
+
+def test_node_names_are_kept_checked_and_saved(client: Client, tmp_path: Path) -> None:
+    info = client.ok("/api/info")
+    tree = info["tree"]
+    packaged = [node.name for node in load_tree(load("gathering").tree).walk()]
+    assert _names(tree) == packaged  # the scenario's tree keeps its file's names
+    tree["children"][0]["name"] = "share"
+    assert client.ok("/api/tree", {"tree": tree})["ok"]
+    client.ok("/api/save-tree", {"name": "named", "format": "yaml"})
+    assert [n.name for n in load_tree(tmp_path / "named.yaml").walk()][1] == "share"
+    tree["children"][0]["name"] = "two\nlines"
+    answer = client.ok("/api/tree", {"tree": tree})
+    assert not answer["ok"] and answer["block"] == 1 and "one line" in answer["error"]
+    tree["children"][0]["name"] = "reactive_fallback_behaviours"
+    answer = client.ok("/api/tree", {"tree": tree})
+    assert not answer["ok"] and answer["block"] == 2  # the second of the two, by its line
+    assert "two nodes are named 'reactive_fallback_behaviours'" in answer["error"]
+
+
+def _names(block: dict[str, Any]) -> list[str]:
+    return [block["name"], *(n for child in block["children"] for n in _names(child))]
 
 
 BILLION_LAUGHS = """<?xml version="1.0"?>

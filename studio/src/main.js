@@ -2,7 +2,9 @@
 // followed drone's tree. Talks to the server of pyautonomousagent.studio (JSON over HTTP).
 import * as Blockly from "blockly/core";
 import * as En from "blockly/msg/en";
-import { ROOT, defineBlocks, loadTree, showStatus, toolbox, treeOf } from "./blocks.js";
+import {
+  NAME, ROOT, defineBlocks, loadTree, showStatus, toolbox, treeOf, uniqueNames,
+} from "./blocks.js";
 import { agentPixel, drawPlot, drawWorld, nearestAgent } from "./world.js";
 
 Blockly.setLocale(En);
@@ -82,6 +84,18 @@ function scheduleCheck() {
   checkTimer = setTimeout(checkTree, 250);
 }
 
+// A new block starts with its type's name, a copy with its original's; where that name is
+// taken, it gets the next free one (in the same undo step as the block's creation).
+function named(event) {
+  const group = Blockly.Events.getGroup();
+  Blockly.Events.setGroup(event.group || group);
+  try {
+    uniqueNames(workspace, event.ids);
+  } finally {
+    Blockly.Events.setGroup(group);
+  }
+}
+
 function startEditor(info) {
   defineBlocks(info.palette);
   workspace = Blockly.inject($("blockly"), {
@@ -93,7 +107,10 @@ function startEditor(info) {
     zoom: { controls: true, startScale: 0.8 },
   });
   workspace.addChangeListener((event) => {
-    if (event.type === Blockly.Events.BLOCK_CREATE) state.created.push(...event.ids);
+    if (event.type === Blockly.Events.BLOCK_CREATE) {
+      state.created.push(...event.ids);
+      named(event);
+    }
     if (!event.isUiEvent) scheduleCheck();
   });
   loadTree(workspace, info.tree);
@@ -317,6 +334,13 @@ function testHooks() {
       return { x: p.x, y: p.y };
     },
     tree: () => treeOf(workspace).tree,
+    // The middle of a block's name field, on the screen (a click there edits the name).
+    nameField(id) {
+      Blockly.renderManagement.triggerQueuedRenders(workspace);
+      const box = workspace.getBlockById(id).getField(NAME).getSvgRoot().getBoundingClientRect();
+      return { x: box.left + box.width / 2, y: box.top + box.height / 2 };
+    },
+    name: (id) => workspace.getBlockById(id).getFieldValue(NAME),
     agentPoint(i) {
       const canvas = $("world");
       const p = agentPixel(canvas, state.frame, i);
