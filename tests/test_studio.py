@@ -5,6 +5,7 @@ against the recorded trace, and a saved run equal to ``pyaa run --tree SAVED.xml
 from __future__ import annotations
 
 import json
+import math
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -284,6 +285,64 @@ def test_another_sites_page_cannot_change_anything(studio: Studio, tmp_path: Pat
             urllib.request.urlopen(request, timeout=30)
         assert refused.value.code == 403
     assert list(tmp_path.iterdir()) == []
+
+
+def _events_of(scenario: Any, iterations: int) -> list[dict[str, Any]]:
+    """The events of an independent run of ``scenario`` (seed 0) to ``iterations``."""
+    sim = Simulation.create(scenario, seed=0)
+    sim.run(progress=False, iterations=iterations)
+    return sim.events
+
+
+@pytest.mark.parametrize(
+    ("name", "overrides", "steps", "measures"),
+    [
+        ("gathering", {"energy_use": 1.0}, 150, {"alerts": 4, "messages": 0}),
+        ("crowded", {}, 600, None),
+        ("patrol", {}, 50, {"alerts": 0}),
+    ],
+)
+def test_the_measures_plot_counts_the_runs_events(
+    tmp_path: Path, name: str, overrides: dict[str, Any], steps: int, measures: Any
+) -> None:
+    session = Session(name, tmp_path)
+    session.configure({"parameters": overrides})
+    session.set_tree(scenario_blocks(session))
+    session.advance(steps // 2)
+    session.frame()  # the events so far are read once; the rest on the next frame
+    session.advance(steps - steps // 2)
+    frame = session.frame()
+    events = _events_of(session.scenario, steps)
+    kinds = {"alerts": "alert", "collisions": "collision", "messages": "message"}
+    counted = {k: sum(e["event"] == kind for e in events) for k, kind in kinds.items()}
+    assert frame["measures"] == {k: counted[k] for k in frame["measures"]}
+    if measures is not None:
+        assert frame["measures"] == measures
+    else:  # crowded: collisions are reported, and happen
+        assert list(frame["measures"]) == ["alerts", "collisions"]
+        assert frame["measures"]["collisions"] > 0
+    window = session.feed.window  # type: ignore[union-attr]
+    recent = [e for e in events if e["iteration"] > steps - window][-50:]
+    assert [e["iteration"] for e in frame["events"]] == [e["iteration"] for e in recent]
+    json.dumps(frame, allow_nan=False)
+
+
+@pytest.mark.parametrize("reach", [1000.0, 25.0])
+def test_a_message_is_drawn_to_the_receivers_in_its_range(tmp_path: Path, reach: float) -> None:
+    session = Session("gathering", tmp_path)
+    session.configure({"parameters": {"datalink_range": reach}})
+    session.set_tree(scenario_blocks(session))
+    session.advance(5003)
+    message = [e for e in session.frame()["events"] if e["kind"] == "message"]
+    assert len(message) == 1 and message[0]["iteration"] == 5000
+    assert message[0]["text"] == "gathering message from drone1 to all"
+    sim = Simulation.create(session.scenario, seed=0)
+    sim.run(progress=False, iterations=5000)
+    x, y = sim.swarm.columns["x"], sim.swarm.columns["y"]
+    near = [k for k in range(1, 4) if math.hypot(x[k] - x[0], y[k] - y[0]) <= reach]
+    assert message[0]["from"] == [round(float(x[0]), 3), round(float(y[0]), 3)]
+    assert message[0]["to"] == [[round(float(x[k]), 3), round(float(y[k]), 3)] for k in near]
+    assert len(near) == (3 if reach == 1000.0 else 1)  # at 25 units: drone3 only
 
 
 @pytest.mark.parametrize("name", names())

@@ -391,6 +391,47 @@ def test_paused_at_k_the_followed_drones_colours_equal_its_trace(
     assert shown_on_blocks == shown
 
 
+STEP = """
+const done = arguments[arguments.length - 1];
+fetch("/api/control", {method: "POST", body: JSON.stringify({action: "step", steps: arguments[0]})})
+  .then((r) => r.json()).then(done);
+"""
+
+
+def test_the_map_draws_a_message_to_the_receivers_in_range_and_the_plots_the_measures(
+    browser: Any, studio: Studio
+) -> None:
+    browser.get(studio.url)
+    wait_for(lambda: "can run" in browser.find_element("id", "message").text)
+    browser.find_element("id", "reset").click()
+    for reached in (2500, 5002):  # the page's own request (Step steps one); two points
+        browser.execute_async_script(STEP, reached - 2500 * (reached > 2500))
+        wait_for(lambda r=reached: browser.execute_script("return window.studio.iteration()") == r)
+    drawing = wait_for(lambda: (d := browser.execute_script("return window.studio.drawing()"))
+                       and d["lines"] and d)  # fmt: skip
+    assert drawing == {
+        "drones": 4,
+        "diamonds": 1,
+        "lines": 3,  # drone1's gathering order to the three others, all in range
+        "banner": "iteration 5000: gathering message from drone1 to all",
+        "measures": ["alerts 0", "messages 1"],
+    }
+    # the diamond where the message puts the gathering (50, 50), in the GIF's purple
+    assert browser.execute_script("return window.studio.pixel(50, 50)")[:3] == [148, 103, 189]
+    inked = """const c = document.getElementById(arguments[0]);
+        const d = c.getContext("2d").getImageData(0, 20, c.width, c.height - 20).data;
+        const colours = new Set();
+        for (let i = 0; i < d.length; i += 4) {
+          if (d[i + 3] > 200) colours.add(d.slice(i, i + 3).join());
+        }
+        return [...colours].map((c) => c.split(",").map(Number));"""
+    purple = (148, 103, 189)  # the messages' line is drawn on the measures plot
+    assert any(
+        max(abs(a - b) for a, b in zip(colour, purple, strict=True)) < 16
+        for colour in browser.execute_script(inked, "measures")
+    )
+
+
 def test_a_notebook_cell_shows_the_studio_and_a_step_in_the_page_advances_it(
     browser: Any, tmp_path: Path
 ) -> None:

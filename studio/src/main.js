@@ -5,14 +5,18 @@ import * as En from "blockly/msg/en";
 import {
   NAME, ROOT, defineBlocks, loadTree, showStatus, toolbox, treeOf, uniqueNames,
 } from "./blocks.js";
-import { agentPixel, drawPlot, drawWorld, nearestAgent } from "./world.js";
+import {
+  agentPixel, drawMeasures, drawPlot, drawWorld, nearestAgent, worldPixel,
+} from "./world.js";
 
 Blockly.setLocale(En);
 
 const $ = (id) => document.getElementById(id);
 const FRAME_MS = 40; // 25 frames per second while playing, at most
 const IDLE_MS = 300;
-const state = { info: null, ok: false, follow: null, frame: null, playing: false, created: [] };
+const state = {
+  info: null, ok: false, follow: null, frame: null, playing: false, created: [], top: 1, drawing: null,
+};
 
 async function api(path, body, raw) {
   const options = body === undefined ? {} : {
@@ -218,15 +222,27 @@ function colourBlocks(frame) {
   });
 }
 
-// The live plot's series: per iteration seen, the swarm's mean and lowest energy.
+// The live plots' series: per iteration seen, the swarm's mean and lowest energy and the
+// scenario's measures so far (alerts, collisions, messages: what it reports).
 function record(frame) {
-  if (!frame.energy || !frame.energy.length) return;
+  if (!frame.world) return; // no run yet
   const series = state.series || (state.series = []);
-  if (series.length && frame.iteration < series[series.length - 1].iteration) series.length = 0;
+  if (series.length && frame.iteration < series[series.length - 1].iteration) {
+    series.length = 0;
+    state.top = 1;
+  }
   if (series.length && frame.iteration === series[series.length - 1].iteration) return;
-  const values = frame.energy;
-  const mean = values.reduce((a, b) => a + b, 0) / values.length;
-  series.push({ iteration: frame.iteration, mean, low: Math.min(...values) });
+  const point = { iteration: frame.iteration, ...(frame.measures || {}) };
+  const values = frame.energy || [];
+  if (values.length) {
+    let sum = 0;
+    let low = Infinity;
+    for (const v of values) { sum += v; if (v < low) low = v; }
+    point.mean = sum / values.length;
+    point.low = low;
+  }
+  for (const z of frame.altitude || []) if (z > state.top) state.top = z;
+  series.push(point);
 }
 
 async function pollOnce() {
@@ -236,9 +252,12 @@ async function pollOnce() {
   state.drawn = (state.drawn || 0) + 1;
   state.playing = frame.playing;
   $("iteration").textContent = `iteration ${frame.iteration} of ${frame.iterations ?? "?"}`;
-  drawWorld($("world"), frame, state.info.marks, state.follow);
   record(frame);
+  const drawing = drawWorld($("world"), frame, state.info.marks, state.follow, state.top);
   drawPlot($("plot"), state.series, frame.iterations || 1);
+  const names = Object.keys(frame.measures || {});
+  const legend = drawMeasures($("measures"), state.series, names, frame.iterations || 1);
+  state.drawing = drawing && { ...drawing, measures: legend };
   showNodes(frame);
 }
 
@@ -348,6 +367,15 @@ function testHooks() {
       return { x: box.left + p.x * (box.width / canvas.width), y: box.top + p.y * (box.height / canvas.height) };
     },
     iteration: () => state.frame && state.frame.iteration,
+    // What the last frame drew: drones, event diamonds, message lines, banner, measures.
+    drawing: () => state.drawing,
+    series: () => state.series,
+    // The colour drawn at world point (x, y) of the map, as [r, g, b, a].
+    pixel(x, y) {
+      const canvas = $("world");
+      const p = worldPixel(canvas, state.frame, x, y);
+      return [...canvas.getContext("2d").getImageData(Math.round(p.x), Math.round(p.y), 1, 1).data];
+    },
     framesDrawn: () => state.drawn || 0,
     openCategory() {
       const toolbox = workspace.getToolbox();

@@ -25,6 +25,7 @@ from pyautonomousagent.runs import check_target, claim_run, save_run, simulate, 
 from pyautonomousagent.scenarios import load
 from pyautonomousagent.simulation import Scenario, ScenarioError, Simulation
 from pyautonomousagent.simulation.scenario import parameter_list
+from pyautonomousagent.studio.live import EventFeed
 from pyautonomousagent.studio.trees import Block, Checked, check_blocks, tree_text
 
 #: What a saved tree or run may be called (a file or folder name in the studio's folder).
@@ -60,6 +61,7 @@ class Session:
         self.scenario: Scenario = self.base
         self.checked: Checked | None = None
         self.sim: Simulation | None = None
+        self.feed: EventFeed | None = None
         self.lock = threading.RLock()
 
     # --- settings -----------------------------------------------------------------------
@@ -136,6 +138,7 @@ class Session:
         tree = self.runnable().tree
         with self.lock:
             self.sim = Simulation.create(self.scenario, seed=self.settings.seed, tree=tree)
+            self.feed = EventFeed(self.sim)
             return self.sim
 
     def advance(self, iterations: int) -> int:
@@ -149,12 +152,13 @@ class Session:
 
     def frame(self, follow: int | None = None) -> dict[str, Any]:
         """What the canvas draws now: positions and headings, the marks, the followed
-        agent's node statuses, and per node how many agents have it active."""
+        agent's node statuses, per node how many agents have it active, and the run's
+        events (:meth:`EventFeed.frame`: counts for the plots, the recent ones placed)."""
         with self.lock:
-            sim = self.sim
-            if sim is None:
+            sim, feed = self.sim, self.feed
+            if sim is None or feed is None:
                 return {"iteration": 0, "running": False}
-            return frame_of(sim, follow)
+            return {**frame_of(sim, follow), **feed.frame()}
 
     # --- saving -------------------------------------------------------------------------
 
