@@ -209,6 +209,9 @@ def test_paused_statuses_equal_the_recorded_trace(client: Client) -> None:
     assert board["number_ticks"] == int(sim.swarm.blackboard["number_ticks"][1]) > 0
     assert frame["active"][0] == 4  # every drone has the root active
     assert frame["x"] == [round(float(v), 3) for v in sim.swarm.columns["x"]]
+    energy = sim.swarm.columns["energy"]
+    assert frame["energy"] == {"mean": round(float(energy.mean()), 3),
+                               "low": round(float(energy.min()), 3)}  # fmt: skip
 
 
 def test_play_and_pause(client: Client) -> None:

@@ -62,6 +62,7 @@ class Session:
         self.checked: Checked | None = None
         self.sim: Simulation | None = None
         self.feed: EventFeed | None = None
+        self.nodes: list[dict[str, Any]] = []  # the run's tree, node_list() once per run
         self.lock = threading.RLock()
 
     # --- settings -----------------------------------------------------------------------
@@ -139,7 +140,13 @@ class Session:
         with self.lock:
             self.sim = Simulation.create(self.scenario, seed=self.settings.seed, tree=tree)
             self.feed = EventFeed(self.sim)
+            self.nodes = node_list(self.sim.recorder.nodes)
             return self.sim
+
+    def iteration(self) -> int:
+        """The iteration the run has reached (0: no run yet)."""
+        sim = self.sim
+        return 0 if sim is None else int(sim.world.iteration)
 
     def advance(self, iterations: int) -> int:
         """Run up to ``iterations`` more iterations (a new run first if there is none);
@@ -158,7 +165,7 @@ class Session:
             sim, feed = self.sim, self.feed
             if sim is None or feed is None:
                 return {"iteration": 0, "running": False}
-            return {**frame_of(sim, follow), **feed.frame()}
+            return {**frame_of(sim, follow, self.nodes), **feed.frame()}
 
     # --- saving -------------------------------------------------------------------------
 
@@ -266,20 +273,25 @@ def _whole(value: Any, key: str, least: int) -> int | None:
     return int(number)
 
 
-def frame_of(sim: Simulation, follow: int | None) -> dict[str, Any]:
-    """The drawing of ``sim`` now (see :meth:`Session.frame`)."""
-    swarm, recorder = sim.swarm, sim.recorder
+def frame_of(
+    sim: Simulation, follow: int | None, nodes: list[dict[str, Any]] | None = None
+) -> dict[str, Any]:
+    """The drawing of ``sim`` now (see :meth:`Session.frame`); ``nodes`` is
+    ``node_list(sim.recorder.nodes)`` where the caller keeps it."""
+    swarm = sim.swarm
     columns = swarm.columns
+    if nodes is None:
+        nodes = node_list(sim.recorder.nodes)
     frame: dict[str, Any] = {
         "iteration": int(sim.world.iteration),
         "iterations": int(sim.scenario.iterations),
         "world": [float(sim.scenario.world[0]), float(sim.scenario.world[1])],
         "x": _rounded(columns["x"]),
         "y": _rounded(columns["y"]),
-        "heading": _rounded(columns["heading"]) if "heading" in columns else [],
-        "energy": _rounded(columns["energy"]) if "energy" in columns else [],
+        "heading": _rounded(columns["heading"], 1) if "heading" in columns else [],
+        "energy": _energy(columns["energy"]) if "energy" in columns else None,
         "altitude": _rounded(columns["z"]) if "z" in columns else [],
-        "active": active_counts(sim),
+        "active": active_counts(sim, nodes),
     }
     if follow is not None and 0 <= follow < swarm.size:
         frame["follow"] = {
@@ -287,9 +299,7 @@ def frame_of(sim: Simulation, follow: int | None) -> dict[str, Any]:
             "statuses": statuses_of(sim, follow),
             "blackboard": {k: _plain(v[follow]) for k, v in swarm.blackboard.items()},
         }
-    frame["nodes"] = [
-        {k: n[k] for k in ("name", "type", "depth")} for n in node_list(recorder.nodes)
-    ]
+    frame["nodes"] = [{k: n[k] for k in ("name", "type", "depth")} for n in nodes]
     return frame
 
 
@@ -301,9 +311,19 @@ def _plain(value: Any) -> Any:
     return item if isinstance(item, bool | int | float | str) else str(item)
 
 
-def _rounded(values: np.ndarray) -> list[float]:
-    """Values for drawing, 3 decimals (the canvas needs no more)."""
-    return [float(v) for v in np.round(np.asarray(values, dtype=np.float64)[:MAX_DRAWN], 3)]
+def _rounded(values: np.ndarray, decimals: int = 3) -> list[float]:
+    """Values for drawing, 3 decimals (the canvas needs no more; headings, in degrees, 1)."""
+    array = np.asarray(values, dtype=np.float64)[:MAX_DRAWN]
+    rounded: list[float] = np.round(array, decimals).tolist()
+    return rounded
+
+
+def _energy(values: np.ndarray) -> dict[str, float] | None:
+    """The swarm's mean and lowest energy (percent) for the plot; None for no agents."""
+    array = np.asarray(values, dtype=np.float64)
+    if array.size == 0:
+        return None
+    return {"mean": round(float(array.mean()), 3), "low": round(float(array.min()), 3)}
 
 
 def statuses_of(sim: Simulation, agent: int) -> list[str] | None:
@@ -316,11 +336,12 @@ def statuses_of(sim: Simulation, agent: int) -> list[str] | None:
     return [STATUS_NAMES.get(int(code), "invalid") for code in trace[-1]]
 
 
-def active_counts(sim: Simulation) -> list[int]:
+def active_counts(sim: Simulation, nodes: list[dict[str, Any]] | None = None) -> list[int]:
     """Per node (tick order), how many agents have it active at the last record: the
-    agent's active leaf and the nodes above it."""
+    agent's active leaf and the nodes above it (``nodes``: ``node_list`` of the run's)."""
     recorder = sim.recorder
-    nodes = node_list(recorder.nodes)
+    if nodes is None:
+        nodes = node_list(recorder.nodes)
     behaviour = recorder.behaviour
     if behaviour is None or recorder.count == 0 or not nodes:
         return [0] * len(nodes)
@@ -328,7 +349,7 @@ def active_counts(sim: Simulation) -> list[int]:
     counts = np.bincount(leaves[leaves >= 0].astype(np.intp), minlength=len(nodes))
     total = counts.astype(np.int64)
     for i in range(len(nodes) - 1, 0, -1):  # children come after their parent
-        parent = int(nodes[i]["parent"])  # type: ignore[call-overload]
+        parent = int(nodes[i]["parent"])
         if parent >= 0:
             total[parent] += total[i]
     return [int(v) for v in total]
