@@ -340,16 +340,15 @@ def active_counts(sim: Simulation, nodes: list[dict[str, Any]] | None = None) ->
     """Per node (tick order), how many agents have it active at the last record: the
     agent's active leaf and the nodes above it (``nodes``: ``node_list`` of the run's)."""
     recorder = sim.recorder
-    if nodes is None:
-        nodes = node_list(recorder.nodes)
+    table: list[dict[str, Any]] = node_list(recorder.nodes) if nodes is None else nodes
     behaviour = recorder.behaviour
-    if behaviour is None or recorder.count == 0 or not nodes:
-        return [0] * len(nodes)
+    if behaviour is None or recorder.count == 0 or not table:
+        return [0] * len(table)
     leaves = np.asarray(behaviour[recorder.count - 1])
-    counts = np.bincount(leaves[leaves >= 0].astype(np.intp), minlength=len(nodes))
+    counts = np.bincount(leaves[leaves >= 0].astype(np.intp), minlength=len(table))
     total = counts.astype(np.int64)
-    for i in range(len(nodes) - 1, 0, -1):  # children come after their parent
-        parent = int(nodes[i]["parent"])
+    for i in range(len(table) - 1, 0, -1):  # children come after their parent
+        parent = int(table[i]["parent"])
         if parent >= 0:
             total[parent] += total[i]
     return [int(v) for v in total]
