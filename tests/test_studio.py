@@ -229,6 +229,34 @@ def test_play_and_pause(client: Client) -> None:
     assert client.ok("/api/frame")["iteration"] == 0
 
 
+def test_a_change_of_tree_or_parameter_during_a_run_offers_reset(client: Client) -> None:
+    info = client.ok("/api/info")
+    client.ok("/api/tree", {"tree": info["tree"]})
+    client.ok("/api/control", {"action": "step", "steps": 50})
+    renamed = json.loads(json.dumps(info["tree"]))
+    renamed["children"][0]["name"] = "share"
+    assert client.ok("/api/tree", {"tree": renamed})["ok"]
+    frame = client.ok("/api/frame")
+    assert frame["iteration"] == 50 and frame["stale"] == "the tree changed during this run"
+    for action in ("play", "step"):
+        status, refused = client.call("/api/control", {"action": action})
+        assert status == 400 and "Reset runs the new one" in refused["error"]
+    client.ok("/api/tree", {"tree": info["tree"]})  # undone: the run is current again
+    client.ok("/api/control", {"action": "step"})
+    frame = client.ok("/api/frame")
+    assert (frame["iteration"], frame["stale"]) == (51, "")
+    answer = client.ok("/api/settings", {"parameters": {"energy_use": 0.3}})
+    assert answer["stale"] == "the parameters changed during this run"
+    assert client.call("/api/control", {"action": "step"})[0] == 400
+    client.ok("/api/control", {"action": "reset"})
+    frame = client.ok("/api/frame")
+    assert (frame["iteration"], frame["stale"]) == (0, "")
+    client.ok("/api/tree", {"tree": renamed})  # at iteration 0 the new tree simply runs
+    assert client.ok("/api/frame")["stale"] == ""
+    client.ok("/api/control", {"action": "step"})
+    assert client.ok("/api/frame?follow=0")["nodes"][1]["name"] == "share"
+
+
 def test_a_saved_run_equals_pyaa_run_of_the_saved_tree(client: Client, tmp_path: Path) -> None:
     info = client.ok("/api/info")
     client.ok("/api/settings", {"iterations": ITERATIONS, "seed": 3})

@@ -391,6 +391,47 @@ def test_paused_at_k_the_followed_drones_colours_equal_its_trace(
     assert shown_on_blocks == shown
 
 
+def test_a_change_of_tree_or_parameter_during_a_run_offers_reset(
+    browser: Any, studio: Studio
+) -> None:
+    browser.get(studio.url)
+    wait_for(lambda: "can run" in browser.find_element("id", "message").text)
+    button = browser.find_element
+    button("id", "reset").click()
+    for k in (1, 2, 3):
+        button("id", "step").click()
+        wait_for(lambda k=k: browser.execute_script("return window.studio.iteration()") == k)
+    offer = "return window.studio.offer()"
+    assert browser.execute_script(offer) == ""
+    root = browser.execute_script(
+        "return window.studio.workspace().getBlocksByType('bt_ReactiveSequence')[0].id"
+    )
+    rename(browser, root, "root")
+    wait_for(lambda: "the tree changed during this run" in browser.execute_script(offer))
+    assert "Reset runs the new one" in browser.execute_script(offer)
+    assert "offer" in (button("id", "reset").get_attribute("class") or "")
+    assert button("id", "play").get_attribute("disabled")
+    assert button("id", "step").get_attribute("disabled")
+    assert browser.execute_script("return window.studio.iteration()") == 3  # still shown
+    button("id", "reset").click()
+    wait_for(lambda: browser.execute_script(offer) == "")
+    assert browser.execute_script("return window.studio.iteration()") == 0
+    assert not button("id", "step").get_attribute("disabled")
+    assert "offer" not in (button("id", "reset").get_attribute("class") or "")
+    button("id", "step").click()
+    wait_for(lambda: browser.execute_script("return window.studio.iteration()") == 1)
+    box = button("css selector", "input[data-param='energy_use']")
+    box.clear()
+    box.send_keys("0.3")
+    button("id", "apply").click()
+    wait_for(lambda: "the parameters changed during this run" in browser.execute_script(offer))
+    assert "Reset runs them" in button("id", "message").text
+    assert button("id", "play").get_attribute("disabled")
+    button("id", "reset").click()
+    wait_for(lambda: browser.execute_script(offer) == "")
+    assert not button("id", "play").get_attribute("disabled")
+
+
 STEP = """
 const done = arguments[arguments.length - 1];
 fetch("/api/control", {method: "POST", body: JSON.stringify({action: "step", steps: arguments[0]})})

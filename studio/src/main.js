@@ -39,9 +39,19 @@ function say(text, kind) {
 
 function setRunnable(ok) {
   state.ok = ok;
-  for (const id of ["play", "step", "reset", "save-run", "save-xml", "save-yaml"]) {
-    $(id).disabled = !ok;
-  }
+  showButtons();
+}
+
+// Play and Step need a tree that can run and a run of it (not one whose tree or parameters
+// changed since it began: then Reset is offered); Reset and saving need a tree that can run.
+function showButtons() {
+  const stale = Boolean(state.stale);
+  for (const id of ["reset", "save-run", "save-xml", "save-yaml"]) $(id).disabled = !state.ok;
+  for (const id of ["play", "step"]) $(id).disabled = !state.ok || stale;
+  $("reset").classList.toggle("offer", stale && state.ok);
+  setText($("offer"), !stale ? ""
+    : state.ok ? `${state.stale}: Reset runs the new one from iteration 0`
+      : `${state.stale}; the tree cannot run yet`);
 }
 
 // --- the tree -------------------------------------------------------------------------
@@ -54,6 +64,9 @@ async function checkTree() {
   state.checking = true;
   try {
     await checkNow();
+    await pollOnce(); // the run may now be one of another tree: Reset is offered
+  } catch (error) {
+    say(error.message, "error");
   } finally {
     state.checking = false;
   }
@@ -175,10 +188,15 @@ function readSettings() {
 
 async function applySettings() {
   try {
-    await api("/api/settings", readSettings());
+    const result = await api("/api/settings", readSettings());
     await checkTree();
-    if (state.ok) await control("reset");
-    say("settings applied; the run is reset", "ok");
+    if (result.stale) {
+      say("settings applied: Reset runs them from iteration 0", "ok");
+    } else {
+      if (state.ok) await control("reset");
+      say("settings applied; the run is reset", "ok");
+    }
+    await pollOnce();
   } catch (error) {
     say(error.message, "error");
   }
@@ -250,7 +268,7 @@ function colourBlocks(frame) {
   const nodes = frame.nodes || [];
   const follow = frame.follow && frame.follow.statuses;
   blocks.forEach((block, i) => {
-    if (nodes.length === blocks.length) {
+    if (nodes.length === blocks.length && !frame.stale) {
       showStatus(block, follow ? follow[i] : "invalid", frame.active ? frame.active[i] : 0);
     } else {
       showStatus(block, "invalid", 0);
@@ -309,6 +327,10 @@ function show(request, frame) {
   state.frame = frame;
   state.drawn = (state.drawn || 0) + 1;
   state.playing = frame.playing;
+  if ((frame.stale || "") !== (state.stale || "")) {
+    state.stale = frame.stale || "";
+    showButtons();
+  }
   record(frame);
   const drawing = drawWorld($("world"), frame, state.info.marks, state.follow, state.top);
   lap("world");
@@ -473,6 +495,7 @@ function testHooks() {
       return icon ? icon.getText() : null;
     },
     runnable: () => state.ok,
+    offer: () => $("offer").textContent,
     // Whether a check of the tree is pending or under way (it may move blocks: warnings).
     busy: () => checkTimer !== null || state.checking,
   };

@@ -219,6 +219,7 @@ class Studio:
         action = data.get("action")
         if action == "play":
             self.session.runnable()  # an invalid tree cannot run
+            self.session.current()  # nor a run whose tree or parameters changed
             self.player.set_playing(True)
         elif action == "pause":
             self.player.set_playing(False)

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.inputs import InputError, shown
 from pyautonomousagent.recording import node_list
 from pyautonomousagent.runs import check_target, claim_run, save_run, simulate, streaming
@@ -62,6 +63,9 @@ class Session:
         self.checked: Checked | None = None
         self.sim: Simulation | None = None
         self.feed: EventFeed | None = None
+        self.run_tree: Node | None = None  # the tree the run was made with
+        #: What changed since the run on the screen began ("": it is current).
+        self.stale = ""
         self.nodes: list[dict[str, Any]] = []  # the run's tree, node_list() once per run
         self.lock = threading.RLock()
 
@@ -104,19 +108,44 @@ class Session:
         )
         with self.lock:
             self.settings, self.scenario = settings, scenario
-            self.sim = None
-        return {"ok": True, "agents": scenario.agents, "iterations": scenario.iterations}
+            self._changed()
+            stale = self.stale
+        return {
+            "ok": True, "agents": scenario.agents, "iterations": scenario.iterations,
+            "stale": stale,
+        }  # fmt: skip
 
     # --- the tree -----------------------------------------------------------------------
 
     def set_tree(self, blocks: Block | None) -> Checked:
-        """Check a tree of blocks; a tree that can run replaces the run's tree (and the run
-        is reset), one that cannot keeps no tree, so nothing runs."""
+        """Check a tree of blocks; a tree that can run is the one the next run (Reset) runs,
+        one that cannot keeps no tree, so nothing new runs (see :meth:`_changed` for the
+        run under way)."""
         checked = check_blocks(blocks, self.scenario)
         with self.lock:
             self.checked = checked
-            self.sim = None
+            self._changed()
         return checked
+
+    def _changed(self) -> None:
+        """After a change of the tree or the settings: a run still at iteration 0 is
+        dropped (the next step starts the new one); a run under way stays on the screen,
+        can no longer be played or stepped, and :attr:`stale` says what changed, so that the
+        page offers Reset. A change undone (the same tree and settings as the run's) makes
+        the run current again."""
+        sim = self.sim
+        if sim is None:
+            self.stale = ""
+            return
+        changed = []
+        if self.checked is None or self.checked.tree != self.run_tree:
+            changed.append("the tree")
+        if (self.scenario, self.settings.seed) != (sim.scenario, sim.seed):
+            changed.append("the parameters")
+        if changed and sim.world.iteration == 0:
+            self.sim = self.feed = None
+            changed = []
+        self.stale = f"{' and '.join(changed)} changed during this run" if changed else ""
 
     def tree_file(self, fmt: str) -> str:
         """The checked tree as the text of an XML or YAML file."""
@@ -139,6 +168,7 @@ class Session:
         tree = self.runnable().tree
         with self.lock:
             self.sim = Simulation.create(self.scenario, seed=self.settings.seed, tree=tree)
+            self.run_tree, self.stale = tree, ""
             self.feed = EventFeed(self.sim)
             self.nodes = node_list(self.sim.recorder.nodes)
             return self.sim
@@ -148,10 +178,17 @@ class Session:
         sim = self.sim
         return 0 if sim is None else int(sim.world.iteration)
 
+    def current(self) -> None:
+        """InputError when the run on the screen is not of the tree and settings now (it
+        cannot go on: Reset starts the new one)."""
+        if self.stale:
+            raise InputError(f"{self.stale}: Reset runs the new one from iteration 0")
+
     def advance(self, iterations: int) -> int:
         """Run up to ``iterations`` more iterations (a new run first if there is none);
         returns the iteration reached."""
         with self.lock:
+            self.current()
             sim = self.sim or self.reset()
             if iterations > 0 and sim.world.iteration < sim.scenario.iterations:
                 sim.run(progress=False, iterations=iterations)
@@ -164,8 +201,8 @@ class Session:
         with self.lock:
             sim, feed = self.sim, self.feed
             if sim is None or feed is None:
-                return {"iteration": 0, "running": False}
-            return {**frame_of(sim, follow, self.nodes), **feed.frame()}
+                return {"iteration": 0, "running": False, "stale": ""}
+            return {**frame_of(sim, follow, self.nodes), **feed.frame(), "stale": self.stale}
 
     # --- saving -------------------------------------------------------------------------
 
