@@ -386,4 +386,5 @@ def test_every_scenario_opens_steps_and_draws(name: str, tmp_path: Path) -> None
     json.dumps(frame, allow_nan=False)
     assert len(frame["x"]) == session.scenario.agents and frame["follow"]["statuses"]
     assert ("z" in session.sim.swarm.columns) == bool(frame["altitude"])  # type: ignore[union-attr]
+    assert frame["measures"]["alerts"] == 0 and frame["stale"] == ""
     assert list(tmp_path.iterdir()) == []

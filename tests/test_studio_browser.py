@@ -15,6 +15,7 @@ Needs Debian's ``chromium`` and ``chromium-driver``, selenium, and the built fro
 
 from __future__ import annotations
 
+import html
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -288,10 +289,19 @@ def test_a_files_node_names_are_kept_and_a_new_block_takes_its_types_name(
     assert names_of(browser.execute_script(tree)) == names_of(packaged_gathering())
     upload = tmp_path_factory.mktemp("uploads") / "renamed.xml"
     text = Path(load("gathering").tree).read_text(encoding="utf-8")
-    upload.write_text(text.replace('"sequence_refuel"', '"refuel_then_go_back"'), "utf-8")
+    markup = '<img src=x onerror="window.pwned=1">'  # a name is text, never markup
+    text = text.replace('"sequence_refuel"', '"refuel_then_go_back"')
+    text = text.replace('"sequence_gathering"', f'"{html.escape(markup)}"')
+    upload.write_text(text, "utf-8")
     browser.find_element("id", "upload").send_keys(str(upload))
     wait_for(lambda: "refuel_then_go_back" in names_of(browser.execute_script(tree)))
     assert len(names_of(browser.execute_script(tree))) == 18
+    assert markup in names_of(browser.execute_script(tree))
+    wait_for(lambda: browser.execute_script("return window.studio.runnable()"))
+    browser.find_element("id", "reset").click()
+    browser.find_element("id", "step").click()
+    wait_for(lambda: markup in browser.find_element("id", "nodes").text)
+    assert browser.execute_script("return window.pwned") is None
     open_empty(browser, studio)
     sequence = add_block(browser, "Sequence", None)
     first = add_block(browser, "Action_Refuel_A", sequence)
