@@ -321,6 +321,21 @@ def test_a_files_node_names_are_kept_and_a_new_block_takes_its_types_name(
     wait_for(lambda: "wrote studio.xml" in browser.find_element("id", "message").text)
     saved = [node.name for node in load_tree(tmp_path / "studio.xml").walk()]
     assert saved == ["sequence", "refuel_first", "action_refuel_a"]
+    # a copy (Ctrl+C, Ctrl+V) of a block takes the next free name of its original's
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.keys import Keys
+
+    point = browser.execute_script("return window.studio.blockPoint(arguments[0])", first)
+    keys = ActionChains(browser)
+    keys.w3c_actions.pointer_action.move_to_location(int(point["x"]), int(point["y"]))
+    keys.w3c_actions.pointer_action.click()
+    keys.key_down(Keys.CONTROL).send_keys("c").send_keys("v").key_up(Keys.CONTROL)
+    keys.perform()
+    newest = "return window.studio.newest('bt_Action_Refuel_A')"
+    copy = wait_for(lambda: (made := browser.execute_script(newest)) not in (first, second) and made)
+    assert browser.execute_script("return window.studio.name(arguments[0])", copy) == (
+        "refuel_first_2"
+    )
 
 
 LAUGHS = """<?xml version="1.0"?>

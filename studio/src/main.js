@@ -468,6 +468,12 @@ function testHooks() {
       return { x: box.left + box.width / 2, y: box.top + box.height / 2 };
     },
     name: (id) => workspace.getBlockById(id).getFieldValue(NAME),
+    // A point on a block's type label, on the screen (a click there selects the block).
+    blockPoint(id) {
+      Blockly.renderManagement.triggerQueuedRenders(workspace);
+      const box = workspace.getBlockById(id).getSvgRoot().getBoundingClientRect();
+      return { x: box.left + 8, y: box.top + 8 };
+    },
     agentPoint(i) {
       const canvas = $("world");
       const p = agentPixel(canvas, state.frame, i);
