@@ -332,7 +332,8 @@ def test_a_files_node_names_are_kept_and_a_new_block_takes_its_types_name(
     keys.key_down(Keys.CONTROL).send_keys("c").send_keys("v").key_up(Keys.CONTROL)
     keys.perform()
     newest = "return window.studio.newest('bt_Action_Refuel_A')"
-    copy = wait_for(lambda: (made := browser.execute_script(newest)) not in (first, second) and made)
+    copy = wait_for(lambda: (made := browser.execute_script(newest)) not in (first, second)
+                    and made)  # fmt: skip
     assert browser.execute_script("return window.studio.name(arguments[0])", copy) == (
         "refuel_first_2"
     )
