@@ -297,6 +297,7 @@ def test_a_files_node_names_are_kept_and_a_new_block_takes_its_types_name(
     wait_for(lambda: "refuel_then_go_back" in names_of(browser.execute_script(tree)))
     assert len(names_of(browser.execute_script(tree))) == 18
     assert markup in names_of(browser.execute_script(tree))
+    wait_for(lambda: not browser.execute_script("return window.studio.busy()"))  # checked
     wait_for(lambda: browser.execute_script("return window.studio.runnable()"))
     browser.find_element("id", "reset").click()
     browser.find_element("id", "step").click()

@@ -483,7 +483,6 @@ function testHooks() {
     iteration: () => state.frame && state.frame.iteration,
     // What the last frame drew: drones, event diamonds, message lines, banner, measures.
     drawing: () => state.drawing,
-    series: () => state.series,
     // The colour drawn at world point (x, y) of the map, as [r, g, b, a].
     pixel(x, y) {
       const canvas = $("world");
