@@ -5,9 +5,9 @@
 #   make docs   installs the [docs] extra (and the extras the lessons and the pages' examples
 #               use) and builds the documentation site into site/ (lessons executed,
 #               warnings as errors, links checked)
-#   make test   installs the test dependencies (and the [docs], [x8], [dask], [video], [fast],
-#               [pandas] and [experiments] extras, and chromium when missing) into .venv and
-#               runs the suite
+#   make test   installs the test dependencies (JupyterLab among them, and the [docs], [x8],
+#               [dask], [video], [fast], [pandas] and [experiments] extras, and chromium when
+#               missing) into .venv and runs the suite
 #   (demo and test also build the studio's front-end with npm: pyaa studio, docs/studio.md)
 PYTHON ?= python3
 VENV ?= .venv
@@ -57,7 +57,8 @@ lessons: $(VENV)/.installed-lessons
 docs: $(VENV)/.installed-docs
 	$(BIN)/python scripts/build_docs.py --out site
 
-# The replay's browser test drives Debian's chromium; install it when missing and we can (root).
+# The browser tests (the replay, the studio, the studio in JupyterLab) drive Debian's chromium;
+# install it when missing and we can (root).
 browser:
 	@if [ ! -x /usr/bin/chromium ] || ! command -v chromedriver >/dev/null; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \

@@ -300,7 +300,9 @@ def test_a_notebook_cell_shows_the_studio(tmp_path: Path) -> None:
     studio = Studio("gathering", tmp_path)
     try:
         html = studio._repr_html_()
-        assert f'src="{studio.url}"' in html
+        assert f'<iframe src="{studio.url}"' in html
+        assert f'<a href="{studio.url}" target="_blank"' in html  # a tab of its own
+        assert repr(studio) == f"Studio('gathering') at {studio.url}"
         with urllib.request.urlopen(studio.url, timeout=30) as page:
             assert b"/static/studio.js" in page.read()
     finally:

@@ -498,33 +498,3 @@ def test_the_map_draws_a_message_to_the_receivers_in_range_and_the_plots_the_mea
         max(abs(a - b) for a, b in zip(colour, purple, strict=True)) < 16
         for colour in browser.execute_script(inked, "measures")
     )
-
-
-def test_a_notebook_cell_shows_the_studio_and_a_step_in_the_page_advances_it(
-    browser: Any, tmp_path: Path
-) -> None:
-    """A real kernel (nbclient, as the lessons run) evaluates ``Studio(...)`` as a cell's
-    value; the frame it outputs is opened in Chromium, and Step there advances the run the
-    kernel serves. (JupyterLab itself is not started here.)"""
-    import re
-
-    nbformat = pytest.importorskip("nbformat", reason="nbformat is not installed")
-    nbclient = pytest.importorskip("nbclient", reason="nbclient is not installed")
-    cells = [
-        f"from pathlib import Path\nfrom pyautonomousagent.studio import Studio\n"
-        f"studio = Studio('gathering', Path({str(tmp_path)!r}))\nstudio",
-        "studio.session.sim.world.iteration",
-    ]
-    notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(c) for c in cells[:1]])
-    client = nbclient.NotebookClient(notebook, kernel_name="python3", timeout=120)
-    with client.setup_kernel():
-        client.execute_cell(notebook.cells[0], 0)
-        html = notebook.cells[0].outputs[0]["data"]["text/html"]
-        url = re.search(r'<iframe src="([^"]+)"', html).group(1)
-        browser.get(url)
-        wait_for(lambda: "can run" in browser.find_element("id", "message").text)
-        browser.find_element("id", "step").click()
-        wait_for(lambda: "iteration 1 of 8000" in browser.find_element("id", "iteration").text)
-        notebook.cells.append(nbformat.v4.new_code_cell(cells[1]))
-        client.execute_cell(notebook.cells[1], 1)
-        assert notebook.cells[1].outputs[0]["data"]["text/plain"] == "1"

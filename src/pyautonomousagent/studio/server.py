@@ -188,12 +188,19 @@ class Studio:
             self._thread = None
 
     def _repr_html_(self) -> str:
-        """The studio in a notebook's output: served in a thread, shown in a frame."""
+        """The studio in a notebook's output: served in a thread, shown in a frame 900 px
+        high, with a link that opens it in a browser tab of its own (more room)."""
         self.start()
         return (
-            f'<iframe src="{self.url}" title="pyAutonomousAgent studio" width="100%" '
-            'height="900" style="border: 1px solid #ccc"></iframe>'
+            f'<div class="pyaa-studio"><iframe src="{self.url}" title="pyAutonomousAgent '
+            'studio" width="100%" height="900" style="border: 1px solid #ccc"></iframe>'
+            f'<a href="{self.url}" target="_blank" rel="noopener">Open the studio in a tab '
+            f"of its own</a> ({self.url})</div>"
         )
+
+    def __repr__(self) -> str:
+        """What a plain-text front end shows."""
+        return f"Studio({self.session.base.name!r}) at {self.url}"
 
     def info(self) -> dict[str, Any]:
         """What the page needs at start."""
