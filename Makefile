@@ -2,13 +2,15 @@
 #   make demo   installs into .venv (with the [fast] and [pandas] extras) and runs the
 #               gathering scenario on the compiled engine into runs/gathering/
 #   make lessons  installs JupyterLab (the [lessons] extra) and opens lesson 01 of notebooks/
+#               (lesson 09 shows the studio: it builds the front-end too)
 #   make docs   installs the [docs] extra (and the extras the lessons and the pages' examples
 #               use) and builds the documentation site into site/ (lessons executed,
 #               warnings as errors, links checked)
 #   make test   installs the test dependencies (JupyterLab among them, and the [docs], [x8],
 #               [dask], [video], [fast], [pandas] and [experiments] extras, and chromium when
 #               missing) into .venv and runs the suite
-#   (demo and test also build the studio's front-end with npm: pyaa studio, docs/studio.md)
+#   (demo, lessons and test also build the studio's front-end with npm: pyaa studio,
+#   docs/studio.md)
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -44,7 +46,7 @@ demo: $(VENV)/.installed
 	$(BIN)/pyaa run gathering --out runs/gathering --overwrite --engine compiled
 	@echo "Next: the lessons. 'make lessons' opens lesson 01 (notebooks/01_one_drone.ipynb) in JupyterLab."
 
-$(VENV)/.installed-lessons: pyproject.toml | $(BIN)/python
+$(VENV)/.installed-lessons: pyproject.toml $(STUDIO_BUNDLE) | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[fast,lessons]"
 	touch $@ $(VENV)/.installed
 

@@ -309,6 +309,18 @@ def test_a_notebook_cell_shows_the_studio(tmp_path: Path) -> None:
         studio.shutdown()
 
 
+def test_without_the_front_end_a_notebook_cell_says_how_to_build_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from pyautonomousagent.studio import server
+
+    monkeypatch.setattr(server, "has_bundle", lambda: False)
+    studio = Studio("gathering", tmp_path)
+    html = studio._repr_html_()
+    assert "front-end is not built" in html and "npm run build" in html
+    assert "<iframe" not in html and studio._thread is None  # not served
+
+
 def test_another_sites_page_cannot_change_anything(studio: Studio, tmp_path: Path) -> None:
     body = json.dumps({"name": "x", "format": "xml"}).encode()
     for header, value in (("Origin", "http://example.com"), ("Host", "evil.example:80")):

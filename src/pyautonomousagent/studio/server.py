@@ -189,7 +189,14 @@ class Studio:
 
     def _repr_html_(self) -> str:
         """The studio in a notebook's output: served in a thread, shown in a frame 900 px
-        high, with a link that opens it in a browser tab of its own (more room)."""
+        high, with a link that opens it in a browser tab of its own (more room); without
+        the built front-end, the one line that says how to build it."""
+        if not has_bundle():
+            return (
+                "<p>The studio's front-end is not built: run <code>make lessons</code> (or "
+                "<code>cd studio &amp;&amp; npm ci &amp;&amp; npm run build</code>), then "
+                "this cell again.</p>"
+            )
         self.start()
         return (
             f'<div class="pyaa-studio"><iframe src="{self.url}" title="pyAutonomousAgent '
