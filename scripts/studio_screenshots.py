@@ -8,8 +8,9 @@ Usage::
 Each picture is taken on a fresh studio (the gathering scenario, in a temporary folder):
 
 - ``studio-blocks.png``: the gathering tree (Fig. 6) built block by block from an empty
-  canvas with real pointer drags (the browser test's helpers) and stepped once, the
-  palette's *Mission leaves* open beside it;
+  canvas with real pointer drags, each block's name typed as the scenario's file names it
+  (the browser test's helpers), and stepped once, the palette's *Mission leaves* open beside
+  it;
 - ``studio-live.png``: the run played at 1000 iterations per second, paused and stepped to
   iteration 5003 (just after the gathering order), drone2 followed: each block shows
   drone2's status and how many drones have the node active, beside the map, the energy
@@ -43,17 +44,18 @@ sys.path.insert(0, str(ROOT))
 # The browser test's helpers drag blocks as a student does: one piece of code for that job.
 from tests.chromium import CHROMIUM, driver_path, offline_chromium  # noqa: E402
 from tests.test_studio_browser import (  # noqa: E402
-    GATHERING,
     add_block,
     build,
     open_category,
     open_empty,
+    packaged_gathering,
     wait_for,
 )
 
 #: The browser window of each picture, CSS pixels: wide enough for the studio's two columns
-#: (the palette open beside the tree needs more), high enough for what the picture shows.
-WINDOWS = {"blocks": (1600, 900), "live": (1400, 1000), "invalid": (1400, 900),
+#: (the palette open beside the tree, whose blocks show their names, needs more), high
+#: enough for what the picture shows.
+WINDOWS = {"blocks": (1900, 900), "live": (1400, 1000), "invalid": (1400, 900),
            "jupyterlab": (1400, 1000)}  # fmt: skip
 #: The iteration the live picture shows: the first after the gathering order (5000) and two.
 LIVE_AT = 5003
@@ -63,10 +65,11 @@ LIVE_AT = 5003
 BESIDE_FLYOUT = """
 const ws = window.studio.workspace();
 const tree = ws.getTopBlocks(true)[0];
-const flyout = [...document.querySelectorAll('.blocklyFlyout')]
-  .map(e => e.getBoundingClientRect()).find(r => r.width > 0);
+const flyout = ws.getToolbox().getFlyout();
+const right = flyout.getWorkspace().getParentSvg().getBoundingClientRect().left
+  + flyout.getWidth();
 const left = tree.getSvgRoot().getBoundingClientRect().left;
-tree.moveBy((flyout.right + 24 - left) / ws.scale, 0);
+tree.moveBy((right + 24 - left) / ws.scale, 0);
 """
 #: Scroll the notebook back to its first cell (the code, then the studio's frame).
 NOTEBOOK_TOP = "document.querySelector('.jp-WindowedPanel-outer').scrollTop = 0;"
@@ -94,7 +97,7 @@ def blocks(browser: Any, out: Path) -> Path:
     """The gathering tree built from blocks, with the palette's mission leaves open."""
     with fresh_studio() as studio:
         open_empty(browser, studio)
-        build(browser, GATHERING)
+        build(browser, packaged_gathering())  # each block's name typed, as in the file
         browser.find_element("id", "cat-mission").click()
         wait_for(lambda: browser.execute_script("return window.studio.openCategory()"))
         browser.execute_script(BESIDE_FLYOUT)  # a move: checked again, the run starts anew
