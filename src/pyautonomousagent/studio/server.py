@@ -7,7 +7,7 @@ advances the run at the chosen speed, :data:`PLAYER_RATE` times a second, while 
 The page, the bundle (Blockly, built by ``npm run build``) and Blockly's media are served
 from the package; nothing comes from elsewhere.
 
-Routes (JSON in and out; errors are ``{"error": MESSAGE}`` with status 400):
+Routes (JSON in and out; errors are ``{"error": MESSAGE}`` with status 400)::
 
     GET  /                      the page
     GET  /static/...            the bundle and media
