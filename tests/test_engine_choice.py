@@ -17,8 +17,10 @@ def test_the_faster_engine_is_picked_where_its_memory_fits() -> None:
     assert pick_engine(given) == "compiled"
     assert pick_engine(given, available=3 * GB) == "compiled"
     assert pick_engine(given, available=2 * GB) == "batched"  # the compiled one would not fit
-    slower = {**given, "compiled": RunCost(11.0, GB)}
-    assert pick_engine(slower) == "batched"  # less memory, but slower
+    slower = {**given, "compiled": RunCost(11.0, 2 * GB)}
+    assert pick_engine(slower) == "batched"
+    leaner = {**given, "compiled": RunCost(11.0, GB)}  # slower, but the batched engine
+    assert pick_engine(leaner) == "compiled"  # would need twice its memory
 
 
 def test_an_engine_needing_much_more_memory_is_never_picked() -> None:
@@ -46,7 +48,7 @@ def test_the_costs_follow_the_record_rate_and_the_cache() -> None:
     decimated = run_costs(100_000, 500, record_every=100)
     for engine in ("batched", "compiled"):
         assert decimated[engine].seconds < cold[engine].seconds
-        assert decimated[engine].bytes < cold[engine].bytes / 50
+        assert decimated[engine].bytes < cold[engine].bytes / 15  # 6 records, not 501
     warm = run_costs(100_000, 500, record_every=1, compiled_ready=True)
     assert warm["batched"] == cold["batched"]
     saved = cold["compiled"].seconds - warm["compiled"].seconds
