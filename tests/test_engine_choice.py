@@ -115,3 +115,25 @@ def test_a_sweep_compiles_once_before_its_runs_and_says_so(
     result = sweep(compiled, tmp_path / "out", "serial", progress=False, report=said.append)
     assert [line.split(" ")[0] for line in said] == ["compiling", "compiled"]
     assert set(result.table["engine"].to_pylist()) == {"compiled"}
+
+
+@pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
+def test_set_up_compiles_the_serial_and_the_parallel_loop_for_any_later_size() -> None:
+    """A small run's set-up leaves both fused variants compiled, so a large run after it
+    (the parallel loop) finds its code compiled: ``ready``, no cold compile."""
+    from pyautonomousagent import Simulation, load
+
+    small = Simulation.create(load("patrol").with_overrides(agents=3, iterations=5),
+                              engine="compiled")  # fmt: skip
+    engine = small.engine
+    fused = engine._fusable(small)
+    assert fused is not None and engine._function(fused, 5) == "block_serial"
+    code = engine._code(fused)
+    for name in engine.variants(fused):
+        assert getattr(code, name).signatures, name  # compiled for this run's types
+    large = Simulation.create(load("patrol").with_overrides(agents=100_000, iterations=5),
+                              engine="batched", record_every=5)  # fmt: skip
+    bigger = type(engine)(
+        run.scenario_tree(large.scenario), large.swarm, large.world, vars(large.scenario.parameters)
+    )
+    assert bigger._function(fused, 500) == "block_parallel" and bigger.ready(large)
