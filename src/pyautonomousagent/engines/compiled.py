@@ -279,6 +279,7 @@ class CompiledEngine:
                                  "keeps it) ...")  # fmt: skip
             for name in self.variants(fused):
                 self._call(sim, fused, 0, name)
+            marker.parent.mkdir(parents=True, exist_ok=True)  # (a module loaded before it)
             marker.touch()
         seconds = sim.timings["compile"] = time.perf_counter() - began
         if seconds >= SAY_COMPILE_SECONDS:
