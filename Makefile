@@ -76,7 +76,7 @@ browser:
 test: $(VENV)/.installed-test browser
 	$(BIN)/ruff check src tests
 	$(BIN)/mypy src
-	$(BIN)/python -m pytest -n 2 --dist loadgroup
+	$(BIN)/python -m pytest -n 2 --dist loadgroup --durations=25
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check src tests
