@@ -46,6 +46,7 @@ from tests.chromium import CHROMIUM, driver_path, offline_chromium  # noqa: E402
 from tests.test_studio_browser import (  # noqa: E402
     add_block,
     build,
+    follow_agent,
     open_category,
     open_empty,
     packaged_gathering,
@@ -117,15 +118,8 @@ def control(studio: Any, **request: Any) -> None:
     urllib.request.urlopen(post, timeout=60).close()
 
 
-def served(studio: Any) -> int:
-    """The iteration the studio's run has reached (0 before the first)."""
-    sim = studio.session.sim
-    return 0 if sim is None else int(sim.world.iteration)
-
-
 def live(browser: Any, out: Path) -> Path:
     """Played to about LIVE_AT, stepped to it exactly, drone2 followed."""
-    from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.support.ui import Select
 
     with fresh_studio() as studio:
@@ -133,20 +127,15 @@ def live(browser: Any, out: Path) -> Path:
         wait_for(lambda: "can run" in browser.find_element("id", "message").text)
         Select(browser.find_element("id", "speed")).select_by_value("1000")
         browser.find_element("id", "play").click()
-        wait_for(lambda: served(studio) >= LIVE_AT - 300, 60)
+        wait_for(lambda: studio.session.iteration() >= LIVE_AT - 300, 60)
         control(studio, action="pause")  # Pause, on time however busy the browser is
-        reached = served(studio)
+        reached = studio.session.iteration()
         if reached >= LIVE_AT:
             raise SystemExit(f"studio_screenshots: played past {LIVE_AT} ({reached}); again")
         control(studio, action="step", steps=LIVE_AT - reached)
         iteration = "return window.studio.iteration() || 0"
         wait_for(lambda: browser.execute_script(iteration) == LIVE_AT)
-        point = browser.execute_script("return window.studio.agentPoint(1)")
-        click = ActionChains(browser)
-        click.w3c_actions.pointer_action.move_to_location(int(point["x"]), int(point["y"]))
-        click.w3c_actions.pointer_action.click()
-        click.perform()
-        wait_for(lambda: "following drone2" in browser.find_element("id", "follow").text)
+        follow_agent(browser, 1)
         running = "return document.querySelectorAll('#nodes [data-status=running]').length"
         wait_for(lambda: browser.execute_script(running) > 0)
         return shot(browser, out / "studio-live.png", wait=0.5)

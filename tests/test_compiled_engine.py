@@ -13,7 +13,8 @@ from pyautonomousagent.bt import leaf
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.engines.compiled import MAX_COMPILED_NODES, CompiledEngine, compilable
-from pyautonomousagent.simulation.run import batched_seconds, choose_engine, scenario_tree
+from pyautonomousagent.simulation.costs import batched_seconds
+from pyautonomousagent.simulation.run import choose_engine, scenario_tree
 from pyautonomousagent.testing import check_engines_agree
 
 needs_numba = pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")

@@ -173,6 +173,19 @@ def rename(browser: Any, block: str, name: str) -> None:
              == name, 5)  # fmt: skip
 
 
+def follow_agent(browser: Any, row: int) -> None:
+    """Click drone ``row`` (0-based) on the map with a real pointer; wait until it is
+    followed."""
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    point = browser.execute_script(f"return window.studio.agentPoint({row})")
+    click = ActionChains(browser)
+    click.w3c_actions.pointer_action.move_to_location(int(point["x"]), int(point["y"]))
+    click.w3c_actions.pointer_action.click()
+    click.perform()
+    wait_for(lambda: f"following drone{row + 1}" in browser.find_element("id", "follow").text)
+
+
 def build(browser: Any, node: dict[str, Any], parent: str | None = None) -> None:
     """Drag ``node`` (a tree of blocks: type, name, children) under ``parent`` block by
     block; each new block starts with its type's name, and ``node``'s name is typed over it."""
@@ -394,14 +407,7 @@ def test_paused_at_k_the_followed_drones_colours_equal_its_trace(
     for k in range(1, 8):
         browser.find_element("id", "step").click()
         wait_for(lambda k=k: browser.execute_script("return window.studio.iteration()") == k)
-    point = browser.execute_script("return window.studio.agentPoint(1)")
-    from selenium.webdriver.common.action_chains import ActionChains
-
-    click = ActionChains(browser)
-    click.w3c_actions.pointer_action.move_to_location(int(point["x"]), int(point["y"]))
-    click.w3c_actions.pointer_action.click()
-    click.perform()
-    wait_for(lambda: "following drone2" in browser.find_element("id", "follow").text)
+    follow_agent(browser, 1)
     shown = browser.execute_script(
         "return [...document.querySelectorAll('#nodes div')].map(d => d.dataset.status)"
     )

@@ -475,8 +475,8 @@ def _check_05(tree_file: Any = None) -> str:
 
 def smallest_compiled_swarm(iterations: int) -> int:
     """The fewest agents for which the batched loop's estimate reaches the seconds from which
-    engine "auto" compiles (:data:`~pyautonomousagent.simulation.run.AUTO_COMPILE_SECONDS`)."""
-    from pyautonomousagent.simulation.run import AUTO_COMPILE_SECONDS, batched_seconds
+    engine "auto" compiles (:data:`~pyautonomousagent.simulation.costs.AUTO_COMPILE_SECONDS`)."""
+    from pyautonomousagent.simulation.costs import AUTO_COMPILE_SECONDS, batched_seconds
 
     low, high = 1, 10**12
     while low < high:

@@ -218,7 +218,6 @@ class CompiledEngine:
         self._inboxes: list[tuple[np.ndarray, np.ndarray]] | None = None
         self._no_climb = np.zeros(0)  # the fused loop's u_w argument for the 2-D drone
         self._blocks: RecordBlock | None = None  # where the fused loop writes its records
-        self._stopped = np.zeros(0, dtype=np.int64)  # the iteration each agent stopped at
 
     def _sends(self, node: int) -> Sends:
         sends = self.kernels[node].sends
@@ -373,7 +372,8 @@ class CompiledEngine:
         row0 = start // every + 1  # the first record these iterations can write
         blocks = self._block(sim.recorder)
         count = blocks.fit(start, count) if count else 0
-        arguments = self._arguments(sim, fused, model, blocks, row0, count)
+        stopped = np.full(self.swarm.size, -1, dtype=np.int64)  # the iteration each stopped at
+        arguments = self._arguments(sim, fused, model, blocks, row0, count, stopped)
         import numba
 
         groups = -(-self.swarm.size // CHUNK)
@@ -384,7 +384,7 @@ class CompiledEngine:
             sim.inbox = []  # handled in the first iteration
         if done:
             blocks.hand_over(row0, (start + done) // every - start // every)
-            self._after(sim, fused.sensors, start, done, self._stopped)
+            self._after(sim, fused.sensors, start, done, stopped)
             self._send(sim.world.datalink)
         return int(done)
 
@@ -396,24 +396,24 @@ class CompiledEngine:
 
     def _arguments(
         self, sim: LoopView, fused: Fused, model: Drone2D | Drone3D, blocks: RecordBlock,
-        row0: int, count: int,
+        row0: int, count: int, stopped: np.ndarray,
     ) -> tuple[Any, ...]:  # fmt: skip
         """The fused function's arguments after ``t0, count, every, row0, chunk``: the
         state, the control signals, the record arrays from record ``row0`` (empty ones for
         ``count`` 0: compiling only), the parameters, the sensors' state, then the messages'
-        and the swarm sensor's."""
+        and the swarm sensor's; ``stopped`` (shape (N,), int64, -1) gets the iteration at
+        which each agent is found unable to move."""
         recorder = sim.recorder
         u_climb = model.u_climb if isinstance(model, Drone3D) else self._no_climb
         traced_at = np.full(self.swarm.size, -1, dtype=np.int64)
         traced_at[recorder.traced] = np.arange(recorder.traced.size)
-        self._stopped = np.full(self.swarm.size, -1, dtype=np.int64)
         columns, traces, behaviour = blocks.arrays(row0) if count else self._empty(recorder)
         assert behaviour is not None  # checked by _fusable
         p = model.params
         arguments = (
             self.status, self.current, self.pending, *self._constants, *self.arrays,
             model.u_speed, model.u_heading, u_climb, *columns, traces,
-            traced_at, behaviour, recorder._leaf_rows.astype(np.int64), self._stopped,
+            traced_at, behaviour, recorder._leaf_rows.astype(np.int64), stopped,
             p.max_speed, p.speed_step, p.turn_step, *fused.sensors.state,
         )  # fmt: skip
         if fused.messaging is not None:

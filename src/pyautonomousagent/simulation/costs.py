@@ -13,6 +13,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+from pyautonomousagent.record_blocks import RECORD_BLOCK_BYTES
+
 #: Seconds of batched loop from which "auto" compiles: compiling a tree takes 5-30 s the
 #: first time (then well under 1 s from numba's cache), which a loop this long pays back.
 #: It is the cost :func:`run_costs` gives a compile not in the cache yet.
@@ -83,8 +85,6 @@ def run_costs(
     the compiled engine pays :data:`AUTO_COMPILE_SECONDS` unless ``compiled_ready`` (its
     loop is in numba's cache). Both store the same records (at most 8 bytes per column,
     agent and record)."""
-    from pyautonomousagent.record_blocks import RECORD_BLOCK_BYTES
-
     records = iterations // record_every + 1
     row = agents * (columns * 8 + 2)  # the columns and the active behaviour
     recorded = records * row

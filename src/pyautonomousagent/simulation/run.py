@@ -37,8 +37,6 @@ from pyautonomousagent.recording import (
 )
 from pyautonomousagent.registry import Registry
 from pyautonomousagent.simulation import phases
-from pyautonomousagent.simulation.costs import AUTO_COMPILE_SECONDS as AUTO_COMPILE_SECONDS
-from pyautonomousagent.simulation.costs import batched_seconds as batched_seconds
 from pyautonomousagent.simulation.costs import pick_engine, run_costs
 from pyautonomousagent.simulation.engine_api import Engine, fuses
 from pyautonomousagent.simulation.fit import check_tree

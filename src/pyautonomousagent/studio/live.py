@@ -54,7 +54,7 @@ class EventFeed:
         #: Iterations an event stays on the map (the GIF's share of the run, at least 1).
         self.window = max(1, round(EVENT_SHOWN * sim.scenario.iterations))
         self.reach = float(vars(sim.scenario.parameters).get("datalink_range", math.inf))
-        self.index = {name: k for k, name in enumerate(sim.recorder.names)}
+        self.index = sim.world.agent_index  # name -> row, without a dict of N names
 
     def update(self) -> None:
         """Read the events that happened since the last call."""

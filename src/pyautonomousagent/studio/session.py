@@ -310,15 +310,11 @@ def _whole(value: Any, key: str, least: int) -> int | None:
     return int(number)
 
 
-def frame_of(
-    sim: Simulation, follow: int | None, nodes: list[dict[str, Any]] | None = None
-) -> dict[str, Any]:
+def frame_of(sim: Simulation, follow: int | None, nodes: list[dict[str, Any]]) -> dict[str, Any]:
     """The drawing of ``sim`` now (see :meth:`Session.frame`); ``nodes`` is
-    ``node_list(sim.recorder.nodes)`` where the caller keeps it."""
+    ``node_list(sim.recorder.nodes)``, which the session makes once per run."""
     swarm = sim.swarm
     columns = swarm.columns
-    if nodes is None:
-        nodes = node_list(sim.recorder.nodes)
     frame: dict[str, Any] = {
         "iteration": int(sim.world.iteration),
         "iterations": int(sim.scenario.iterations),
@@ -373,19 +369,18 @@ def statuses_of(sim: Simulation, agent: int) -> list[str] | None:
     return [STATUS_NAMES.get(int(code), "invalid") for code in trace[-1]]
 
 
-def active_counts(sim: Simulation, nodes: list[dict[str, Any]] | None = None) -> list[int]:
+def active_counts(sim: Simulation, nodes: list[dict[str, Any]]) -> list[int]:
     """Per node (tick order), how many agents have it active at the last record: the
     agent's active leaf and the nodes above it (``nodes``: ``node_list`` of the run's)."""
     recorder = sim.recorder
-    table: list[dict[str, Any]] = node_list(recorder.nodes) if nodes is None else nodes
     behaviour = recorder.behaviour
-    if behaviour is None or recorder.count == 0 or not table:
-        return [0] * len(table)
+    if behaviour is None or recorder.count == 0 or not nodes:
+        return [0] * len(nodes)
     leaves = np.asarray(behaviour[recorder.count - 1])
-    counts = np.bincount(leaves[leaves >= 0].astype(np.intp), minlength=len(table))
+    counts = np.bincount(leaves[leaves >= 0].astype(np.intp), minlength=len(nodes))
     total = counts.astype(np.int64)
-    for i in range(len(table) - 1, 0, -1):  # children come after their parent
-        parent = int(table[i]["parent"])
+    for i in range(len(nodes) - 1, 0, -1):  # children come after their parent
+        parent = int(nodes[i]["parent"])
         if parent >= 0:
             total[parent] += total[i]
     return [int(v) for v in total]
