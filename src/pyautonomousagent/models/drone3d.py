@@ -15,7 +15,8 @@ control signal ``u_w``:
   whole, so the altitude settles instead of limit-cycling.
 
 Only ``+ - min max`` act on the altitude, so every engine and every SIMD level gives the
-same bits. All functions work on whole arrays of shape ``(N,)``.
+same bits. The NumPy functions work on whole arrays of shape ``(N,)``; beside each, its
+per-agent form (``*_agent``, on row ``a``: see :mod:`~pyautonomousagent.models.drone2d`).
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pyautonomousagent.jit import njit
+from pyautonomousagent.kernels import np_maximum, np_minimum
 from pyautonomousagent.models import drone2d
 
 #: The swarm columns the 3-D drone moves and follows, name -> dtype: altitude (world units
@@ -91,6 +94,22 @@ def advance_vertical(
     return new_z, new_climb
 
 
+@njit(inline="always")
+def climb_agent(
+    a: int, moving: bool, z: np.ndarray, climb_rate: np.ndarray, u_climb: np.ndarray,
+    max_climb_rate: float, max_altitude: float,
+) -> None:  # fmt: skip
+    """:meth:`Drone3D.advance`'s altitude of agent row ``a``: :func:`advance_vertical`
+    written into ``z[a]`` and ``climb_rate[a]`` (arrays shape (N,); bounds as in
+    :class:`Drone3DParameters`) where ``moving``, else its climb rate set to 0."""
+    if not moving:
+        climb_rate[a] = 0.0
+        return
+    w = climb_rate[a]
+    z[a] = np_minimum(np_maximum(z[a] + w, 0.0), max_altitude)
+    climb_rate[a] = np_minimum(np_maximum(w + u_climb[a], -max_climb_rate), max_climb_rate)
+
+
 def climb_control(
     z: np.ndarray, climb: np.ndarray, requested_altitude: np.ndarray, params: Drone3DParameters
 ) -> np.ndarray:
@@ -104,6 +123,20 @@ def climb_control(
     """
     wanted = clip(requested_altitude - (z + climb), -params.max_climb_rate, params.max_climb_rate)
     return clip(wanted - climb, -params.climb_step, params.climb_step)
+
+
+@njit(inline="always")
+def climb_control_agent(
+    a: int, z: np.ndarray, climb_rate: np.ndarray, requested_altitude: np.ndarray,
+    u_climb: np.ndarray, max_climb_rate: float, climb_step: float,
+) -> None:  # fmt: skip
+    """:func:`climb_control` of agent row ``a``, written into ``u_climb[a]`` (arrays shape
+    (N,); the bounds as in :class:`Drone3DParameters`)."""
+    w = climb_rate[a]
+    wanted = np_minimum(
+        np_maximum(requested_altitude[a] - (z[a] + w), -max_climb_rate), max_climb_rate
+    )
+    u_climb[a] = np_minimum(np_maximum(wanted - w, -climb_step), climb_step)
 
 
 class Drone3D:
