@@ -324,10 +324,8 @@ def _swarm_detect(sensors: SensorKernel, layout: Layout) -> str:
             return done"""
 
 
-#: What the fused functions pass for a parameter of the motion model's per-agent functions
-#: (:func:`motion_functions`) of this name: the agent row, whether it moves, the control
-#: signals, the 2-D drone's parameters; the 3-D drone's come from :attr:`Layout.vertical`
-#: (:data:`_VERTICAL`); any other name is the swarm column of that name.
+#: What the fused functions pass for a parameter of this name of :func:`motion_functions`;
+#: the 3-D drone's are read from :attr:`Layout.vertical`, any other is the column.
 _MOTION_ARGS = {"u_speed": "us", "u_heading": "uh", "u_climb": "uc"} | {
     name: name for name in ("a", "moving", "max_speed", "speed_step", "turn_step")
 }
@@ -344,11 +342,6 @@ def motion_functions(layout: Layout) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
             (drone2d.control_agent, drone3d.climb_control_agent))  # fmt: skip
 
 
-def motion_imports(layout: Layout) -> dict[str, Any]:
-    """Name -> function of :func:`motion_functions`, for the generated module's imports."""
-    return {alias(f): f for group in motion_functions(layout) for f in group}
-
-
 def _model_calls(functions: Sequence[Any], layout: Layout, indent: str) -> str:
     """A line per function: its call for agent ``a``, its arguments matched by name."""
     vertical = dict(zip(_VERTICAL, layout.constants.refs("drone3d", layout.vertical or ()),
@@ -362,9 +355,8 @@ def _model_calls(functions: Sequence[Any], layout: Layout, indent: str) -> str:
 
 
 def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
-    """Phase 2 for agent ``a``: the sensors, then the motion model's step
-    (:func:`motion_functions`; an agent that cannot move stops), ``stopped_at`` keeping the
-    first iteration it could not."""
+    """Phase 2 for agent ``a``: the sensors, the motion model's step (:func:`motion_functions`;
+    one that cannot move stops), ``stopped_at`` keeping the first iteration it could not."""
     lines = f"""moving = {_sensor_call(sensors, layout)}{_swarm_apply(sensors, layout)}
 {_model_calls(motion_functions(layout)[0], layout, "")}
 if not moving and stopped_at[a] < 0:
@@ -657,7 +649,7 @@ def module_source(
     lines = [HEADER]
     used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
     used |= {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
-    used |= motion_imports(layout)
+    used |= {alias(f): f for group in motion_functions(layout) for f in group}
     if sensors is not None:
         used["S"] = sensors.function
     if sensors is not None and sensors.swarm is not None:

@@ -36,7 +36,7 @@ from pyautonomousagent.engines.compiled_source import (
     _swarm_args,
     alias,
     fused_arguments,
-    motion_imports,
+    motion_functions,
     tree_body,
 )
 from pyautonomousagent.kernels import LeafKernel, SensorKernel
@@ -129,16 +129,19 @@ def kernel_module_source(
     """The generated module: imports of the helpers and kernels, then ``block_gpu`` and the
     swarm sensor's :func:`swarm_kernels` (plain Python functions:
     :func:`~pyautonomousagent.engines.gpu.load_kernel` compiles them)."""
-    lines = [HEADER, *_import_lines(_kernel_imports(kernels, sensors) | motion_imports(layout))]
+    lines = [HEADER, *_import_lines(_kernel_imports(kernels, sensors, layout))]
     lines.append(kernel_function(program, kernels, layout, sensors))
     lines.append(swarm_kernels(layout, sensors))
     return "\n".join(lines) + "\n"
 
 
-def _kernel_imports(kernels: Mapping[int, LeafKernel], sensors: SensorKernel) -> dict[str, Any]:
-    """Name -> function of the leaves' (and their ``Later`` steps') and sensors' kernels (with
-    a swarm sensor its ``apply``, ``WA``, and device steps, ``WD0, WD1, ...``)."""
-    used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
+def _kernel_imports(kernels: Mapping[int, LeafKernel], sensors: SensorKernel,
+                    layout: Layout) -> dict[str, Any]:  # fmt: skip
+    """Name -> function of the leaves' (and their ``Later`` steps'), sensors' (with a swarm
+    sensor its ``apply``, ``WA``, and device steps, ``WD0, WD1, ...``) and the motion
+    model's (:func:`~pyautonomousagent.engines.compiled_source.motion_functions`) kernels."""
+    used: dict[str, Any] = {alias(f): f for group in motion_functions(layout) for f in group}
+    used |= {alias(k.function): k.function for k in kernels.values()}
     used |= {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
     used["S"] = sensors.function
     if sensors.swarm is not None:
@@ -370,7 +373,7 @@ def message_module_source(
     sensors' and handlers' kernels (``H<k>``, per-receiver ``R<k>``), then
     :func:`message_kernels` (plain Python functions: the engine compiles them)."""
     lines = [MESSAGE_HEADER]
-    used = _kernel_imports(kernels, sensors) | motion_imports(layout)
+    used = _kernel_imports(kernels, sensors, layout)
     for k, handler in enumerate(messaging.handlers):
         used[f"H{k}"] = handler.function
         if handler.receive is not None:

@@ -3,8 +3,7 @@
 Heading is in degrees, measured clockwise from north (+y), as in aviation: a drone with
 heading 90 flies east (+x). The NumPy functions work on whole arrays of shape ``(N,)``;
 beside each, its per-agent form (``*_agent``: the same operations in the same order on row
-``a`` of the arrays, compiled with numba for the compiled engine's loop and as a CUDA
-device function for the GPU engine's).
+``a``; the compiled engine's loop and the GPU kernel call it).
 """
 
 from __future__ import annotations
@@ -64,13 +63,11 @@ def advance(
 
 
 @njit(inline="always")
-def step_agent(
-    a: int, moving: bool, x: np.ndarray, y: np.ndarray, speed: np.ndarray,
-    heading: np.ndarray, u_speed: np.ndarray, u_heading: np.ndarray, max_speed: float,
-) -> None:  # fmt: skip
+def step_agent(a: int, moving: bool, x: np.ndarray, y: np.ndarray, speed: np.ndarray,
+               heading: np.ndarray, u_speed: np.ndarray, u_heading: np.ndarray,
+               max_speed: float) -> None:  # fmt: skip
     """:meth:`Drone2D.advance` of agent row ``a``: :func:`advance` written into its entries
-    of ``x``, ``y``, ``speed`` and ``heading`` (shape (N,) each) where ``moving``, else its
-    speed set to 0 (``u_speed``, ``u_heading``: read only)."""
+    of the arrays (shape (N,)) where ``moving``, else its speed set to 0."""
     if not moving:
         speed[a] = 0.0
         return
@@ -126,11 +123,9 @@ def control(
 
 
 @njit(inline="always")
-def control_agent(
-    a: int, speed: np.ndarray, heading: np.ndarray, requested_speed: np.ndarray,
-    requested_heading: np.ndarray, u_speed: np.ndarray, u_heading: np.ndarray,
-    speed_step: float, turn_step: float,
-) -> None:  # fmt: skip
+def control_agent(a: int, speed: np.ndarray, heading: np.ndarray, requested_speed: np.ndarray,
+                  requested_heading: np.ndarray, u_speed: np.ndarray, u_heading: np.ndarray,
+                  speed_step: float, turn_step: float) -> None:  # fmt: skip
     """:func:`control` of agent row ``a``, written into ``u_speed[a]`` and ``u_heading[a]``
     (arrays shape (N,); the steps as in :class:`DroneParameters`)."""
     u_speed[a] = speed_step * np_sign(requested_speed[a] - speed[a])
@@ -138,6 +133,17 @@ def control_agent(
     if error > 180.0:
         error = error - 360.0
     u_heading[a] = turn_step * np_sign(error)
+
+
+def settle(s: dict[str, np.ndarray], new: dict[str, np.ndarray], moving: np.ndarray,
+           stopped: str) -> None:  # fmt: skip
+    """The ``new`` columns (shape (N,) each) into the swarm's ``s`` where ``moving`` (shape
+    (N,), bool); elsewhere the column ``stopped`` (a rate: speed, climb rate) set to 0."""
+    everyone = bool(moving.all())
+    for key, value in new.items():
+        np.copyto(s[key], value, where=True if everyone else moving)
+    if not everyone:
+        s[stopped][~moving] = 0.0
 
 
 class Drone2D:
@@ -171,11 +177,7 @@ class Drone2D:
         new = advance(
             s["x"], s["y"], s["speed"], s["heading"], self.u_speed, self.u_heading, self.params
         )
-        everyone = bool(moving.all())
-        for key, value in zip(("x", "y", "speed", "heading"), new, strict=True):
-            np.copyto(s[key], value, where=True if everyone else moving)
-        if not everyone:
-            s["speed"][~moving] = 0.0
+        settle(s, dict(zip(("x", "y", "speed", "heading"), new, strict=True)), moving, "speed")
 
     def control(self, s: dict[str, np.ndarray]) -> None:
         """Phase 4: control signals toward the requested speed and heading."""
