@@ -15,6 +15,7 @@ iterations (sensors, the 2-D drone's motion, with the 3-D drone's altitude where
 
 from __future__ import annotations
 
+import inspect
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -33,6 +34,7 @@ from pyautonomousagent.kernels import (
     SensorKernel,
     SwarmSensorKernel,
 )
+from pyautonomousagent.models import drone2d, drone3d
 
 _CODES = {name: code for code, name in NAMES.items()}
 
@@ -322,71 +324,49 @@ def _swarm_detect(sensors: SensorKernel, layout: Layout) -> str:
             return done"""
 
 
-def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
-    """Phase 2 for agent ``a``: the sensors, then the 2-D drone's step (and the 3-D drone's
-    altitude, :func:`_vertical_motion`). The sine and cosine are
-    :func:`~pyautonomousagent.kernels.sincos_degrees`, the NumPy path's operations: the same
-    bits on every CPU, and in a GPU kernel compiled without FMA contraction."""
-    c = {name: layout.array(name) for name in layout.names}
-    x, y, v, h = c["x"], c["y"], c["speed"], c["heading"]
-    lines = f"""moving = {_sensor_call(sensors, layout)}{_swarm_apply(sensors, layout)}
-if moving:
-    heading = {h}[a]
-    speed = {v}[a]
-    sine, cosine = sincos_degrees(heading)
-    {x}[a] = {x}[a] + speed * sine
-    {y}[a] = {y}[a] + speed * cosine
-    {v}[a] = np_minimum(np_maximum(speed + us[a], 0.0), max_speed)
-    {h}[a] = wrap_degrees(heading + uh[a]){_vertical_motion(layout)}
-else:
-    {v}[a] = 0.0{_vertical_stop(layout)}
-    if stopped_at[a] < 0:
-        stopped_at[a] = t"""
-    return "\n".join(indent + line for line in lines.splitlines())
+#: What the fused functions pass for a parameter of this name of :func:`motion_functions`;
+#: the 3-D drone's are read from :attr:`Layout.vertical`, any other is the column.
+_MOTION_ARGS = {"u_speed": "us", "u_heading": "uh", "u_climb": "uc"} | {
+    name: name for name in ("a", "moving", "max_speed", "speed_step", "turn_step")
+}
+_VERTICAL = ("max_climb_rate", "climb_step", "max_altitude")
 
 
-def _vertical_refs(layout: Layout) -> tuple[str, str, str]:
-    """Where the code reads the 3-D drone's max_climb_rate, climb_step and max_altitude."""
-    assert layout.vertical is not None
-    top, step, ceiling = layout.constants.refs("drone3d", layout.vertical)
-    return top, step, ceiling
-
-
-def _vertical_motion(layout: Layout) -> str:
-    """The 3-D drone's eqs. 5-6 for agent ``a`` (``models.drone3d.advance_vertical``), after
-    the 2-D step in :func:`_motion`; "" for the 2-D drone."""
+def motion_functions(layout: Layout) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+    """The motion model's per-agent functions (njit, in :mod:`~pyautonomousagent.models`),
+    each group called in order: Phase 2's step, Phase 4's control: the 2-D drone's, then,
+    where :attr:`Layout.vertical` is set, the 3-D drone's altitude's."""
     if layout.vertical is None:
-        return ""
-    z, w = layout.array("z"), layout.array("climb_rate")
-    top, _, ceiling = _vertical_refs(layout)
-    return f"""
-    climb = {w}[a]
-    {z}[a] = np_minimum(np_maximum({z}[a] + climb, 0.0), {ceiling})
-    {w}[a] = np_minimum(np_maximum(climb + uc[a], -{top}), {top})"""
+        return (drone2d.step_agent,), (drone2d.control_agent,)
+    return ((drone2d.step_agent, drone3d.climb_agent),
+            (drone2d.control_agent, drone3d.climb_control_agent))  # fmt: skip
 
 
-def _vertical_stop(layout: Layout) -> str:
-    """A 3-D drone that cannot move stops climbing; "" for the 2-D drone."""
-    return "" if layout.vertical is None else f"\n    {layout.array('climb_rate')}[a] = 0.0"
+def _model_calls(functions: Sequence[Any], layout: Layout, indent: str) -> str:
+    """A line per function: its call for agent ``a``, its arguments matched by name."""
+    vertical = dict(zip(_VERTICAL, layout.constants.refs("drone3d", layout.vertical or ()),
+                        strict=False))  # fmt: skip
+    lines = []
+    for function in functions:
+        names = inspect.signature(getattr(function, "py_func", function)).parameters
+        args = [_MOTION_ARGS.get(n) or vertical.get(n) or layout.array(n) for n in names]
+        lines.append(f"{indent}{alias(function)}({', '.join(args)})")
+    return "\n".join(lines)
+
+
+def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
+    """Phase 2 for agent ``a``: the sensors, the motion model's step (:func:`motion_functions`;
+    one that cannot move stops), ``stopped_at`` keeping the first iteration it could not."""
+    lines = f"""moving = {_sensor_call(sensors, layout)}{_swarm_apply(sensors, layout)}
+{_model_calls(motion_functions(layout)[0], layout, "")}
+if not moving and stopped_at[a] < 0:
+    stopped_at[a] = t"""
+    return "\n".join(indent + line for line in lines.splitlines())
 
 
 def _control(layout: Layout, indent: str) -> str:
-    """Phase 4 for agent ``a``: the 2-D drone's speed and turn steps toward the requests
-    (and the 3-D drone's climb step toward the requested altitude)."""
-    v, h = layout.array("speed"), layout.array("heading")
-    rs, rh = layout.array("requested_speed"), layout.array("requested_heading")
-    lines = f"""us[a] = speed_step * np_sign({rs}[a] - {v}[a])
-error = wrap_degrees({rh}[a] - {h}[a])
-if error > 180.0:
-    error = error - 360.0
-uh[a] = turn_step * np_sign(error)"""
-    if layout.vertical is not None:  # eq. 7, models.drone3d.climb_control
-        z, w, ra = (layout.array(k) for k in ("z", "climb_rate", "requested_altitude"))
-        top, step, _ = _vertical_refs(layout)
-        lines += f"""
-wanted = np_minimum(np_maximum({ra}[a] - ({z}[a] + {w}[a]), -{top}), {top})
-uc[a] = np_minimum(np_maximum(wanted - {w}[a], -{step}), {step})"""
-    return "\n".join(indent + line for line in lines.splitlines())
+    """Phase 4 for agent ``a``: the motion model's control (:func:`motion_functions`)."""
+    return _model_calls(motion_functions(layout)[1], layout, indent)
 
 
 def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, indent: str) -> str:
@@ -650,9 +630,7 @@ from numba import njit, prange
 from numpy import uint64 as U  # agent rows as unsigned: no check for negative indices
 
 from pyautonomousagent.engines.compiled_runtime import halt, record_statuses
-from pyautonomousagent.kernels import (
-    hypot, np_maximum, np_minimum, np_sign, sincos_degrees, wrap_degrees,
-)
+from pyautonomousagent.kernels import hypot
 """
 
 
@@ -671,6 +649,7 @@ def module_source(
     lines = [HEADER]
     used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
     used |= {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
+    used |= {alias(f): f for group in motion_functions(layout) for f in group}
     if sensors is not None:
         used["S"] = sensors.function
     if sensors is not None and sensors.swarm is not None:

@@ -36,6 +36,7 @@ from pyautonomousagent.engines.compiled_source import (
     _swarm_args,
     alias,
     fused_arguments,
+    motion_functions,
     tree_body,
 )
 from pyautonomousagent.kernels import LeafKernel, SensorKernel
@@ -46,27 +47,13 @@ import math
 from numba import cuda
 
 from pyautonomousagent.engines.compiled_runtime import halt, record_statuses
-from pyautonomousagent.kernels import np_maximum, np_minimum, np_sign, sincos_degrees, wrap_degrees
 """
 
 #: The header of a tree that sends messages: also ``hypot`` (the range test), numba's
 #: ``int64`` (local arrays) and the cell grid's walk over a receiver's cells.
-MESSAGE_HEADER = (
-    HEADER.replace("np_maximum,", "hypot, np_maximum,").replace(
-        "import cuda\n", "import cuda, int64\n"
-    )
-    + "from pyautonomousagent.engines.gpu_grid import cell_spans, next_message\n"
-)
-
-#: The helpers the generated kernel imports besides the leaves' and sensors' kernels.
-HELPERS = (
-    "halt",
-    "record_statuses",
-    "np_maximum",
-    "np_minimum",
-    "np_sign",
-    "sincos_degrees",
-    "wrap_degrees",
+MESSAGE_HEADER = HEADER.replace("import cuda\n", "import cuda, int64\n") + (
+    "from pyautonomousagent.engines.gpu_grid import cell_spans, next_message\n"
+    "from pyautonomousagent.kernels import hypot\n"
 )
 
 
@@ -80,12 +67,6 @@ def kernel_function(
     if layout.outboxes:
         raise ValueError("the GPU kernel is written for trees that send no messages")
     store = "\n".join(f"            r{j}[row, a] = c{j}[a]" for j in range(len(layout.names)))
-    if layout.deferred:
-        control = _later_pass(
-            kernels, layout, "range(a, a + 1)", _control(layout, " " * 12), " " * 8
-        )
-    else:
-        control = _control(layout, " " * 8)
     arguments = fused_arguments(layout, sensors) + _swarm_state(sensors)
     return f"""
 def block_gpu(t0, count, every, row0, {arguments}):
@@ -95,12 +76,21 @@ def block_gpu(t0, count, every, row0, {arguments}):
     for t in range(t0 + 1, t0 + count + 1):
 {_motion(layout, sensors, " " * 8)}
 {tree_body(program, kernels, layout, " " * 8)}
-{control}
+{_thread_control(kernels, layout, " " * 8)}
         if t % every == 0:
             row = t // every - row0
 {store}
             record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)
 """
+
+
+def _thread_control(kernels: Mapping[int, LeafKernel], layout: Layout, indent: str) -> str:
+    """Phase 4 for the agent ``a`` of a thread, at ``indent``, after its deferred ``Later``
+    steps (if any)."""
+    if not layout.deferred:
+        return _control(layout, indent)
+    return _later_pass(kernels, layout, "range(a, a + 1)", _control(layout, indent + " " * 4),
+                       indent)  # fmt: skip
 
 
 def _swarm_state(sensors: SensorKernel) -> str:
@@ -139,16 +129,19 @@ def kernel_module_source(
     """The generated module: imports of the helpers and kernels, then ``block_gpu`` and the
     swarm sensor's :func:`swarm_kernels` (plain Python functions:
     :func:`~pyautonomousagent.engines.gpu.load_kernel` compiles them)."""
-    lines = [HEADER, *_import_lines(_kernel_imports(kernels, sensors))]
+    lines = [HEADER, *_import_lines(_kernel_imports(kernels, sensors, layout))]
     lines.append(kernel_function(program, kernels, layout, sensors))
     lines.append(swarm_kernels(layout, sensors))
     return "\n".join(lines) + "\n"
 
 
-def _kernel_imports(kernels: Mapping[int, LeafKernel], sensors: SensorKernel) -> dict[str, Any]:
-    """Name -> function of the leaves' (and their ``Later`` steps') and sensors' kernels (with
-    a swarm sensor its ``apply``, ``WA``, and device steps, ``WD0, WD1, ...``)."""
-    used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
+def _kernel_imports(kernels: Mapping[int, LeafKernel], sensors: SensorKernel,
+                    layout: Layout) -> dict[str, Any]:  # fmt: skip
+    """Name -> function of the leaves' (and their ``Later`` steps'), sensors' (with a swarm
+    sensor its ``apply``, ``WA``, and device steps, ``WD0, WD1, ...``) and the motion
+    model's (:func:`~pyautonomousagent.engines.compiled_source.motion_functions`) kernels."""
+    used: dict[str, Any] = {alias(f): f for group in motion_functions(layout) for f in group}
+    used |= {alias(k.function): k.function for k in kernels.values()}
     used |= {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
     used["S"] = sensors.function
     if sensors.swarm is not None:
@@ -346,14 +339,8 @@ def message_kernels(
     a prefix sum between them)."""
     records = len(layout.names)
     store = "\n".join(f"        r{j}[row, a] = c{j}[a]" for j in range(records))
-    if layout.deferred:
-        control = _later_pass(
-            kernels, layout, "range(a, a + 1)", _control(layout, " " * 8), " " * 4
-        )
-    else:
-        control = _control(layout, " " * 4)
     tick = f"""{tree_body(program, kernels, layout, " " * 4)}
-{control}
+{_thread_control(kernels, layout, " " * 4)}
     if t % every == 0:
         row = t // every - row0
 {store}
@@ -386,7 +373,7 @@ def message_module_source(
     sensors' and handlers' kernels (``H<k>``, per-receiver ``R<k>``), then
     :func:`message_kernels` (plain Python functions: the engine compiles them)."""
     lines = [MESSAGE_HEADER]
-    used = _kernel_imports(kernels, sensors)
+    used = _kernel_imports(kernels, sensors, layout)
     for k, handler in enumerate(messaging.handlers):
         used[f"H{k}"] = handler.function
         if handler.receive is not None:
