@@ -112,8 +112,10 @@ def _bind(kernel: Any, *functions: tuple[str, Callable[..., Any], tuple[str, ...
     bound = [bind_columns(what, f, leading, kernel.names) for what, f, leading in functions]
     for (what, function, _), columns in zip(functions[1:], bound[1:], strict=True):
         if columns != bound[0]:
-            raise TypeError(f"{what} {_qualified(function, columns)} takes its arrays in "
-                            f"another order than {functions[0][0]}: {', '.join(bound[0])}")  # fmt: skip
+            raise TypeError(
+                f"{what} {_qualified(function, columns)} takes its arrays in another order "
+                f"than {functions[0][0]}: {', '.join(bound[0])}"
+            )
     object.__setattr__(kernel, "names", bound[0])
 
 
@@ -269,13 +271,12 @@ class HandlerKernel:
     def __post_init__(self) -> None:
         passed = {"arrays": len(self.names), "state arrays": len(self.state),
                   "constants": len(self.constants)}  # fmt: skip
-        check_arity("HandlerKernel", self.function, ("t", "senders", "data", "count"), passed)
+        everyone, one = ("t", "senders", "data", "count"), ("r", "m", "t", "senders", "data")
+        check_arity("HandlerKernel", self.function, everyone, passed)
         if self.receive is not None and self.receive.state is None:  # else: its state's size
-            check_arity("Receive", self.receive.function, ("r", "m", "t", "senders", "data"),
-                        passed)  # fmt: skip
-        receive = () if self.receive is None else (("Receive", self.receive.function,
-                                                      ("r", "m", "t", "senders", "data")),)  # fmt: skip
-        _bind(self, ("HandlerKernel", self.function, ("t", "senders", "data", "count")), *receive)
+            check_arity("Receive", self.receive.function, one, passed)
+        receive = () if self.receive is None else (("Receive", self.receive.function, one),)
+        _bind(self, ("HandlerKernel", self.function, everyone), *receive)
 
 
 @dataclass(frozen=True)
