@@ -8,8 +8,9 @@ by returning a :class:`SensorKernel` from
 that has no kernel runs on the batched engine instead.
 
 A kernel function takes the agent's row ``a`` first, then the arrays it names (shape (N,),
-read and written at ``[a]``), then its constants; it must give the same bits as the NumPy
-``evaluate``/``sense`` it stands for (the engine-identity tests hold them equal).
+read and written at ``[a]``; matched to its parameters by name, :data:`Columns`), then its
+constants; it must give the same bits as the NumPy ``evaluate``/``sense`` it stands for (the
+engine-identity tests hold them equal).
 
 Messages: a leaf that broadcasts declares what it sends (:class:`Sends`) and its kernel gets
 an outbox after its arrays; a mission's message type may have a :class:`HandlerKernel`, the
@@ -185,7 +186,7 @@ class LeafKernel:
     Attributes:
         function: ``function(a, *arrays, [outbox,] *constants) -> status code`` (an njit
             function).
-        names: the swarm columns or blackboard keys passed as arrays, in order;
+        names: the swarm columns or blackboard keys passed as arrays (:data:`Columns`);
             :data:`ITERATION` passes the iteration number.
         constants: numbers passed after the arrays (port values, an agent row, ...).
         sends: what the leaf broadcasts (its outbox comes after the arrays), or None.
