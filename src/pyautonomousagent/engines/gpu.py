@@ -53,7 +53,7 @@ from pyautonomousagent.loop.arguments import ordered, parameters
 from pyautonomousagent.loop.engine import LoopEngine
 from pyautonomousagent.loop.layout import Constants, Fused, Layout, Messaging
 from pyautonomousagent.loop.modules import load_source
-from pyautonomousagent.loop.source import fused_parameters
+from pyautonomousagent.loop.source import fused_parameters, record_parameters, swarm_state_names
 from pyautonomousagent.models.drone2d import Drone2D
 from pyautonomousagent.models.drone3d import Drone3D
 
@@ -398,10 +398,10 @@ class GpuEngine(LoopEngine):
         model = sim.model
         assert isinstance(model, Drone2D | Drone3D)
         assert self._device is not None and self._groups is not None
-        records = fused_parameters(self.layout, fused.sensors)[1]
+        records = record_parameters(self.layout)
         arguments = self._device | dict(zip(records, self._groups.arguments(slot), strict=True))
         arguments |= self._model_arguments(model, fused.sensors) | self._readings
-        swarm = self._swarm_arguments(fused.sensors)
+        swarm = swarm_state_names(fused.sensors.swarm)
         return arguments | dict(zip(swarm, self._swarm_device, strict=True))
 
     def loop(self, sim: LoopView, count: int, typical: int | None = None) -> int:

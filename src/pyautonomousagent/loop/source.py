@@ -82,10 +82,16 @@ def fused_parameters(layout: Layout, sensors: SensorKernel) -> list[list[str]]:
     records, then the motion's parameters and the sensors' state ``ss0, ss1, ...``
     (``SensorKernel.state``)."""
     state = ["st", "cur", "pend", "kf", "ki", *layout.array_names, "us", "uh", "uc"]
-    records = [*layout.record_names, "traces", "traced_at", "behaviour", "leaf_rows", "stopped_at"]
     parameters = ["max_speed", "speed_step", "turn_step"]
     sensed = [f"ss{j}" for j in range(len(sensors.state))]
-    return [state, records, parameters + sensed]
+    return [state, record_parameters(layout), parameters + sensed]
+
+
+def record_parameters(layout: Layout) -> list[str]:
+    """The record arrays' parameters: a column's ``r0, r1, ...``, the traced agents' node
+    statuses ``traces``, their rows ``traced_at``, the active behaviour, the leaves' rows
+    in the traces, and the iteration each agent stopped at."""
+    return [*layout.record_names, "traces", "traced_at", "behaviour", "leaf_rows", "stopped_at"]
 
 
 def fused_arguments(layout: Layout, sensors: SensorKernel) -> str:
