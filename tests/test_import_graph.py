@@ -24,7 +24,6 @@ ENGINE_OF = {
     "batched": "batched",
     "compiled": "compiled",
     "compiled_source": "compiled",
-    "compiled_runtime": "compiled",
     "gpu": "gpu",
     "gpu_source": "gpu",
     "gpu_messages": "gpu",
@@ -39,7 +38,7 @@ ENGINE_OF = {
 #: (which may import it), nor more of simulation/ than the engines' protocol (type-only).
 LOOP_MAY_IMPORT = (
     "loop", "bt", "kernels", "models", "recording", "record_blocks", "state", "world",
-    "datalink", "simulation.engine_api",
+    "datalink", "jit", "simulation.engine_api",
 )  # fmt: skip
 
 

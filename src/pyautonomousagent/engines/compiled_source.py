@@ -473,7 +473,7 @@ import math
 from numba import njit, prange
 from numpy import uint64 as U  # agent rows as unsigned: no check for negative indices
 
-from pyautonomousagent.engines.compiled_runtime import halt, record_statuses
+from pyautonomousagent.loop.runtime import halt, record_statuses
 from pyautonomousagent.kernels import (
     hypot, np_maximum, np_minimum, np_sign, sincos_degrees, wrap_degrees,
 )

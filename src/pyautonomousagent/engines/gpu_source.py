@@ -42,7 +42,7 @@ import math
 
 from numba import cuda
 
-from pyautonomousagent.engines.compiled_runtime import halt, record_statuses
+from pyautonomousagent.loop.runtime import halt, record_statuses
 from pyautonomousagent.kernels import np_maximum, np_minimum, np_sign, sincos_degrees, wrap_degrees
 """
 

@@ -3,8 +3,9 @@
 What the compiled and GPU engines share, so that neither imports the other: the generated
 modules' loading and cache (:mod:`.modules`), where the generated code finds things and the
 numbers it reads (:mod:`.layout`), the pieces of source both write and the fused functions'
-parameter names (:mod:`.source`), the arguments matched to those names (:mod:`.arguments`),
-and the engines' common base: the tree's arrays and the bookkeeping of a fused run
-(:mod:`.engine`). This package imports bt/, kernels, models, recording and record_blocks,
-never engines/ (which may import it).
+parameter names (:mod:`.source`), the helpers their generated code calls (:mod:`.runtime`),
+the arguments matched to those names (:mod:`.arguments`), and the engines' common base: the
+tree's arrays and the bookkeeping of a fused run (:mod:`.engine`). This package imports bt/,
+kernels, jit, models, recording, state, world and datalink, never engines/ (which may import
+it).
 """
