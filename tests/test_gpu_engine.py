@@ -17,9 +17,9 @@ import pytest
 
 from pyautonomousagent import Simulation, cli, jit, load, runs
 from pyautonomousagent.engines import gpu
-from pyautonomousagent.engines.compiled_source import Constants
 from pyautonomousagent.engines.gpu_source import kernel_module_source
-from pyautonomousagent.simulation.run import ENGINES, choose_engine, scenario_tree
+from pyautonomousagent.loop.layout import Constants
+from pyautonomousagent.simulation.run import ENGINES, choose_engine, gpu_engine, scenario_tree
 from pyautonomousagent.testing import check_same_runs
 
 needs_numba = pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
@@ -36,8 +36,10 @@ def test_the_device_name_is_text_whether_numba_cuda_gives_bytes_or_str() -> None
 
 
 def test_gpu_is_a_registered_engine() -> None:
+    """Registered as the GPU engine on a compiled engine (its host: the two engines import
+    none of each other)."""
     assert "gpu" in ENGINES
-    assert ENGINES.get("gpu") is gpu.GpuEngine
+    assert ENGINES.get("gpu") is gpu_engine
 
 
 class _NoDeviceError(Exception):
@@ -127,7 +129,9 @@ def _kernel_source(agents: int = 4) -> str:
     fused = engine._fusable(sim)
     assert fused is not None and fused.messaging is None
     layout = engine.layout.__class__(**{**vars(engine.layout), "constants": Constants()})
-    return kernel_module_source(engine.program, engine.kernels, layout, fused.sensors)
+    return kernel_module_source(
+        engine.program, engine.kernels, layout, fused.sensors, engine.stages
+    )
 
 
 @needs_numba

@@ -16,9 +16,9 @@ from pathlib import Path
 import pytest
 
 from pyautonomousagent import Simulation, jit, load
-from pyautonomousagent.engines.compiled_source import Constants
 from pyautonomousagent.engines.gpu_messages import DeviceMessages
 from pyautonomousagent.engines.gpu_source import message_module_source
+from pyautonomousagent.loop.layout import Constants
 from pyautonomousagent.missions import gathering
 
 NEAR, SENDER, EACH = DeviceMessages.NEAR, DeviceMessages.SENDER, DeviceMessages.EACH
@@ -37,7 +37,7 @@ def _message_source(scenario: str) -> str:
         **{**vars(engine.layout), "constants": Constants(), "vertical": fused.vertical}
     )
     return message_module_source(
-        engine.program, engine.kernels, layout, fused.sensors, fused.messaging
+        engine.program, engine.kernels, layout, fused.sensors, fused.messaging, engine.stages
     )
 
 

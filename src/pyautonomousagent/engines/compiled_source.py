@@ -18,101 +18,27 @@ from __future__ import annotations
 import inspect
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from typing import Any
-
-import numpy as np
 
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.program import Program
 from pyautonomousagent.bt.status import FAILURE, NAMES, RUNNING, SUCCESS
-from pyautonomousagent.kernels import (
-    ITERATION,
-    HandlerKernel,
-    Later,
-    LeafKernel,
-    SensorKernel,
-    SwarmSensorKernel,
+from pyautonomousagent.kernels import LeafKernel, SensorKernel
+from pyautonomousagent.loop.layout import Layout, Messaging
+from pyautonomousagent.loop.source import (
+    _later,
+    _later_pass,
+    _swarm_args,
+    alias,
+    fused_arguments,
+    motion_functions,
 )
-from pyautonomousagent.models import drone2d, drone3d
 
 _CODES = {name: code for code, name in NAMES.items()}
 
 #: Agents ticked together over a run of iterations in the fused loop: their records of one
 #: iteration are contiguous (2 KiB per column), and their state stays in the L2 cache.
 CHUNK = 256
-
-
-class Constants:
-    """The numbers the generated code reads at run time (ports, parameters, agent rows): not
-    written into it, so that one compiled module serves every value. Each call site's
-    numbers get slots in two arrays, ``kf`` (float64) and ``ki`` (int64: whole numbers and
-    flags), arguments of every generated function."""
-
-    def __init__(self) -> None:
-        self._slots: dict[tuple[str, int], str] = {}
-        self.floats: list[float] = []
-        self.ints: list[int] = []
-
-    def refs(self, site: str, values: Sequence[Any]) -> list[str]:
-        """Where the code reads ``values`` of call site ``site`` (e.g. ``"leaf 3"``)."""
-        refs = []
-        for j, value in enumerate(values):
-            key = (site, j)
-            if key not in self._slots:
-                if isinstance(value, bool | int | np.integer):
-                    self.ints.append(int(value))
-                    self._slots[key] = f"ki[{len(self.ints) - 1}]"
-                else:
-                    self.floats.append(float(value))
-                    self._slots[key] = f"kf[{len(self.floats) - 1}]"
-            refs.append(self._slots[key])
-        return refs
-
-    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        """``kf`` and ``ki`` (never empty: numba types an empty list poorly)."""
-        return (np.array(self.floats or [0.0], dtype=np.float64),
-                np.array(self.ints or [0], dtype=np.int64))  # fmt: skip
-
-
-@dataclass(frozen=True)
-class Layout:
-    """Where the generated code finds things.
-
-    Attributes:
-        names: the arrays ``c0, c1, ...``: swarm columns, then blackboard keys.
-        memory_rows: node index -> its row of ``cur`` (Sequence and Fallback nodes).
-        outboxes: the nodes whose leaves send messages (their kernels' ``Sends``), in node
-            order; each has an outbox ``o<node>`` (see :class:`~pyautonomousagent.kernels.Sends`).
-        deferred: the leaves whose ``Later`` step is done for all agents after the tree
-            (:func:`deferrable`); the tree marks each agent's in ``pend`` (-1: none).
-        constants: the numbers the code reads from ``kf`` and ``ki``, filled while the
-            source is written.
-        vertical: the 3-D drone's ``(max_climb_rate, climb_step, max_altitude)`` where the
-            motion model is the 3-D drone (its altitude and climb rate are moved too, the
-            control signal u_w kept in ``uc``), else None (the 2-D drone).
-    """
-
-    names: tuple[str, ...]
-    memory_rows: Mapping[int, int]
-    outboxes: tuple[int, ...] = ()
-    deferred: tuple[int, ...] = ()
-    constants: Constants = field(default_factory=Constants)
-    vertical: tuple[float, float, float] | None = None
-
-    @property
-    def arrays(self) -> str:
-        """The arrays' argument list: ``c0, c1, ...``, then the outboxes ``o<node>, ...``."""
-        return ", ".join([f"c{j}" for j in range(len(self.names))] + self.outbox_names)
-
-    @property
-    def outbox_names(self) -> list[str]:
-        """The outboxes of the sending leaves, in node order."""
-        return [f"o{i}" for i in self.outboxes]
-
-    def array(self, name: str) -> str:
-        """The variable holding array ``name`` (``t`` for the iteration)."""
-        return "t" if name == ITERATION else f"c{self.names.index(name)}"
 
 
 def supported(program: Program) -> bool:
@@ -125,32 +51,6 @@ def supported(program: Program) -> bool:
         if not plain and NODE_TYPES.get(node.type).status_map is None:
             return False
     return True
-
-
-def deferrable(program: Program, kernels: Mapping[int, LeafKernel]) -> tuple[int, ...]:
-    """The leaves with a ``Later`` step that no node ticked after them can see: every
-    ancestor returns at once when its child is RUNNING (a Sequence, a Fallback, or a
-    decorator that maps RUNNING to RUNNING), so the tick ends with the leaf."""
-    deferred = []
-    for i, kernel in sorted(kernels.items()):
-        if kernel.later is None:
-            continue
-        up, safe = int(program.parent[i]), True
-        while up >= 0 and safe:
-            node = program.nodes[up]
-            if node.type not in ("Sequence", "Fallback"):
-                status_map = NODE_TYPES.get(node.type).status_map or {}
-                safe = status_map.get("RUNNING", "RUNNING") == "RUNNING"
-            up = int(program.parent[up])
-        if safe:
-            deferred.append(i)
-    return tuple(deferred)
-
-
-def alias(function: Any) -> str:
-    """The name a kernel function is imported under: its module and name, made one word."""
-    py = getattr(function, "py_func", function)
-    return "K_" + f"{py.__module__}.{py.__qualname__}".replace(".", "_")
 
 
 def _call(kernel: LeafKernel, layout: Layout, node: int) -> str:
@@ -236,30 +136,6 @@ def _node_lines(
     return _decorator(program, i)
 
 
-def _later(later: Later, layout: Layout) -> str:
-    """The statement of a ``Later`` step for agent ``a``."""
-    values = ", ".join(f"{layout.array(name)}[a]" for name in later.names)
-    return f"{layout.array(later.target)}[a] = {alias(later.function)}({values})"
-
-
-def _later_pass(
-    kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, then: str, indent: str
-) -> str:
-    """A loop over ``agents`` doing the deferred ``Later`` steps the tree marked in ``pend``,
-    then ``then`` (code for agent ``a``, indented by 4, e.g. Phase 4), indented by
-    ``indent``."""
-    lines = [f"for a in {agents}:", "    p = pend[a]", "    if p >= 0:"]
-    for i in layout.deferred:
-        later = kernels[i].later
-        assert later is not None
-        lines += [f"        if p == {i}:", f"            {_later(later, layout)}"]
-    lines.append("        pend[a] = -1")
-    if then:  # a loop of its own: the steps above run many agents at a time
-        lines.append(f"for a in {agents}:")
-    body = "\n".join(indent + line for line in lines)
-    return body + ("\n" + then if then else "")
-
-
 _CHILD = re.compile(r"^(\s*)n(\d+)\(a, t, st, cur, ARRAYS\)$")
 _LOCALS = re.compile(r"\b(fresh|start|previous|res|new)\b")
 
@@ -298,14 +174,6 @@ def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:
     return f"S({', '.join(args)})"
 
 
-def _swarm_args(swarm: SwarmSensorKernel, layout: Layout) -> list[str]:
-    """The arguments of a swarm sensor's functions after the first ones: its arrays, its state
-    ``ws0, ws1, ...`` (arguments of the fused function) and its constants."""
-    args = [layout.array(name) for name in swarm.names]
-    args += [f"ws{j}" for j in range(len(swarm.state))]
-    return args + layout.constants.refs("swarm", swarm.constants)
-
-
 def _swarm_apply(sensors: SensorKernel, layout: Layout) -> str:
     """After agent ``a``'s sensors, what the swarm sensor found for it (a line of its own);
     "" without a swarm sensor."""
@@ -324,22 +192,13 @@ def _swarm_detect(sensors: SensorKernel, layout: Layout) -> str:
             return done"""
 
 
-#: What the fused functions pass for a parameter of this name of :func:`motion_functions`;
-#: the 3-D drone's are read from :attr:`Layout.vertical`, any other is the column.
+#: What the fused functions pass for a parameter of this name of the motion model's
+#: functions (:func:`~pyautonomousagent.loop.source.motion_functions`); the 3-D drone's are
+#: read from :attr:`Layout.vertical`, any other is the column.
 _MOTION_ARGS = {"u_speed": "us", "u_heading": "uh", "u_climb": "uc"} | {
     name: name for name in ("a", "moving", "max_speed", "speed_step", "turn_step")
 }
 _VERTICAL = ("max_climb_rate", "climb_step", "max_altitude")
-
-
-def motion_functions(layout: Layout) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
-    """The motion model's per-agent functions (njit, in :mod:`~pyautonomousagent.models`),
-    each group called in order: Phase 2's step, Phase 4's control: the 2-D drone's, then,
-    where :attr:`Layout.vertical` is set, the 3-D drone's altitude's."""
-    if layout.vertical is None:
-        return (drone2d.step_agent,), (drone2d.control_agent,)
-    return ((drone2d.step_agent, drone3d.climb_agent),
-            (drone2d.control_agent, drone3d.climb_control_agent))  # fmt: skip
 
 
 def _model_calls(functions: Sequence[Any], layout: Layout, indent: str) -> str:
@@ -355,8 +214,9 @@ def _model_calls(functions: Sequence[Any], layout: Layout, indent: str) -> str:
 
 
 def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
-    """Phase 2 for agent ``a``: the sensors, the motion model's step (:func:`motion_functions`;
-    one that cannot move stops), ``stopped_at`` keeping the first iteration it could not."""
+    """Phase 2 for agent ``a``: the sensors, the motion model's step
+    (:func:`~pyautonomousagent.loop.source.motion_functions`; one that cannot move stops),
+    ``stopped_at`` keeping the first iteration it could not."""
     lines = f"""moving = {_sensor_call(sensors, layout)}{_swarm_apply(sensors, layout)}
 {_model_calls(motion_functions(layout)[0], layout, "")}
 if not moving and stopped_at[a] < 0:
@@ -365,7 +225,8 @@ if not moving and stopped_at[a] < 0:
 
 
 def _control(layout: Layout, indent: str) -> str:
-    """Phase 4 for agent ``a``: the motion model's control (:func:`motion_functions`)."""
+    """Phase 4 for agent ``a``: the motion model's control
+    (:func:`~pyautonomousagent.loop.source.motion_functions`)."""
     return _model_calls(motion_functions(layout)[1], layout, indent)
 
 
@@ -376,22 +237,6 @@ def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, inde
     if not layout.deferred:
         return _control(layout, indent + " " * 4)
     return _later_pass(kernels, layout, agents, _control(layout, indent + " " * 4), indent)
-
-
-#: The arguments of the fused functions from the node statuses on (see
-#: :func:`block_function`), less the sensors' state (:func:`fused_arguments`).
-_FUSED_ARGS = """st, cur, pend, kf, ki, {arrays}, us, uh, uc,
-           {records}, traces, traced_at, behaviour, leaf_rows, stopped_at,
-           max_speed, speed_step, turn_step"""
-
-
-def fused_arguments(layout: Layout, sensors: SensorKernel) -> str:
-    """The arguments of the fused functions (and the GPU kernels) from the node statuses on:
-    :data:`_FUSED_ARGS`, then the sensors' state ``ss0, ss1, ...``
-    (``SensorKernel.state``)."""
-    records = ", ".join(f"r{j}" for j in range(len(layout.names)))
-    state = "".join(f", ss{j}" for j in range(len(sensors.state)))
-    return _FUSED_ARGS.format(arrays=layout.arrays, records=records) + state
 
 
 def block_function(
@@ -433,34 +278,6 @@ def {name}(t0, count, every, row0, chunk, {fused_arguments(layout, sensors)}):
                     record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)
     return count
 """
-
-
-@dataclass(frozen=True)
-class Messaging:
-    """The message types the tree sends, for :func:`message_block_function`.
-
-    Attributes:
-        types: the types, in order of their first sending node (type ``k`` is index ``k``).
-        handlers: each type's compiled handler.
-        recorded: each type's ``MessageType.recorded``.
-        senders: sending node -> (its type's index, outbox row of each handler field).
-    """
-
-    types: tuple[str, ...]
-    handlers: tuple[HandlerKernel, ...]
-    recorded: tuple[bool, ...]
-    senders: Mapping[int, tuple[int, tuple[int, ...]]]
-
-    @property
-    def inboxes(self) -> str:
-        """The inbox arguments ``ib_s0, ib_d0, ...`` (senders, data per type)."""
-        return ", ".join(f"ib_s{k}, ib_d{k}" for k in range(len(self.types)))
-
-    @property
-    def state(self) -> str:
-        """The handlers' state arguments ``hs<type>_<j>``."""
-        names = [f"hs{k}_{j}" for k, h in enumerate(self.handlers) for j in range(len(h.state))]
-        return ", ".join(names)
 
 
 def _handle(messaging: Messaging, layout: Layout) -> str:
@@ -629,7 +446,7 @@ import math
 from numba import njit, prange
 from numpy import uint64 as U  # agent rows as unsigned: no check for negative indices
 
-from pyautonomousagent.engines.compiled_runtime import halt, record_statuses
+from pyautonomousagent.loop.runtime import halt, record_statuses
 from pyautonomousagent.kernels import hypot
 """
 
