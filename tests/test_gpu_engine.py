@@ -4,6 +4,7 @@ run through numba's CUDA simulator against the batched engine, bit for bit."""
 from __future__ import annotations
 
 import ast
+import inspect
 import json
 import os
 import subprocess
@@ -19,6 +20,8 @@ from pyautonomousagent import Simulation, cli, jit, load, runs
 from pyautonomousagent.engines import gpu
 from pyautonomousagent.engines.gpu_source import kernel_module_source
 from pyautonomousagent.loop.layout import Constants
+from pyautonomousagent.loop.source import alias
+from pyautonomousagent.models import drone2d
 from pyautonomousagent.simulation.run import ENGINES, choose_engine, gpu_engine, scenario_tree
 from pyautonomousagent.testing import check_same_runs
 
@@ -141,8 +144,10 @@ def test_the_kernel_is_the_compiled_generators_code_for_one_thread() -> None:
     kernel = next(n for n in tree.body if isinstance(n, ast.FunctionDef))
     assert kernel.name == "block_gpu"
     assert "a = cuda.grid(1)" in source
-    assert "sincos_degrees(heading)" in source  # no library sin/cos on the device
+    assert f"{alias(drone2d.step_agent)}(" in source  # the model's own per-agent step
     assert "math.sin" not in source and "math.cos" not in source
+    step = inspect.getsource(drone2d.step_agent.py_func)
+    assert "sincos_one(h)" in step and "math." not in step  # no library sin/cos on the device
     assert "prange" not in source.split("import", 3)[-1]  # one agent a thread, no CPU threads
 
 
