@@ -316,7 +316,7 @@ class Simulation:
             _compiled_if_ready(sim, tree)
         if auto and isinstance(sim.engine, GpuEngine) and not sim.engine.runs(sim):
             log.debug("engine auto: compiled, not gpu: the kernel cannot run this run")
-            sim.engine = CompiledEngine(tree, swarm, world, vars(scenario.parameters))
+            sim.engine = sim.engine.host  # the compiled engine of the run's tree
         phases.record(sim)  # the initial state, iteration 0
         if fuses(sim.engine):
             sim.engine.prepare(sim)  # e.g. compile before the loop
