@@ -121,9 +121,12 @@ def on_channel(link: Datalink) -> list[tuple]:
     return out
 
 
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Tests that read the executed lessons run on one xdist worker (``--dist loadgroup``),
-    so that the lessons are executed once, not once per worker (about 90 s each time)."""
+    so that the lessons are executed and the docs site built once, not once per worker
+    (about 4 minutes each time). First among the hooks: xdist's own hook turns the mark
+    into the test's group, and a mark added after it is ignored."""
     for item in items:
         if "executed_lessons" in getattr(item, "fixturenames", ()):
             item.add_marker(pytest.mark.xdist_group("lessons"))

@@ -232,3 +232,15 @@ def test_check_09_names_the_field_left_unset(tmp_path: Path, monkeypatch) -> Non
         check_exercise(9, tree_file="broken.xml")
     save_tree(l09_expected_tree(), "early.xml")
     check_exercise(9, tree_file="early.xml")
+
+
+def test_the_tests_of_the_executed_lessons_form_one_xdist_group(request: pytest.FixtureRequest):
+    """Under ``--dist loadgroup`` every test that reads the executed lessons carries the group
+    suffix, so that one worker executes the lessons and builds the site (pytest 9.2 silently
+    dropped the grouping: two builds of about 4 minutes each)."""
+    if not getattr(request.config.option, "loadgroup", False):  # set on xdist's workers
+        pytest.skip("grouping applies only under pytest-xdist's --dist loadgroup (make test)")
+    readers = [i.nodeid for i in request.session.items if "executed_lessons" in i.fixturenames]
+    if not readers:
+        pytest.skip("no test that reads the executed lessons was selected")
+    assert [n for n in readers if not n.endswith("@lessons")] == []

@@ -266,11 +266,9 @@ class CompiledEngine(LoopEngine):
         share = max(1, groups // (SHARE * numba.get_num_threads()))
         with numba.parallel_chunksize(share):  # a core that others slow down takes less
             done = block(start, count, every, row0, CHUNK, *values)
-        if fused.messaging is not None and done:
-            sim.inbox = []  # handled in the first iteration
         if done:
             blocks.hand_over(row0, (start + done) // every - start // every)
-            self._after(sim, fused.sensors, start, done, stopped)
+            sim.account_fused(fused.sensors, start, done, stopped)
             self._send(sim.world.datalink)
         return int(done)
 

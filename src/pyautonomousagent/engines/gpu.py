@@ -465,11 +465,10 @@ class GpuEngine(LoopEngine):
             values = ordered(common, arguments, "the message kernels")
             done = self._message_loop(sim, fresh, tuple(values), count, row0)
         self._groups.launched(slot, start, done, fused.sensors, time.perf_counter() - began)
-        self._synced = sim.world.iteration = start + done
+        self._synced = start + done  # the clock: the simulation advances it by ``done``
         if self._messages is not None and done:
             self.sync(sim)  # the outboxes, for the datalink
             self._messages.download_state()
-            sim.inbox = []  # handled in the first iteration
             self._send(sim.world.datalink)  # the last iteration's, for the CPU to deliver
         return done
 

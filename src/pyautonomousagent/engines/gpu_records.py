@@ -19,11 +19,11 @@ The host waits for the device only where it must:
 
 Handing a group over (in order of iterations) stores its rows in the recorder
 (:meth:`~pyautonomousagent.recording.Recorder.store_group`: compact columns stay compact),
-then does the fused loop's bookkeeping (``LoopEngine._after``): the sensors' alerts
+then has the simulation do the fused loop's bookkeeping (``account_fused``): the sensors' alerts
 of the agents that stopped, in order of iteration, the recorder's iterations and count, and
 its listeners, which hand finished records to the Parquet writer's thread
 (:class:`~pyautonomousagent.streaming.StatesStream`): so the kernel never waits on the disk.
-``sim.world.iteration`` is the engine's clock meanwhile (set at the launch), and the
+``sim.world.iteration``, the simulation's clock, counts the iterations launched, and the
 recorder's count lags it by the groups in flight.
 
 A group holds at most :data:`GROUP_BYTES` on the device (and as much pinned on the host):
@@ -43,7 +43,6 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pyautonomousagent.kernels import SensorKernel
-from pyautonomousagent.loop.engine import LoopEngine
 from pyautonomousagent.record_blocks import RECORD_BLOCK_BYTES, fitting
 from pyautonomousagent.recording import Recorder
 
@@ -221,8 +220,8 @@ class RecordGroups:
 
     def _hand_over(self, sim: LoopView, group: Group) -> None:
         """Wait for ``group``'s copy, store its rows in the recorder and do its bookkeeping
-        (``LoopEngine._after``: alerts, the recorder's count, its listeners), the clock
-        kept at the engine's iteration."""
+        (``sim.account_fused``: alerts, the recorder's count, its listeners; the clock is
+        left at the iterations launched)."""
         slot = group.slot
         slot.events["copied"].synchronize()
         began = time.perf_counter()
@@ -230,9 +229,7 @@ class RecordGroups:
         rows = group.rows
         recorded = {k: v[:rows] for k, v in zip(self.names, columns, strict=True)}
         self.recorder.store_group(group.row0, recorded, traces[:rows], behaviour[:rows])
-        now = sim.world.iteration
-        LoopEngine._after(sim, group.sensors, group.start, group.count, stopped)
-        sim.world.iteration = now
+        sim.account_fused(group.sensors, group.start, group.count, stopped)
         host = time.perf_counter() - began
         if self.on_device:
             events = slot.events

@@ -233,28 +233,3 @@ class LoopEngine:
         return (
             delivery.to_all and messaging is not None and delivery.messages.type in messaging.types
         )
-
-    @staticmethod
-    def _after(
-        sim: LoopView, sensors: SensorKernel, start: int, count: int, stopped: np.ndarray
-    ) -> None:
-        """The bookkeeping of a fused run: the sensors' alerts and what the swarm sensor
-        kept, in order of iteration (an iteration's alerts first, as Phase 2 raises them),
-        the world's clock, the recorder's iterations and count."""
-        collect = sensors.swarm.collect if sensors.swarm is not None else None
-        for t in np.unique(stopped[stopped >= 0]).tolist():
-            if collect is not None:
-                collect(sim, t - 1)
-            sim.world.iteration = t
-            if sensors.stopped is not None:
-                sensors.stopped(sim, np.flatnonzero(stopped == t))
-        if collect is not None:
-            collect(sim, start + count)
-        sim.world.iteration = start + count
-        recorder = sim.recorder
-        for t in range(start + 1, start + count + 1):
-            if recorder.due(t):
-                recorder.iterations[recorder.count] = t
-                recorder.count += 1
-        for listener in recorder.listeners:  # e.g. the states written while the run goes
-            listener(recorder.count)

@@ -18,6 +18,7 @@ from pyautonomousagent.simulation.view import SimulationView
 
 if TYPE_CHECKING:
     from pyautonomousagent.bt.spec import Node
+    from pyautonomousagent.kernels import SensorKernel
     from pyautonomousagent.simulation.mission import MessageType, Mission
     from pyautonomousagent.simulation.motion import Model
     from pyautonomousagent.simulation.scenario import Scenario
@@ -67,6 +68,13 @@ class LoopView(SimulationView, Protocol):
 
     def step(self) -> None:
         """Run one iteration, Phases 2-6, in Python."""
+        ...
+
+    def account_fused(
+        self, sensors: SensorKernel, start: int, count: int, stopped: np.ndarray
+    ) -> None:
+        """The bookkeeping of fused iterations ``start + 1 .. start + count`` (alerts, the
+        recorder's count; :func:`~pyautonomousagent.simulation.phases.account_fused`)."""
         ...
 
 

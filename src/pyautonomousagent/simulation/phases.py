@@ -22,6 +22,7 @@ from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
 if TYPE_CHECKING:
+    from pyautonomousagent.kernels import SensorKernel
     from pyautonomousagent.simulation.engine_api import LoopView
 
 log = logging.getLogger("pyautonomousagent")
@@ -110,3 +111,37 @@ def record(sim: LoopView) -> None:
     if recorder.due(sim.world.iteration):
         statuses = sim.engine.node_statuses() if recorder.wants_statuses else None
         recorder.record(sim.world.iteration, sim.swarm, sim.model.columns(), statuses)
+
+
+def account_fused(
+    sim: LoopView, sensors: SensorKernel, start: int, count: int, stopped: np.ndarray
+) -> None:
+    """Phases 2 and 6's bookkeeping of iterations ``start + 1 .. start + count`` that a fused
+    loop ran: the sensors' alerts and what the swarm sensor kept, in order of iteration (an
+    iteration's alerts first, as Phase 2 raises them, the clock set to it meanwhile), then
+    the recorder's iterations and count and its listeners. The clock is left as it was (the
+    simulation advances it by the iterations a call ran).
+
+    Args:
+        sensors: the mission's compiled sensors the loop ran.
+        stopped: the iteration at which each agent was found unable to move, shape (N,),
+            int64 (-1: it was not).
+    """
+    now = sim.world.iteration
+    collect = sensors.swarm.collect if sensors.swarm is not None else None
+    for t in np.unique(stopped[stopped >= 0]).tolist():
+        if collect is not None:
+            collect(sim, t - 1)
+        sim.world.iteration = t
+        if sensors.stopped is not None:
+            sensors.stopped(sim, np.flatnonzero(stopped == t))
+    if collect is not None:
+        collect(sim, start + count)
+    sim.world.iteration = now
+    recorder = sim.recorder
+    for t in range(start + 1, start + count + 1):
+        if recorder.due(t):
+            recorder.iterations[recorder.count] = t
+            recorder.count += 1
+    for listener in recorder.listeners:  # e.g. the states written while the run goes
+        listener(recorder.count)

@@ -8,7 +8,7 @@ import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pyarrow as pa
@@ -45,6 +45,9 @@ from pyautonomousagent.simulation.motion import Model, build_model
 from pyautonomousagent.simulation.scenario import Scenario, ScenarioError, to_mapping
 from pyautonomousagent.state import CONTROL_COLUMNS, MOTION_COLUMNS, Swarm
 from pyautonomousagent.world import World
+
+if TYPE_CHECKING:
+    from pyautonomousagent.kernels import SensorKernel
 
 log = logging.getLogger("pyautonomousagent")
 
@@ -378,10 +381,20 @@ class Simulation:
         """Up to ``count`` whole iterations in one call of an engine that runs them (the
         compiled engine's ``loop``), then the last one's Phase 5; how many were run (0: none,
         step the next one)."""
-        done = self.engine.loop(self, count) if fuses(self.engine) else 0
+        done = int(self.engine.loop(self, count)) if fuses(self.engine) else 0
         if done:
+            self.world.iteration += done
+            self.inbox = []  # a fused loop handles the inbox in its first iteration
             phases.deliver_messages(self)
-        return int(done)
+        return done
+
+    def account_fused(
+        self, sensors: SensorKernel, start: int, count: int, stopped: np.ndarray
+    ) -> None:
+        """The bookkeeping of fused iterations ``start + 1 .. start + count``
+        (:func:`~pyautonomousagent.simulation.phases.account_fused`), called by the engine
+        whose loop ran them, when their records reach the recorder."""
+        phases.account_fused(self, sensors, start, count, stopped)
 
     def _settle(self) -> None:
         """Have an engine that keeps work in flight (the GPU engine's records and state)
