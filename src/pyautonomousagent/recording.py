@@ -85,6 +85,7 @@ class Recorder:
         docs: unit and meaning of every column: :data:`COLUMN_DOCS` and the mission's.
         groups: the recorded column names by origin: "state", "blackboard", "model".
         nodes: the tree's nodes in tick order (``Node.walk()``), or [] without a tree.
+        leaf_rows: the node indices of the leaves, ascending, shape (L,), int16.
         traced: indices of the traced agents, shape (K,).
         traces: node statuses of the traced agents, shape (records, nodes, K), int8.
         behaviour: active leaf per agent as a node index, shape (records, N), int16; -1 when
@@ -124,7 +125,7 @@ class Recorder:
         self.nodes: list[Node] = list(tree.walk()) if tree is not None else []
         if check_size(len(self.nodes)):  # a node index is recorded as an int16
             raise TreeError(f"the tree {check_size(len(self.nodes))} in a recorded run")
-        self._leaf_rows = np.array(
+        self.leaf_rows = np.array(
             [i for i, node in enumerate(self.nodes) if not node.is_control], dtype=np.int16
         )
         self.traced = np.asarray(traced if tree is not None else (), dtype=np.intp)
@@ -179,7 +180,7 @@ class Recorder:
             if statuses is None:
                 raise ValueError("this recorder keeps traces: pass the engine's node statuses")
             self.traces[row] = statuses[:, self.traced]
-            self._codes.store(row, "behaviour", active_leaf(statuses, self._leaf_rows))
+            self._codes.store(row, "behaviour", active_leaf(statuses, self.leaf_rows))
         self.count += 1
         for listener in self.listeners:
             listener(self.count)
@@ -560,7 +561,7 @@ def recorder_from_tables(
     if not nodes and traces is not None and traces.schema.metadata:
         nodes = json.loads(traces.schema.metadata.get(b"pyautonomousagent.nodes", b"[]"))
     recorder.nodes = _rebuild(nodes)
-    recorder._leaf_rows = np.array(
+    recorder.leaf_rows = np.array(
         [i for i, node in enumerate(recorder.nodes) if not node.is_control], dtype=np.int16
     )
     recorder.behaviour = _behaviour_codes(states, recorder.nodes, records, n)

@@ -293,7 +293,7 @@ class CompiledEngine(LoopEngine):
         columns, traces, behaviour = blocks.arrays(row0) if count else self._empty(recorder)
         assert behaviour is not None  # checked by _fusable
         records = dict(zip(self.layout.record_names, columns, strict=True))
-        leaf_rows = recorder._leaf_rows.astype(np.int64)
+        leaf_rows = recorder.leaf_rows.astype(np.int64)
         records |= {"traces": traces, "traced_at": traced_at, "behaviour": behaviour}
         records |= {"leaf_rows": leaf_rows, "stopped_at": stopped}
         arguments = self._tree_arguments(self._constants)

@@ -124,7 +124,7 @@ class RecordGroups:
         traced_at = np.full(agents, -1, dtype=np.int64)
         traced_at[recorder.traced] = np.arange(recorder.traced.size)
         self.traced_at = cuda.to_device(traced_at)
-        self.leaf_rows = cuda.to_device(recorder._leaf_rows.astype(np.int64))
+        self.leaf_rows = cuda.to_device(recorder.leaf_rows.astype(np.int64))
         self._no_stop = cuda.to_device(np.full(agents, -1, dtype=np.int64))
         self._shapes = self._row_shapes(agents)
         fitting = GROUP_BYTES // max(1, self.row_bytes)
