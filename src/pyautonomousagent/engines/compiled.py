@@ -139,6 +139,7 @@ class CompiledEngine(LoopEngine):
         self._constants: tuple[np.ndarray, np.ndarray] = Constants().arrays()
         self._no_climb = np.zeros(0)  # the fused loop's u_w argument for the 2-D drone
         self._blocks: RecordBlock | None = None  # where the fused loop writes its records
+        self._tick: tuple[ModuleType, list[Any]] | None = None  # tick's code and arguments
 
     def _code(self, fused: Fused | None) -> ModuleType:
         if self._module is None or (fused is not None and self._fused is None):
@@ -159,9 +160,17 @@ class CompiledEngine(LoopEngine):
         """Tick the tree once for every agent (at the world's iteration); what the leaves
         sent goes to the datalink."""
         code = self._code(self._fused)
-        code.tick(self.world.iteration, self.status, self.current, self.pending, *self._constants,
-                  *self.arrays)  # fmt: skip
+        code.tick(self.world.iteration, *self._tick_values(code))
         self._send(self.world.datalink)
+
+    def _tick_values(self, code: ModuleType) -> list[Any]:
+        """The generated ``tick``'s arguments after the iteration ``t``, matched to its
+        parameters by name (:meth:`_tree_arguments`); the same objects every iteration."""
+        if self._tick is None or self._tick[0] is not code:
+            values = ordered(parameters(code.tick, 1), self._tree_arguments(self._constants),
+                             "tick")  # fmt: skip
+            self._tick = (code, values)
+        return self._tick[1]
 
     def prepare(self, sim: LoopView) -> None:
         """Compile (or load from numba's cache) what this run will call, before its loop:
@@ -200,8 +209,7 @@ class CompiledEngine(LoopEngine):
         a cold compile of x8-patrol's tree took 8 s of its first iteration)."""
         import numba
 
-        arguments = (self.world.iteration, self.status, self.current, self.pending,
-                     *self._constants, *self.arrays)  # fmt: skip
+        arguments = (self.world.iteration, *self._tick_values(code))
         code.tick.compile(tuple(numba.typeof(a) for a in arguments))
 
     def ready(self, sim: LoopView) -> bool:
