@@ -312,7 +312,9 @@ class GpuEngine(LoopEngine):
         )
         names = [line.split("(")[0][4:] for line in source.splitlines() if line.startswith("def ")]
         kernels = {name: load_kernel(source, name) for name in names}
-        self._messages = DeviceMessages(kernels, messaging, self.layout.names, self.swarm.size)
+        common = [name for line in fused_parameters(layout, sensors) for name in line]
+        xy = (common.index(layout.array("x")), common.index(layout.array("y")))
+        self._messages = DeviceMessages(kernels, messaging, xy, self.swarm.size)
         return source
 
     @staticmethod

@@ -72,7 +72,8 @@ class DeviceMessages:
             ``handle_all_<k>``, ``handle_sender_<k>``, ``handle_each_<k>``,
             ``handle_near_<k>``, ``flag_<k>``, ``scatter_<k>``).
         messaging: the tree's message types and their handlers.
-        names: the generated code's arrays ``c0, c1, ...`` (``Layout.names``).
+        xy: where the agents' x and y arrays are among the kernels' common arguments
+            (``loop.source.fused_parameters``), found by name.
         n: agents.
     """
 
@@ -88,10 +89,10 @@ class DeviceMessages:
     ROOM = 8
 
     def __init__(
-        self, kernels: dict[str, Any], messaging: Messaging, names: tuple[str, ...], n: int
+        self, kernels: dict[str, Any], messaging: Messaging, xy: tuple[int, int], n: int
     ) -> None:
         self.kernels, self.messaging, self.n = kernels, messaging, n
-        self.xy = (5 + names.index("x"), 5 + names.index("y"))  # in the common arguments
+        self.xy = xy  # where x and y are in the kernels' common arguments (found by name)
         types = len(messaging.types)
         self.width = [sum(1 for kind, _ in messaging.senders.values() if kind == k)
                       for k in range(types)]  # fmt: skip
