@@ -4,14 +4,15 @@ A record says everything the engine-independent code needs: how many children th
 takes, its parameters with their defaults and checks, the tags files write it with (and the
 parameters a tag fixes: ``ReactiveSequence`` is ``Sequence`` with ``memory=False``), its
 symbol for pictures, and whether BehaviorTree.CPP has it built in. The spec
-(:mod:`~pyautonomousagent.bt.spec`), the file readers and writers, the pictures and both
-engines read the records; an engine implements a type under the record's name
-(``engines/pytrees.py``'s ``PYTREES_NODES``, ``engines/batched.py``'s ``BATCHED_NODES``).
+(:mod:`~pyautonomousagent.bt.spec`), the file readers and writers, the pictures and the
+engines read the records. A record with a ``rule`` (:mod:`~pyautonomousagent.bt.rules`)
+says its semantics once, and every engine derives its form from that; a record without one
+is implemented by hand under its name in the py_trees and batched engines
+(``engines/btcpp.py``'s ``BTCPP_BEHAVIOURS``, ``engines/batched.py``'s ``BATCHED_NODES``).
 
 Type names are BehaviorTree.CPP's tags where BT.CPP has the node; py_trees' own decorators
 keep their py_trees names, and py_trees' Repeat/Retry/Parallel are ``PyTrees...``.
-Adding a node type: register a record here, then implement it in both engines (a test
-checks that each record has both).
+Adding a node type: register a record here with its rule, and its tests.
 """
 
 from __future__ import annotations
@@ -20,7 +21,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from pyautonomousagent.bt.rules import Ops, Rule
 from pyautonomousagent.bt.script import ScriptError, parse
+from pyautonomousagent.bt.status import FAILURE, NAMES, RUNNING, SUCCESS
 from pyautonomousagent.registry import Registry
 
 CONTROL = "Control"
@@ -125,6 +128,11 @@ class NodeType:
             if there is one).
         builtin: True if BehaviorTree.CPP 4 has it (Groot2 knows it already).
         status_map: for a decorator that maps its child's status: {child: own} by name.
+        rule: its semantics, for every engine (:mod:`~pyautonomousagent.bt.rules`); None
+            for a type each engine implements by hand.
+        memory: True if the rule remembers a whole number per agent (``Ops.memory``).
+        yields: True if the node returns at once, RUNNING, when a child is RUNNING (so no
+            node ticked after that child sees the tick: compiled leaves may defer a step).
     """
 
     name: str
@@ -135,6 +143,9 @@ class NodeType:
     tags: tuple[FileTag, ...] = ()
     builtin: bool = True
     status_map: Mapping[str, str] | None = None
+    rule: Rule | None = None
+    memory: bool = False
+    yields: bool = False
 
     def defaults(self) -> dict[str, Any]:
         """Parameter -> default (None for required ones)."""
@@ -154,6 +165,9 @@ def _tag(tag: str, symbol: str, doc: str, **fixed: Any) -> tuple[FileTag, ...]:
 
 
 def _decorator(name: str, tag: str, symbol: str, doc: str, **kwargs: Any) -> NodeType:
+    status_map = kwargs.get("status_map")
+    if status_map is not None:
+        kwargs.update(rule=mapped_rule(status_map), yields=status_map.get("RUNNING") is None)
     return add(NodeType(name, DECORATOR, 1, 1, tags=_tag(tag, symbol, doc), **kwargs))
 
 
@@ -163,19 +177,93 @@ def _control(name: str, least: int, most: int | None, symbol: str, doc: str, **k
 
 MEMORY = Param("memory", bool, None, boolean, in_files=False)
 
+
+def sequence_rule(n: Ops) -> None:
+    """py_trees' Sequence: ticks the children in order from the first (with ``memory``, from
+    the RUNNING one) until one does not succeed, which it returns; without memory the
+    children after that one are halted. Remembers the child it ticks (-1: none)."""
+    memory = n.params["memory"]
+    fresh = n.let("fresh", n.status() != RUNNING)
+    with n.when(fresh):
+        n.halt(0)
+    if not n.kids:
+        n.set_memory(-1)
+        n.finish(SUCCESS)
+        return
+    start = n.let("start", n.pick(fresh, 0, n.memory())) if memory else 0
+    for k in range(n.kids):
+        with n.when(start <= k):
+            if memory:
+                n.set_memory(k)
+            result = n.tick(k)
+            if not memory:
+                with n.when(result != SUCCESS):
+                    n.halt(k + 1)
+            n.finish(result, where=result != SUCCESS)
+    n.finish(SUCCESS)
+
+
+def fallback_rule(n: Ops) -> None:
+    """py_trees' Selector: tries the children in order from the first (with ``memory``, from
+    the remembered one, halting those before it) until one does not fail, which it returns
+    and remembers; a newly chosen child halts the ones after it."""
+    memory = n.params["memory"]
+    with n.when(n.status() != RUNNING):
+        n.set_memory(0)
+    if not n.kids:
+        n.set_memory(-1)
+        n.finish(FAILURE)
+        return
+    previous = n.let("previous", n.memory())
+    for k in range(n.kids - 1) if memory else ():
+        with n.when(previous > k):
+            n.halt(k, k + 1)
+    start = previous if memory else 0
+    for k in range(n.kids):
+        with n.when(start <= k):
+            result = n.tick(k)
+            with n.when(result != FAILURE):
+                n.set_memory(k)
+                with n.when(previous != k):
+                    n.halt(k + 1)
+            n.finish(result, where=result != FAILURE)
+    n.set_memory(n.kids - 1)
+    n.finish(FAILURE)
+
+
 # -- py_trees composites, written with BT.CPP's tags -------------------------------------------
 add(NodeType("Sequence", CONTROL, 0, None, (MEMORY,), (
     FileTag("Sequence", {"memory": True}, "→",
             "ticks children in order; resumes at a RUNNING child; restarts after a failure"),
     FileTag("ReactiveSequence", {"memory": False}, "R→",
             "ticks children from the first on every tick"),
-)))  # fmt: skip
+), rule=sequence_rule, memory=True, yields=True))  # fmt: skip
 add(NodeType("Fallback", CONTROL, 0, None, (MEMORY,), (
     FileTag("Fallback", {"memory": True}, "?",
             "tries children in order until one does not fail; resumes at a RUNNING child"),
     FileTag("ReactiveFallback", {"memory": False}, "R?",
             "tries children from the first on every tick"),
-)))  # fmt: skip
+), rule=fallback_rule, memory=True, yields=True))  # fmt: skip
+
+
+def mapped_rule(status_map: Mapping[str, str]) -> Rule:
+    """A status-mapping decorator: ticks the child and returns its status mapped through
+    ``status_map`` ({child: own} by name); a child left RUNNING under a finished decorator is
+    halted."""
+    codes = {name: code for code, name in NAMES.items()}
+    table = [*range(len(NAMES))]
+    for child, own in status_map.items():
+        table[codes[child]] = codes[own]
+
+    def rule(n: Ops) -> None:
+        result = n.tick(0)
+        new = n.let("new", n.lookup(tuple(table), result))
+        with n.when((new != RUNNING) & (result == RUNNING)):
+            n.halt(0)
+        n.finish(new)
+
+    return rule
+
 
 # -- status-mapping decorators ----------------------------------------------------------------
 _decorator(
@@ -356,6 +444,53 @@ for _cases in range(2, 7):
              "last; a running child of another case is halted"),
     )  # fmt: skip
     add(_decorator_or_control)
+
+def try_catch_rule(n: Ops) -> None:
+    """BT.CPP 4.9's TryCatch: children 1..N-1 are a Sequence with memory (the try block); if
+    one fails, all are reset and the last child (the catch) is ticked until it finishes, when
+    all are reset and the node fails; SUCCESS (all reset) when the try block succeeded.
+    Remembers the child to tick: 0..N-2 in the try block, N-1 in the catch."""
+    catch = n.kids - 1
+    with n.when(n.status() != RUNNING):
+        n.set_memory(0)
+    for k in range(catch):
+        with n.when(n.memory() <= k):
+            result = n.tick(k)
+            with n.when(result == RUNNING):
+                n.set_memory(k)
+                n.finish(RUNNING)
+            with n.when(result == FAILURE):
+                n.halt(0)
+                n.set_memory(catch)
+    with n.when(n.memory() != catch):
+        n.halt(0)
+        n.set_memory(0)
+        n.finish(SUCCESS)
+    result = n.tick(catch)
+    with n.when(result != RUNNING):
+        n.halt(0)
+        n.set_memory(0)
+    n.finish(n.pick(result == RUNNING, RUNNING, FAILURE))
+
+
+def _no_catch_on_halt(value: Any, children: int) -> str:
+    if value is False:
+        return ""
+    return f"must be false, got {value!r}: no engine ticks a child while halting its parent"
+
+
+_control(
+    "TryCatch",
+    2,
+    None,
+    "try",
+    "BT.CPP 4.9: children but the last in sequence; if one fails, the last (catch) runs, "
+    "then FAILURE",
+    params=(Param("catch_on_halt", bool, False, _no_catch_on_halt),),
+    rule=try_catch_rule,
+    memory=True,
+    yields=True,
+)
 
 # -- py_trees nodes BehaviorTree.CPP lacks ----------------------------------------------------
 _decorator(

@@ -72,7 +72,7 @@ BTCPP_LEAVES = frozenset(
 #: BehaviorTree.CPP 4 built-ins that pyAutonomousAgent does not run, with the reason.
 UNSUPPORTED: dict[str, str] = {
     **dict.fromkeys(
-        ["ManualSelector", "TryCatch", "AlwaysRunning"],
+        ["ManualSelector", "AlwaysRunning"],
         "it is not a built-in of BehaviorTree.CPP 4.8 (the version held against)",
     ),
     **dict.fromkeys(

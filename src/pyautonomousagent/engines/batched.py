@@ -5,21 +5,23 @@ order (pre-order), each with its parent, its children and the end of its subtree
 subtree is the contiguous range ``[i, end[i])``. Per-node state is held per agent:
 
 - ``status``: shape (nodes, N), int8 codes of :mod:`pyautonomousagent.bt.status`;
-- ``current``: per Sequence/Selector node, shape (N,), the child index it remembers
-  (py_trees' ``current_child``), -1 for none;
-- ``counter``: per Repeat/Retry node, shape (N,), its successes / failures so far (and the
-  remembered child or loop count of BehaviorTree.CPP's SequenceWithMemory, Repeat and
-  RetryUntilSuccessful).
+- ``counter``: per control node, shape (N,), what it remembers: the child index of a rule's
+  ``memory`` (py_trees' ``current_child`` of a Sequence/Selector), the successes / failures
+  of Repeat/Retry, the remembered child or loop count of BehaviorTree.CPP's
+  SequenceWithMemory, Repeat and RetryUntilSuccessful.
 
 A node is ticked for the agents whose tick reaches it (a boolean mask), and every
 rule of py_trees 2.x is reproduced: which children are ticked, which statuses are kept,
-and which RUNNING subtrees are halted (set INVALID) and when. Leaves run their
+and which RUNNING subtrees are halted (set INVALID) and when. A node type with a rule
+(:mod:`pyautonomousagent.bt.rules`) runs it through :class:`MaskedOps`, values arrays over
+agents and conditions masks; the others have a method here. Leaves run their
 engine-independent ``evaluate`` once for all those agents.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -27,6 +29,7 @@ import numpy as np
 from pyautonomousagent.allocator import reuse_freed_memory
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
+from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.program import PRE_CONDITIONS, case_values, compile_tree
 from pyautonomousagent.bt.script import Script, parse
 from pyautonomousagent.bt.script_leaves import iterations
@@ -34,7 +37,6 @@ from pyautonomousagent.bt.spec import (
     Node,
     TreeError,
     check_entries,
-    node_type,
     parallel_threshold,
 )
 from pyautonomousagent.bt.status import (
@@ -58,14 +60,6 @@ def _some(mask: np.ndarray) -> bool:
     """Whether any entry of ``mask`` holds (``count_nonzero`` costs a quarter of ``any()``
     on a thousand entries)."""
     return bool(np.count_nonzero(mask))
-
-
-def _status_table(type_name: str) -> np.ndarray:
-    """Lookup table child status -> own status of a status-mapping decorator."""
-    table = np.arange(len(NAMES), dtype=np.int8)
-    for child, own in (node_type(type_name).status_map or {}).items():
-        table[_CODES[child]] = _CODES[own]
-    return table
 
 
 class BatchedEngine:
@@ -98,12 +92,6 @@ class BatchedEngine:
         self.swarm, self.world, self.defaults = swarm, world, defaults
         n = len(program.nodes)
         self.status = np.zeros((n, swarm.size), dtype=np.int8)
-        kinds = [node.type for node in program.nodes]
-        self.current = {
-            i: np.full(swarm.size, -1, dtype=np.int32)
-            for i, kind in enumerate(kinds)
-            if kind in ("Sequence", "Fallback")
-        }
         self.counter = {
             i: np.zeros(swarm.size, dtype=np.int64)
             for i, node in enumerate(program.nodes)
@@ -119,11 +107,6 @@ class BatchedEngine:
         self._ticks = swarm.blackboard["number_ticks"]
         self._everyone = np.ones(swarm.size, dtype=bool)
         self._all = swarm.agents(slice(None))  # the view of every agent, made once
-        self._tables = {
-            i: _status_table(node.type)
-            for i, node in enumerate(program.nodes)
-            if node.is_control and node_type(node.type).status_map is not None
-        }
         self._scripts: dict[int, Script] = {}
         self._attributes = {
             i: {key: parse(code) for key, code in node.scripts.items()}
@@ -142,9 +125,9 @@ class BatchedEngine:
         node = self.program.nodes[i]
         if not node.is_control:
             return lambda mask: self._leaf(i, mask)
-        if i in self._tables:
-            return lambda mask: self._decorator(i, mask)
         method = BATCHED_NODES[node.type]
+        if method is _rule_ticker:
+            return MaskedOps(self, i).run
         return lambda mask: method(self, i, mask)
 
     def tick(self) -> None:
@@ -260,74 +243,6 @@ class BatchedEngine:
                 "of if/and/or, or run the tree with engine='pytrees'"
             ) from None
 
-    def _sequence(self, i: int, mask: np.ndarray) -> None:
-        kids, memory = self.program.children[i], self.program.params[i]["memory"]
-        status, current = self.status[i], self.current[i]
-        fresh = mask & (status != RUNNING)
-        self._halt_children(i, 0, fresh)
-        if not kids:
-            np.copyto(status, SUCCESS, where=mask)
-            np.copyto(current, -1, where=mask)
-            return
-        start, last_start, going = self._sequence_start(memory, mask, fresh, current)
-        for k, child in enumerate(kids):
-            if _some(going):
-                if memory:
-                    np.copyto(current, k, where=going)
-                self._tickers[child](going)
-                result = self.status[child]
-                succeeded = result == SUCCESS
-                stopped = going & ~succeeded
-                if not memory:
-                    self._halt_children(i, k + 1, stopped)
-                np.copyto(status, result, where=stopped)
-                going &= succeeded
-            if start is not None and k < last_start:
-                going |= mask & (start == k + 1)
-        np.copyto(status, SUCCESS, where=going)
-
-    @staticmethod
-    def _sequence_start(
-        memory: bool, mask: np.ndarray, fresh: np.ndarray, current: np.ndarray
-    ) -> tuple[np.ndarray | None, int, np.ndarray]:
-        """Where each agent's sequence starts: (child index per agent or None when all start
-        at the first child, the largest start, the agents starting at the first child)."""
-        resuming = mask & ~fresh
-        if memory and _some(resuming):
-            start = np.where(fresh, 0, current)
-            return start, int(start[resuming].max()), mask & (start == 0)
-        return None, 0, mask.copy()
-
-    def _selector(self, i: int, mask: np.ndarray) -> None:
-        kids, memory = self.program.children[i], self.program.params[i]["memory"]
-        status, current = self.status[i], self.current[i]
-        np.copyto(current, 0, where=mask & (status != RUNNING))
-        if not kids:
-            np.copyto(status, FAILURE, where=mask)
-            np.copyto(current, -1, where=mask)
-            return
-        previous = current.copy()
-        if memory:
-            for k in range(len(kids) - 1):
-                self._halt(kids[k], mask & (previous > k))
-            going = mask & (previous == 0)
-        else:
-            going = mask.copy()
-        for k, child in enumerate(kids):
-            if _some(going):
-                self._tickers[child](going)
-                result = self.status[child]
-                failed = result == FAILURE
-                chosen = going & ~failed
-                np.copyto(current, k, where=chosen)
-                self._halt_children(i, k + 1, chosen & (previous != k))
-                np.copyto(status, result, where=chosen)
-                going &= failed
-            if memory and k + 1 < len(kids):
-                going |= mask & (previous == k + 1)
-        np.copyto(status, FAILURE, where=going)
-        np.copyto(current, len(kids) - 1, where=going)
-
     def _parallel(self, i: int, mask: np.ndarray) -> None:
         kids, params = self.program.children[i], self.program.params[i]
         status = self.status[i]
@@ -347,12 +262,6 @@ class BatchedEngine:
         for k, child in enumerate(kids):
             self._halt(child, finished & (results[k] == RUNNING))
         np.copyto(status, new, where=mask)
-
-    def _decorator(self, i: int, mask: np.ndarray) -> None:
-        child = self.program.children[i][0]
-        self._tickers[child](mask)
-        result = self.status[child]
-        self._settle(i, child, mask, result, self._tables[i][result])
 
     def _counted(self, i: int, mask: np.ndarray) -> None:
         """PyTreesRepeat (counts successes) and PyTreesRetry (counts failures), as py_trees'
@@ -627,12 +536,95 @@ class BatchedEngine:
             np.copyto(result, outcome, where=going & (outcome != RUNNING))
 
 
+class MaskedOps:
+    """:class:`~pyautonomousagent.bt.rules.Ops` of control node ``i`` for all agents at once:
+    values are arrays over agents (N,), a condition narrows the mask of the agents a step
+    applies to, and a ``finish`` takes its agents out of the rest of the rule."""
+
+    def __init__(self, engine: BatchedEngine, i: int) -> None:
+        self._engine = engine
+        self._rule = NODE_TYPES.get(engine.program.nodes[i].type).rule
+        self.children = engine.program.children[i]
+        self.kids = len(self.children)
+        self.params = engine.program.params[i]
+        self._status, self._memory = engine.status[i], engine.counter[i]
+        self._alive = self._guard = engine._everyone
+        self._tables: dict[tuple[int, ...], np.ndarray] = {}
+
+    def run(self, mask: np.ndarray) -> None:
+        """Tick the node for the agents of ``mask``."""
+        self._alive, self._guard = mask.copy(), None
+        self._rule(self)
+
+    def _mask(self) -> np.ndarray:
+        return self._alive if self._guard is None else self._alive & self._guard
+
+    def status(self) -> np.ndarray:
+        return self._status
+
+    def memory(self) -> np.ndarray:
+        return self._memory
+
+    def set_memory(self, value: Any) -> None:
+        np.copyto(self._memory, value, where=self._mask())
+
+    def tick(self, k: int) -> np.ndarray:
+        mask = self._mask()
+        if _some(mask):
+            self._engine._tickers[self.children[k]](mask)
+        return self._engine.status[self.children[k]]
+
+    def halt(self, first: int, last: int | None = None) -> None:
+        mask = self._mask()
+        if _some(mask):
+            for child in self.children[first:last]:
+                self._engine._halt(child, mask)
+
+    def let(self, name: str, value: Any) -> Any:
+        return value.copy() if isinstance(value, np.ndarray) else value
+
+    def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
+        if isinstance(cond, np.ndarray):
+            return np.where(cond, if_true, if_false)
+        return if_true if cond else if_false
+
+    def lookup(self, table: tuple[int, ...], value: Any) -> np.ndarray:
+        if table not in self._tables:
+            self._tables[table] = np.asarray(table, dtype=np.int8)
+        return self._tables[table][value]
+
+    @contextmanager
+    def when(self, cond: Any) -> Iterator[None]:
+        if not isinstance(cond, np.ndarray):
+            if not cond:
+                raise ValueError("a rule's condition is false whatever the agent")
+            yield
+            return
+        outer = self._guard
+        self._guard = cond if outer is None else outer & cond
+        try:
+            yield
+        finally:
+            self._guard = outer
+
+    def finish(self, status: Any, where: Any = True) -> None:
+        mask = self._mask()
+        if isinstance(where, np.ndarray):
+            mask = mask & where
+        np.copyto(self._status, status, where=mask)
+        self._alive &= ~mask
+
+
+def _rule_ticker(engine: BatchedEngine, i: int, mask: np.ndarray) -> None:
+    """A node type with a rule, ticked by a :class:`MaskedOps` (the engine's ticker makes
+    one per node, once)."""
+    MaskedOps(engine, i).run(mask)
+
+
 #: Node type -> the method that ticks it, called with (engine, node index, mask): one entry
-#: per record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES` (status-mapping decorators
-#: all use ``_decorator`` with the record's ``status_map``).
+#: per record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES`, those with a rule derived
+#: from it (:func:`_rule_ticker`).
 BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
-    "Sequence": BatchedEngine._sequence,
-    "Fallback": BatchedEngine._selector,
     "PyTreesParallel": BatchedEngine._parallel,
     "PyTreesRepeat": BatchedEngine._counted,
     "PyTreesRetry": BatchedEngine._counted,
@@ -650,4 +642,7 @@ BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
     "Timeout": BatchedEngine._timeout,
     "RunOnce": BatchedEngine._run_once,
     **{f"Switch{n}": BatchedEngine._switch for n in range(2, 7)},
+}
+BATCHED_NODES |= {
+    name: _rule_ticker for name, record in NODE_TYPES.items() if record.rule is not None
 }

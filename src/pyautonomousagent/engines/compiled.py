@@ -41,6 +41,7 @@ from pyautonomousagent import jit
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, leaf_type, make_leaf
 from pyautonomousagent.bt.program import Program, compile_tree
 from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_entries
+from pyautonomousagent.bt.tree_source import memory_rows
 from pyautonomousagent.engines.compiled_source import (
     CHUNK,
     Constants,
@@ -197,17 +198,17 @@ class CompiledEngine:
                 if kernel is None:
                     raise TreeError(f"leaf {node.name!r} ({node.type}) has no kernel")
                 self.kernels[i] = kernel
-        memory = [i for i, n in enumerate(self.program.nodes) if n.type in ("Sequence", "Fallback")]
+        rows = memory_rows(self.program)
         senders = tuple(i for i, kernel in sorted(self.kernels.items()) if kernel.sends)
         self.layout = Layout(
             tuple(swarm.columns) + tuple(swarm.blackboard),
-            {i: k for k, i in enumerate(memory)},
+            rows,
             senders,
             deferrable(self.program, self.kernels),
         )
         self.pending = np.full(swarm.size, -1, dtype=np.int32)  # deferred Later steps
         self.status = np.zeros((len(self.program.nodes), swarm.size), dtype=np.int8)
-        self.current = np.full((len(memory), swarm.size), -1, dtype=np.int32)
+        self.current = np.full((len(rows), swarm.size), -1, dtype=np.int32)
         self.outboxes = {i: np.zeros((3 + len(self._sends(i).fields), swarm.size)) for i in senders}
         self.arrays = [{**swarm.columns, **swarm.blackboard}[k] for k in self.layout.names]
         self.arrays += list(self.outboxes.values())

@@ -1,0 +1,73 @@
+"""A control node's semantics, written once as a rule that every engine runs in its own form.
+
+A rule is a function of one argument, ``n``, an :class:`Ops`: the node as one engine sees it.
+It says, for the agents whose tick reaches the node, which children are ticked, which are
+halted, what the node remembers and what it returns, through ``n``'s few operations only:
+values are opaque (an int, a NumPy array over agents, or a piece of generated source) and
+combine with ``==``, ``!=``, ``<``, ``<=``, ``>``, ``>=``, ``&`` and ``|``; a condition
+on them is taken with ``with n.when(cond):``, never with ``if``. Python's own ``if`` and
+``for`` see only what is fixed when the tree is built: the number of children and the
+parameters. Each engine gives its form by implementing :class:`Ops`:
+
+- the py_trees engine runs the rule for one agent, values plain ints (``engines/pytrees.py``);
+- the batched engine runs it once for all agents, values arrays over agents, conditions masks
+  (``engines/batched.py``);
+- the compiled and GPU engines run it once to write its code for agent ``a``, values source
+  text, conditions ``if`` blocks (:mod:`pyautonomousagent.bt.tree_source`).
+
+The rules of the node types live with their records (:mod:`pyautonomousagent.bt.nodes`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from contextlib import AbstractContextManager
+from typing import Any, Protocol
+
+
+class Ops(Protocol):
+    """One control node as an engine ticks it (see the module's docstring).
+
+    Attributes:
+        kids: how many children the node has.
+        params: its parameters, defaults filled in (``Program.params``).
+    """
+
+    kids: int
+    params: Mapping[str, Any]
+
+    def status(self) -> Any:
+        """The node's own status before this tick (a code of :mod:`~pyautonomousagent.bt.status`)."""
+
+    def memory(self) -> Any:
+        """The whole number the node remembers between ticks (records with ``memory``)."""
+
+    def set_memory(self, value: Any) -> None:
+        """Remember ``value`` (for the agents the current conditions select)."""
+
+    def tick(self, k: int) -> Any:
+        """Tick child ``k``; its status after that tick."""
+
+    def halt(self, first: int, last: int | None = None) -> None:
+        """Halt children ``first`` to ``last - 1`` (all from ``first`` when ``last`` is None):
+        a child not INVALID becomes INVALID with its subtree, a RUNNING leaf is told."""
+
+    def let(self, name: str, value: Any) -> Any:
+        """``value`` kept under ``name`` (a local of the rule; read later as it is now)."""
+
+    def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
+        """``if_true`` where ``cond`` holds, else ``if_false``."""
+
+    def lookup(self, table: tuple[int, ...], value: Any) -> Any:
+        """``table[value]``: a status mapped through a table indexed by status code."""
+
+    def when(self, cond: Any) -> AbstractContextManager[None]:
+        """A block that applies to the agents where ``cond`` holds (nested: all of them)."""
+
+    def finish(self, status: Any, where: Any = True) -> None:
+        """End this node's tick with ``status`` where ``where`` holds (under the current
+        conditions): nothing after it applies to those agents."""
+
+
+#: A node type's semantics: called with the node as an engine sees it.
+Rule = Callable[[Ops], None]

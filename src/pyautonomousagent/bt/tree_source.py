@@ -1,0 +1,186 @@
+"""A tree's tick for one agent as straight-line Python source, from the node types' rules.
+
+The compiled engine (numba) and the GPU engine (numba-cuda) both compile this code: every
+control node's rule (:mod:`pyautonomousagent.bt.rules`) is run once with :class:`SourceOps`,
+which writes what it does for agent ``a`` instead of doing it. ``st`` holds the node statuses
+(nodes, N) int8 and ``cur`` what each node with ``memory`` remembers (one row per such node,
+(M, N) int32); ``halt(a, st, node, end)`` is ``engines/compiled_runtime.halt``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from typing import Any
+
+from pyautonomousagent.bt.nodes import NODE_TYPES
+from pyautonomousagent.bt.program import Program
+
+
+class Source:
+    """A value of the generated code: its source text; comparisons and ``&``/``|`` make the
+    text of the combined value."""
+
+    def __init__(self, text: str) -> None:
+        self.text = text
+
+    def __str__(self) -> str:
+        return self.text
+
+    def _op(self, op: str, other: Any, flip: bool = False) -> Source:
+        left, right = (other, self) if flip else (self, other)
+        return Source(f"({_text(left)} {op} {_text(right)})")
+
+    def __eq__(self, other: Any) -> Source:  # type: ignore[override]
+        return self._op("==", other)
+
+    def __ne__(self, other: Any) -> Source:  # type: ignore[override]
+        return self._op("!=", other)
+
+    def __lt__(self, other: Any) -> Source:
+        return self._op("<", other)
+
+    def __le__(self, other: Any) -> Source:
+        return self._op("<=", other)
+
+    def __gt__(self, other: Any) -> Source:
+        return self._op(">", other)
+
+    def __ge__(self, other: Any) -> Source:
+        return self._op(">=", other)
+
+    def __and__(self, other: Any) -> Source:
+        return self._op("and", other)
+
+    def __rand__(self, other: Any) -> Source:
+        return self._op("and", other, flip=True)
+
+    def __or__(self, other: Any) -> Source:
+        return self._op("or", other)
+
+    def __ror__(self, other: Any) -> Source:
+        return self._op("or", other, flip=True)
+
+    __hash__ = None  # type: ignore[assignment]
+
+
+def _text(value: Any) -> str:
+    """Source text of a value: a :class:`Source`, a bool or a whole number."""
+    if isinstance(value, bool):
+        return str(value)
+    return value.text if isinstance(value, Source) else str(int(value))
+
+
+class SourceOps:
+    """:class:`~pyautonomousagent.bt.rules.Ops` that writes node ``i``'s rule as code for agent
+    ``a``: its lines in :attr:`lines`, children written in place by ``expand``; a ``finish``
+    leaves the node's ``while True:`` block with ``break``; locals end in ``_<i>``."""
+
+    def __init__(
+        self, program: Program, i: int, row: int, expand: Callable[[int], list[str]]
+    ) -> None:
+        self.program, self.i, self.row, self._expand = program, i, row, expand
+        self.children = program.children[i]
+        self.kids = len(self.children)
+        self.params = program.params[i]
+        self.lines: list[str] = []
+        self._depth = 0
+
+    def _emit(self, line: str) -> None:
+        self.lines.append("    " * self._depth + line)
+
+    def status(self) -> Source:
+        return Source(f"st[{self.i}, a]")
+
+    def memory(self) -> Source:
+        return Source(f"cur[{self.row}, a]")
+
+    def set_memory(self, value: Any) -> None:
+        self._emit(f"cur[{self.row}, a] = {_text(value)}")
+
+    def tick(self, k: int) -> Source:
+        child = self.children[k]
+        self.lines += ["    " * self._depth + line for line in self._expand(child)]
+        self._emit(f"res_{self.i} = st[{child}, a]")
+        return Source(f"res_{self.i}")
+
+    def halt(self, first: int, last: int | None = None) -> None:
+        for child in self.children[first:last]:
+            self._emit(f"halt(a, st, {child}, {self.program.end[child]})")
+
+    def let(self, name: str, value: Any) -> Any:
+        if not isinstance(value, Source):
+            return value
+        self._emit(f"{name}_{self.i} = {value.text}")
+        return Source(f"{name}_{self.i}")
+
+    def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
+        if not isinstance(cond, Source):
+            return if_true if cond else if_false
+        return Source(f"({_text(if_true)} if {cond.text} else {_text(if_false)})")
+
+    def lookup(self, table: tuple[int, ...], value: Any) -> Source:
+        return Source(f"({', '.join(map(str, table))},)[{_text(value)}]")
+
+    @contextmanager
+    def when(self, cond: Any) -> Iterator[None]:
+        if not isinstance(cond, Source):
+            if not cond:
+                raise ValueError("a rule's condition is false whatever the agent")
+            yield
+            return
+        self._emit(f"if {cond.text}:")
+        self._depth += 1
+        size = len(self.lines)
+        yield
+        if len(self.lines) == size:
+            self._emit("pass")
+        self._depth -= 1
+
+    def finish(self, status: Any, where: Any = True) -> None:
+        with self.when(where):
+            self._emit(f"st[{self.i}, a] = {_text(status)}")
+            if self._depth or isinstance(where, Source):
+                self._emit("break")
+
+
+def memory_rows(program: Program) -> dict[int, int]:
+    """Node index -> its row of ``cur``: the control nodes whose record has ``memory``."""
+    nodes = [i for i, node in enumerate(program.nodes) if node.is_control]
+    return {i: k for k, i in enumerate(i for i in nodes if node_record(program, i).memory)}
+
+
+def node_record(program: Program, i: int) -> Any:
+    """The :class:`~pyautonomousagent.bt.nodes.NodeType` of control node ``i``."""
+    return NODE_TYPES.get(program.nodes[i].type)
+
+
+def has_source(program: Program) -> bool:
+    """Whether every control node of ``program`` has a rule and no scripting attribute."""
+    return all(
+        not node.scripts and (not node.is_control or node_record(program, i).rule is not None)
+        for i, node in enumerate(program.nodes)
+    )
+
+
+def tree_body(
+    program: Program,
+    leaf_lines: Callable[[int], list[str]],
+    rows: Mapping[int, int],
+    indent: str,
+) -> str:
+    """The tick of agent ``a`` as straight-line code, indented by ``indent``: each control node
+    is a ``while True:`` block left with ``break``, its children written in place; a leaf is
+    ``leaf_lines(i)``. One body with no calls between nodes: numba passes no arrays between
+    functions (which costs reference counting per call and made a tick ten times slower)."""
+
+    def expand(i: int) -> list[str]:
+        if not program.nodes[i].is_control:
+            return leaf_lines(i)
+        ops = SourceOps(program, i, rows.get(i, -1), expand)
+        rule = node_record(program, i).rule
+        assert rule is not None, program.nodes[i].type
+        rule(ops)
+        return ["while True:", *("    " + line for line in ops.lines), "    break"]
+
+    return "\n".join(indent + line for line in expand(0))
