@@ -487,6 +487,7 @@ _control(
     "BT.CPP 4.9: children but the last in sequence; if one fails, the last (catch) runs, "
     "then FAILURE",
     params=(Param("catch_on_halt", bool, False, _no_catch_on_halt),),
+    builtin=False,  # not in BT.CPP 4.8, the version held against: files declare it
     rule=try_catch_rule,
     memory=True,
     yields=True,
