@@ -23,7 +23,7 @@ from typing import Any
 
 from pyautonomousagent.bt.rules import Ops, Rule
 from pyautonomousagent.bt.script import ScriptError, parse
-from pyautonomousagent.bt.status import FAILURE, NAMES, RUNNING, SUCCESS
+from pyautonomousagent.bt.status import FAILURE, NAMES, RUNNING, SKIPPED, SUCCESS
 from pyautonomousagent.registry import Registry
 
 CONTROL = "Control"
@@ -180,8 +180,9 @@ MEMORY = Param("memory", bool, None, boolean, in_files=False)
 
 def sequence_rule(n: Ops) -> None:
     """py_trees' Sequence: ticks the children in order from the first (with ``memory``, from
-    the RUNNING one) until one does not succeed, which it returns; without memory the
-    children after that one are halted. Remembers the child it ticks (-1: none)."""
+    the RUNNING one) until one neither succeeds nor is skipped, which it returns; without
+    memory the children after that one are halted. SKIPPED when every child was skipped
+    this tick (BT.CPP's). Remembers the child it ticks (-1: none)."""
     memory = n.params["memory"]
     fresh = n.let("fresh", n.status() != RUNNING)
     with n.when(fresh):
@@ -191,24 +192,29 @@ def sequence_rule(n: Ops) -> None:
         n.finish(SUCCESS)
         return
     start = n.let("start", n.pick(fresh, 0, n.memory())) if memory else 0
+    skipped = n.let("skipped", fresh if memory else True)
     for k in range(n.kids):
         with n.when(start <= k):
             if memory:
                 n.set_memory(k)
             result = n.tick(k)
+            stop = n.let("stop", (result != SUCCESS) & (result != SKIPPED))
             if not memory:
-                with n.when(result != SUCCESS):
+                with n.when(stop):
                     n.halt(k + 1)
-            n.finish(result, where=result != SUCCESS)
-    n.finish(SUCCESS)
+            n.finish(result, where=stop)
+            skipped = n.let("skipped", skipped & (result == SKIPPED))
+    n.finish(n.pick(skipped, SKIPPED, SUCCESS))
 
 
 def fallback_rule(n: Ops) -> None:
     """py_trees' Selector: tries the children in order from the first (with ``memory``, from
-    the remembered one, halting those before it) until one does not fail, which it returns
-    and remembers; a newly chosen child halts the ones after it."""
+    the remembered one, halting those before it) until one neither fails nor is skipped,
+    which it returns and remembers; a newly chosen child halts the ones after it. SKIPPED
+    when every child was skipped this tick (BT.CPP's)."""
     memory = n.params["memory"]
-    with n.when(n.status() != RUNNING):
+    fresh = n.let("fresh", n.status() != RUNNING)
+    with n.when(fresh):
         n.set_memory(0)
     if not n.kids:
         n.set_memory(-1)
@@ -219,16 +225,19 @@ def fallback_rule(n: Ops) -> None:
         with n.when(previous > k):
             n.halt(k, k + 1)
     start = previous if memory else 0
+    skipped = n.let("skipped", fresh if memory else True)
     for k in range(n.kids):
         with n.when(start <= k):
             result = n.tick(k)
-            with n.when(result != FAILURE):
+            chosen = n.let("chosen", (result != FAILURE) & (result != SKIPPED))
+            with n.when(chosen):
                 n.set_memory(k)
                 with n.when(previous != k):
                     n.halt(k + 1)
-            n.finish(result, where=result != FAILURE)
+            n.finish(result, where=chosen)
+            skipped = n.let("skipped", skipped & (result == SKIPPED))
     n.set_memory(n.kids - 1)
-    n.finish(FAILURE)
+    n.finish(n.pick(skipped, SKIPPED, FAILURE))
 
 
 # -- py_trees composites, written with BT.CPP's tags -------------------------------------------
@@ -291,8 +300,8 @@ _decorator(
     "KeepRunningUntilFailure",
     "KeepRunningUntilFailure",
     "∞",
-    "RUNNING when the child succeeds; FAILURE when it fails",
-    status_map={"SUCCESS": "RUNNING"},
+    "RUNNING when the child succeeds (or is skipped); FAILURE when it fails",
+    status_map={"SUCCESS": "RUNNING", "SKIPPED": "RUNNING"},
 )
 for _name, _map in {
     "FailureIsRunning": {"FAILURE": "RUNNING"},
@@ -380,15 +389,6 @@ def msec(value: Any, children: int) -> str:
     return ""
 
 
-def _then_skip(value: Any, children: int) -> str:
-    if value is False:
-        return ""
-    return (
-        f"must be false, got {value!r}: a skipped node (BehaviorTree.CPP's SKIPPED) has no "
-        "equal on the py_trees engine"
-    )
-
-
 _decorator(
     "Precondition",
     "Precondition",
@@ -413,12 +413,28 @@ _decorator(
     "halts the child and fails when it runs longer than msec of simulated time",
     params=(Param("msec", int, None, msec),),
 )
+def run_once_rule(n: Ops) -> None:
+    """BT.CPP's RunOnce: ticks the child until it succeeds or fails once, then returns that
+    status for ever without ticking it (``then_skip``: SKIPPED instead). Remembers the
+    status (0: none yet)."""
+    done = n.let("done", n.memory())
+    with n.when(done != 0):
+        n.finish(SKIPPED if n.params["then_skip"] else done)
+    result = n.tick(0)
+    with n.when((result == SUCCESS) | (result == FAILURE)):
+        n.set_memory(result)
+    n.finish(result)
+
+
 _decorator(
     "RunOnce",
     "RunOnce",
     "once",
-    "ticks the child until it finishes once, then returns that status for ever",
-    params=(Param("then_skip", bool, True, _then_skip),),
+    "ticks the child until it finishes once; then SKIPPED (then_skip=false: that status)",
+    params=(Param("then_skip", bool, True, boolean),),
+    rule=run_once_rule,
+    memory=True,
+    yields=True,
 )
 
 
@@ -448,11 +464,14 @@ for _cases in range(2, 7):
 def try_catch_rule(n: Ops) -> None:
     """BT.CPP 4.9's TryCatch: children 1..N-1 are a Sequence with memory (the try block); if
     one fails, all are reset and the last child (the catch) is ticked until it finishes, when
-    all are reset and the node fails; SUCCESS (all reset) when the try block succeeded.
-    Remembers the child to tick: 0..N-2 in the try block, N-1 in the catch."""
+    all are reset and the node fails; SUCCESS (all reset) when the try block succeeded,
+    SKIPPED when it was all skipped. Remembers the child to tick: 0..N-2 in the try block,
+    N-1 in the catch."""
     catch = n.kids - 1
-    with n.when(n.status() != RUNNING):
+    fresh = n.let("fresh", n.status() != RUNNING)
+    with n.when(fresh):
         n.set_memory(0)
+    skipped = n.let("skipped", fresh)
     for k in range(catch):
         with n.when(n.memory() <= k):
             result = n.tick(k)
@@ -462,10 +481,11 @@ def try_catch_rule(n: Ops) -> None:
             with n.when(result == FAILURE):
                 n.halt(0)
                 n.set_memory(catch)
+            skipped = n.let("skipped", skipped & (result == SKIPPED))
     with n.when(n.memory() != catch):
         n.halt(0)
         n.set_memory(0)
-        n.finish(SUCCESS)
+        n.finish(n.pick(skipped, SKIPPED, SUCCESS))
     result = n.tick(catch)
     with n.when(result != RUNNING):
         n.halt(0)

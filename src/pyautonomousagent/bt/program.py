@@ -16,12 +16,18 @@ import numpy as np
 
 from pyautonomousagent.bt.script_leaves import literal
 from pyautonomousagent.bt.spec import Node, control_params
-from pyautonomousagent.bt.status import FAILURE, SUCCESS
+from pyautonomousagent.bt.status import FAILURE, SKIPPED, SUCCESS
 
-#: BehaviorTree.CPP's pre-condition attributes in the order it checks them, each with the
-#: status (a code of :mod:`pyautonomousagent.bt.status`) the node gets, without a tick,
-#: where the script holds and the node does not resume (it is not RUNNING).
-PRE_CONDITIONS = (("_failureIf", FAILURE), ("_successIf", SUCCESS))
+#: BehaviorTree.CPP's pre-condition attributes in the order it checks them: (attribute, the
+#: status, a code of :mod:`pyautonomousagent.bt.status`, the node gets without a tick, the
+#: script's truth value that decides it, whether it is also asked of a RUNNING node, which
+#: is then halted first). Asked of a node that does not resume (not RUNNING), in order.
+PRE_CONDITIONS = (
+    ("_failureIf", FAILURE, True, False),
+    ("_successIf", SUCCESS, True, False),
+    ("_skipIf", SKIPPED, True, False),
+    ("_while", SKIPPED, False, True),
+)
 
 
 @dataclass(frozen=True)

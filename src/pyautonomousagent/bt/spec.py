@@ -139,6 +139,7 @@ def check_structure(root: Node) -> None:
         if count < record.least or (record.most is not None and count > record.most):
             raise TreeError(f"{node.type} {node.name!r} needs {_arity(record)}, has {count}")
         control_params(node)
+        _check_skipped_children(node)
         if node.type == "Sequence" and node.params.get("memory") is False:
             asynchronous = sum(child.type == "AsyncSequence" for child in node.children)
             if asynchronous > 1:
@@ -146,6 +147,36 @@ def check_structure(root: Node) -> None:
                     f"reactive sequence {node.name!r} has {asynchronous} AsyncSequence children; "
                     "BehaviorTree.CPP allows one"
                 )
+
+
+#: Scripting attributes that may make a node SKIPPED (BehaviorTree.CPP's pre-conditions).
+SKIPPING = ("_skipIf", "_while")
+
+
+def may_skip(node: Node) -> bool:
+    """Whether ``node`` may return SKIPPED: it has ``_skipIf`` or ``_while``, it is a RunOnce
+    with ``then_skip``, or a node type with a rule with a child that may (conservatively: a
+    Sequence is SKIPPED only when all its children are)."""
+    if any(key in node.scripts for key in SKIPPING):
+        return True
+    if node.type == "RunOnce" and node.params.get("then_skip", True):
+        return True
+    rule = node.is_control and node_type(node.type).rule is not None
+    return rule and any(may_skip(child) for child in node.children)
+
+
+def _check_skipped_children(node: Node) -> None:
+    """TreeError if ``node``'s type has no rule (:mod:`~pyautonomousagent.bt.rules`) yet a
+    child may be SKIPPED: only the node types with a rule say what a skipped child does."""
+    if node_type(node.type).rule is not None:
+        return
+    for child in node.children:
+        if may_skip(child):
+            raise TreeError(
+                f"{node.type} {node.name!r} cannot take child {child.name!r}, which may be "
+                "SKIPPED (_skipIf, _while, RunOnce then_skip): put it under a Sequence, "
+                "Fallback, TryCatch, RunOnce or status-mapping decorator"
+            )
 
 
 def entries_read(root: Node) -> dict[str, str]:

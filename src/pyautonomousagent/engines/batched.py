@@ -168,16 +168,19 @@ class BatchedEngine:
 
     def _with_scripts(self, i: int, ticker: Callable[[np.ndarray], None]) -> Callable:
         """``ticker`` with node ``i``'s scripting attributes (see engines/btcpp.py's
-        ``with_scripts``): pre-conditions for the agents it does not resume, then its tick
-        for the others, then the post scripts by status."""
+        ``with_scripts``): pre-conditions (``PRE_CONDITIONS``), then its tick for the
+        agents they did not decide, then the post scripts by status."""
         scripts, status = self._attributes[i], self.status[i]
 
         def tick(mask: np.ndarray) -> None:
             going = mask.copy()
-            for key, result in PRE_CONDITIONS:
-                asked = going & (status != RUNNING)
+            for key, result, holds, running in PRE_CONDITIONS:
+                asked = going if running else going & (status != RUNNING)
                 if key in scripts and _some(asked):
-                    decided = self._truth(scripts[key], asked)
+                    truth = self._truth(scripts[key], asked)
+                    decided = asked & (truth if holds else ~truth)
+                    if running:
+                        self._halt(i, decided & (status == RUNNING))
                     np.copyto(status, result, where=decided)
                     going &= ~decided
             if _some(going):
@@ -524,17 +527,6 @@ class BatchedEngine:
                 np.copyto(running, 0, where=finished)
                 self._halt_children(i, 0, finished)
 
-    def _run_once(self, i: int, mask: np.ndarray) -> None:
-        """RunOnce then_skip=false; ``counter`` holds the remembered status (0: none yet)."""
-        child, result, status = self.program.children[i][0], self.counter[i], self.status[i]
-        going = mask & (result == 0)
-        np.copyto(status, result, where=mask & ~going)
-        if _some(going):
-            self._tickers[child](going)
-            outcome = self.status[child]
-            np.copyto(status, outcome, where=going)
-            np.copyto(result, outcome, where=going & (outcome != RUNNING))
-
 
 class MaskedOps:
     """:class:`~pyautonomousagent.bt.rules.Ops` of control node ``i`` for all agents at once:
@@ -640,7 +632,6 @@ BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
     "Precondition": BatchedEngine._precondition,
     "Delay": BatchedEngine._delay,
     "Timeout": BatchedEngine._timeout,
-    "RunOnce": BatchedEngine._run_once,
     **{f"Switch{n}": BatchedEngine._switch for n in range(2, 7)},
 }
 BATCHED_NODES |= {

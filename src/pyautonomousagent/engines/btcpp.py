@@ -17,6 +17,7 @@ The batched engine implements the same rules on arrays; docs/tree-files.md has t
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from enum import Enum
 from typing import Any
 
 import py_trees
@@ -30,12 +31,20 @@ from pyautonomousagent.bt.script import parse
 from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import parallel_threshold
 
+class Skipped(Enum):
+    """BehaviorTree.CPP's SKIPPED, a status py_trees lacks: a py_trees node's ``status``
+    where it was skipped (it is neither RUNNING nor INVALID to py_trees)."""
+
+    SKIPPED = "SKIPPED"
+
+
 #: Status codes (:mod:`pyautonomousagent.bt.status`) as py_trees' statuses, and back.
 TO_PYTREES = {
     codes.INVALID: Status.INVALID,
     codes.SUCCESS: Status.SUCCESS,
     codes.FAILURE: Status.FAILURE,
     codes.RUNNING: Status.RUNNING,
+    codes.SKIPPED: Skipped.SKIPPED,
 }
 FROM_PYTREES = {v: k for k, v in TO_PYTREES.items()}
 
@@ -400,29 +409,6 @@ class Timeout(_Timed):
         yield self
 
 
-class RunOnce(py_trees.decorators.Decorator):
-    """BT.CPP ``RunOnce then_skip="false"``: ticks the child until it finishes once, then
-    returns that status without ticking it again."""
-
-    def __init__(self, name: str, child: Behaviour) -> None:
-        super().__init__(name=name, child=child)
-        self.result: Status | None = None
-
-    def tick(self) -> Iterator[Behaviour]:
-        """The remembered status, or the child's."""
-        if self.result is None:
-            yield from self.decorated.tick()
-            if self.decorated.status != Status.RUNNING:
-                self.result = self.decorated.status
-            self.status = self.decorated.status
-        else:
-            self.status = self.result
-        yield self
-
-    def update(self) -> Status:  # pragma: no cover - tick() does the work
-        return self.decorated.status
-
-
 class Switch(py_trees.composites.Composite):
     """BT.CPP ``Switch2``...``Switch6``: ticks the child of the first case equal to the
     agent's entry ``variable`` (else the last child); a running child of another case is
@@ -456,15 +442,14 @@ class Switch(py_trees.composites.Composite):
         yield self
 
 
-#: Pre-conditions in BT.CPP's order: attribute -> the status it returns when its script holds.
 #: :data:`~pyautonomousagent.bt.program.PRE_CONDITIONS` with py_trees' statuses.
-PRE_CONDITIONS = tuple((key, TO_PYTREES[code]) for key, code in program.PRE_CONDITIONS)
+PRE_CONDITIONS = tuple((key, TO_PYTREES[code], *rest) for key, code, *rest in program.PRE_CONDITIONS)
 
 
 def with_scripts(behaviour: Behaviour, scripts: Mapping[str, str], agent: Any) -> Behaviour:
     """Give ``behaviour`` BehaviorTree.CPP's scripting attributes, run on ``agent``'s
-    blackboard: ``_failureIf``/``_successIf`` decide without a tick when the node does not
-    resume (it is not RUNNING); after a tick that finishes the node, ``_onSuccess`` or
+    blackboard: the pre-conditions (``_failureIf``, ``_successIf``, ``_skipIf``, ``_while``)
+    decide without a tick (``_while`` also halts a RUNNING node); after a tick that finishes the node, ``_onSuccess`` or
     ``_onFailure``, then ``_post`` (as BT.CPP 4.8: not after RUNNING); ``_onHalted`` when a
     RUNNING node is halted, after its children's."""
     parsed = {key: parse(code) for key, code in scripts.items()}
@@ -480,13 +465,15 @@ def with_scripts(behaviour: Behaviour, scripts: Mapping[str, str], agent: Any) -
             parsed["_post"].run(board)
 
     def scripted_tick() -> Iterator[Behaviour]:
-        if behaviour.status != Status.RUNNING:
-            for key, status in PRE_CONDITIONS:
-                if key in parsed and parsed[key].truth(board):
-                    behaviour.status = status
-                    post()
-                    yield behaviour
-                    return
+        for key, status, holds, running in PRE_CONDITIONS:
+            asked = running or behaviour.status != Status.RUNNING
+            if key in parsed and asked and bool(parsed[key].truth(board)) == holds:
+                if behaviour.status == Status.RUNNING:
+                    behaviour.stop(Status.INVALID)
+                behaviour.status = status
+                post()
+                yield behaviour
+                return
         for node in tick():
             if node is behaviour:  # its last step: parents decide on seeing it
                 post()
@@ -519,7 +506,6 @@ BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Beh
     "Precondition": lambda name, kids, p: Precondition(name, kids[0], p["if"], p["else"]),
     "Delay": lambda name, kids, p: Delay(name, kids[0], p["delay_msec"]),
     "Timeout": lambda name, kids, p: Timeout(name, kids[0], p["msec"]),
-    "RunOnce": lambda name, kids, p: RunOnce(name, kids[0]),
     **{
         f"Switch{n}": lambda name, kids, p: Switch(name, kids, p["variable"].key, case_values(p))
         for n in range(2, 7)

@@ -208,7 +208,7 @@ class CompiledEngine:
         )
         self.pending = np.full(swarm.size, -1, dtype=np.int32)  # deferred Later steps
         self.status = np.zeros((len(self.program.nodes), swarm.size), dtype=np.int8)
-        self.current = np.full((len(rows), swarm.size), -1, dtype=np.int32)
+        self.current = np.zeros((len(rows), swarm.size), dtype=np.int32)
         self.outboxes = {i: np.zeros((3 + len(self._sends(i).fields), swarm.size)) for i in senders}
         self.arrays = [{**swarm.columns, **swarm.blackboard}[k] for k in self.layout.names]
         self.arrays += list(self.outboxes.values())
