@@ -75,11 +75,13 @@ ENGINES = [
 
 
 def run(tree: Node, engine: str, scripts: Mapping[str, str], expected: list[str],
-        ticks: list[int]) -> None:  # fmt: skip
-    """Tick once per row, leaf ``x`` returning ``scripts[x][tick]`` (S, F, R); assert every
-    node's status (letters, tick order) and the leaf ticks of that tick."""
+        ticks: list[int], board: Mapping[str, str] | None = None) -> None:  # fmt: skip
+    """Tick once per row, leaf ``x`` returning ``scripts[x][tick]`` (S, F, R) and each entry
+    ``k`` of ``board`` holding digit ``board[k][tick]``; assert every node's status (letters,
+    tick order) and the leaf ticks of that tick."""
     names = [node.name for node in tree.walk() if not node.is_control]
-    keys = {f"s_{name}": np.int64 for name in names}
+    board = board or {}
+    keys = {f"s_{name}": np.int64 for name in names} | dict.fromkeys(board, np.int64)
     with LEAF_TYPES.override("FromEntry", FromEntry):
         swarm = Swarm.create(["drone1"], {**BLACKBOARD_KEYS, **keys}, DroneMission.columns)
         world = make_world(swarm)
@@ -92,6 +94,8 @@ def run(tree: Node, engine: str, scripts: Mapping[str, str], expected: list[str]
         for t, (row, leaf_ticks) in enumerate(zip(expected, ticks, strict=True)):
             for name in names:
                 swarm.blackboard[f"s_{name}"][:] = CODE[scripts[name][t]]
+            for key, digits in board.items():
+                swarm.blackboard[key][:] = int(digits[t])
             before = int(counts[0])
             world.iteration += 1
             decision.tick()

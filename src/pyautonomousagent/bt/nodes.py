@@ -130,7 +130,7 @@ class NodeType:
         status_map: for a decorator that maps its child's status: {child: own} by name.
         rule: its semantics, for every engine (:mod:`~pyautonomousagent.bt.rules`); None
             for a type each engine implements by hand.
-        memory: True if the rule remembers a whole number per agent (``Ops.memory``).
+        memory: how many whole numbers per agent the rule remembers (``Ops.memory``).
         yields: True if the node returns at once, RUNNING, when a child is RUNNING (so no
             node ticked after that child sees the tick: compiled leaves may defer a step).
     """
@@ -144,7 +144,7 @@ class NodeType:
     builtin: bool = True
     status_map: Mapping[str, str] | None = None
     rule: Rule | None = None
-    memory: bool = False
+    memory: int = 0
     yields: bool = False
 
     def defaults(self) -> dict[str, Any]:
@@ -182,7 +182,8 @@ def sequence_rule(n: Ops) -> None:
     """py_trees' Sequence: ticks the children in order from the first (with ``memory``, from
     the RUNNING one) until one neither succeeds nor is skipped, which it returns; without
     memory the children after that one are halted. SKIPPED when every child was skipped
-    this tick (BT.CPP's). Remembers the child it ticks (-1: none)."""
+    (BT.CPP's: in this run, or this tick without memory). Remembers the child it ticks
+    (-1: none), and whether no child succeeded yet."""
     memory = n.params["memory"]
     fresh = n.let("fresh", n.status() != RUNNING)
     with n.when(fresh):
@@ -192,7 +193,8 @@ def sequence_rule(n: Ops) -> None:
         n.finish(SUCCESS)
         return
     start = n.let("start", n.pick(fresh, 0, n.memory())) if memory else 0
-    skipped = n.let("skipped", fresh if memory else True)
+    with n.when(fresh if memory else True):
+        n.set_memory(1, slot=1)  # no child succeeded yet in this run
     for k in range(n.kids):
         with n.when(start <= k):
             if memory:
@@ -203,15 +205,16 @@ def sequence_rule(n: Ops) -> None:
                 with n.when(stop):
                     n.halt(k + 1)
             n.finish(result, where=stop)
-            skipped = n.let("skipped", skipped & (result == SKIPPED))
-    n.finish(n.pick(skipped, SKIPPED, SUCCESS))
+            with n.when(result == SUCCESS):
+                n.set_memory(0, slot=1)
+    n.finish(n.pick(n.memory(1) == 1, SKIPPED, SUCCESS))
 
 
 def fallback_rule(n: Ops) -> None:
     """py_trees' Selector: tries the children in order from the first (with ``memory``, from
     the remembered one, halting those before it) until one neither fails nor is skipped,
     which it returns and remembers; a newly chosen child halts the ones after it. SKIPPED
-    when every child was skipped this tick (BT.CPP's)."""
+    when every child was skipped (as Sequence); remembers whether no child failed yet."""
     memory = n.params["memory"]
     fresh = n.let("fresh", n.status() != RUNNING)
     with n.when(fresh):
@@ -225,7 +228,8 @@ def fallback_rule(n: Ops) -> None:
         with n.when(previous > k):
             n.halt(k, k + 1)
     start = previous if memory else 0
-    skipped = n.let("skipped", fresh if memory else True)
+    with n.when(fresh if memory else True):
+        n.set_memory(1, slot=1)  # no child failed yet in this run
     for k in range(n.kids):
         with n.when(start <= k):
             result = n.tick(k)
@@ -235,9 +239,10 @@ def fallback_rule(n: Ops) -> None:
                 with n.when(previous != k):
                     n.halt(k + 1)
             n.finish(result, where=chosen)
-            skipped = n.let("skipped", skipped & (result == SKIPPED))
+            with n.when(result == FAILURE):
+                n.set_memory(0, slot=1)
     n.set_memory(n.kids - 1)
-    n.finish(n.pick(skipped, SKIPPED, FAILURE))
+    n.finish(n.pick(n.memory(1) == 1, SKIPPED, FAILURE))
 
 
 # -- py_trees composites, written with BT.CPP's tags -------------------------------------------
@@ -246,13 +251,13 @@ add(NodeType("Sequence", CONTROL, 0, None, (MEMORY,), (
             "ticks children in order; resumes at a RUNNING child; restarts after a failure"),
     FileTag("ReactiveSequence", {"memory": False}, "R→",
             "ticks children from the first on every tick"),
-), rule=sequence_rule, memory=True, yields=True))  # fmt: skip
+), rule=sequence_rule, memory=2, yields=True))  # fmt: skip
 add(NodeType("Fallback", CONTROL, 0, None, (MEMORY,), (
     FileTag("Fallback", {"memory": True}, "?",
             "tries children in order until one does not fail; resumes at a RUNNING child"),
     FileTag("ReactiveFallback", {"memory": False}, "R?",
             "tries children from the first on every tick"),
-), rule=fallback_rule, memory=True, yields=True))  # fmt: skip
+), rule=fallback_rule, memory=2, yields=True))  # fmt: skip
 
 
 def mapped_rule(status_map: Mapping[str, str]) -> Rule:
@@ -433,7 +438,7 @@ _decorator(
     "ticks the child until it finishes once; then SKIPPED (then_skip=false: that status)",
     params=(Param("then_skip", bool, True, boolean),),
     rule=run_once_rule,
-    memory=True,
+    memory=1,
     yields=True,
 )
 
@@ -465,13 +470,12 @@ def try_catch_rule(n: Ops) -> None:
     """BT.CPP 4.9's TryCatch: children 1..N-1 are a Sequence with memory (the try block); if
     one fails, all are reset and the last child (the catch) is ticked until it finishes, when
     all are reset and the node fails; SUCCESS (all reset) when the try block succeeded,
-    SKIPPED when it was all skipped. Remembers the child to tick: 0..N-2 in the try block,
-    N-1 in the catch."""
+    SKIPPED when it was all skipped. Remembers the child to tick (0..N-2 in the try block,
+    N-1 in the catch) and whether no try child succeeded yet."""
     catch = n.kids - 1
-    fresh = n.let("fresh", n.status() != RUNNING)
-    with n.when(fresh):
+    with n.when(n.status() != RUNNING):
         n.set_memory(0)
-    skipped = n.let("skipped", fresh)
+        n.set_memory(1, slot=1)  # no try child succeeded yet
     for k in range(catch):
         with n.when(n.memory() <= k):
             result = n.tick(k)
@@ -481,11 +485,12 @@ def try_catch_rule(n: Ops) -> None:
             with n.when(result == FAILURE):
                 n.halt(0)
                 n.set_memory(catch)
-            skipped = n.let("skipped", skipped & (result == SKIPPED))
+            with n.when(result == SUCCESS):
+                n.set_memory(0, slot=1)
     with n.when(n.memory() != catch):
         n.halt(0)
         n.set_memory(0)
-        n.finish(n.pick(skipped, SKIPPED, SUCCESS))
+        n.finish(n.pick(n.memory(1) == 1, SKIPPED, SUCCESS))
     result = n.tick(catch)
     with n.when(result != RUNNING):
         n.halt(0)
@@ -509,7 +514,7 @@ _control(
     params=(Param("catch_on_halt", bool, False, _no_catch_on_halt),),
     builtin=False,  # not in BT.CPP 4.8, the version held against: files declare it
     rule=try_catch_rule,
-    memory=True,
+    memory=2,
     yields=True,
 )
 

@@ -39,11 +39,12 @@ class Ops(Protocol):
     def status(self) -> Any:
         """The node's own status before this tick (a code of :mod:`~pyautonomousagent.bt.status`)."""
 
-    def memory(self) -> Any:
-        """The whole number the node remembers between ticks (records with ``memory``)."""
+    def memory(self, slot: int = 0) -> Any:
+        """Whole number ``slot`` the node remembers between ticks (``slot`` below the record's
+        ``memory``); 0 before it is first set."""
 
-    def set_memory(self, value: Any) -> None:
-        """Remember ``value`` (for the agents the current conditions select)."""
+    def set_memory(self, value: Any, slot: int = 0) -> None:
+        """Remember ``value`` in ``slot`` (for the agents the current conditions select)."""
 
     def tick(self, k: int) -> Any:
         """Tick child ``k``; its status after that tick."""

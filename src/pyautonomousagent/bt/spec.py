@@ -166,17 +166,25 @@ def may_skip(node: Node) -> bool:
 
 
 def _check_skipped_children(node: Node) -> None:
-    """TreeError if ``node``'s type has no rule (:mod:`~pyautonomousagent.bt.rules`) yet a
-    child may be SKIPPED: only the node types with a rule say what a skipped child does."""
-    if node_type(node.type).rule is not None:
+    """TreeError if a child of ``node`` may be SKIPPED and ``node``'s type has no rule
+    (:mod:`~pyautonomousagent.bt.rules`: only those say what a skipped child does), or
+    ``node`` has a pre-condition or ``_onHalted``: BT.CPP leaves a node whose own tick
+    returned SKIPPED RUNNING, which no engine here mirrors."""
+    child = next((c for c in node.children if may_skip(c)), None)
+    if child is None:
         return
-    for child in node.children:
-        if may_skip(child):
-            raise TreeError(
-                f"{node.type} {node.name!r} cannot take child {child.name!r}, which may be "
-                "SKIPPED (_skipIf, _while, RunOnce then_skip): put it under a Sequence, "
-                "Fallback, TryCatch, RunOnce or status-mapping decorator"
-            )
+    if node_type(node.type).rule is None:
+        raise TreeError(
+            f"{node.type} {node.name!r} cannot take child {child.name!r}, which may be "
+            "SKIPPED (_skipIf, _while, RunOnce then_skip): put it under a Sequence, "
+            "Fallback, TryCatch, RunOnce or status-mapping decorator"
+        )
+    held = sorted(set(node.scripts) - {"_onSuccess", "_onFailure", "_post"})
+    if held:
+        raise TreeError(
+            f"{node.type} {node.name!r} may be SKIPPED through child {child.name!r}, so it "
+            f"cannot have {', '.join(held)} (BehaviorTree.CPP then keeps it RUNNING)"
+        )
 
 
 def entries_read(root: Node) -> dict[str, str]:

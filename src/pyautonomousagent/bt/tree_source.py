@@ -92,11 +92,11 @@ class SourceOps:
     def status(self) -> Source:
         return Source(f"st[{self.i}, a]")
 
-    def memory(self) -> Source:
-        return Source(f"cur[{self.row}, a]")
+    def memory(self, slot: int = 0) -> Source:
+        return Source(f"cur[{self.row + slot}, a]")
 
-    def set_memory(self, value: Any) -> None:
-        self._emit(f"cur[{self.row}, a] = {_text(value)}")
+    def set_memory(self, value: Any, slot: int = 0) -> None:
+        self._emit(f"cur[{self.row + slot}, a] = {_text(value)}")
 
     def tick(self, k: int) -> Source:
         child = self.children[k]
@@ -145,9 +145,18 @@ class SourceOps:
 
 
 def memory_rows(program: Program) -> dict[int, int]:
-    """Node index -> its row of ``cur``: the control nodes whose record has ``memory``."""
-    nodes = [i for i, node in enumerate(program.nodes) if node.is_control]
-    return {i: k for k, i in enumerate(i for i in nodes if node_record(program, i).memory)}
+    """Node index -> its first row of ``cur`` (one row per number the node's record says it
+    remembers, ``memory``); ``cur`` has :func:`memory_size` rows."""
+    rows, row = {}, 0
+    for i, node in enumerate(program.nodes):
+        if node.is_control and node_record(program, i).memory:
+            rows[i], row = row, row + node_record(program, i).memory
+    return rows
+
+
+def memory_size(program: Program) -> int:
+    """The rows of ``cur``: what the control nodes remember, in all."""
+    return sum(node_record(program, i).memory for i, n in enumerate(program.nodes) if n.is_control)
 
 
 def node_record(program: Program, i: int) -> Any:

@@ -539,7 +539,8 @@ class MaskedOps:
         self.children = engine.program.children[i]
         self.kids = len(self.children)
         self.params = engine.program.params[i]
-        self._status, self._memory = engine.status[i], engine.counter[i]
+        slots = NODE_TYPES.get(engine.program.nodes[i].type).memory
+        self._status, self._memory = engine.status[i], np.zeros((slots, engine.swarm.size), np.int64)
         self._alive = self._guard = engine._everyone
         self._tables: dict[tuple[int, ...], np.ndarray] = {}
 
@@ -554,11 +555,11 @@ class MaskedOps:
     def status(self) -> np.ndarray:
         return self._status
 
-    def memory(self) -> np.ndarray:
-        return self._memory
+    def memory(self, slot: int = 0) -> np.ndarray:
+        return self._memory[slot]
 
-    def set_memory(self, value: Any) -> None:
-        np.copyto(self._memory, value, where=self._mask())
+    def set_memory(self, value: Any, slot: int = 0) -> None:
+        np.copyto(self._memory[slot], value, where=self._mask())
 
     def tick(self, k: int) -> np.ndarray:
         mask = self._mask()

@@ -41,7 +41,7 @@ from pyautonomousagent import jit
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, leaf_type, make_leaf
 from pyautonomousagent.bt.program import Program, compile_tree
 from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_entries
-from pyautonomousagent.bt.tree_source import memory_rows
+from pyautonomousagent.bt.tree_source import memory_rows, memory_size
 from pyautonomousagent.engines.compiled_source import (
     CHUNK,
     Constants,
@@ -208,7 +208,7 @@ class CompiledEngine:
         )
         self.pending = np.full(swarm.size, -1, dtype=np.int32)  # deferred Later steps
         self.status = np.zeros((len(self.program.nodes), swarm.size), dtype=np.int8)
-        self.current = np.zeros((len(rows), swarm.size), dtype=np.int32)
+        self.current = np.zeros((memory_size(self.program), swarm.size), dtype=np.int32)
         self.outboxes = {i: np.zeros((3 + len(self._sends(i).fields), swarm.size)) for i in senders}
         self.arrays = [{**swarm.columns, **swarm.blackboard}[k] for k in self.layout.names]
         self.arrays += list(self.outboxes.values())

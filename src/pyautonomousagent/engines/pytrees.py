@@ -185,17 +185,21 @@ class _Ruled:
 class RuleComposite(_Ruled, py_trees.composites.Composite):
     """A control node type with a rule, as a py_trees composite."""
 
-    def __init__(self, name: str, children: list[Any], params: dict[str, Any], rule: Rule) -> None:
+    def __init__(
+        self, name: str, children: list[Any], params: dict[str, Any], rule: Rule, slots: int
+    ) -> None:
         super().__init__(name, children)
-        self.ops, self.rule = ScalarOps(self, params), rule
+        self.ops, self.rule = ScalarOps(self, params, slots), rule
 
 
 class RuleDecorator(_Ruled, py_trees.decorators.Decorator):
     """A decorator type with a rule, as a py_trees decorator."""
 
-    def __init__(self, name: str, children: list[Any], params: dict[str, Any], rule: Rule) -> None:
+    def __init__(
+        self, name: str, children: list[Any], params: dict[str, Any], rule: Rule, slots: int
+    ) -> None:
         super().__init__(name=name, child=children[0])
-        self.ops, self.rule = ScalarOps(self, params), rule
+        self.ops, self.rule = ScalarOps(self, params, slots), rule
 
 
 class ScalarOps:
@@ -203,19 +207,19 @@ class ScalarOps:
     and whole numbers; a step under a condition that does not hold does nothing. The child
     ticked last is py_trees' ``current_child``."""
 
-    def __init__(self, node: Any, params: dict[str, Any]) -> None:
+    def __init__(self, node: Any, params: dict[str, Any], slots: int) -> None:
         self.node, self.params, self.kids = node, params, len(node.children)
-        self.memorised, self.alive, self.guard = 0, True, True
+        self.memorised, self.alive, self.guard = [0] * slots, True, True
 
     def status(self) -> int:
         return FROM_PYTREES[self.node.status]
 
-    def memory(self) -> int:
-        return self.memorised
+    def memory(self, slot: int = 0) -> int:
+        return self.memorised[slot]
 
-    def set_memory(self, value: Any) -> None:
+    def set_memory(self, value: Any, slot: int = 0) -> None:
         if self.alive and self.guard:
-            self.memorised = int(value)
+            self.memorised[slot] = int(value)
 
     def tick(self, k: int) -> int:
         child = self.node.children[k]
@@ -264,7 +268,11 @@ PYTREES_NODES: dict[str, Callable[[str, list[Any], dict[str, Any]], Any]] = {
     **BTCPP_BEHAVIOURS,
 }
 PYTREES_NODES |= {
-    name: partial(RuleComposite if record.kind == CONTROL else RuleDecorator, rule=record.rule)
+    name: partial(
+        RuleComposite if record.kind == CONTROL else RuleDecorator,
+        rule=record.rule,
+        slots=record.memory,
+    )
     for name, record in NODE_TYPES.items()
     if record.rule is not None
 }
