@@ -102,10 +102,9 @@ def test_files_with_skip_attributes_and_run_once_load(tmp_path) -> None:
     path = tmp_path / "skip.xml"
     path.write_text(
         '<root BTCPP_format="4"><BehaviorTree ID="M"><Sequence>'
-        '<RunOnce><Action_Refuel_A/></RunOnce>'
+        "<RunOnce><Action_Refuel_A/></RunOnce>"
         '<Action_Repair_Damage_A _skipIf="energy &gt; 90" _while="true"/>'
         "</Sequence></BehaviorTree></root>"
     )
     document = read_document(path)
     assert document.main == "M"
-

@@ -21,11 +21,10 @@ from pyautonomousagent.bt import reactive_sequence
 from pyautonomousagent.bt.leaf import LEAF_TYPES, Leaf, Port
 from pyautonomousagent.bt.spec import Node, TreeError, check_structure
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
-from pyautonomousagent.engines.batched import BatchedEngine
-from pyautonomousagent.engines.pytrees import PyTreesEngine
 from pyautonomousagent.jit import njit
 from pyautonomousagent.kernels import LeafKernel
 from pyautonomousagent.missions.drones import DroneMission
+from pyautonomousagent.simulation.run import ENGINES as ENGINES_BY_NAME
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -85,11 +84,7 @@ def run(tree: Node, engine: str, scripts: Mapping[str, str], expected: list[str]
     with LEAF_TYPES.override("FromEntry", FromEntry):
         swarm = Swarm.create(["drone1"], {**BLACKBOARD_KEYS, **keys}, DroneMission.columns)
         world = make_world(swarm)
-        if engine == "compiled":
-            from pyautonomousagent.engines.compiled import CompiledEngine as kind
-        else:
-            kind = PyTreesEngine if engine == "pytrees" else BatchedEngine
-        decision = kind(tree, swarm, world, default_parameters())
+        decision = ENGINES_BY_NAME.get(engine)(tree, swarm, world, default_parameters())
         counts = swarm.blackboard["number_ticks"]
         for t, (row, leaf_ticks) in enumerate(zip(expected, ticks, strict=True)):
             for name in names:

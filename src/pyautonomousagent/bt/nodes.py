@@ -418,6 +418,8 @@ _decorator(
     "halts the child and fails when it runs longer than msec of simulated time",
     params=(Param("msec", int, None, msec),),
 )
+
+
 def run_once_rule(n: Ops) -> None:
     """BT.CPP's RunOnce: ticks the child until it succeeds or fails once, then returns that
     status for ever without ticking it (``then_skip``: SKIPPED instead). Remembers the
@@ -465,6 +467,7 @@ for _cases in range(2, 7):
              "last; a running child of another case is halted"),
     )  # fmt: skip
     add(_decorator_or_control)
+
 
 def try_catch_rule(n: Ops) -> None:
     """BT.CPP 4.9's TryCatch: children 1..N-1 are a Sequence with memory (the try block); if

@@ -33,11 +33,14 @@ class Ops(Protocol):
         params: its parameters, defaults filled in (``Program.params``).
     """
 
-    kids: int
-    params: Mapping[str, Any]
+    @property
+    def kids(self) -> int: ...
+
+    @property
+    def params(self) -> Mapping[str, Any]: ...
 
     def status(self) -> Any:
-        """The node's own status before this tick (a code of :mod:`~pyautonomousagent.bt.status`)."""
+        """The node's own status before this tick (a code of :mod:`.status`)."""
 
     def memory(self, slot: int = 0) -> Any:
         """Whole number ``slot`` the node remembers between ticks (``slot`` below the record's

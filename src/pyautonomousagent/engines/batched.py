@@ -31,6 +31,7 @@ from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.program import PRE_CONDITIONS, case_values, compile_tree
+from pyautonomousagent.bt.rules import Rule
 from pyautonomousagent.bt.script import Script, parse
 from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import (
@@ -535,14 +536,19 @@ class MaskedOps:
 
     def __init__(self, engine: BatchedEngine, i: int) -> None:
         self._engine = engine
-        self._rule = NODE_TYPES.get(engine.program.nodes[i].type).rule
+        rule = NODE_TYPES.get(engine.program.nodes[i].type).rule
+        assert rule is not None
+        self._rule: Rule = rule
         self.children = engine.program.children[i]
         self.kids = len(self.children)
         self.params = engine.program.params[i]
         slots = NODE_TYPES.get(engine.program.nodes[i].type).memory
-        self._status, self._memory = engine.status[i], np.zeros((slots, engine.swarm.size), np.int64)
-        self._alive = self._guard = engine._everyone
+        self._status = engine.status[i]
+        self._memory = np.zeros((slots, engine.swarm.size), np.int64)  # see Ops.memory
+        self._alive, self._guard = engine._everyone, None
         self._tables: dict[tuple[int, ...], np.ndarray] = {}
+
+    _guard: np.ndarray | None
 
     def run(self, mask: np.ndarray) -> None:
         """Tick the node for the agents of ``mask``."""

@@ -31,6 +31,7 @@ from pyautonomousagent.bt.script import parse
 from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import parallel_threshold
 
+
 class Skipped(Enum):
     """BehaviorTree.CPP's SKIPPED, a status py_trees lacks: a py_trees node's ``status``
     where it was skipped (it is neither RUNNING nor INVALID to py_trees)."""
@@ -39,7 +40,7 @@ class Skipped(Enum):
 
 
 #: Status codes (:mod:`pyautonomousagent.bt.status`) as py_trees' statuses, and back.
-TO_PYTREES = {
+TO_PYTREES: dict[int, Any] = {
     codes.INVALID: Status.INVALID,
     codes.SUCCESS: Status.SUCCESS,
     codes.FAILURE: Status.FAILURE,
@@ -443,15 +444,17 @@ class Switch(py_trees.composites.Composite):
 
 
 #: :data:`~pyautonomousagent.bt.program.PRE_CONDITIONS` with py_trees' statuses.
-PRE_CONDITIONS = tuple((key, TO_PYTREES[code], *rest) for key, code, *rest in program.PRE_CONDITIONS)
+PRE_CONDITIONS: tuple[tuple[str, Any, bool, bool], ...] = tuple(
+    (key, TO_PYTREES[code], *rest) for key, code, *rest in program.PRE_CONDITIONS
+)
 
 
 def with_scripts(behaviour: Behaviour, scripts: Mapping[str, str], agent: Any) -> Behaviour:
     """Give ``behaviour`` BehaviorTree.CPP's scripting attributes, run on ``agent``'s
     blackboard: the pre-conditions (``_failureIf``, ``_successIf``, ``_skipIf``, ``_while``)
-    decide without a tick (``_while`` also halts a RUNNING node); after a tick that finishes the node, ``_onSuccess`` or
-    ``_onFailure``, then ``_post`` (as BT.CPP 4.8: not after RUNNING); ``_onHalted`` when a
-    RUNNING node is halted, after its children's."""
+    decide without a tick (``_while`` also halts a RUNNING node); after a tick that
+    finishes the node, ``_onSuccess`` or ``_onFailure``, then ``_post`` (as BT.CPP 4.8: not
+    after RUNNING); ``_onHalted`` when a RUNNING node is halted, after its children's."""
     parsed = {key: parse(code) for key, code in scripts.items()}
     board = agent.blackboard
     tick, stop = behaviour.tick, behaviour.stop

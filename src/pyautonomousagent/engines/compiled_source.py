@@ -7,8 +7,9 @@ becomes a block of straight-line code that ticks it for agent row ``a`` at itera
 rules): ``st`` holds the node statuses (nodes, N) int8 and ``cur`` what each node with
 ``memory`` remembers (one row per such node, (M, N) int32), exactly as the batched engine
 keeps them; ``c0, c1, ...`` are the swarm's columns and blackboard arrays in
-:attr:`Layout.names` order. A leaf calls its :class:`~pyautonomousagent.kernels.LeafKernel`. ``tick`` ticks every agent; ``block_serial``/``block_parallel`` run whole
-iterations (sensors, the 2-D drone's motion, with the 3-D drone's altitude where
+:attr:`Layout.names` order. A leaf calls its :class:`~pyautonomousagent.kernels.LeafKernel`.
+``tick`` ticks every agent; ``block_serial``/``block_parallel`` run whole iterations
+(sensors, the 2-D drone's motion, with the 3-D drone's altitude where
 :attr:`Layout.vertical` is set, the tree, control and recording) agent by agent.
 """
 

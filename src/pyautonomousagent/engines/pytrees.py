@@ -179,7 +179,7 @@ class _Ruled:
         yield self  # type: ignore[misc]
 
     def update(self) -> Status:  # pragma: no cover - tick() does the work
-        return self.status  # type: ignore[attr-defined, no-any-return]
+        return self.status  # type: ignore[attr-defined]
 
 
 class RuleComposite(_Ruled, py_trees.composites.Composite):
