@@ -133,6 +133,8 @@ class NodeType:
         memory: how many whole numbers per agent the rule remembers (``Ops.memory``).
         yields: True if the node returns at once, RUNNING, when a child is RUNNING (so no
             node ticked after that child sees the tick: compiled leaves may defer a step).
+        skips: True if the rule says what a SKIPPED child does (BT.CPP's); a child that
+            may be SKIPPED is refused under the others.
     """
 
     name: str
@@ -146,6 +148,7 @@ class NodeType:
     rule: Rule | None = None
     memory: int = 0
     yields: bool = False
+    skips: bool = False
 
     def defaults(self) -> dict[str, Any]:
         """Parameter -> default (None for required ones)."""
@@ -167,7 +170,8 @@ def _tag(tag: str, symbol: str, doc: str, **fixed: Any) -> tuple[FileTag, ...]:
 def _decorator(name: str, tag: str, symbol: str, doc: str, **kwargs: Any) -> NodeType:
     status_map = kwargs.get("status_map")
     if status_map is not None:
-        kwargs.update(rule=mapped_rule(status_map), yields=status_map.get("RUNNING") is None)
+        rule = mapped_rule(status_map)
+        kwargs.update(rule=rule, yields=status_map.get("RUNNING") is None, skips=True)
     return add(NodeType(name, DECORATOR, 1, 1, tags=_tag(tag, symbol, doc), **kwargs))
 
 
@@ -251,13 +255,13 @@ add(NodeType("Sequence", CONTROL, 0, None, (MEMORY,), (
             "ticks children in order; resumes at a RUNNING child; restarts after a failure"),
     FileTag("ReactiveSequence", {"memory": False}, "R→",
             "ticks children from the first on every tick"),
-), rule=sequence_rule, memory=2, yields=True))  # fmt: skip
+), rule=sequence_rule, memory=2, yields=True, skips=True))  # fmt: skip
 add(NodeType("Fallback", CONTROL, 0, None, (MEMORY,), (
     FileTag("Fallback", {"memory": True}, "?",
             "tries children in order until one does not fail; resumes at a RUNNING child"),
     FileTag("ReactiveFallback", {"memory": False}, "R?",
             "tries children from the first on every tick"),
-), rule=fallback_rule, memory=2, yields=True))  # fmt: skip
+), rule=fallback_rule, memory=2, yields=True, skips=True))  # fmt: skip
 
 
 def mapped_rule(status_map: Mapping[str, str]) -> Rule:
@@ -318,12 +322,103 @@ for _name, _map in {
     _decorator(_name, _name, "", f"py_trees: child {_change}", builtin=False, status_map=_map)
 
 # -- BehaviorTree.CPP's own semantics (one tick = one tickExactlyOnce(), docs/tree-files.md) --
+def sequence_with_memory_rule(n: Ops) -> None:
+    """BT.CPP's SequenceWithMemory: resumes at the remembered child (kept on halt); after a
+    child that succeeded at its first tick it yields (RUNNING, a wake-up); a child that does
+    not succeed is returned and remembered; starts over only after success."""
+    start = n.let("start", n.memory())
+    for k in range(n.kids):
+        with n.when(start <= k):
+            woke = n.let("woke", n.child(k) != RUNNING)
+            result = n.tick(k)
+            if k + 1 < n.kids:
+                with n.when(woke & (result == SUCCESS)):
+                    n.set_memory(k + 1)
+                    n.finish(RUNNING)
+            with n.when(result != SUCCESS):
+                n.set_memory(k)
+                n.finish(result)
+    n.set_memory(0)
+    n.finish(SUCCESS)
+
+
+def async_rule(proceed: int) -> Rule:
+    """BT.CPP's AsyncSequence (``proceed`` SUCCESS) and AsyncFallback (FAILURE): a memory
+    Sequence / Fallback that yields (RUNNING) after a child that ended with ``proceed`` at
+    its first tick, and goes on at the next tick. Remembers the child to tick."""
+
+    def rule(n: Ops) -> None:
+        with n.when(n.status() != RUNNING):
+            n.set_memory(0)
+        start = n.let("start", n.memory())
+        for k in range(n.kids):
+            with n.when(start <= k):
+                woke = n.let("woke", n.child(k) != RUNNING)
+                result = n.tick(k)
+                with n.when(result != proceed):
+                    n.set_memory(n.pick(result == RUNNING, k, 0))
+                    n.finish(result)
+                if k + 1 < n.kids:
+                    with n.when(woke):
+                        n.set_memory(k + 1)
+                        n.finish(RUNNING)
+        n.set_memory(0)
+        n.finish(proceed)
+
+    return rule
+
+
+def if_then_else_rule(n: Ops) -> None:
+    """BT.CPP's IfThenElse: the first child decides (unless a branch runs): SUCCESS ticks the
+    second, FAILURE the third (with two children: FAILURE); a finished branch resets all.
+    Remembers the running branch (0: none, ask the condition)."""
+    with n.when(n.status() != RUNNING):
+        n.set_memory(0)
+    with n.when(n.memory() == 0):
+        result = n.tick(0)
+        with n.when(result == SUCCESS):
+            n.set_memory(1)
+        if n.kids == 3:
+            with n.when(result == FAILURE):
+                n.set_memory(2)
+        n.finish(result, where=n.memory() == 0)
+    for branch in range(1, n.kids):
+        with n.when(n.memory() == branch):
+            result = n.let("result", n.tick(branch))  # kept: the halt below resets it
+            with n.when(result != RUNNING):
+                n.halt(0)
+                n.set_memory(0)
+            n.finish(result)
+
+
+def while_do_else_rule(n: Ops) -> None:
+    """BT.CPP's WhileDoElse: the first child is asked on every tick; SUCCESS ticks the second
+    (halting the third), FAILURE the third (halting the second) or fails; all are reset when
+    both the condition and the branch finished."""
+    asked = n.let("asked", n.tick(0))
+    yes, no = asked == SUCCESS, asked == FAILURE
+    with n.when(yes):
+        n.halt(2)
+        n.tick(1)
+    if n.kids == 3:
+        with n.when(no):
+            n.halt(1, 2)
+            n.tick(2)
+    otherwise = n.child(2) if n.kids == 3 else asked
+    result = n.let("result", n.pick(yes, n.child(1), n.pick(no, otherwise, asked)))
+    with n.when((asked != RUNNING) & (result != RUNNING)):
+        n.halt(0)
+    n.finish(result)
+
+
 _control(
     "SequenceWithMemory",
     1,
     None,
     "→*",
     "like Sequence, but after a failure resumes at the failed child",
+    rule=sequence_with_memory_rule,
+    memory=1,
 )
 _control(
     "AsyncSequence",
@@ -331,6 +426,8 @@ _control(
     None,
     "→a",
     "like Sequence, but yields (RUNNING) after a child that succeeded at once",
+    rule=async_rule(SUCCESS),
+    memory=1,
 )
 _control(
     "AsyncFallback",
@@ -338,11 +435,26 @@ _control(
     None,
     "?a",
     "like Fallback, but yields (RUNNING) after a child that failed at once",
+    rule=async_rule(FAILURE),
+    memory=1,
 )
 _control(
-    "IfThenElse", 2, 3, "if", "child 1 decides: SUCCESS ticks child 2, FAILURE child 3 (or fails)"
+    "IfThenElse",
+    2,
+    3,
+    "if",
+    "child 1 decides: SUCCESS ticks child 2, FAILURE child 3 (or fails)",
+    rule=if_then_else_rule,
+    memory=1,
 )
-_control("WhileDoElse", 2, 3, "while", "like IfThenElse, but asks child 1 again on every tick")
+_control(
+    "WhileDoElse",
+    2,
+    3,
+    "while",
+    "like IfThenElse, but asks child 1 again on every tick",
+    rule=while_do_else_rule,
+)
 _control(
     "Parallel",
     1,
@@ -441,6 +553,7 @@ _decorator(
     params=(Param("then_skip", bool, True, boolean),),
     rule=run_once_rule,
     memory=1,
+    skips=True,
     yields=True,
 )
 
@@ -518,6 +631,7 @@ _control(
     builtin=False,  # not in BT.CPP 4.8, the version held against: files declare it
     rule=try_catch_rule,
     memory=2,
+    skips=True,
     yields=True,
 )
 

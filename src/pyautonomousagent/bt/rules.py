@@ -49,8 +49,12 @@ class Ops(Protocol):
     def set_memory(self, value: Any, slot: int = 0) -> None:
         """Remember ``value`` in ``slot`` (for the agents the current conditions select)."""
 
+    def child(self, k: int) -> Any:
+        """Child ``k``'s status now."""
+
     def tick(self, k: int) -> Any:
-        """Tick child ``k``; its status after that tick."""
+        """Tick child ``k``; its status after that tick (on some engines a view of the
+        child's status: ``let`` it to keep it past a halt of that child)."""
 
     def halt(self, first: int, last: int | None = None) -> None:
         """Halt children ``first`` to ``last - 1`` (all from ``first`` when ``last`` is None):

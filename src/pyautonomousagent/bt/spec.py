@@ -155,25 +155,25 @@ SKIPPING = ("_skipIf", "_while")
 
 def may_skip(node: Node) -> bool:
     """Whether ``node`` may return SKIPPED: it has ``_skipIf`` or ``_while``, it is a RunOnce
-    with ``then_skip``, or a node type with a rule with a child that may (conservatively: a
-    Sequence is SKIPPED only when all its children are)."""
+    with ``then_skip``, or of a node type that passes SKIPPED on (its record ``skips``) with
+    a child that may (conservatively: a Sequence is SKIPPED only when all children are)."""
     if any(key in node.scripts for key in SKIPPING):
         return True
     if node.type == "RunOnce" and node.params.get("then_skip", True):
         return True
-    rule = node.is_control and node_type(node.type).rule is not None
-    return rule and any(may_skip(child) for child in node.children)
+    skips = node.is_control and node_type(node.type).skips
+    return skips and any(may_skip(child) for child in node.children)
 
 
 def _check_skipped_children(node: Node) -> None:
-    """TreeError if a child of ``node`` may be SKIPPED and ``node``'s type has no rule
-    (:mod:`~pyautonomousagent.bt.rules`: only those say what a skipped child does), or
+    """TreeError if a child of ``node`` may be SKIPPED and ``node``'s type does not say what
+    a skipped child does (its record's ``skips``), or
     ``node`` has a pre-condition or ``_onHalted``: BT.CPP leaves a node whose own tick
     returned SKIPPED RUNNING, which no engine here mirrors."""
     child = next((c for c in node.children if may_skip(c)), None)
     if child is None:
         return
-    if node_type(node.type).rule is None:
+    if not node_type(node.type).skips:
         raise TreeError(
             f"{node.type} {node.name!r} cannot take child {child.name!r}, which may be "
             "SKIPPED (_skipIf, _while, RunOnce then_skip): put it under a Sequence, "

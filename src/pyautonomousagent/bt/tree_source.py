@@ -98,6 +98,9 @@ class SourceOps:
     def set_memory(self, value: Any, slot: int = 0) -> None:
         self._emit(f"cur[{self.row + slot}, a] = {_text(value)}")
 
+    def child(self, k: int) -> Source:
+        return Source(f"st[{self.children[k]}, a]")
+
     def tick(self, k: int) -> Source:
         child = self.children[k]
         self.lines += ["    " * self._depth + line for line in self._expand(child)]

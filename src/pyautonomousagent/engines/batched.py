@@ -298,28 +298,6 @@ class BatchedEngine:
     # ``counter`` holds SequenceWithMemory's remembered child and the loop counts of
     # Repeat / RetryUntilSuccessful; ``_done`` marks the finished children of a Parallel.
 
-    def _sequence_with_memory(self, i: int, mask: np.ndarray) -> None:
-        index, status, kids = self.counter[i], self.status[i], self.program.children[i]
-        start = index.copy()
-        alive = mask.copy()
-        for k, child in enumerate(kids):
-            ticked = alive & (start <= k)
-            if _some(ticked):
-                fresh = self.status[child] != RUNNING
-                self._tickers[child](ticked)
-                result = self.status[child]
-                stopped = ticked & (result != SUCCESS)
-                if k + 1 < len(kids):  # a wake-up: yield after a first-tick success
-                    woken = ticked & fresh & (result == SUCCESS)
-                    np.copyto(index, k + 1, where=woken)
-                    np.copyto(status, RUNNING, where=woken)
-                    alive &= ~woken
-                np.copyto(index, k, where=stopped)
-                np.copyto(status, result, where=stopped)
-                alive &= ~stopped
-        np.copyto(index, 0, where=alive)
-        np.copyto(status, SUCCESS, where=alive)
-
     def _btcpp_loop(self, i: int, mask: np.ndarray) -> None:
         """Repeat (again on SUCCESS) and RetryUntilSuccessful (again on FAILURE): the child
         is ticked again within the tick only if it was RUNNING before; a child that returns
@@ -373,74 +351,6 @@ class BatchedEngine:
                 np.copyto(status, np.where(won, SUCCESS, FAILURE), where=ended)
                 alive &= ~ended
         np.copyto(status, RUNNING, where=alive)
-
-    def _async_sequence(self, i: int, mask: np.ndarray, proceed: int) -> None:
-        """AsyncSequence (``proceed`` SUCCESS) and AsyncFallback (``proceed`` FAILURE); the
-        remembered child is in ``counter``."""
-        kids, index, status = self.program.children[i], self.counter[i], self.status[i]
-        np.copyto(index, 0, where=mask & (status != RUNNING))
-        start = index.copy()
-        alive = mask.copy()
-        for k, child in enumerate(kids):
-            ticked = alive & (start <= k)
-            if not _some(ticked):
-                continue
-            fresh = self.status[child] != RUNNING
-            self._tickers[child](ticked)
-            result = self.status[child]
-            stopped = ticked & (result != proceed)
-            np.copyto(status, result, where=stopped)
-            np.copyto(index, np.where(result == RUNNING, k, 0), where=stopped)
-            alive &= ~stopped
-            if k + 1 < len(kids):
-                woken = ticked & fresh & (result == proceed)
-                np.copyto(index, k + 1, where=woken)
-                np.copyto(status, RUNNING, where=woken)
-                alive &= ~woken
-        np.copyto(index, 0, where=alive)
-        np.copyto(status, proceed, where=alive)
-
-    def _if_then_else(self, i: int, mask: np.ndarray) -> None:
-        """IfThenElse; the running branch (0: none, ask the condition) is in ``counter``."""
-        kids, branch, status = self.program.children[i], self.counter[i], self.status[i]
-        np.copyto(branch, 0, where=mask & (status != RUNNING))
-        asking = mask & (branch == 0)
-        if _some(asking):
-            self._tickers[kids[0]](asking)
-            result = self.status[kids[0]]
-            np.copyto(branch, 1, where=asking & (result == SUCCESS))
-            if len(kids) == 3:
-                np.copyto(branch, 2, where=asking & (result == FAILURE))
-            np.copyto(status, result, where=asking & (branch == 0))
-        for b in range(1, len(kids)):
-            going = mask & (branch == b)
-            if _some(going):
-                self._tickers[kids[b]](going)
-                result = self.status[kids[b]]
-                np.copyto(status, result, where=going)
-                finished = going & (result != RUNNING)
-                self._halt_children(i, 0, finished)
-                np.copyto(branch, 0, where=finished)
-
-    def _while_do_else(self, i: int, mask: np.ndarray) -> None:
-        """WhileDoElse: the condition is asked on every tick."""
-        kids, status = self.program.children[i], self.status[i]
-        self._tickers[kids[0]](mask)
-        asked = self.status[kids[0]].copy()
-        result = asked.copy()
-        yes, no = mask & (asked == SUCCESS), mask & (asked == FAILURE)
-        if len(kids) == 3:
-            self._halt(kids[2], yes)
-        if _some(yes):
-            self._tickers[kids[1]](yes)
-            np.copyto(result, self.status[kids[1]], where=yes)
-        if len(kids) == 3:
-            self._halt(kids[1], no)
-            if _some(no):
-                self._tickers[kids[2]](no)
-                np.copyto(result, self.status[kids[2]], where=no)
-        self._halt_children(i, 0, mask & (asked != RUNNING) & (result != RUNNING))
-        np.copyto(status, result, where=mask)
 
     def _parallel_all(self, i: int, mask: np.ndarray) -> None:
         """ParallelAll: ``_done`` marks the finished children."""
@@ -567,6 +477,9 @@ class MaskedOps:
     def set_memory(self, value: Any, slot: int = 0) -> None:
         np.copyto(self._memory[slot], value, where=self._mask())
 
+    def child(self, k: int) -> np.ndarray:
+        return self._engine.status[self.children[k]]
+
     def tick(self, k: int) -> np.ndarray:
         mask = self._mask()
         if _some(mask):
@@ -627,14 +540,9 @@ BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
     "PyTreesParallel": BatchedEngine._parallel,
     "PyTreesRepeat": BatchedEngine._counted,
     "PyTreesRetry": BatchedEngine._counted,
-    "SequenceWithMemory": BatchedEngine._sequence_with_memory,
     "Parallel": BatchedEngine._btcpp_parallel,
     "Repeat": BatchedEngine._btcpp_loop,
     "RetryUntilSuccessful": BatchedEngine._btcpp_loop,
-    "AsyncSequence": lambda engine, i, mask: engine._async_sequence(i, mask, SUCCESS),
-    "AsyncFallback": lambda engine, i, mask: engine._async_sequence(i, mask, FAILURE),
-    "IfThenElse": BatchedEngine._if_then_else,
-    "WhileDoElse": BatchedEngine._while_do_else,
     "ParallelAll": BatchedEngine._parallel_all,
     "Precondition": BatchedEngine._precondition,
     "Delay": BatchedEngine._delay,

@@ -5,8 +5,6 @@ ticked, what is returned, what is remembered) in py_trees' terms: a halted node 
 ``INVALID`` (BT.CPP's ``IDLE``) and a finished node keeps its last status for display.
 The batched engine implements the same rules on arrays; docs/tree-files.md has the table.
 
-- :class:`SequenceWithMemory`: a sequence that, after a failure, resumes at the failed
-  child; it keeps its place even when halted, and starts over only after success.
 - :class:`RetryUntilSuccessful` / :class:`Repeat`: tick the child again *within the same
   tick* after a failure (resp. success), up to ``num_attempts`` (resp. ``num_cycles``) times.
 - :class:`Parallel`: ticks the children that have not finished yet, left to right, and
@@ -48,47 +46,6 @@ TO_PYTREES: dict[int, Any] = {
     codes.SKIPPED: Skipped.SKIPPED,
 }
 FROM_PYTREES = {v: k for k, v in TO_PYTREES.items()}
-
-
-class SequenceWithMemory(py_trees.composites.Composite):
-    """BT.CPP ``SequenceWithMemory``: resumes at the running or failed child.
-
-    Args:
-        name: the node's name.
-        children: the children, ticked left to right.
-    """
-
-    def __init__(self, name: str, children: Sequence[Behaviour]) -> None:
-        super().__init__(name, list(children))
-        self.index = 0  # the child to tick first; kept on halt, as in BT.CPP 4
-
-    def tick(self) -> Iterator[Behaviour]:
-        """Tick from the remembered child on; stop at the first child that does not succeed,
-        or yield (RUNNING) after a child that succeeded at its first tick (a wake-up)."""
-        if self.status != Status.RUNNING:
-            self.initialise()
-        for k in range(self.index, len(self.children)):
-            child = self.children[k]
-            self.current_child = child
-            fresh = child.status != Status.RUNNING
-            yield from child.tick()
-            if child.status == Status.SUCCESS:
-                if fresh and k + 1 < len(self.children):
-                    self.index = k + 1
-                    self.status = Status.RUNNING
-                    yield self
-                    return
-                continue
-            self.index = k
-            if child.status == Status.RUNNING:
-                self.status = Status.RUNNING
-            else:
-                self.stop(child.status)
-            yield self
-            return
-        self.index = 0
-        self.stop(Status.SUCCESS)
-        yield self
 
 
 class _Loop(py_trees.decorators.Decorator):
@@ -208,99 +165,6 @@ def _halt_all(children: Sequence[Behaviour]) -> None:
     for child in children:
         if child.status != Status.INVALID:
             child.stop(Status.INVALID)
-
-
-class AsyncSequence(py_trees.composites.Composite):
-    """BT.CPP ``AsyncSequence`` (``proceed=SUCCESS``) and ``AsyncFallback``
-    (``proceed=FAILURE``): a Sequence / Fallback with memory that, after a child ended with
-    ``proceed`` at its first tick, yields (RUNNING) and goes on at the next tick."""
-
-    def __init__(self, name: str, children: Sequence[Behaviour], proceed: Status) -> None:
-        super().__init__(name, list(children))
-        self.proceed = proceed
-        self.index = 0
-
-    def tick(self) -> Iterator[Behaviour]:
-        """Tick from the remembered child; stop at a child that does not end with proceed."""
-        if self.status != Status.RUNNING:
-            self.index = 0
-            self.initialise()
-        for k in range(self.index, len(self.children)):
-            child = self.children[k]
-            fresh = child.status != Status.RUNNING
-            yield from child.tick()
-            if child.status == self.proceed:
-                if fresh and k + 1 < len(self.children):
-                    self.index, self.status = k + 1, Status.RUNNING
-                    yield self
-                    return
-                continue
-            self.index = k if child.status == Status.RUNNING else 0
-            self.status = child.status
-            yield self
-            return
-        self.index = 0
-        self.status = self.proceed
-        yield self
-
-
-class IfThenElse(py_trees.composites.Composite):
-    """BT.CPP ``IfThenElse``: the first child decides; SUCCESS ticks the second, FAILURE the
-    third (or fails, with two children); a running branch is resumed without asking again."""
-
-    def __init__(self, name: str, children: Sequence[Behaviour]) -> None:
-        super().__init__(name, list(children))
-        self.branch = 0
-
-    def tick(self) -> Iterator[Behaviour]:
-        """Ask the condition (unless a branch is running), then tick the chosen branch."""
-        if self.status != Status.RUNNING:
-            self.branch = 0
-            self.initialise()
-        if self.branch == 0:
-            condition = self.children[0]
-            yield from condition.tick()
-            if condition.status == Status.SUCCESS:
-                self.branch = 1
-            elif condition.status == Status.FAILURE and len(self.children) == 3:
-                self.branch = 2
-            else:
-                self.status = condition.status
-                yield self
-                return
-        branch = self.children[self.branch]
-        yield from branch.tick()
-        self.status = branch.status
-        if branch.status != Status.RUNNING:
-            _halt_all(self.children)
-            self.branch = 0
-        yield self
-
-
-class WhileDoElse(py_trees.composites.Composite):
-    """BT.CPP ``WhileDoElse``: the first child is asked on every tick; SUCCESS ticks the
-    second (halting the third), FAILURE the third (halting the second) or fails."""
-
-    def tick(self) -> Iterator[Behaviour]:
-        """Ask the condition, then tick the branch it picks; reset all when it finishes."""
-        if self.status != Status.RUNNING:
-            self.initialise()
-        condition = self.children[0]
-        yield from condition.tick()
-        result = condition.status
-        if result == Status.SUCCESS:
-            if len(self.children) == 3:
-                _halt_all(self.children[2:])
-            yield from self.children[1].tick()
-            result = self.children[1].status
-        elif result == Status.FAILURE and len(self.children) == 3:
-            _halt_all(self.children[1:2])
-            yield from self.children[2].tick()
-            result = self.children[2].status
-        if condition.status != Status.RUNNING and result != Status.RUNNING:
-            _halt_all(self.children)
-        self.status = result
-        yield self
 
 
 class ParallelAll(py_trees.composites.Composite):
@@ -495,16 +359,11 @@ def with_scripts(behaviour: Behaviour, scripts: Mapping[str, str], agent: Any) -
 
 #: Node type -> py_trees behaviour, called with (name, children, parameters).
 BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Behaviour]] = {
-    "SequenceWithMemory": lambda name, kids, p: SequenceWithMemory(name, kids),
     "Parallel": lambda name, kids, p: Parallel(name, kids, p["success_count"], p["failure_count"]),
     "Repeat": lambda name, kids, p: Repeat(name, kids[0], p["num_cycles"]),
     "RetryUntilSuccessful": lambda name, kids, p: RetryUntilSuccessful(
         name, kids[0], p["num_attempts"]
     ),
-    "AsyncSequence": lambda name, kids, p: AsyncSequence(name, kids, Status.SUCCESS),
-    "AsyncFallback": lambda name, kids, p: AsyncSequence(name, kids, Status.FAILURE),
-    "IfThenElse": lambda name, kids, p: IfThenElse(name, kids),
-    "WhileDoElse": lambda name, kids, p: WhileDoElse(name, kids),
     "ParallelAll": lambda name, kids, p: ParallelAll(name, kids, p["max_failures"]),
     "Precondition": lambda name, kids, p: Precondition(name, kids[0], p["if"], p["else"]),
     "Delay": lambda name, kids, p: Delay(name, kids[0], p["delay_msec"]),

@@ -221,6 +221,9 @@ class ScalarOps:
         if self.alive and self.guard:
             self.memorised[slot] = int(value)
 
+    def child(self, k: int) -> int:
+        return FROM_PYTREES[self.node.children[k].status]
+
     def tick(self, k: int) -> int:
         child = self.node.children[k]
         if self.alive and self.guard:
