@@ -321,6 +321,7 @@ for _name, _map in {
     _change = ", ".join(f"{a} becomes {b}" for a, b in _map.items()) or "returns the child's"
     _decorator(_name, _name, "", f"py_trees: child {_change}", builtin=False, status_map=_map)
 
+
 # -- BehaviorTree.CPP's own semantics (one tick = one tickExactlyOnce(), docs/tree-files.md) --
 def sequence_with_memory_rule(n: Ops) -> None:
     """BT.CPP's SequenceWithMemory: resumes at the remembered child (kept on halt); after a
