@@ -20,8 +20,7 @@ engine-independent ``evaluate`` once for all those agents.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -456,17 +455,22 @@ class MaskedOps:
         self._status = engine.status[i]
         self._memory = np.zeros((slots, engine.swarm.size), np.int64)  # see Ops.memory
         self._alive, self._guard = engine._everyone, None
+        self._eff: np.ndarray | None = None
+        self._outer: list[tuple[np.ndarray | None, np.ndarray | None]] = []
         self._tables: dict[tuple[int, ...], np.ndarray] = {}
 
     _guard: np.ndarray | None
 
     def run(self, mask: np.ndarray) -> None:
         """Tick the node for the agents of ``mask``."""
-        self._alive, self._guard = mask.copy(), None
+        self._alive, self._guard, self._eff = mask.copy(), None, None
         self._rule(self)
 
     def _mask(self) -> np.ndarray:
-        return self._alive if self._guard is None else self._alive & self._guard
+        """The agents the current step applies to (cached until a block or finish)."""
+        if self._eff is None:
+            self._eff = self._alive if self._guard is None else self._alive & self._guard
+        return self._eff
 
     def status(self) -> np.ndarray:
         return self._status
@@ -505,19 +509,23 @@ class MaskedOps:
             self._tables[table] = np.asarray(table, dtype=np.int8)
         return self._tables[table][value]
 
-    @contextmanager
-    def when(self, cond: Any) -> Iterator[None]:
-        if not isinstance(cond, np.ndarray):
-            if not cond:
-                raise ValueError("a rule's condition is false whatever the agent")
-            yield
-            return
-        outer = self._guard
-        self._guard = cond if outer is None else outer & cond
-        try:
-            yield
-        finally:
-            self._guard = outer
+    def when(self, cond: Any) -> MaskedOps:
+        """A block for the agents where ``cond`` holds (a static condition must hold)."""
+        self._outer.append((self._guard, self._eff))
+        if isinstance(cond, np.ndarray):
+            self._guard = cond if self._guard is None else self._guard & cond
+            self._eff = None
+        elif not cond:
+            raise ValueError("a rule's condition is false whatever the agent")
+        return self
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, *exc: object) -> None:
+        self._guard, self._eff = self._outer.pop()
+        if self._eff is not None and self._eff is not self._alive:
+            self._eff = None  # the agents alive may have changed inside the block
 
     def finish(self, status: Any, where: Any = True) -> None:
         mask = self._mask()
@@ -525,6 +533,7 @@ class MaskedOps:
             mask = mask & where
         np.copyto(self._status, status, where=mask)
         self._alive &= ~mask
+        self._eff = None
 
 
 def _rule_ticker(engine: BatchedEngine, i: int, mask: np.ndarray) -> None:

@@ -11,7 +11,6 @@ from __future__ import annotations
 import operator
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator, Mapping
-from contextlib import contextmanager
 from functools import partial
 from typing import Any
 
@@ -210,6 +209,7 @@ class ScalarOps:
     def __init__(self, node: Any, params: dict[str, Any], slots: int) -> None:
         self.node, self.params, self.kids = node, params, len(node.children)
         self.memorised, self.alive, self.guard = [0] * slots, True, True
+        self._outer: list[bool] = []
 
     def status(self) -> int:
         return FROM_PYTREES[self.node.status]
@@ -244,14 +244,17 @@ class ScalarOps:
     def lookup(self, table: tuple[int, ...], value: Any) -> int:
         return table[value]
 
-    @contextmanager
-    def when(self, cond: Any) -> Iterator[None]:
-        outer = self.guard
-        self.guard = outer and bool(cond)
-        try:
-            yield
-        finally:
-            self.guard = outer
+    def when(self, cond: Any) -> ScalarOps:
+        """A block for this agent if ``cond`` holds (and every block around it)."""
+        self._outer.append(self.guard)
+        self.guard = self.guard and bool(cond)
+        return self
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, *exc: object) -> None:
+        self.guard = self._outer.pop()
 
     def finish(self, status: Any, where: Any = True) -> None:
         if self.alive and self.guard and where:
