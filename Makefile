@@ -2,13 +2,15 @@
 #   make demo   installs into .venv (with the [fast] and [pandas] extras) and runs the
 #               gathering scenario on the compiled engine into runs/gathering/
 #   make lessons  installs JupyterLab (the [lessons] extra) and opens lesson 01 of notebooks/
+#               (lesson 09 shows the studio: it builds the front-end too)
 #   make docs   installs the [docs] extra (and the extras the lessons and the pages' examples
 #               use) and builds the documentation site into site/ (lessons executed,
 #               warnings as errors, links checked)
-#   make test   installs the test dependencies (and the [docs], [x8], [dask], [video], [fast],
-#               [pandas] and [experiments] extras, and chromium when missing) into .venv and
-#               runs the suite
-#   (demo and test also build the studio's front-end with npm: pyaa studio, docs/studio.md)
+#   make test   installs the test dependencies (JupyterLab among them, and the [docs], [x8],
+#               [dask], [video], [fast], [pandas] and [experiments] extras, and chromium when
+#               missing) into .venv and runs the suite
+#   (demo, lessons and test also build the studio's front-end with npm: pyaa studio,
+#   docs/studio.md)
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
@@ -44,7 +46,7 @@ demo: $(VENV)/.installed
 	$(BIN)/pyaa run gathering --out runs/gathering --overwrite --engine compiled
 	@echo "Next: the lessons. 'make lessons' opens lesson 01 (notebooks/01_one_drone.ipynb) in JupyterLab."
 
-$(VENV)/.installed-lessons: pyproject.toml | $(BIN)/python
+$(VENV)/.installed-lessons: pyproject.toml $(STUDIO_BUNDLE) | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e ".[fast,lessons]"
 	touch $@ $(VENV)/.installed
 
@@ -57,7 +59,8 @@ lessons: $(VENV)/.installed-lessons
 docs: $(VENV)/.installed-docs
 	$(BIN)/python scripts/build_docs.py --out site
 
-# The replay's browser test drives Debian's chromium; install it when missing and we can (root).
+# The browser tests (the replay, the studio, the studio in JupyterLab) drive Debian's chromium;
+# install it when missing and we can (root).
 browser:
 	@if [ ! -x /usr/bin/chromium ] || ! command -v chromedriver >/dev/null; then \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
@@ -68,11 +71,12 @@ browser:
 	fi
 
 # The suite on two workers (pytest-xdist): CI has 2 cores, and a worker waits on numba's
-# compiles and on subprocesses much of the time.
+# compiles and on subprocesses much of the time. Tests of one xdist_group run on one worker
+# (the lessons, executed once for the tests that read them, not once per worker).
 test: $(VENV)/.installed-test browser
 	$(BIN)/ruff check src tests
 	$(BIN)/mypy src
-	$(BIN)/python -m pytest -n 2
+	$(BIN)/python -m pytest -n 2 --dist loadgroup --durations=25
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check src tests

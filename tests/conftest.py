@@ -121,6 +121,14 @@ def on_channel(link: Datalink) -> list[tuple]:
     return out
 
 
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Tests that read the executed lessons run on one xdist worker (``--dist loadgroup``),
+    so that the lessons are executed once, not once per worker (about 90 s each time)."""
+    for item in items:
+        if "executed_lessons" in getattr(item, "fixturenames", ()):
+            item.add_marker(pytest.mark.xdist_group("lessons"))
+
+
 @pytest.fixture(scope="session")
 def executed_lessons(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A folder holding every lesson notebook executed top to bottom from a fresh kernel

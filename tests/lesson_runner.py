@@ -28,6 +28,7 @@ LESSONS = (
     "06_experiments.ipynb",
     "07_swarms_at_scale.ipynb",
     "08_skywalker_x8.ipynb",
+    "09_blocks_studio.ipynb",
 )
 #: Seconds one cell may take before the lesson fails.
 CELL_TIMEOUT = 180

@@ -418,6 +418,21 @@ def test_output_folder_problems(tmp_path, capsys):
     assert "cannot use" in refused([*RUN, "--out", str(tmp_path / "file" / "below")], capsys)
 
 
+def test_a_bad_output_folder_is_refused_before_the_run_is_set_up(tmp_path, capsys, monkeypatch):
+    """Set-up can compile for minutes: a folder that cannot take the run is refused first."""
+    import pyautonomousagent.cli as cli
+
+    class NotSetUp:
+        @staticmethod
+        def create(*args: Any, **kwargs: Any) -> None:
+            raise AssertionError("the run was set up before its folder was checked")
+
+    monkeypatch.setattr(cli, "Simulation", NotSetUp)
+    (tmp_path / "file").write_text("x")
+    assert "is a file" in refused([*RUN, "--out", str(tmp_path / "file")], capsys)
+    assert "cannot use" in refused([*RUN, "--out", str(tmp_path / "file" / "below")], capsys)
+
+
 # ---------------------------------------------------------------------------- Python API
 
 SHORT = load("patrol").with_overrides(agents=2, iterations=5)

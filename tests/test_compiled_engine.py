@@ -13,7 +13,8 @@ from pyautonomousagent.bt import leaf
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.engines.compiled import MAX_COMPILED_NODES, CompiledEngine, compilable
-from pyautonomousagent.simulation.run import batched_seconds, choose_engine, scenario_tree
+from pyautonomousagent.simulation.costs import batched_seconds
+from pyautonomousagent.simulation.run import choose_engine, scenario_tree
 from pyautonomousagent.testing import check_engines_agree
 
 needs_numba = pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
@@ -111,11 +112,11 @@ def test_random_trees_tick_alike(seed: int) -> None:
 @needs_numba
 def test_auto_picks_compiled_where_it_can_and_batched_elsewhere() -> None:
     patrol = scenario_tree(load("patrol"))
-    assert choose_engine(patrol) == "compiled"
+    assert choose_engine(patrol, record_every=4000) == "compiled"  # 10^6 drones, 4000 its
     gathering = scenario_tree(load("gathering"))  # its messages have kernels too
-    assert choose_engine(gathering) == "compiled"
+    assert choose_engine(gathering, record_every=4000) == "compiled"
     scripted = leaf("Scripted", "s", statuses=[[1]])
-    assert choose_engine(scripted) == "batched"
+    assert choose_engine(scripted, record_every=4000) == "batched"
     assert "no kernel" in compilable(scripted)
 
 
@@ -139,14 +140,18 @@ def test_a_tree_over_the_node_limit_goes_to_the_batched_engine() -> None:
 def test_auto_takes_compiled_once_the_runs_loop_was_compiled(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    """Where it is faster than the batched engine with loading the compiled code (about 1
+    s): 20,000 iterations of a few drones (NumPy's cost per call), 4000 of 5000 drones."""
     monkeypatch.setenv("PYAA_CACHE_DIR", str(tmp_path))
-    scenario = load("gathering").with_overrides(iterations=20)
+    scenario = load("gathering").with_overrides(iterations=20_000)
     assert Simulation.create(scenario).engine.name == "batched"  # nothing compiled yet
     Simulation.create(scenario.with_overrides(low_energy_threshold=30.0), engine="compiled")
     assert Simulation.create(scenario).engine.name == "compiled"  # ports are no source
-    other = load("gathering").with_overrides(iterations=20, agents=5000)
-    assert Simulation.create(other).engine.name == "compiled"  # nor is the swarm's size
-    patrol = load("patrol").with_overrides(agents=10, iterations=20)  # another tree
+    other = load("gathering").with_overrides(iterations=4000, agents=5000)
+    assert Simulation.create(other, record_every=100).engine.name == "compiled"  # any size
+    short = load("gathering").with_overrides(iterations=20)  # faster than loading the code
+    assert Simulation.create(short).engine.name == "batched"
+    patrol = load("patrol").with_overrides(agents=10, iterations=20_000)  # another tree
     assert Simulation.create(patrol).engine.name == "batched"
 
 
@@ -157,7 +162,7 @@ def test_auto_compiles_only_runs_that_pay_for_the_compiling(
     monkeypatch.setenv("PYAA_CACHE_DIR", str(tmp_path))  # nothing compiled yet
     patrol = scenario_tree(load("patrol"))
     assert choose_engine(patrol, 1000, 4000) == "batched"  # 0.9 s on the batched engine
-    assert choose_engine(patrol, 10**6, 400) == "compiled"  # 26 s
+    assert choose_engine(patrol, 10**6, 400, record_every=400) == "compiled"  # 26 s
     assert choose_engine(patrol, 4, 200_000) == "compiled"  # 30 s: NumPy's cost per call
     assert 0.5 < batched_seconds(1000, 4000) < 2.0 and batched_seconds(4, 8000) < 1.5
     small = Simulation.create(load("patrol").with_overrides(agents=10, iterations=5))
@@ -166,7 +171,7 @@ def test_auto_compiles_only_runs_that_pay_for_the_compiling(
 
 def test_without_numba_auto_falls_back_to_batched(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("PYAA_NO_JIT", "1")
-    assert choose_engine(scenario_tree(load("patrol"))) == "batched"
+    assert choose_engine(scenario_tree(load("patrol")), record_every=4000) == "batched"
     with pytest.raises(TreeError, match="numba"):
         Simulation.create(load("patrol"), engine="compiled")
 

@@ -256,3 +256,20 @@ def test_lesson_3_page_gives_its_replay_room(browser, site, tmp_path):  # noqa: 
         browser.switch_to.window(here)
     errors = [e for e in browser.get_log("browser") if e["level"] == "SEVERE"]
     assert errors == []
+
+
+def test_lesson_9_page_shows_no_empty_studio_frame(site: Path, executed_lessons: Path) -> None:
+    """Lesson 9's studio cell output a frame served by its kernel; on the site no kernel
+    serves it, so the cell (tagged remove-output) shows its code and no frame."""
+    notebook = _lesson(executed_lessons, "09")
+    frames = [
+        output
+        for cell in notebook.cells
+        for output in cell.get("outputs", [])
+        if "<iframe" in output.get("data", {}).get("text/html", "")
+    ]
+    assert len(frames) == 1  # the kernel did output the studio
+    page = next((site / "lessons").glob("09_*.html"))
+    assert "<iframe" not in page.read_text(encoding="utf-8")
+    text = _text(page)
+    assert "Without a mouse" in text and "Studio" in text  # the lesson, its code shown

@@ -11,6 +11,7 @@ import socket
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import pyarrow as pa
@@ -195,3 +196,29 @@ def test_an_unreachable_scheduler_is_one_line() -> None:
     address = f"tcp://127.0.0.1:{_free_port()}"
     with pytest.raises(BackendError, match="cannot reach a Dask scheduler at 'tcp://127.0.0.1:"):
         DaskBackend(address, timeout=1)
+
+
+def test_a_local_dask_cluster_does_not_warn_when_port_8787_is_taken() -> None:
+    """The local cluster's scheduler serves HTTP on a free port: with 8787 taken (another
+    cluster, a sweep on another worker) it prints no warning into a lesson or a log."""
+    pytest.importorskip("distributed")
+    from pyautonomousagent.experiments.backends import DaskBackend
+
+    taken = socket.socket()
+    try:
+        taken.bind(("", 8787))
+        taken.listen()
+    except OSError:
+        pass  # already taken by someone else: the case under test
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            backend = DaskBackend(workers=1)
+        try:
+            assert [str(w.message) for w in caught if "8787" in str(w.message)] == []
+            assert backend._cluster is not None
+            assert backend._cluster.scheduler.http_server.port != 8787
+        finally:
+            backend.close()
+    finally:
+        taken.close()

@@ -11,14 +11,16 @@ import pytest
 from pyautonomousagent.lessons import (
     CHECKS,
     ExerciseError,
+    check_exercise,
     embedded_replay,
     l02_tree,
     l05_expected_tree,
+    l09_expected_tree,
     scripted,
     tick_table,
     x8_climb_time,
 )
-from pyautonomousagent.testing import check_exercise, scoped_registrations
+from pyautonomousagent.testing import scoped_registrations
 
 
 def test_tick_table_shows_a_reactive_sequence_halting_its_action() -> None:
@@ -92,8 +94,8 @@ def test_an_embedded_replay_fills_the_width_and_opens_full_page(tmp_path: Path) 
 
 def test_every_lesson_has_a_check() -> None:
     assert set(CHECKS) >= {"02", "06"}
-    with pytest.raises(ExerciseError, match="no exercise for lesson 9"):
-        check_exercise(9)
+    with pytest.raises(ExerciseError, match="no exercise for lesson 10"):
+        check_exercise(10)
 
 
 # --- the other lessons' checks: missing and wrong answers fail with a hint ------------------
@@ -122,6 +124,10 @@ def test_every_lesson_has_a_check() -> None:
         (7, {"agents": 60_000}, "fewer drones already reach"),
         (8, {}, "Not answered yet: set `climb_time`"),
         (8, {"climb_time": "soon"}, "should be a number of seconds"),
+        (9, {}, "Not answered yet: set `tree_file`"),
+        (9, {"tree_file": 9}, "should be the name of the XML file"),
+        (9, {"tree_file": "early.yaml"}, "is not an XML file: press Save XML"),
+        (9, {"tree_file": "no-such-file.xml"}, "There is no file"),
     ],
 )
 def test_checks_refuse_missing_and_wrong_answers(
@@ -205,3 +211,24 @@ def test_check_04_a_wrong_leaf_in_the_lessons_mission(executed_lessons: Path) ->
             register_leaf(leaf_type)
             with pytest.raises(ExerciseError, match=message):
                 check_exercise(4, leaf_type=leaf_type, scenario=scenario)
+
+
+def test_check_09_names_the_field_left_unset(tmp_path: Path, monkeypatch) -> None:
+    from pyautonomousagent.bt import save_tree
+    from pyautonomousagent.missions.drones.trees import gathering_tree
+
+    monkeypatch.chdir(tmp_path)
+    for name, tree, message in (
+        ("threshold-only.xml", l09_expected_tree(60, 2), "the refuel rate is not 5"),
+        ("rate-only.xml", l09_expected_tree(40, 5), "the threshold is not 60"),
+        ("unchanged.xml", gathering_tree(), "as with the scenario's own tree"),
+        ("other.xml", l09_expected_tree(50, 5), "do not fly as they should"),
+    ):
+        save_tree(tree, name)
+        with pytest.raises(ExerciseError, match=message):
+            check_exercise(9, tree_file=name)
+    Path("broken.xml").write_text("<root>")
+    with pytest.raises(ExerciseError, match="Your file does not load: broken.xml"):
+        check_exercise(9, tree_file="broken.xml")
+    save_tree(l09_expected_tree(), "early.xml")
+    check_exercise(9, tree_file="early.xml")

@@ -5,6 +5,7 @@ against the recorded trace, and a saved run equal to ``pyaa run --tree SAVED.xml
 from __future__ import annotations
 
 import json
+import math
 import urllib.error
 import urllib.request
 from pathlib import Path
@@ -76,6 +77,9 @@ def test_palette_is_built_from_the_registries(client: Client) -> None:
     low = leaves["Condition_Low_Energy_Level"]
     assert low["doc"].startswith("SUCCESS if the energy level")
     assert low["ports"][0]["name"] == "threshold" and low["ports"][0]["value"] == 40.0
+    assert low["name"] == "condition_low_energy_level"  # a new block's name: the loader's
+    controls = {c["type"]: c for c in info["palette"]["controls"]}
+    assert controls["ReactiveSequence"]["name"] == "reactive_sequence"
     names = [p["name"] for p in info["schema"]["parameters"]]
     assert "low_energy_threshold" in names
     energy = next(p for p in info["schema"]["parameters"] if p["name"] == "energy_use")
@@ -127,6 +131,28 @@ def test_an_unknown_port_is_flagged_on_its_block(client: Client) -> None:
     tree["children"][0]["ports"]["bogus"] = "1"
     answer = client.ok("/api/tree", {"tree": tree})
     assert answer["block"] == 1 and "has no port 'bogus'" in answer["error"]
+
+
+def test_node_names_are_kept_checked_and_saved(client: Client, tmp_path: Path) -> None:
+    info = client.ok("/api/info")
+    tree = info["tree"]
+    packaged = [node.name for node in load_tree(load("gathering").tree).walk()]
+    assert _names(tree) == packaged  # the scenario's tree keeps its file's names
+    tree["children"][0]["name"] = "share"
+    assert client.ok("/api/tree", {"tree": tree})["ok"]
+    client.ok("/api/save-tree", {"name": "named", "format": "yaml"})
+    assert [n.name for n in load_tree(tmp_path / "named.yaml").walk()][1] == "share"
+    tree["children"][0]["name"] = "two\nlines"
+    answer = client.ok("/api/tree", {"tree": tree})
+    assert not answer["ok"] and answer["block"] == 1 and "one line" in answer["error"]
+    tree["children"][0]["name"] = "reactive_fallback_behaviours"
+    answer = client.ok("/api/tree", {"tree": tree})
+    assert not answer["ok"] and answer["block"] == 2  # the second of the two, by its line
+    assert "two nodes are named 'reactive_fallback_behaviours'" in answer["error"]
+
+
+def _names(block: dict[str, Any]) -> list[str]:
+    return [block["name"], *(n for child in block["children"] for n in _names(child))]
 
 
 BILLION_LAUGHS = """<?xml version="1.0"?>
@@ -183,6 +209,9 @@ def test_paused_statuses_equal_the_recorded_trace(client: Client) -> None:
     assert board["number_ticks"] == int(sim.swarm.blackboard["number_ticks"][1]) > 0
     assert frame["active"][0] == 4  # every drone has the root active
     assert frame["x"] == [round(float(v), 3) for v in sim.swarm.columns["x"]]
+    energy = sim.swarm.columns["energy"]
+    assert frame["energy"] == {"mean": round(float(energy.mean()), 3),
+                               "low": round(float(energy.min()), 3)}  # fmt: skip
 
 
 def test_play_and_pause(client: Client) -> None:
@@ -198,6 +227,34 @@ def test_play_and_pause(client: Client) -> None:
     assert 0 < reached == client.ok("/api/frame")["iteration"]
     client.ok("/api/control", {"action": "reset"})
     assert client.ok("/api/frame")["iteration"] == 0
+
+
+def test_a_change_of_tree_or_parameter_during_a_run_offers_reset(client: Client) -> None:
+    info = client.ok("/api/info")
+    client.ok("/api/tree", {"tree": info["tree"]})
+    client.ok("/api/control", {"action": "step", "steps": 50})
+    renamed = json.loads(json.dumps(info["tree"]))
+    renamed["children"][0]["name"] = "share"
+    assert client.ok("/api/tree", {"tree": renamed})["ok"]
+    frame = client.ok("/api/frame")
+    assert frame["iteration"] == 50 and frame["stale"] == "the tree changed during this run"
+    for action in ("play", "step"):
+        status, refused = client.call("/api/control", {"action": action})
+        assert status == 400 and "Reset runs the new one" in refused["error"]
+    client.ok("/api/tree", {"tree": info["tree"]})  # undone: the run is current again
+    client.ok("/api/control", {"action": "step"})
+    frame = client.ok("/api/frame")
+    assert (frame["iteration"], frame["stale"]) == (51, "")
+    answer = client.ok("/api/settings", {"parameters": {"energy_use": 0.3}})
+    assert answer["stale"] == "the parameters changed during this run"
+    assert client.call("/api/control", {"action": "step"})[0] == 400
+    client.ok("/api/control", {"action": "reset"})
+    frame = client.ok("/api/frame")
+    assert (frame["iteration"], frame["stale"]) == (0, "")
+    client.ok("/api/tree", {"tree": renamed})  # at iteration 0 the new tree simply runs
+    assert client.ok("/api/frame")["stale"] == ""
+    client.ok("/api/control", {"action": "step"})
+    assert client.ok("/api/frame?follow=0")["nodes"][1]["name"] == "share"
 
 
 def test_a_saved_run_equals_pyaa_run_of_the_saved_tree(client: Client, tmp_path: Path) -> None:
@@ -243,11 +300,25 @@ def test_a_notebook_cell_shows_the_studio(tmp_path: Path) -> None:
     studio = Studio("gathering", tmp_path)
     try:
         html = studio._repr_html_()
-        assert f'src="{studio.url}"' in html
+        assert f'<iframe src="{studio.url}"' in html
+        assert f'<a href="{studio.url}" target="_blank"' in html  # a tab of its own
+        assert repr(studio) == f"Studio('gathering') at {studio.url}"
         with urllib.request.urlopen(studio.url, timeout=30) as page:
             assert b"/static/studio.js" in page.read()
     finally:
         studio.shutdown()
+
+
+def test_without_the_front_end_a_notebook_cell_says_how_to_build_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from pyautonomousagent.studio import server
+
+    monkeypatch.setattr(server, "has_bundle", lambda: False)
+    studio = Studio("gathering", tmp_path)
+    html = studio._repr_html_()
+    assert "front-end is not built" in html and "npm run build" in html
+    assert "<iframe" not in html and studio._thread is None  # not served
 
 
 def test_another_sites_page_cannot_change_anything(studio: Studio, tmp_path: Path) -> None:
@@ -261,6 +332,64 @@ def test_another_sites_page_cannot_change_anything(studio: Studio, tmp_path: Pat
     assert list(tmp_path.iterdir()) == []
 
 
+def _events_of(scenario: Any, iterations: int) -> list[dict[str, Any]]:
+    """The events of an independent run of ``scenario`` (seed 0) to ``iterations``."""
+    sim = Simulation.create(scenario, seed=0)
+    sim.run(progress=False, iterations=iterations)
+    return sim.events
+
+
+@pytest.mark.parametrize(
+    ("name", "overrides", "steps", "measures"),
+    [
+        ("gathering", {"energy_use": 1.0}, 150, {"alerts": 4, "messages": 0}),
+        ("crowded", {}, 600, None),
+        ("patrol", {}, 50, {"alerts": 0}),
+    ],
+)
+def test_the_measures_plot_counts_the_runs_events(
+    tmp_path: Path, name: str, overrides: dict[str, Any], steps: int, measures: Any
+) -> None:
+    session = Session(name, tmp_path)
+    session.configure({"parameters": overrides})
+    session.set_tree(scenario_blocks(session))
+    session.advance(steps // 2)
+    session.frame()  # the events so far are read once; the rest on the next frame
+    session.advance(steps - steps // 2)
+    frame = session.frame()
+    events = _events_of(session.scenario, steps)
+    kinds = {"alerts": "alert", "collisions": "collision", "messages": "message"}
+    counted = {k: sum(e["event"] == kind for e in events) for k, kind in kinds.items()}
+    assert frame["measures"] == {k: counted[k] for k in frame["measures"]}
+    if measures is not None:
+        assert frame["measures"] == measures
+    else:  # crowded: collisions are reported, and happen
+        assert list(frame["measures"]) == ["alerts", "collisions"]
+        assert frame["measures"]["collisions"] > 0
+    window = session.feed.window  # type: ignore[union-attr]
+    recent = [e for e in events if e["iteration"] > steps - window][-50:]
+    assert [e["iteration"] for e in frame["events"]] == [e["iteration"] for e in recent]
+    json.dumps(frame, allow_nan=False)
+
+
+@pytest.mark.parametrize("reach", [1000.0, 25.0])
+def test_a_message_is_drawn_to_the_receivers_in_its_range(tmp_path: Path, reach: float) -> None:
+    session = Session("gathering", tmp_path)
+    session.configure({"parameters": {"datalink_range": reach}})
+    session.set_tree(scenario_blocks(session))
+    session.advance(5003)
+    message = [e for e in session.frame()["events"] if e["kind"] == "message"]
+    assert len(message) == 1 and message[0]["iteration"] == 5000
+    assert message[0]["text"] == "gathering message from drone1 to all"
+    sim = Simulation.create(session.scenario, seed=0)
+    sim.run(progress=False, iterations=5000)
+    x, y = sim.swarm.columns["x"], sim.swarm.columns["y"]
+    near = [k for k in range(1, 4) if math.hypot(x[k] - x[0], y[k] - y[0]) <= reach]
+    assert message[0]["from"] == [round(float(x[0]), 3), round(float(y[0]), 3)]
+    assert message[0]["to"] == [[round(float(x[k]), 3), round(float(y[k]), 3)] for k in near]
+    assert len(near) == (3 if reach == 1000.0 else 1)  # at 25 units: drone3 only
+
+
 @pytest.mark.parametrize("name", names())
 def test_every_scenario_opens_steps_and_draws(name: str, tmp_path: Path) -> None:
     session = Session(name, tmp_path)
@@ -271,4 +400,5 @@ def test_every_scenario_opens_steps_and_draws(name: str, tmp_path: Path) -> None
     json.dumps(frame, allow_nan=False)
     assert len(frame["x"]) == session.scenario.agents and frame["follow"]["statuses"]
     assert ("z" in session.sim.swarm.columns) == bool(frame["altitude"])  # type: ignore[union-attr]
+    assert frame["measures"]["alerts"] == 0 and frame["stale"] == ""
     assert list(tmp_path.iterdir()) == []

@@ -1,13 +1,13 @@
 """The studio in a real headless Chromium, offline, driven with real pointer events.
 
 From an empty canvas the test drags the paper's gathering tree (Fig. 6) block by block out
-of the toolbox (Selenium's pointer actions), runs it, saves the run (8000 iterations, seed
-0), and checks: the saved states equal ``pyaa run gathering --tree SAVED.xml --seed 0`` bit
-for bit and ``pyaa run gathering --seed 0`` in every column, the active leaf compared as
-its node's index (blocks made by hand are named after their types, the packaged file names
-its nodes); the saved XML loads in ``pyaa run --tree`` and in the real
-BehaviorTree.CPP (behaviortreepy). A second test builds an invalid tree and sees the
-block's message, with Run disabled.
+of the toolbox (Selenium's pointer actions), types on each block the name the packaged
+gathering tree gives that node, runs it, saves the run (8000 iterations, seed 0), and
+checks: the saved states equal ``pyaa run gathering --seed 0`` bit for bit in every column
+(``behaviour``, the active leaf's name, included) and ``pyaa run gathering --tree SAVED.xml
+--seed 0``; the saved XML loads in ``pyaa run --tree`` and in the real BehaviorTree.CPP
+(behaviortreepy). A second test builds an invalid tree and sees the block's message, with
+Run disabled.
 
 Needs Debian's ``chromium`` and ``chromium-driver``, selenium, and the built front-end
 (``make test`` builds it); skipped, with the reason, without them.
@@ -15,6 +15,7 @@ Needs Debian's ``chromium`` and ``chromium-driver``, selenium, and the built fro
 
 from __future__ import annotations
 
+import html
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -22,10 +23,13 @@ from typing import Any
 
 import pytest
 
-from pyautonomousagent.bt.files import load_tree
+from pyautonomousagent.bt.files import load_tree, read_document
+from pyautonomousagent.bt.spec import snake_case
 from pyautonomousagent.cli import main
 from pyautonomousagent.recording import read_table
+from pyautonomousagent.scenarios import load
 from pyautonomousagent.studio import Studio, has_bundle
+from pyautonomousagent.studio.trees import blocks_of
 from tests.chromium import offline_chromium
 
 GATHERING = (
@@ -150,20 +154,60 @@ def add_block(browser: Any, kind: str, parent: str | None) -> str:
     raise AssertionError(f"no {kind} block could be dragged out of the toolbox")
 
 
-def build(browser: Any, node: tuple[str, list], parent: str | None = None) -> None:
-    kind, children = node
-    made = add_block(browser, kind, parent)
-    for child in children:
+def rename(browser: Any, block: str, name: str) -> None:
+    """Click the block's name field (a real click) and type ``name`` over it, then Enter."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.keys import Keys
+
+    point = browser.execute_script("return window.studio.nameField(arguments[0])", block)
+    click = ActionChains(browser)
+    click.w3c_actions.pointer_action.move_to_location(int(point["x"]), int(point["y"]))
+    click.w3c_actions.pointer_action.click()
+    click.perform()
+    editor = wait_for(lambda: browser.execute_script(
+        "const e = document.activeElement;"
+        "return e && e.classList.contains('blocklyHtmlInput') ? e : null"), 5)  # fmt: skip
+    editor.send_keys(Keys.CONTROL, "a")
+    editor.send_keys(name, Keys.ENTER)
+    wait_for(lambda: browser.execute_script("return window.studio.name(arguments[0])", block)
+             == name, 5)  # fmt: skip
+
+
+def follow_agent(browser: Any, row: int) -> None:
+    """Click drone ``row`` (0-based) on the map with a real pointer; wait until it is
+    followed."""
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    point = browser.execute_script(f"return window.studio.agentPoint({row})")
+    click = ActionChains(browser)
+    click.w3c_actions.pointer_action.move_to_location(int(point["x"]), int(point["y"]))
+    click.w3c_actions.pointer_action.click()
+    click.perform()
+    wait_for(lambda: f"following drone{row + 1}" in browser.find_element("id", "follow").text)
+
+
+def build(browser: Any, node: dict[str, Any], parent: str | None = None) -> None:
+    """Drag ``node`` (a tree of blocks: type, name, children) under ``parent`` block by
+    block; each new block starts with its type's name, and ``node``'s name is typed over it."""
+    made = add_block(browser, node["type"], parent)
+    name = "return window.studio.name(arguments[0])"
+    assert browser.execute_script(name, made) == snake_case(node["type"])
+    rename(browser, made, node["name"])
+    for child in node["children"]:
         build(browser, child, made)
-
-
-def node_indices(table: Any) -> Any:
-    """The ``behaviour`` column as node indices in tick order (null: no leaf ticked)."""
-    return table.column("behaviour").combine_chunks().indices
 
 
 def shape(tree: dict[str, Any]) -> tuple[str, list]:
     return (tree["type"], [shape(child) for child in tree["children"]])
+
+
+def names_of(tree: dict[str, Any]) -> list[str]:
+    return [tree["name"], *(n for child in tree["children"] for n in names_of(child))]
+
+
+def packaged_gathering() -> dict[str, Any]:
+    """The packaged gathering tree as blocks (type, name, ports, children)."""
+    return blocks_of(read_document(load("gathering").tree))
 
 
 def test_build_the_gathering_tree_from_blocks_run_and_save(
@@ -171,8 +215,12 @@ def test_build_the_gathering_tree_from_blocks_run_and_save(
 ) -> None:
     open_empty(browser, studio)
     assert browser.find_element("id", "play").get_attribute("disabled")
-    build(browser, GATHERING)
-    assert shape(browser.execute_script("return window.studio.tree()")) == GATHERING
+    paper = packaged_gathering()
+    assert shape(paper) == GATHERING
+    build(browser, paper)
+    made = browser.execute_script("return window.studio.tree()")
+    assert shape(made) == GATHERING and names_of(made) == names_of(paper)
+    wait_for(lambda: not browser.execute_script("return window.studio.busy()"))
     wait_for(lambda: browser.execute_script("return window.studio.runnable()"))
     assert not browser.find_element("id", "play").get_attribute("disabled")
     browser.find_element("id", "step").click()
@@ -189,15 +237,14 @@ def test_build_the_gathering_tree_from_blocks_run_and_save(
     assert main(["run", "gathering", "--tree", str(saved), "--seed", "0", "--out", str(out),
                  "--no-gif", "--quiet"]) == 0  # fmt: skip
     assert ours.equals(read_table(out / "states.parquet"))
-    paper = tmp_path / "cli-paper"
-    args = ["run", "gathering", "--seed", "0", "--out", str(paper), "--no-gif", "--quiet"]
+    cli = tmp_path / "cli-paper"
+    args = ["run", "gathering", "--seed", "0", "--out", str(cli), "--no-gif", "--quiet"]
     assert main(args) == 0
-    theirs = read_table(paper / "states.parquet")
-    columns = [c for c in ours.column_names if c != "behaviour"]
-    assert ours.select(columns).equals(theirs.select(columns))
-    # The active leaf: the same node (its index in tick order) in every row; only the names
-    # differ (blocks made by hand are named after their types, the packaged file names them).
-    assert node_indices(ours).equals(node_indices(theirs))
+    theirs = read_table(cli / "states.parquet")
+    assert ours.column_names == theirs.column_names and "behaviour" in ours.column_names
+    for column in ours.column_names:  # every column, behaviour (the active leaf) included
+        assert ours.column(column).equals(theirs.column(column)), column
+    assert ours.equals(theirs)
     assert load_tree(saved).walk() is not None
     btcpp = pytest.importorskip("behaviortreepy", reason="behaviortreepy is not installed")
     from .btcpp_reference import btcpp_factory_with_our_leaves, btcpp_text
@@ -244,6 +291,66 @@ def test_an_invalid_tree_shows_the_message_on_the_block_and_cannot_run(
     keys(Keys.CONTROL, Keys.SHIFT)
     wait_for(lambda: "needs exactly 1 child" in browser.find_element("id", "message").text)
     assert browser.find_element("id", "play").get_attribute("disabled")
+
+
+def test_a_files_node_names_are_kept_and_a_new_block_takes_its_types_name(
+    browser: Any, studio: Studio, tmp_path: Path, tmp_path_factory: pytest.TempPathFactory
+) -> None:
+    tree = "return window.studio.tree()"
+    browser.get(studio.url)
+    wait_for(lambda: "can run" in browser.find_element("id", "message").text)
+    assert names_of(browser.execute_script(tree)) == names_of(packaged_gathering())
+    upload = tmp_path_factory.mktemp("uploads") / "renamed.xml"
+    text = Path(load("gathering").tree).read_text(encoding="utf-8")
+    markup = '<img src=x onerror="window.pwned=1">'  # a name is text, never markup
+    text = text.replace('"sequence_refuel"', '"refuel_then_go_back"')
+    text = text.replace('"sequence_gathering"', f'"{html.escape(markup)}"')
+    upload.write_text(text, "utf-8")
+    browser.find_element("id", "upload").send_keys(str(upload))
+    wait_for(lambda: "refuel_then_go_back" in names_of(browser.execute_script(tree)))
+    assert len(names_of(browser.execute_script(tree))) == 18
+    assert markup in names_of(browser.execute_script(tree))
+    wait_for(lambda: not browser.execute_script("return window.studio.busy()"))  # checked
+    wait_for(lambda: browser.execute_script("return window.studio.runnable()"))
+    browser.find_element("id", "reset").click()
+    browser.find_element("id", "step").click()
+    wait_for(lambda: markup in browser.find_element("id", "nodes").text)
+    assert browser.execute_script("return window.pwned") is None
+    open_empty(browser, studio)
+    sequence = add_block(browser, "Sequence", None)
+    first = add_block(browser, "Action_Refuel_A", sequence)
+    second = add_block(browser, "Action_Refuel_A", sequence)
+    made = ["sequence", "action_refuel_a", "action_refuel_a_2"]
+    assert names_of(browser.execute_script(tree)) == made
+    wait_for(lambda: browser.execute_script("return window.studio.runnable()"))
+    rename(browser, second, "action_refuel_a")  # two nodes of one name: the loader refuses
+    wait_for(lambda: "two nodes are named" in browser.find_element("id", "message").text)
+    assert "two nodes are named 'action_refuel_a'" in (
+        browser.execute_script("return window.studio.warning(arguments[0])", second) or ""
+    )
+    assert browser.find_element("id", "save-xml").get_attribute("disabled")
+    rename(browser, first, "refuel_first")
+    wait_for(lambda: browser.execute_script("return window.studio.runnable()"))
+    browser.find_element("id", "save-xml").click()
+    wait_for(lambda: "wrote studio.xml" in browser.find_element("id", "message").text)
+    saved = [node.name for node in load_tree(tmp_path / "studio.xml").walk()]
+    assert saved == ["sequence", "refuel_first", "action_refuel_a"]
+    # a copy (Ctrl+C, Ctrl+V) of a block takes the next free name of its original's
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.keys import Keys
+
+    point = browser.execute_script("return window.studio.blockPoint(arguments[0])", first)
+    keys = ActionChains(browser)
+    keys.w3c_actions.pointer_action.move_to_location(int(point["x"]), int(point["y"]))
+    keys.w3c_actions.pointer_action.click()
+    keys.key_down(Keys.CONTROL).send_keys("c").send_keys("v").key_up(Keys.CONTROL)
+    keys.perform()
+    newest = "return window.studio.newest('bt_Action_Refuel_A')"
+    copy = wait_for(lambda: (made := browser.execute_script(newest)) not in (first, second)
+                    and made)  # fmt: skip
+    assert browser.execute_script("return window.studio.name(arguments[0])", copy) == (
+        "refuel_first_2"
+    )
 
 
 LAUGHS = """<?xml version="1.0"?>
@@ -300,14 +407,7 @@ def test_paused_at_k_the_followed_drones_colours_equal_its_trace(
     for k in range(1, 8):
         browser.find_element("id", "step").click()
         wait_for(lambda k=k: browser.execute_script("return window.studio.iteration()") == k)
-    point = browser.execute_script("return window.studio.agentPoint(1)")
-    from selenium.webdriver.common.action_chains import ActionChains
-
-    click = ActionChains(browser)
-    click.w3c_actions.pointer_action.move_to_location(int(point["x"]), int(point["y"]))
-    click.w3c_actions.pointer_action.click()
-    click.perform()
-    wait_for(lambda: "following drone2" in browser.find_element("id", "follow").text)
+    follow_agent(browser, 1)
     shown = browser.execute_script(
         "return [...document.querySelectorAll('#nodes div')].map(d => d.dataset.status)"
     )
@@ -324,31 +424,83 @@ def test_paused_at_k_the_followed_drones_colours_equal_its_trace(
     assert shown_on_blocks == shown
 
 
-def test_a_notebook_cell_shows_the_studio_and_a_step_in_the_page_advances_it(
-    browser: Any, tmp_path: Path
+def test_a_change_of_tree_or_parameter_during_a_run_offers_reset(
+    browser: Any, studio: Studio
 ) -> None:
-    """A real kernel (nbclient, as the lessons run) evaluates ``Studio(...)`` as a cell's
-    value; the frame it outputs is opened in Chromium, and Step there advances the run the
-    kernel serves. (JupyterLab itself is not started here.)"""
-    import re
+    browser.get(studio.url)
+    wait_for(lambda: "can run" in browser.find_element("id", "message").text)
+    button = browser.find_element
+    button("id", "reset").click()
+    for k in (1, 2, 3):
+        button("id", "step").click()
+        wait_for(lambda k=k: browser.execute_script("return window.studio.iteration()") == k)
+    offer = "return window.studio.offer()"
+    assert browser.execute_script(offer) == ""
+    root = browser.execute_script(
+        "return window.studio.workspace().getBlocksByType('bt_ReactiveSequence')[0].id"
+    )
+    rename(browser, root, "root")
+    wait_for(lambda: "the tree changed during this run" in browser.execute_script(offer))
+    assert "Reset runs the new one" in browser.execute_script(offer)
+    assert "offer" in (button("id", "reset").get_attribute("class") or "")
+    assert button("id", "play").get_attribute("disabled")
+    assert button("id", "step").get_attribute("disabled")
+    assert browser.execute_script("return window.studio.iteration()") == 3  # still shown
+    button("id", "reset").click()
+    wait_for(lambda: browser.execute_script(offer) == "")
+    assert browser.execute_script("return window.studio.iteration()") == 0
+    assert not button("id", "step").get_attribute("disabled")
+    assert "offer" not in (button("id", "reset").get_attribute("class") or "")
+    button("id", "step").click()
+    wait_for(lambda: browser.execute_script("return window.studio.iteration()") == 1)
+    box = button("css selector", "input[data-param='energy_use']")
+    box.clear()
+    box.send_keys("0.3")
+    button("id", "apply").click()
+    wait_for(lambda: "the parameters changed during this run" in browser.execute_script(offer))
+    assert "Reset runs them" in button("id", "message").text
+    assert button("id", "play").get_attribute("disabled")
+    button("id", "reset").click()
+    wait_for(lambda: browser.execute_script(offer) == "")
+    assert not button("id", "play").get_attribute("disabled")
 
-    nbformat = pytest.importorskip("nbformat", reason="nbformat is not installed")
-    nbclient = pytest.importorskip("nbclient", reason="nbclient is not installed")
-    cells = [
-        f"from pathlib import Path\nfrom pyautonomousagent.studio import Studio\n"
-        f"studio = Studio('gathering', Path({str(tmp_path)!r}))\nstudio",
-        "studio.session.sim.world.iteration",
-    ]
-    notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(c) for c in cells[:1]])
-    client = nbclient.NotebookClient(notebook, kernel_name="python3", timeout=120)
-    with client.setup_kernel():
-        client.execute_cell(notebook.cells[0], 0)
-        html = notebook.cells[0].outputs[0]["data"]["text/html"]
-        url = re.search(r'<iframe src="([^"]+)"', html).group(1)
-        browser.get(url)
-        wait_for(lambda: "can run" in browser.find_element("id", "message").text)
-        browser.find_element("id", "step").click()
-        wait_for(lambda: "iteration 1 of 8000" in browser.find_element("id", "iteration").text)
-        notebook.cells.append(nbformat.v4.new_code_cell(cells[1]))
-        client.execute_cell(notebook.cells[1], 1)
-        assert notebook.cells[1].outputs[0]["data"]["text/plain"] == "1"
+
+STEP = """
+const done = arguments[arguments.length - 1];
+fetch("/api/control", {method: "POST", body: JSON.stringify({action: "step", steps: arguments[0]})})
+  .then((r) => r.json()).then(done);
+"""
+
+
+def test_the_map_draws_a_message_to_the_receivers_in_range_and_the_plots_the_measures(
+    browser: Any, studio: Studio
+) -> None:
+    browser.get(studio.url)
+    wait_for(lambda: "can run" in browser.find_element("id", "message").text)
+    browser.find_element("id", "reset").click()
+    for reached in (2500, 5002):  # the page's own request (Step steps one); two points
+        browser.execute_async_script(STEP, reached - 2500 * (reached > 2500))
+        wait_for(lambda r=reached: browser.execute_script("return window.studio.iteration()") == r)
+    drawing = wait_for(lambda: (d := browser.execute_script("return window.studio.drawing()"))
+                       and d["lines"] and d)  # fmt: skip
+    assert drawing == {
+        "drones": 4,
+        "diamonds": 1,
+        "lines": 3,  # drone1's gathering order to the three others, all in range
+        "banner": "iteration 5000: gathering message from drone1 to all",
+        "measures": ["alerts 0", "messages 1"],
+    }
+    # the diamond where the message puts the gathering (50, 50), in the GIF's purple
+    assert browser.execute_script("return window.studio.pixel(50, 50)")[:3] == [148, 103, 189]
+    inked = """const c = document.getElementById(arguments[0]);
+        const d = c.getContext("2d").getImageData(0, 20, c.width, c.height - 20).data;
+        const colours = new Set();
+        for (let i = 0; i < d.length; i += 4) {
+          if (d[i + 3] > 200) colours.add(d.slice(i, i + 3).join());
+        }
+        return [...colours].map((c) => c.split(",").map(Number));"""
+    purple = (148, 103, 189)  # the messages' line is drawn on the measures plot
+    assert any(
+        max(abs(a - b) for a, b in zip(colour, purple, strict=True)) < 16
+        for colour in browser.execute_script(inked, "measures")
+    )

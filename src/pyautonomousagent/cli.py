@@ -36,6 +36,7 @@ from pyautonomousagent.runs import (
     SaveError,
     add_files,
     check_output,
+    check_target,
     claim_existing,
     claim_run,
     default_folder,
@@ -607,6 +608,8 @@ def run(args: argparse.Namespace) -> int:
     _check_agent_options(args, scenario)
     if args.tree is not None:
         scenario = scenario.with_overrides(tree=_tree_option(args.tree))
+    out = args.out or default_folder(scenario.name)
+    check_target(out, overwrite=True, create=False)  # as claim_run first does, before set-up
     with _saying_compiles(not args.quiet):
         sim = Simulation.create(
             scenario,
@@ -618,7 +621,6 @@ def run(args: argparse.Namespace) -> int:
     why = getattr(sim.engine, "why_not_fused", lambda sim: "")(sim)
     if why and not args.quiet:
         print(f"pyaa: the compiled engine ticks the tree only, not whole iterations: {why}")
-    out = args.out or default_folder(scenario.name)
     with claim_run(out, args.overwrite, report=_note) as held:
         return _run_claimed(args, scenario, sim, held)
 

@@ -34,7 +34,7 @@ from pyautonomousagent.arrays import _SERIES, _SQRT3, _TAN_PI_12, _sincos_float
 from pyautonomousagent.jit import njit
 
 if TYPE_CHECKING:
-    from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.simulation.view import SimulationView
 
 #: The name that passes the iteration number (an int) to a kernel instead of an array.
 ITERATION = "@iteration"
@@ -248,7 +248,7 @@ class SwarmSensorKernel:
     names: tuple[str, ...]
     state: tuple[Any, ...] = ()
     constants: tuple[float | int, ...] = ()
-    collect: Callable[[Simulation, int], None] | None = None
+    collect: Callable[[SimulationView, int], None] | None = None
     device: tuple[Callable[..., None], ...] = ()
 
     def __post_init__(self) -> None:
@@ -281,7 +281,7 @@ class SensorKernel:
     function: Callable[..., bool]
     names: tuple[str, ...]
     constants: tuple[float | int, ...] = ()
-    stopped: Callable[[Simulation, Any], None] | None = None
+    stopped: Callable[[SimulationView, Any], None] | None = None
     swarm: SwarmSensorKernel | None = None
     state: tuple[Any, ...] = ()
 

@@ -5,8 +5,6 @@
 - :func:`check_exercise`: the check cell at the end of each lesson. It works the answer out
   itself (the answer is not in the notebook), prints a friendly verdict, and raises
   :class:`ExerciseError` with a hint when the answer is missing or wrong.
-
-Both are also importable from :mod:`pyautonomousagent.testing`.
 """
 
 from __future__ import annotations
@@ -176,7 +174,7 @@ def scripted(*statuses: str) -> list[list[int]]:
         ) from None
 
 
-#: Lesson number ("01".."08") -> its check: takes the answers, returns the verdict's text,
+#: Lesson number ("01".."09") -> its check: takes the answers, returns the verdict's text,
 #: raises ExerciseError when an answer is missing or wrong.
 CHECKS: dict[str, Callable[..., str]] = {}
 
@@ -477,8 +475,8 @@ def _check_05(tree_file: Any = None) -> str:
 
 def smallest_compiled_swarm(iterations: int) -> int:
     """The fewest agents for which the batched loop's estimate reaches the seconds from which
-    engine "auto" compiles (:data:`~pyautonomousagent.simulation.run.AUTO_COMPILE_SECONDS`)."""
-    from pyautonomousagent.simulation.run import AUTO_COMPILE_SECONDS, batched_seconds
+    engine "auto" compiles (:data:`~pyautonomousagent.simulation.costs.AUTO_COMPILE_SECONDS`)."""
+    from pyautonomousagent.simulation.costs import AUTO_COMPILE_SECONDS, batched_seconds
 
     low, high = 1, 10**12
     while low < high:
@@ -604,3 +602,93 @@ def _check_08(climb_time: Any = None) -> str:
             "where abs(altitude - 60) <= 1 (np.argmax of that condition)."
         )
     return f"The X8 first comes within 1 m of 60 m after {expected:.2f} s."
+
+
+# --- Lesson 09: blocks in the studio --------------------------------------------------------
+
+#: Lesson 09's exercise: the refuelling threshold (percent) and rate (percent per iteration).
+L09_THRESHOLD, L09_RATE = 60.0, 5.0
+
+
+def l09_expected_tree(threshold: float = L09_THRESHOLD, rate: float = L09_RATE) -> Node:
+    """The gathering tree (Fig. 6) with ``Condition_Low_Energy_Level``'s threshold (percent)
+    and ``Action_Refuel_A``'s rate (percent per iteration) set."""
+    from dataclasses import replace
+
+    from pyautonomousagent.missions.drones.trees import gathering_tree
+
+    ports = {"Condition_Low_Energy_Level": {"threshold": threshold},
+             "Action_Refuel_A": {"rate": rate}}  # fmt: skip
+
+    def edited(node: Node) -> Node:
+        extra = ports.get(node.type, {})
+        return replace(node, params={**node.params, **extra},
+                       children=tuple(edited(child) for child in node.children))  # fmt: skip
+
+    return edited(gathering_tree())
+
+
+def _flight(tree: Node) -> list[np.ndarray]:
+    """x, y and energy of the gathering scenario's drones (seed 0, 3000 iterations) flying
+    ``tree``: arrays of shape (records, agents)."""
+    from pyautonomousagent.scenarios import load
+    from pyautonomousagent.simulation.run import Simulation
+
+    scenario = load("gathering").with_overrides(iterations=3000)
+    recorder = Simulation.create(scenario, seed=0, tree=tree).run(progress=False).recorder
+    return [recorder.column(key) for key in ("x", "y", "energy")]
+
+
+def _same_flight(a: list[np.ndarray], b: list[np.ndarray]) -> bool:
+    return all(np.array_equal(u, v) for u, v in zip(a, b, strict=True))
+
+
+@_lesson("09")
+def _check_09(tree_file: Any = None) -> str:
+    from pyautonomousagent.bt.files import load_tree
+
+    given = _given("tree_file", tree_file, "the name of the XML file you saved from the studio")
+    if not isinstance(given, str | os.PathLike) or not str(given).strip():
+        raise ExerciseError(
+            f"`tree_file` should be the name of the XML file you saved "
+            f"from the studio, like 'refuel-early.xml', got {shown(given)}."
+        )
+    path = Path(given)
+    if path.suffix != ".xml":
+        raise ExerciseError(f"{path} is not an XML file: press Save XML in the studio, and give "
+                            "the name it wrote (NAME.xml).")  # fmt: skip
+    if not path.is_file():
+        raise ExerciseError(
+            f"There is no file {path} here: type a name in the studio's name "
+            "box and press Save XML (it writes NAME.xml next to this notebook)."
+        )
+    try:
+        tree = load_tree(path)
+    except Exception as error:  # the file's mistake, in its own words
+        raise ExerciseError(f"Your file does not load: {error}") from None
+    got = _flight(tree)
+    if _same_flight(got, _flight(l09_expected_tree())):
+        return (f"{path} makes the drones refuel at {L09_THRESHOLD:g} %, {L09_RATE:g} % per "
+                "iteration.")  # fmt: skip
+    raise ExerciseError(_l09_hint(path, got))
+
+
+def _l09_hint(path: Path, got: list[np.ndarray]) -> str:
+    """What is wrong with the tree that flew ``got``: one of the two fields, both, or more."""
+    from pyautonomousagent.scenarios import load
+
+    params = load("gathering").parameters
+    scenario_values = (float(params.low_energy_threshold), float(params.refuel_rate))
+    cases = (
+        ((L09_THRESHOLD, scenario_values[1]), f"the refuel rate is not {L09_RATE:g}"),
+        ((scenario_values[0], L09_RATE), f"the threshold is not {L09_THRESHOLD:g}"),
+        (scenario_values, "the drones fly as with the scenario's own tree: neither field is set"),
+    )
+    for (threshold, rate), what in cases:
+        if _same_flight(got, _flight(l09_expected_tree(threshold, rate))):
+            return (f"Not quite: with {path} {what}.\nHint: type {L09_THRESHOLD:g} in "
+                    f"Condition_Low_Energy_Level's threshold field and {L09_RATE:g} in "
+                    "Action_Refuel_A's rate field, then press Save XML again.")  # fmt: skip
+    return (f"Not quite: with {path} the drones do not fly as they should.\nHint: start from "
+            "the gathering tree (Fig. 6: Scenario's tree, or your fig6 blocks) and change only "
+            f"those two fields: threshold {L09_THRESHOLD:g}, rate {L09_RATE:g}.")  # fmt: skip

@@ -19,6 +19,8 @@ from pyautonomousagent.simulation.mission import (
 from pyautonomousagent.simulation.params import Param, Point, Reader, ScenarioError, Values
 from pyautonomousagent.simulation.run import Simulation
 from pyautonomousagent.simulation.scenario import Scenario, check_point_in_world
+from pyautonomousagent.simulation.scenario_view import ScenarioView
+from pyautonomousagent.simulation.view import SimulationView
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -35,7 +37,9 @@ __all__ = [
     "Recorder",
     "Scenario",
     "ScenarioError",
+    "ScenarioView",
     "Simulation",
+    "SimulationView",
     "Swarm",
     "Values",
     "World",

@@ -188,26 +188,37 @@ class Recorder:
         self,
         row0: int,
         columns: Mapping[str, np.ndarray],
-        traces: np.ndarray,
+        traces: np.ndarray | None,
         behaviour: np.ndarray | None = None,
     ) -> None:
         """Store records ``row0`` .. ``row0 + rows - 1`` written elsewhere (e.g. by a GPU
-        kernel), as :meth:`record` stores them one by one (compact columns stay compact);
-        the bookkeeping (``iterations``, ``count``, listeners) is the caller's.
+        kernel, or a fused loop's block: :class:`~pyautonomousagent.record_blocks.RecordBlock`),
+        as :meth:`record` stores them one by one (compact columns stay compact, and the same
+        ones are stored in full); the bookkeeping (``iterations``, ``count``, listeners) is
+        the caller's.
 
         Args:
             row0: the first record's number.
-            columns: every recorded column, name -> values of shape (rows, N).
-            traces: the traced agents' node statuses, shape (rows, nodes, K), int8.
-            behaviour: the active leaves, shape (rows, N), int16; required with a tree.
+            columns: recorded columns, name -> values of shape (rows, N); a column left out
+                was written in place (into :meth:`RecordedColumns.full`).
+            traces: the traced agents' node statuses, shape (rows, nodes, K), int8; None
+                where they were written in place.
+            behaviour: the active leaves, shape (rows, N), int16; with a tree, required
+                unless they were written in place (their array stored in full).
         """
-        for key in self.columns:
-            self.columns.store_block(row0, key, columns[key])
-        self.traces[row0 : row0 + len(traces)] = traces
+        self.columns.store_rows(row0, columns)
+        if traces is not None:
+            self.traces[row0 : row0 + len(traces)] = traces
         if self._codes is not None:
-            if behaviour is None:
+            if behaviour is None and self._codes.full("behaviour") is None:
                 raise ValueError("this recorder keeps traces: pass the active behaviours")
-            self._codes.store_block(row0, "behaviour", behaviour)
+            if behaviour is not None:
+                self._codes.store_rows(row0, {"behaviour": behaviour})
+
+    def behaviour_codes(self) -> RecordedColumns | None:
+        """The active behaviours as recorded columns (one, ``"behaviour"``), to write in
+        place where stored in full; None without a tree."""
+        return self._codes
 
     def trace(self, agent: int | str) -> np.ndarray:
         """The node statuses of one traced agent (index or name), shape (records so far, nodes)."""
@@ -375,6 +386,25 @@ class RecordedColumns(Mapping[str, np.ndarray]):
             return
         for r, row in enumerate(values):
             self.store(row0 + r, key, row)
+
+    def store_rows(self, row0: int, blocks: Mapping[str, np.ndarray]) -> None:
+        """Record ``blocks[key]`` (shape (rows, N)) as records ``row0``.. of each column
+        ``key`` given: at once for a column stored in full, the others record by record and,
+        within a record, column by column in this mapping's column order, as
+        :meth:`store_record` does (so the same columns end up stored in full)."""
+        rest = [key for key in self.dtypes if key in blocks and key not in self._full]
+        for key, values in blocks.items():
+            if key not in rest:
+                self.store_block(row0, key, values)
+        rows = max((len(blocks[key]) for key in rest), default=0)
+        for r in range(rows):
+            for key in rest:
+                self.store(row0 + r, key, blocks[key][r])
+
+    def full(self, key: str) -> np.ndarray | None:
+        """Column ``key``'s array of shape (records, N) where it is stored in full, else None
+        (without storing it: see :meth:`__getitem__`)."""
+        return self._full.get(key)
 
     def store_record(self, row: int, sources: Mapping[str, np.ndarray]) -> None:
         """Record ``sources[key]`` (shape (N,)) as record ``row`` of every column ``key``."""

@@ -120,8 +120,11 @@ def is_run_folder(path: Path) -> bool:
     return (path / SUMMARY).is_file()
 
 
-def check_target(folder: str | Path, overwrite: bool = False) -> Path:
-    """``folder`` if a run can be saved there; checked before a run starts.
+def check_target(folder: str | Path, overwrite: bool = False, create: bool = True) -> Path:
+    """``folder`` if a run can be saved there; checked before a run starts. With ``create``
+    false nothing is written (the parent is not made nor probed): the check ``pyaa run``
+    makes before setting up a run (a compile can take minutes), so that a bad folder is
+    refused at once.
 
     Raises:
         RunError: it is a file, it holds an earlier run and ``overwrite`` is false, it is
@@ -149,12 +152,24 @@ def check_target(folder: str | Path, overwrite: bool = False) -> Path:
                 f"output folder {path} is a mount point, which a run cannot be renamed into; "
                 f"use a folder inside it (--out {path / 'NAME'}), or {fix}"
             )
+        if not create:
+            _check_ancestors(path)
+            return path
         path.absolute().parent.mkdir(parents=True, exist_ok=True)
         with contextlib.suppress(FileNotFoundError):  # a claim's recovery may have taken it
             hidden_folder(path, "probe").rmdir()  # the parent is writable
     except OSError as error:
         raise RunError(f"cannot use output folder {path}: {_reason(error)}; {fix}") from None
     return path
+
+
+def _check_ancestors(path: Path) -> None:
+    """Raise NotADirectoryError where the nearest existing folder above ``path`` is a file."""
+    for ancestor in path.absolute().parents:
+        if ancestor.exists():
+            if not ancestor.is_dir():
+                raise NotADirectoryError(20, "Not a directory", str(ancestor))
+            return
 
 
 @contextlib.contextmanager

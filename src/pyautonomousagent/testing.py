@@ -9,9 +9,10 @@
 - :func:`check_leaf`: prove a leaf type gives the same results on both engines when it is
   ticked for all, most or few of the agents;
 - :func:`scoped_registrations`: whatever a test registers (leaves, missions, scenarios, motion
-  models, engines, mission files) is gone after the block;
-- :func:`check_exercise` and :func:`tick_table` (from :mod:`pyautonomousagent.lessons`): the
-  lesson notebooks' exercise checks and per-tick status tables.
+  models, engines, mission files) is gone after the block.
+
+The lesson notebooks' exercise checks and per-tick status tables (:func:`check_exercise`,
+:func:`tick_table`) are in :mod:`pyautonomousagent.lessons`, which uses these tools.
 """
 
 from __future__ import annotations
@@ -31,7 +32,6 @@ from pyautonomousagent.bt.spec import Node, leaf, reactive_sequence
 from pyautonomousagent.bt.status import FAILURE, SUCCESS
 from pyautonomousagent.bt.trees import TREES
 from pyautonomousagent.datalink import Datalink
-from pyautonomousagent.lessons import ExerciseError, check_exercise, tick_table
 from pyautonomousagent.scenarios import SCENARIOS, load
 from pyautonomousagent.simulation import phases
 from pyautonomousagent.simulation.mission import MISSIONS
@@ -42,15 +42,12 @@ from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
 __all__ = [
-    "ExerciseError",
     "Harness",
     "check_engines_agree",
-    "check_exercise",
     "check_leaf",
     "check_same_runs",
     "make_harness",
     "scoped_registrations",
-    "tick_table",
 ]
 
 

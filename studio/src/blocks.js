@@ -11,6 +11,8 @@ const ACTION_COLOUR = 330;
 /** The field on each node block that shows the followed agent's status and the count of
  * agents that have the node active. */
 export const STATUS = "STATUS";
+/** The field of each node block that holds the node's name (saved in the tree file). */
+export const NAME = "NAME";
 
 function statusField() {
   return new Blockly.FieldLabel("", "st-label");
@@ -36,6 +38,12 @@ export function blockType(tag) {
   return `bt_${tag}`;
 }
 
+function nameField(name) {
+  const field = new Blockly.FieldTextInput(name);
+  field.setTooltip("the node's name (saved in the tree file; each node has its own)");
+  return field;
+}
+
 function portField(block, name, hint) {
   block
     .appendDummyInput(`PORT_${name}`)
@@ -58,7 +66,8 @@ export function defineBlocks(palette) {
     Blockly.Blocks[blockType(control.type)] = {
       init() {
         const label = control.symbol ? `${control.symbol}  ${control.type}` : control.type;
-        this.appendDummyInput().appendField(label).appendField(statusField(), STATUS);
+        this.appendDummyInput().appendField(label).appendField(nameField(control.name), NAME)
+          .appendField(statusField(), STATUS);
         for (const param of control.params) {
           portField(this, param.name, param.required ? "required" : "");
         }
@@ -73,7 +82,8 @@ export function defineBlocks(palette) {
   for (const leaf of palette.leaves) {
     Blockly.Blocks[blockType(leaf.type)] = {
       init() {
-        this.appendDummyInput().appendField(leaf.type).appendField(statusField(), STATUS);
+        this.appendDummyInput().appendField(leaf.type).appendField(nameField(leaf.name), NAME)
+          .appendField(statusField(), STATUS);
         for (const port of leaf.ports) {
           portField(this, port.name, `default ${port.value ?? port.default}`);
         }
@@ -119,11 +129,9 @@ export function treeOf(workspace) {
   const root = workspace.getBlocksByType(ROOT, false)[0];
   const tops = root ? chain(root.getInputTargetBlock("ROOT")) : [];
   const order = [];
-  const names = new Set(); // a copied block keeps its name: the copy goes without
   const visit = (block) => {
     order.push(block);
-    const name = block.data && !names.has(block.data) ? block.data : null;
-    if (name) names.add(name);
+    const name = block.getFieldValue(NAME).trim() || null;
     const ports = {};
     for (const input of block.inputList) {
       for (const field of input.fieldRow) {
@@ -145,8 +153,8 @@ export function treeOf(workspace) {
 function stateOf(node) {
   const fields = {};
   for (const [key, value] of Object.entries(node.ports || {})) fields[`P_${key}`] = value;
+  if (node.name) fields[NAME] = node.name;
   const state = { type: blockType(node.type), fields };
-  if (node.name) state.data = node.name;
   const kids = node.children || [];
   if (kids.length) state.inputs = { CHILDREN: { block: stackOf(kids) } };
   return state;
@@ -156,6 +164,26 @@ function stackOf(nodes) {
   const states = nodes.map(stateOf);
   for (let i = states.length - 2; i >= 0; i--) states[i].next = { block: states[i + 1] };
   return states[0];
+}
+
+/** Give each of the blocks ``ids`` that shares its name with another block of
+ * ``workspace`` a name of its own, as the file loader names unnamed nodes (``base_2``,
+ * ``base_3``, ...): a new block starts with its type's name, a copy with its original's. */
+export function uniqueNames(workspace, ids) {
+  const fresh = new Set(ids);
+  const taken = new Set();
+  for (const block of workspace.getAllBlocks(false)) {
+    if (!fresh.has(block.id) && block.getField(NAME)) taken.add(block.getFieldValue(NAME));
+  }
+  for (const id of ids) {
+    const block = workspace.getBlockById(id);
+    if (!block || !block.getField(NAME)) continue;
+    const base = block.getFieldValue(NAME).replace(/_\d+$/, "") || block.type.slice(3);
+    let name = block.getFieldValue(NAME);
+    for (let n = 2; taken.has(name); n++) name = `${base}_${n}`;
+    if (name !== block.getFieldValue(NAME)) block.setFieldValue(name, NAME);
+    taken.add(name);
+  }
 }
 
 /** Replace the workspace with the root block holding ``tree`` (null: empty). */

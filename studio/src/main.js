@@ -2,15 +2,22 @@
 // followed drone's tree. Talks to the server of pyautonomousagent.studio (JSON over HTTP).
 import * as Blockly from "blockly/core";
 import * as En from "blockly/msg/en";
-import { ROOT, defineBlocks, loadTree, showStatus, toolbox, treeOf } from "./blocks.js";
-import { agentPixel, drawPlot, drawWorld, nearestAgent } from "./world.js";
+import {
+  NAME, ROOT, defineBlocks, loadTree, showStatus, toolbox, treeOf, uniqueNames,
+} from "./blocks.js";
+import {
+  agentPixel, drawMeasures, drawPlot, drawWorld, nearestAgent, worldPixel,
+} from "./world.js";
 
 Blockly.setLocale(En);
 
 const $ = (id) => document.getElementById(id);
-const FRAME_MS = 40; // 25 frames per second while playing, at most
+const FRAME_MS = 1000 / 40; // 40 frames per second while playing, at most
+const PANELS_MS = 200; // plots, node list and blocks' labels: 5 times a second while playing
 const IDLE_MS = 300;
-const state = { info: null, ok: false, follow: null, frame: null, playing: false, created: [] };
+const state = {
+  info: null, ok: false, follow: null, frame: null, playing: false, created: [], top: 1, drawing: null,
+};
 
 async function api(path, body, raw) {
   const options = body === undefined ? {} : {
@@ -32,9 +39,19 @@ function say(text, kind) {
 
 function setRunnable(ok) {
   state.ok = ok;
-  for (const id of ["play", "step", "reset", "save-run", "save-xml", "save-yaml"]) {
-    $(id).disabled = !ok;
-  }
+  showButtons();
+}
+
+// Play and Step need a tree that can run and a run of it (not one whose tree or parameters
+// changed since it began: then Reset is offered); Reset and saving need a tree that can run.
+function showButtons() {
+  const stale = Boolean(state.stale);
+  for (const id of ["reset", "save-run", "save-xml", "save-yaml"]) $(id).disabled = !state.ok;
+  for (const id of ["play", "step"]) $(id).disabled = !state.ok || stale;
+  $("reset").classList.toggle("offer", stale && state.ok);
+  setText($("offer"), !stale ? ""
+    : state.ok ? `${state.stale}: Reset runs the new one from iteration 0`
+      : `${state.stale}; the tree cannot run yet`);
 }
 
 // --- the tree -------------------------------------------------------------------------
@@ -47,6 +64,9 @@ async function checkTree() {
   state.checking = true;
   try {
     await checkNow();
+    await pollOnce(); // the run may now be one of another tree: Reset is offered
+  } catch (error) {
+    say(error.message, "error");
   } finally {
     state.checking = false;
   }
@@ -82,6 +102,18 @@ function scheduleCheck() {
   checkTimer = setTimeout(checkTree, 250);
 }
 
+// A new block starts with its type's name, a copy with its original's; where that name is
+// taken, it gets the next free one (in the same undo step as the block's creation).
+function named(event) {
+  const group = Blockly.Events.getGroup();
+  Blockly.Events.setGroup(event.group || group);
+  try {
+    uniqueNames(workspace, event.ids);
+  } finally {
+    Blockly.Events.setGroup(group);
+  }
+}
+
 function startEditor(info) {
   defineBlocks(info.palette);
   workspace = Blockly.inject($("blockly"), {
@@ -93,18 +125,29 @@ function startEditor(info) {
     zoom: { controls: true, startScale: 0.8 },
   });
   workspace.addChangeListener((event) => {
-    if (event.type === Blockly.Events.BLOCK_CREATE) state.created.push(...event.ids);
-    if (!event.isUiEvent) scheduleCheck();
+    if (event.type === Blockly.Events.BLOCK_CREATE) {
+      state.created.push(...event.ids);
+      named(event);
+    }
+    if (!event.isUiEvent) {
+      state.blocks = null; // the blocks in tree order, found again on the next frame
+      scheduleCheck();
+    }
   });
-  loadTree(workspace, info.tree);
+  openTree(info.tree);
+}
+
+// Replace the canvas with ``tree`` (null: empty) and check it.
+function openTree(tree) {
+  loadTree(workspace, tree);
+  state.blocks = null;
   scheduleCheck();
 }
 
 async function upload(file) {
   try {
     const data = await api(`/api/upload?name=${encodeURIComponent(file.name)}`, file, true);
-    loadTree(workspace, data.tree);
-    scheduleCheck();
+    openTree(data.tree);
   } catch (error) {
     say(error.message, "error");
   }
@@ -145,10 +188,15 @@ function readSettings() {
 
 async function applySettings() {
   try {
-    await api("/api/settings", readSettings());
+    const result = await api("/api/settings", readSettings());
     await checkTree();
-    if (state.ok) await control("reset");
-    say("settings applied; the run is reset", "ok");
+    if (result.stale) {
+      say("settings applied: Reset runs them from iteration 0", "ok");
+    } else {
+      if (state.ok) await control("reset");
+      say("settings applied; the run is reset", "ok");
+    }
+    await pollOnce();
   } catch (error) {
     say(error.message, "error");
   }
@@ -166,34 +214,61 @@ async function control(action, extra) {
   }
 }
 
+// The node list under the map: its rows are made when the run's tree changes (names as
+// text, never as markup), then only the statuses and counts that changed are written.
 function showNodes(frame) {
   const box = $("nodes");
   const follow = frame.follow;
-  $("follow").textContent = follow
+  const nodes = frame.nodes || [];
+  setText($("follow"), follow
     ? `following ${follow.agent}${follow.statuses ? "" : " (not traced)"}`
-    : "Click a drone to follow it; the numbers are how many agents have each node active.";
-  const rows = (frame.nodes || []).map((node, i) => {
+    : "Click a drone to follow it; the numbers are how many agents have each node active.");
+  const key = nodes.map((node) => `${node.depth} ${node.name}`).join("\n");
+  if (state.nodesKey !== key) {
+    state.nodesKey = key;
+    box.replaceChildren(...nodes.map((node, i) => nodeRow(node, i)));
+  }
+  const rows = box.children;
+  for (let i = 0; i < nodes.length; i++) {
     const status = follow && follow.statuses ? follow.statuses[i] : "invalid";
-    const active = frame.active ? frame.active[i] : 0;
-    return `<div data-node="${i}" data-status="${status}"><span class="st ${status}"></span>` +
-      `${"&nbsp;&nbsp;".repeat(node.depth)}${node.name} <b>${active}</b></div>`;
-  });
-  box.innerHTML = rows.join("");
+    const row = rows[i];
+    if (row.dataset.status !== status) {
+      row.dataset.status = status;
+      row.firstChild.className = `st ${status}`;
+    }
+    setText(row.lastChild, String(frame.active ? frame.active[i] : 0));
+  }
   const board = follow && follow.blackboard ? Object.entries(follow.blackboard) : [];
-  $("blackboard").textContent = board.length
+  setText($("blackboard"), board.length
     ? `blackboard of ${follow.agent}: ` + board.map(([k, v]) => `${k} = ${typeof v === "number" ? +v.toFixed(3) : v}`).join(", ")
-    : "";
-  colourBlocks(frame);
+    : "");
+}
+
+function nodeRow(node, i) {
+  const row = document.createElement("div");
+  row.dataset.node = String(i);
+  row.dataset.status = "invalid";
+  const mark = document.createElement("span");
+  mark.className = "st invalid";
+  const count = document.createElement("b");
+  row.append(mark, `${"\u00a0\u00a0".repeat(node.depth)}${node.name} `, count);
+  return row;
+}
+
+function setText(element, text) {
+  if (element.textContent !== text) element.textContent = text;
 }
 
 // The blocks show the followed agent's statuses and the active counts while the run's tree
-// is the one on the canvas (an edit resets the run).
+// is the one on the canvas (an edit resets the run); a changed label makes Blockly lay its
+// block out again.
 function colourBlocks(frame) {
-  const { blocks } = treeOf(workspace);
+  if (!state.blocks) state.blocks = treeOf(workspace).blocks;
+  const blocks = state.blocks;
   const nodes = frame.nodes || [];
   const follow = frame.follow && frame.follow.statuses;
   blocks.forEach((block, i) => {
-    if (nodes.length === blocks.length) {
+    if (nodes.length === blocks.length && !frame.stale) {
       showStatus(block, follow ? follow[i] : "invalid", frame.active ? frame.active[i] : 0);
     } else {
       showStatus(block, "invalid", 0);
@@ -201,41 +276,110 @@ function colourBlocks(frame) {
   });
 }
 
-// The live plot's series: per iteration seen, the swarm's mean and lowest energy.
+// The live plots' series: per iteration seen, the swarm's mean and lowest energy and the
+// scenario's measures so far (alerts, collisions, messages: what it reports).
 function record(frame) {
-  if (!frame.energy || !frame.energy.length) return;
+  if (!frame.world) return; // no run yet
   const series = state.series || (state.series = []);
-  if (series.length && frame.iteration < series[series.length - 1].iteration) series.length = 0;
+  if (series.length && frame.iteration < series[series.length - 1].iteration) {
+    series.length = 0;
+    state.top = 1;
+  }
   if (series.length && frame.iteration === series[series.length - 1].iteration) return;
-  const values = frame.energy;
-  const mean = values.reduce((a, b) => a + b, 0) / values.length;
-  series.push({ iteration: frame.iteration, mean, low: Math.min(...values) });
+  const point = { iteration: frame.iteration, ...(frame.measures || {}) };
+  if (frame.energy) {
+    point.mean = frame.energy.mean;
+    point.low = frame.energy.low;
+  }
+  for (const z of frame.altitude || []) if (z > state.top) state.top = z;
+  series.push(point);
 }
 
-async function pollOnce() {
-  const query = state.follow === null ? "" : `?follow=${state.follow}`;
-  const frame = await api(`/api/frame${query}`);
+// Milliseconds spent per part of the frames drawn so far (for scripts/studio_frames.py).
+const profile = { frames: 0, new: 0, fetch: 0, world: 0, plots: 0, nodes: 0, blocks: 0 };
+
+// A request for the current frame: {seq, follow, promise}. While playing (``after``: the
+// iteration last received) the server answers once the run has moved past it.
+let requests = 0;
+
+function requestFrame(after) {
+  const query = new URLSearchParams();
+  if (state.follow !== null) query.set("follow", state.follow);
+  if (after !== undefined) query.set("after", after);
+  const promise = api(`/api/frame?${query}`);
+  promise.catch(() => {}); // a prefetched frame's error is reported when it is awaited
+  requests += 1;
+  return { seq: requests, follow: state.follow, promise };
+}
+
+// Draw one frame; an answer older than the one drawn, or for another followed drone, is
+// dropped.
+function show(request, frame) {
+  if (request.seq < (state.shownSeq || 0) || request.follow !== state.follow) return;
+  state.shownSeq = request.seq;
+  let t = performance.now();
+  const lap = (part) => {
+    const now = performance.now();
+    profile[part] += now - t;
+    t = now;
+  };
+  if (!state.frame || frame.iteration !== state.frame.iteration) profile.new += 1;
   state.frame = frame;
   state.drawn = (state.drawn || 0) + 1;
   state.playing = frame.playing;
-  $("iteration").textContent = `iteration ${frame.iteration} of ${frame.iterations ?? "?"}`;
-  drawWorld($("world"), frame, state.info.marks, state.follow);
+  if ((frame.stale || "") !== (state.stale || "")) {
+    state.stale = frame.stale || "";
+    showButtons();
+  }
   record(frame);
+  const drawing = drawWorld($("world"), frame, state.info.marks, state.follow, state.top);
+  lap("world");
+  state.drawing = drawing && { ...drawing, measures: state.legend };
+  profile.frames += 1;
+  // The iteration, plots, node list and blocks' labels: at most every PANELS_MS while playing
+  // (the page's layout and painting cost more than the map's), on every frame otherwise.
+  const now = performance.now();
+  if (frame.playing && now - (state.panelsAt || 0) < PANELS_MS) return;
+  state.panelsAt = now;
+  setText($("iteration"), `iteration ${frame.iteration} of ${frame.iterations ?? "?"}`);
   drawPlot($("plot"), state.series, frame.iterations || 1);
+  const names = Object.keys(frame.measures || {});
+  state.legend = drawMeasures($("measures"), state.series, names, frame.iterations || 1);
+  state.drawing = drawing && { ...drawing, measures: state.legend };
+  lap("plots");
   showNodes(frame);
+  lap("nodes");
+  colourBlocks(frame);
+  lap("blocks");
 }
 
-// One request in flight at a time: a frame that arrives late replaces the one before, so
-// frames are dropped, never queued.
+// The current frame, now (after a button or a click).
+async function pollOnce() {
+  const request = requestFrame();
+  show(request, await request.promise);
+}
+
+// One request in flight at a time: while playing, the next frame is asked for as soon as
+// one arrives, and drawn once this one is (so the server's wait for the run and the page's
+// drawing overlap); a frame that arrives late replaces the one before: frames are dropped,
+// never queued. At most one frame per FRAME_MS while playing, one per IDLE_MS otherwise.
 async function pollLoop() {
-  const start = performance.now();
-  try {
-    await pollOnce();
-  } catch (error) {
-    say(error.message, "error");
+  let next = null;
+  for (;;) {
+    const start = performance.now();
+    const request = next || requestFrame();
+    next = null;
+    try {
+      const frame = await request.promise;
+      profile.fetch += performance.now() - start;
+      if (frame.playing && request.follow === state.follow) next = requestFrame(frame.iteration);
+      show(request, frame);
+    } catch (error) {
+      say(error.message, "error");
+    }
+    const period = state.playing ? FRAME_MS : IDLE_MS;
+    await new Promise((ok) => setTimeout(ok, Math.max(0, period - (performance.now() - start))));
   }
-  const period = state.playing ? FRAME_MS : IDLE_MS;
-  setTimeout(pollLoop, Math.max(0, period - (performance.now() - start)));
 }
 
 async function saveTree(format) {
@@ -258,8 +402,8 @@ async function saveRun() {
 }
 
 function wire() {
-  $("start-scenario").onclick = () => { loadTree(workspace, state.info.tree); scheduleCheck(); };
-  $("start-empty").onclick = () => { loadTree(workspace, null); scheduleCheck(); };
+  $("start-scenario").onclick = () => openTree(state.info.tree);
+  $("start-empty").onclick = () => openTree(null);
   $("upload").onchange = (event) => event.target.files[0] && upload(event.target.files[0]);
   $("save-xml").onclick = () => saveTree("xml");
   $("save-yaml").onclick = () => saveTree("yaml");
@@ -317,6 +461,19 @@ function testHooks() {
       return { x: p.x, y: p.y };
     },
     tree: () => treeOf(workspace).tree,
+    // The middle of a block's name field, on the screen (a click there edits the name).
+    nameField(id) {
+      Blockly.renderManagement.triggerQueuedRenders(workspace);
+      const box = workspace.getBlockById(id).getField(NAME).getSvgRoot().getBoundingClientRect();
+      return { x: box.left + box.width / 2, y: box.top + box.height / 2 };
+    },
+    name: (id) => workspace.getBlockById(id).getFieldValue(NAME),
+    // A point on a block's type label, on the screen (a click there selects the block).
+    blockPoint(id) {
+      Blockly.renderManagement.triggerQueuedRenders(workspace);
+      const box = workspace.getBlockById(id).getSvgRoot().getBoundingClientRect();
+      return { x: box.left + 8, y: box.top + 8 };
+    },
     agentPoint(i) {
       const canvas = $("world");
       const p = agentPixel(canvas, state.frame, i);
@@ -324,7 +481,16 @@ function testHooks() {
       return { x: box.left + p.x * (box.width / canvas.width), y: box.top + p.y * (box.height / canvas.height) };
     },
     iteration: () => state.frame && state.frame.iteration,
+    // What the last frame drew: drones, event diamonds, message lines, banner, measures.
+    drawing: () => state.drawing,
+    // The colour drawn at world point (x, y) of the map, as [r, g, b, a].
+    pixel(x, y) {
+      const canvas = $("world");
+      const p = worldPixel(canvas, state.frame, x, y);
+      return [...canvas.getContext("2d").getImageData(Math.round(p.x), Math.round(p.y), 1, 1).data];
+    },
     framesDrawn: () => state.drawn || 0,
+    profile: () => ({ ...profile }),
     openCategory() {
       const toolbox = workspace.getToolbox();
       return toolbox.getFlyout().isVisible() ? toolbox.getSelectedItem()?.getId() : null;
@@ -334,6 +500,7 @@ function testHooks() {
       return icon ? icon.getText() : null;
     },
     runnable: () => state.ok,
+    offer: () => $("offer").textContent,
     // Whether a check of the tree is pending or under way (it may move blocks: warnings).
     busy: () => checkTimer !== null || state.checking,
   };

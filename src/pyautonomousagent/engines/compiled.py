@@ -54,6 +54,7 @@ from pyautonomousagent.engines.compiled_source import (
 from pyautonomousagent.kernels import LeafKernel, Sends, SensorKernel
 from pyautonomousagent.models.drone2d import Drone2D
 from pyautonomousagent.models.drone3d import Drone3D
+from pyautonomousagent.record_blocks import RecordBlock
 from pyautonomousagent.registry import UnknownNameError
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
@@ -61,7 +62,7 @@ from pyautonomousagent.world import World
 if TYPE_CHECKING:
     from pyautonomousagent.datalink import Datalink, Delivery
     from pyautonomousagent.recording import Recorder
-    from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.simulation.engine_api import LoopView
 
 
 #: Most nodes of a tree the compiled engine takes. Its generated source grows with the square
@@ -217,6 +218,7 @@ class CompiledEngine:
         self._constants: tuple[np.ndarray, np.ndarray] = Constants().arrays()
         self._inboxes: list[tuple[np.ndarray, np.ndarray]] | None = None
         self._no_climb = np.zeros(0)  # the fused loop's u_w argument for the 2-D drone
+        self._blocks: RecordBlock | None = None  # where the fused loop writes its records
 
     def _sends(self, node: int) -> Sends:
         sends = self.kernels[node].sends
@@ -256,13 +258,15 @@ class CompiledEngine:
                 data = {f: box[3 + j, rows] for j, f in enumerate(sends.fields)}
                 datalink.send(rows, sends.type, data, (box[1, rows], box[2, rows]))
 
-    def prepare(self, sim: Simulation) -> None:
-        """Compile (or load from numba's cache) what this run will call, before its loop;
-        mark a fused loop compiled (see :meth:`ready`). Its seconds go to
-        ``sim.timings["compile"]``; on the ``pyautonomousagent.compile`` logger (INFO, which
-        ``pyaa run`` shows) a line before a fused loop is compiled for the first time on this
-        machine, and one saying how long it took where that was :data:`SAY_COMPILE_SECONDS`
-        or more."""
+    def prepare(self, sim: LoopView) -> None:
+        """Compile (or load from numba's cache) what this run will call, before its loop:
+        the fused loop's serial and parallel functions both (:meth:`variants`), so that a
+        later run of any swarm size or length finds them compiled; mark them compiled (see
+        :meth:`ready`). Its seconds go to ``sim.timings["compile"]``; on the
+        ``pyautonomousagent.compile`` logger (INFO, which ``pyaa run`` and ``pyaa sweep``
+        show) a line before a fused loop is compiled for the first time on this machine,
+        and one saying how long it took where that was :data:`SAY_COMPILE_SECONDS` or
+        more."""
         began = time.perf_counter()
         fused = self._fusable(sim)
         if fused is None:
@@ -270,16 +274,19 @@ class CompiledEngine:
         else:
             marker = self._marker(sim, fused)
             if not marker.exists():
-                compile_log.info("compiling this tree's fused loop for the compiled engine "
-                                 "(once on this machine: numba's cache keeps it) ...")  # fmt: skip
-            self.loop(sim, 0, typical=min(sim.scenario.iterations, 500))
+                compile_log.info("compiling this tree's fused loop for the compiled engine, "
+                                 "serial and parallel (once on this machine: numba's cache "
+                                 "keeps it) ...")  # fmt: skip
+            for name in self.variants(fused):
+                self._call(sim, fused, 0, name)
+            marker.parent.mkdir(parents=True, exist_ok=True)  # (a module loaded before it)
             marker.touch()
         seconds = sim.timings["compile"] = time.perf_counter() - began
         if seconds >= SAY_COMPILE_SECONDS:
             compile_log.info("compiled engine: compiling (or loading) the tree's code took "
                              "%.1f s", seconds)  # fmt: skip
 
-    def sync(self, sim: Simulation) -> None:
+    def sync(self, sim: LoopView) -> None:
         """Nothing to finish: :meth:`loop` returns with its records and state written."""
 
     def _compile_tick(self, code: ModuleType) -> None:
@@ -292,17 +299,17 @@ class CompiledEngine:
                      *self._constants, *self.arrays)  # fmt: skip
         code.tick.compile(tuple(numba.typeof(a) for a in arguments))
 
-    def ready(self, sim: Simulation) -> bool:
+    def ready(self, sim: LoopView) -> bool:
         """Whether ``sim`` runs fused and :meth:`prepare` compiled that loop before on this
         machine (numba's cache holds it: set-up takes well under a second)."""
         fused = self._fusable(sim)
         return fused is not None and self._marker(sim, fused).exists()
 
-    def fuses(self, sim: Simulation) -> bool:
+    def fuses(self, sim: LoopView) -> bool:
         """Whether :meth:`loop` can run ``sim``'s iterations (from its start)."""
         return self._fusable(sim) is not None
 
-    def why_not_fused(self, sim: Simulation) -> str:
+    def why_not_fused(self, sim: LoopView) -> str:
         """Why :meth:`loop` cannot run ``sim``'s iterations from its start (then each
         iteration runs Phases 2 and 4-6 in NumPy and ticks the compiled tree), or ""."""
         if self._fusable(sim) is not None:
@@ -315,69 +322,108 @@ class CompiledEngine:
             return "a message type the tree sends has no compiled handler"
         return "the C library's sin/cos do not give NumPy's bits on this CPU"
 
-    def _marker(self, sim: Simulation, fused: Fused) -> Path:
-        """The file saying that the fused function ``sim``'s loop calls is in numba's cache."""
-        function = self._function(fused, min(sim.scenario.iterations, 500))
-        return cache_folder() / f"{module_name(self._source(fused)[0])}.{function}.compiled"
+    def _marker(self, sim: LoopView, fused: Fused) -> Path:
+        """The file saying that the fused functions ``sim``'s loop calls (serial and
+        parallel: :meth:`variants`) are in numba's cache."""
+        kind = self.variants(fused)[0].removesuffix("_serial")
+        return cache_folder() / f"{module_name(self._source(fused)[0])}.{kind}.compiled"
+
+    def variants(self, fused: Fused) -> tuple[str, str]:
+        """The fused functions of ``fused``'s kind, serial then parallel: which one a call
+        runs depends on the swarm's size and the iterations (:meth:`_function`)."""
+        if fused.messaging is not None or fused.sensors.swarm is not None:
+            kind = "messages" if fused.messaging is not None else "swarm"
+            return f"block_{kind}_serial", f"block_{kind}_parallel"
+        return "block_serial", "block_parallel"
 
     def _function(self, fused: Fused, iterations: int) -> str:
         """The fused function a call of ``iterations`` iterations runs: the parallel one
         where it pays for starting the threads (once a call without messages, three times
         an iteration with them)."""
+        serial, parallel = self.variants(fused)
         if fused.messaging is not None or fused.sensors.swarm is not None:
-            kind = "messages" if fused.messaging is not None else "swarm"
-            parallel = self.swarm.size >= PARALLEL_AGENTS
-            return f"block_{kind}_parallel" if parallel else f"block_{kind}_serial"
-        return "block_parallel" if iterations * self.swarm.size >= PARALLEL else "block_serial"
+            return parallel if self.swarm.size >= PARALLEL_AGENTS else serial
+        return parallel if iterations * self.swarm.size >= PARALLEL else serial
 
     def node_statuses(self) -> np.ndarray:
         """Status codes after the last tick, shape (nodes in tick order, N), int8."""
         return self.status.copy()
 
-    def loop(self, sim: Simulation, count: int, typical: int | None = None) -> int:
+    def loop(self, sim: LoopView, count: int, typical: int | None = None) -> int:
         """Run up to ``count`` whole iterations in compiled code; return how many were run:
         0 where this run cannot be fused now (then call ``sim.step()``). Phases 2-6 of
         each, except the last one's Phase 5: its messages wait on the datalink's channel,
-        for the caller to deliver. ``typical``: pick the compiled function as for that many
-        iterations (``count`` 0 compiles it and runs nothing)."""
+        for the caller to deliver. Fewer iterations where their records would not fit in
+        the record block's budget (:class:`~pyautonomousagent.record_blocks.RecordBlock`:
+        the columns the recorder keeps compact are written into its buffers and handed to
+        the recorder after the call). ``typical``: pick the compiled function as for that
+        many iterations (``count`` 0 compiles it and runs nothing)."""
         fused = self._fusable(sim)
         if fused is None:
             return 0
-        recorder, model = sim.recorder, sim.model
+        return self._call(sim, fused, count, self._function(fused, typical or count))
+
+    def _call(self, sim: LoopView, fused: Fused, count: int, function: str) -> int:
+        """:meth:`loop` by the fused function named ``function`` (chosen before the count
+        is cut to the records that fit: a short call runs the function of a long one)."""
+        model = sim.model
         assert isinstance(model, Drone2D | Drone3D)
-        u_climb = model.u_climb if isinstance(model, Drone3D) else self._no_climb
-        code = self._code(fused)
-        traced_at = np.full(self.swarm.size, -1, dtype=np.int64)
-        traced_at[recorder.traced] = np.arange(recorder.traced.size)
-        stopped = np.full(self.swarm.size, -1, dtype=np.int64)
-        p = model.params
-        records = self._records(recorder, count)  # the columns, then the active behaviour
-        arguments = (
-            self.status, self.current, self.pending, *self._constants, *self.arrays,
-            model.u_speed, model.u_heading, u_climb, *records[:-1], recorder.traces,
-            traced_at, records[-1], recorder._leaf_rows.astype(np.int64), stopped,
-            p.max_speed, p.speed_step, p.turn_step, *fused.sensors.state,
-        )  # fmt: skip
-        start, every = sim.world.iteration, recorder.every
-        if fused.messaging is not None:
-            arguments += tuple(self._inbox(sim, fused.messaging))
-        if fused.sensors.swarm is not None:
-            arguments += fused.sensors.swarm.state
-        block = getattr(code, self._function(fused, typical or count))
+        block = getattr(self._code(fused), function)
+        start, every = sim.world.iteration, sim.recorder.every
+        row0 = start // every + 1  # the first record these iterations can write
+        blocks = self._block(sim.recorder)
+        count = blocks.fit(start, count) if count else 0
+        stopped = np.full(self.swarm.size, -1, dtype=np.int64)  # the iteration each stopped at
+        arguments = self._arguments(sim, fused, model, blocks, row0, count, stopped)
         import numba
 
         groups = -(-self.swarm.size // CHUNK)
         share = max(1, groups // (SHARE * numba.get_num_threads()))
         with numba.parallel_chunksize(share):  # a core that others slow down takes less
-            done = block(start, count, every, CHUNK, *arguments)
+            done = block(start, count, every, row0, CHUNK, *arguments)
         if fused.messaging is not None and done:
             sim.inbox = []  # handled in the first iteration
         if done:
+            blocks.hand_over(row0, (start + done) // every - start // every)
             self._after(sim, fused.sensors, start, done, stopped)
             self._send(sim.world.datalink)
         return int(done)
 
-    def _inbox(self, sim: Simulation, messaging: Messaging) -> list[Any]:
+    def _block(self, recorder: Recorder) -> RecordBlock:
+        """The run's record block (made for ``recorder`` once)."""
+        if self._blocks is None or self._blocks.recorder is not recorder:
+            self._blocks = RecordBlock(recorder, self.layout.names)
+        return self._blocks
+
+    def _arguments(
+        self, sim: LoopView, fused: Fused, model: Drone2D | Drone3D, blocks: RecordBlock,
+        row0: int, count: int, stopped: np.ndarray,
+    ) -> tuple[Any, ...]:  # fmt: skip
+        """The fused function's arguments after ``t0, count, every, row0, chunk``: the
+        state, the control signals, the record arrays from record ``row0`` (empty ones for
+        ``count`` 0: compiling only), the parameters, the sensors' state, then the messages'
+        and the swarm sensor's; ``stopped`` (shape (N,), int64, -1) gets the iteration at
+        which each agent is found unable to move."""
+        recorder = sim.recorder
+        u_climb = model.u_climb if isinstance(model, Drone3D) else self._no_climb
+        traced_at = np.full(self.swarm.size, -1, dtype=np.int64)
+        traced_at[recorder.traced] = np.arange(recorder.traced.size)
+        columns, traces, behaviour = blocks.arrays(row0) if count else self._empty(recorder)
+        assert behaviour is not None  # checked by _fusable
+        p = model.params
+        arguments = (
+            self.status, self.current, self.pending, *self._constants, *self.arrays,
+            model.u_speed, model.u_heading, u_climb, *columns, traces,
+            traced_at, behaviour, recorder._leaf_rows.astype(np.int64), stopped,
+            p.max_speed, p.speed_step, p.turn_step, *fused.sensors.state,
+        )  # fmt: skip
+        if fused.messaging is not None:
+            arguments += tuple(self._inbox(sim, fused.messaging))
+        if fused.sensors.swarm is not None:
+            arguments += fused.sensors.swarm.state
+        return arguments
+
+    def _inbox(self, sim: LoopView, messaging: Messaging) -> list[Any]:
         """The arguments of ``block_messages_*`` after the common ones: the datalink's range,
         ``order``, ``counts``, ``lowest``, each type's inbox (senders, data) filled with
         ``sim.inbox`` (deliveries that reached everyone, checked by :meth:`_fusable`), and
@@ -406,7 +452,7 @@ class CompiledEngine:
         lowest = np.zeros(len(types), dtype=np.int64)
         return [sim.world.datalink.range, order, counts, lowest, *inboxes, *state]
 
-    def _messaging(self, sim: Simulation) -> Messaging | None:
+    def _messaging(self, sim: LoopView) -> Messaging | None:
         """The compiled handling of the messages the tree sends, or None where a type sent
         has no compiled handler in ``sim`` (or one that reads a field not sent)."""
         types = tuple(dict.fromkeys(self._sends(i).type for i in self.layout.outboxes))
@@ -426,18 +472,15 @@ class CompiledEngine:
         recorded = tuple(sim.handlers[kind].recorded for kind in types)
         return Messaging(types, tuple(handlers), recorded, senders)
 
-    def _records(self, recorder: Recorder, count: int) -> list[np.ndarray]:
-        """The record arrays the fused loop writes, shape (records, N) each: the recorded
-        columns in layout order, then the active behaviour. For ``count`` 0 (compiling only)
-        empty ones of the same types, so that compiling does not make the recorder store
-        columns it keeps as one value while agents are alike (``RecordedColumns``)."""
-        if count:
-            assert recorder.behaviour is not None  # checked by _fusable
-            return [*(recorder.columns[k] for k in self.layout.names), recorder.behaviour]
-        dtypes = [*(recorder.columns.dtypes[k] for k in self.layout.names), np.dtype(np.int16)]
-        return [np.empty((0, self.swarm.size), dtype) for dtype in dtypes]
+    def _empty(self, recorder: Recorder) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
+        """Empty record arrays of the types the fused loop writes (the columns in layout
+        order, the traces, the active behaviour), for compiling only: the recorder stores
+        nothing (columns it keeps compact stay so: ``RecordedColumns``)."""
+        n = self.swarm.size
+        columns = [np.empty((0, n), recorder.columns.dtypes[k]) for k in self.layout.names]
+        return columns, recorder.traces[:0], np.empty((0, n), np.int16)
 
-    def _fusable(self, sim: Simulation) -> Fused | None:
+    def _fusable(self, sim: LoopView) -> Fused | None:
         """What :meth:`loop` calls where it can run ``sim`` now, else None: the mission's
         compiled sensors and the 2-D or 3-D drone; a tree that sends nothing with no message in
         flight, or one whose messages have compiled handlers, the messages in flight having
@@ -474,7 +517,7 @@ class CompiledEngine:
 
     @staticmethod
     def _after(
-        sim: Simulation, sensors: SensorKernel, start: int, count: int, stopped: np.ndarray
+        sim: LoopView, sensors: SensorKernel, start: int, count: int, stopped: np.ndarray
     ) -> None:
         """The bookkeeping of a fused run: the sensors' alerts and what the swarm sensor
         kept, in order of iteration (an iteration's alerts first, as Phase 2 raises them),

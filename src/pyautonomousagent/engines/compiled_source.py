@@ -322,11 +322,13 @@ def block_function(
     sensors: SensorKernel,
     parallel: bool,
 ) -> str:
-    """``block_serial``/``block_parallel(t0, count, every, chunk, st, cur, pend, kf, ki, arrays...,
-    us, uh, uc, records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
+    """``block_serial``/``block_parallel(t0, count, every, row0, chunk, st, cur, pend, kf, ki,
+    arrays..., us, uh, uc, records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
     max_speed, speed_step, turn_step, sensor state...) -> count``: iterations ``t0 + 1 ..
     t0 + count`` of Phases 2 (sensors, motion), 3, 4 and 6 for every agent, ``chunk`` agents
-    at a time (no agent hears another: the tree sends no message). ``us``, ``uh``, ``uc``: the
+    at a time (no agent hears another: the tree sends no message); the record of iteration
+    ``t`` goes to row ``t // every - row0`` of the record arrays (a block of record rows,
+    :mod:`~pyautonomousagent.record_blocks`). ``us``, ``uh``, ``uc``: the
     control signals u_v, u_a and (3-D drone) u_w, shape (N,)."""
     store = "\n".join(
         f"                r{j}[row, first:last] = c{j}[first:last]"
@@ -335,7 +337,7 @@ def block_function(
     name = "block_parallel" if parallel else "block_serial"
     return f"""
 @njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
-def {name}(t0, count, every, chunk, {fused_arguments(layout, sensors)}):
+def {name}(t0, count, every, row0, chunk, {fused_arguments(layout, sensors)}):
     n = {layout.array("x")}.shape[0]
     for group in prange((n + chunk - 1) // chunk):
         first = group * chunk
@@ -346,7 +348,7 @@ def {name}(t0, count, every, chunk, {fused_arguments(layout, sensors)}):
 {tree_body(program, kernels, layout, " " * 16)}
 {_phase4(kernels, layout, "range(U(first), U(last))", " " * 12)}
             if t % every == 0:  # a contiguous run of each record row, column by column
-                row = t // every
+                row = t // every - row0
 {store}
                 for a in range(U(first), U(last)):
                     record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)
@@ -466,12 +468,13 @@ def stepwise_block_function(
     (``sensors.swarm``, called once an iteration, before the agents' sensors):
 
     ``block_messages_serial``/``block_messages_parallel`` (with messaging) or
-    ``block_swarm_serial``/``block_swarm_parallel`` (without) ``(t0, count, every, chunk, st,
+    ``block_swarm_serial``/``block_swarm_parallel`` (without) ``(t0, count, every, row0, chunk, st,
     cur, pend, kf, ki, arrays..., outboxes..., us, uh, uc, records..., traces, traced_at,
     behaviour, leaf_rows, stopped_at, max_speed, speed_step, turn_step, sensor state...[,
     reach, order, counts, lowest, inboxes..., handler state...][, swarm state...]) ->
     iterations done``:
-    up to ``count`` whole iterations. With messaging, the messages are handled compiled: the
+    up to ``count`` whole iterations, the record of iteration ``t`` in row ``t // every -
+    row0``. With messaging, the messages are handled compiled: the
     inboxes hold the messages to handle in the first iteration (``order``: the types
     delivered, in delivery order, -1 after them; ``counts`` per type); it stops after an
     iteration whose messages do not reach every agent (``reach``: the datalink's range,
@@ -512,7 +515,7 @@ def stepwise_block_function(
     arguments = fused_arguments(layout, sensors) + extra
     return f"""
 @njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
-def {name}(t0, count, every, chunk, {arguments}):
+def {name}(t0, count, every, row0, chunk, {arguments}):
     n = {layout.array("x")}.shape[0]
     groups = (n + chunk - 1) // chunk
     done = 0
@@ -521,7 +524,7 @@ def {name}(t0, count, every, chunk, {arguments}):
 {_groups(sense_and_move, " " * 8)}{handle}
 {_groups(tick_and_control, " " * 8)}
         if t % every == 0:
-            row = t // every
+            row = t // every - row0
 {_groups(record, " " * 12)}
         done += 1{collect}
     return done

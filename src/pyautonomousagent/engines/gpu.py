@@ -60,7 +60,7 @@ from pyautonomousagent.world import World
 if TYPE_CHECKING:
     from pyautonomousagent.datalink import Delivery
     from pyautonomousagent.engines.gpu_messages import DeviceMessages
-    from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.simulation.engine_api import LoopView
 
 #: How to install what the GPU engine needs.
 INSTALL = "pip install 'pyautonomousagent[gpu]' (numba-cuda and CuPy for CUDA 13)"
@@ -248,7 +248,7 @@ class GpuEngine(CompiledEngine):
         self._groups: RecordGroups | None = None
         self.timings = dict.fromkeys(TIMINGS, 0.0)
 
-    def prepare(self, sim: Simulation) -> None:
+    def prepare(self, sim: LoopView) -> None:
         """Compile the kernel before the loop.
 
         Raises:
@@ -338,12 +338,12 @@ class GpuEngine(CompiledEngine):
             "numba": numba.__version__,
         }
 
-    def ready(self, sim: Simulation) -> bool:
+    def ready(self, sim: LoopView) -> bool:
         """False: "auto" picks the GPU engine by the run's size (:func:`auto_takes_gpu`),
         not by what numba's cache holds (``CompiledEngine.ready``)."""
         return False
 
-    def runs(self, sim: Simulation) -> bool:
+    def runs(self, sim: LoopView) -> bool:
         """Whether the kernels can run ``sim``'s iterations from its start (else
         :meth:`prepare` refuses it): a mission with compiled sensors and compiled handlers
         of the messages its tree sends, the 2-D or 3-D drone; a sensor of the whole swarm
@@ -354,7 +354,7 @@ class GpuEngine(CompiledEngine):
         swarm = fused.sensors.swarm
         return swarm is None or (bool(swarm.device) and fused.messaging is None)
 
-    def bytes_per_drone_iteration(self, sim: Simulation) -> float:
+    def bytes_per_drone_iteration(self, sim: LoopView) -> float:
         """Bytes of device memory one drone-iteration moves, counted from the kernel's
         arrays: the drone's state (node statuses, remembered children, columns, blackboard,
         control signals) read and written once an iteration, and its record row (columns,
@@ -370,7 +370,7 @@ class GpuEngine(CompiledEngine):
         state = sum(array.nbytes for array in arrays) / self.swarm.size
         return 2 * state + self._groups.row_bytes / self.swarm.size / sim.recorder.every
 
-    def _state(self, sim: Simulation) -> list[Any]:
+    def _state(self, sim: LoopView) -> list[Any]:
         """The state the kernel reads and writes, in argument order (host arrays)."""
         model = sim.model
         assert isinstance(model, Drone2D | Drone3D)
@@ -378,7 +378,7 @@ class GpuEngine(CompiledEngine):
         return [self.status, self.current, self.pending, *self._kernel_constants, *self.arrays,
                 model.u_speed, model.u_heading, u_climb]  # fmt: skip
 
-    def loop(self, sim: Simulation, count: int, typical: int | None = None) -> int:
+    def loop(self, sim: LoopView, count: int, typical: int | None = None) -> int:
         """:meth:`_loop` with NVVM's FMA contraction off (:func:`no_fma`): a kernel that is
         first launched here with new argument types (a grid or reduction step, e.g. when the
         first message falls in range) is compiled at that launch, and must do the NumPy
@@ -386,7 +386,7 @@ class GpuEngine(CompiledEngine):
         with no_fma():
             return self._loop(sim, count)
 
-    def _loop(self, sim: Simulation, count: int) -> int:
+    def _loop(self, sim: LoopView, count: int) -> int:
         """Run up to ``count`` whole iterations on the device (0 compiles only; fewer where
         their records would not fit in a group, :meth:`RecordGroups.fit`, or where a tree's
         messages must go through the CPU's datalink, a recorded type); return how many ran,
@@ -448,7 +448,7 @@ class GpuEngine(CompiledEngine):
             self._send(sim.world.datalink)  # the last iteration's, for the CPU to deliver
         return done
 
-    def sync(self, sim: Simulation) -> None:
+    def sync(self, sim: LoopView) -> None:
         """Hand the records in flight over to the recorder and copy the state back into the
         swarm's arrays (where a kernel ran since the last sync): at the end of
         ``Simulation.run`` and ``step``, before an iteration stepped on the CPU, and after
@@ -488,7 +488,7 @@ class GpuEngine(CompiledEngine):
             launch(t - 1, 1 if count else 0, every, row0, *arguments, *state)
 
     def _message_loop(
-        self, sim: Simulation, fresh: bool, arguments: tuple[Any, ...], count: int, row0: int
+        self, sim: LoopView, fresh: bool, arguments: tuple[Any, ...], count: int, row0: int
     ) -> int:
         """Up to ``count`` iterations of a tree that sends messages
         (:class:`~pyautonomousagent.engines.gpu_messages.DeviceMessages`), ``sim.inbox``

@@ -49,7 +49,7 @@ from pyautonomousagent.engines.gpu_grid import DeviceGrid
 from pyautonomousagent.engines.gpu_reduce import Workspace, bounding_box, exclusive_scan, shape
 
 if TYPE_CHECKING:
-    from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.simulation.engine_api import LoopView
 
 cuda: Any = numba_cuda  # numba's stubs type cuda.grid poorly
 
@@ -135,7 +135,7 @@ class DeviceMessages:
             if handler.receive is not None and handler.receive.keep is not None:
                 handler.receive.keep(tuple(a.copy_to_host() for a in self.tables[k]))
 
-    def upload_inbox(self, sim: Simulation) -> None:
+    def upload_inbox(self, sim: LoopView) -> None:
         """``sim.inbox`` (last iteration's deliveries, delivered by the CPU) into the inboxes,
         those that reached only some grouped by cell; the agents' positions now are their
         positions at delivery."""
@@ -183,7 +183,7 @@ class DeviceMessages:
             sx, sy = self.inboxes[k][4:]
             grid.group(sx, sy, 0, (0.0, 0.0, 0.0, 0.0), reach)
 
-    def run(self, sim: Simulation, common: tuple[Any, ...], count: int, row0: int) -> int:
+    def run(self, sim: LoopView, common: tuple[Any, ...], count: int, row0: int) -> int:
         """Up to ``count`` iterations from the world's (``common``: the kernels' common
         arguments, ``row0``: the record group's first row); how many were done."""
         start, every, reach = sim.world.iteration, sim.recorder.every, sim.world.datalink.range

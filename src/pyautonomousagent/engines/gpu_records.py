@@ -27,7 +27,9 @@ its listeners, which hand finished records to the Parquet writer's thread
 recorder's count lags it by the groups in flight.
 
 A group holds at most :data:`GROUP_BYTES` on the device (and as much pinned on the host):
-:meth:`RecordGroups.fit` shortens a call to the iterations whose records fit.
+:meth:`RecordGroups.fit` shortens a call to the iterations whose records fit (as the compiled
+engine's :class:`~pyautonomousagent.record_blocks.RecordBlock` does), so the host's memory
+beyond the recorder's records is bounded whatever the run's length.
 """
 
 from __future__ import annotations
@@ -42,18 +44,21 @@ import numpy as np
 
 from pyautonomousagent.engines.compiled import CompiledEngine
 from pyautonomousagent.kernels import SensorKernel
+from pyautonomousagent.record_blocks import RECORD_BLOCK_BYTES, fitting
 from pyautonomousagent.recording import Recorder
 
 if TYPE_CHECKING:
-    from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.simulation.engine_api import LoopView
 
 #: Slots of record rows, used in turn: one being written by a kernel while another is copied.
 SLOTS = 2
 
 #: Bytes of record rows a slot holds at most on the device (and as many pinned on the host):
-#: 1 GiB, so that two slots fit beside 100,000,000 drones' state on an 80 GB card. A call
-#: whose records would need more runs fewer iterations (at least one).
-GROUP_BYTES = 1 << 30
+#: the slots share the fused loops' budget
+#: (:data:`~pyautonomousagent.record_blocks.RECORD_BLOCK_BYTES`), so that the host holds no
+#: more beyond the recorder's records than on the compiled engine.
+#: A call whose records would need more runs fewer iterations (at least one).
+GROUP_BYTES = RECORD_BLOCK_BYTES // SLOTS
 
 
 @dataclass
@@ -146,15 +151,14 @@ class RecordGroups:
     def fit(self, start: int, count: int) -> int:
         """The most iterations, up to ``count``, from iteration ``start`` whose records fit
         in a slot (:attr:`capacity` rows); at least one."""
-        every = self.recorder.every
-        return min(count, (start // every + self.capacity + 1) * every - 1 - start)
+        return fitting(start, count, self.recorder.every, self.capacity)
 
     @property
     def in_flight(self) -> int:
         """Groups launched whose records the recorder does not hold yet."""
         return len(self._flight)
 
-    def slot(self, sim: Simulation) -> Slot:
+    def slot(self, sim: LoopView) -> Slot:
         """The next slot, free: its group handed over first if it is still in flight (the
         host waits for its copy); its ``stopped`` reset and its "began" event recorded on
         :attr:`stream`, for the kernel launched next."""
@@ -209,13 +213,13 @@ class RecordGroups:
         enqueue_s = time.perf_counter() - began
         self._flight.append(Group(slot, start, count, row0, rows, sensors, launch_s, enqueue_s))
 
-    def settle(self, sim: Simulation) -> None:
+    def settle(self, sim: LoopView) -> None:
         """Hand every group in flight over to the recorder, in order (the host waits for
         their copies)."""
         while self._flight:
             self._hand_over(sim, self._flight.popleft())
 
-    def _hand_over(self, sim: Simulation, group: Group) -> None:
+    def _hand_over(self, sim: LoopView, group: Group) -> None:
         """Wait for ``group``'s copy, store its rows in the recorder and do its bookkeeping
         (``CompiledEngine._after``: alerts, the recorder's count, its listeners), the clock
         kept at the engine's iteration."""

@@ -320,7 +320,8 @@ class DaskBackend:
                 n_workers=workers or os.cpu_count() or 1,
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                dashboard_address=None,  # no dashboard; its HTTP server on a free port, not
+                scheduler_kwargs={"dashboard_address": ":0"},  # 8787 (a warning if it is taken)
             )
             self.client = Client(self._cluster)
         else:

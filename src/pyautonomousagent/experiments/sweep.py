@@ -140,6 +140,49 @@ def check(experiment: Experiment, scenario: Any) -> RunData:
     return recorded
 
 
+def compile_once(
+    experiment: Experiment, scenario: Any, runs: int, report: Callable[[str], None]
+) -> float | None:
+    """Compile the tree's fused loop here, once, before the runs go to the workers, where
+    they take the compiled engine: ``engine: compiled``, or ``auto`` where the largest run
+    is faster on the compiled engine than on the batched one (``choose_engine`` with
+    ``compiled_ready``) by enough, over all ``runs``, to pay for the compiling
+    (:data:`~pyautonomousagent.simulation.costs.AUTO_COMPILE_SECONDS`). Each worker then
+    loads it from numba's cache (``auto`` takes it there once it is compiled). Not for a
+    varied tree. ``report`` is told before and how long it took; the seconds, or None
+    where nothing was compiled."""
+    from pyautonomousagent.engines.compiled import CompiledEngine
+    from pyautonomousagent.simulation import Simulation
+    from pyautonomousagent.simulation.costs import AUTO_COMPILE_SECONDS, run_costs
+    from pyautonomousagent.simulation.run import choose_engine, recorded_columns
+
+    if experiment.engine not in ("auto", "compiled") or "tree" in experiment.parameters:
+        return None
+    tree = scenario_tree(scenario)
+    if experiment.engine == "auto":
+        points = experiment.points()
+        agents = max(int(p.get("agents", scenario.agents)) for p in points)
+        iterations = max(int(p.get("iterations", scenario.iterations)) for p in points)
+        every = experiment.record_every
+        columns = recorded_columns(scenario.create_mission(), tree)
+        if choose_engine(tree, agents, iterations, every, columns, True) != "compiled":
+            return None
+        costs = run_costs(agents, iterations, every, columns, compiled_ready=True)
+        if runs * (costs["batched"].seconds - costs["compiled"].seconds) < AUTO_COMPILE_SECONDS:
+            return None
+    report("compiling (or loading) the tree's loop for the compiled engine once, before the "
+           "runs go to the workers ...")  # fmt: skip
+    began = time.perf_counter()
+    probe = scenario.with_overrides(agents=1, iterations=1)
+    sim = Simulation.create(probe, seed=0, engine="compiled", tree=tree)
+    seconds = time.perf_counter() - began
+    why = sim.engine.why_not_fused(sim) if isinstance(sim.engine, CompiledEngine) else ""
+    if why:
+        report(f"the compiled engine ticks the tree only, not whole iterations: {why}")
+    report(f"compiled engine: compiling (or loading) the tree's code took {seconds:.1f} s")
+    return seconds
+
+
 def _check_tree(name: str, value: Any, experiment: str) -> None:
     """A varied tree file must exist (it is read on the worker, relative to its folder)."""
     from pyautonomousagent.bt.files import is_tree_file
@@ -225,8 +268,9 @@ def sweep(
     out = Path(out)
     scenario = base_scenario(experiment)
     experiment = for_scenario(experiment, scenario)  # a design's int parameters stay int
-    probe = check(experiment, scenario)
     runs = experiment.runs()
+    compile_once(experiment, scenario, len(runs), report or _ignore)
+    probe = check(experiment, scenario)
     previous = _previous_manifest(out, experiment, resume)
     points = experiment.points()
     types, docs = parameter_columns(scenario)

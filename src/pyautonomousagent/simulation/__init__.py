@@ -10,6 +10,7 @@ from pyautonomousagent.simulation.mission import (
 from pyautonomousagent.simulation.params import Param, ScenarioError, Values
 from pyautonomousagent.simulation.run import ENGINES, Simulation
 from pyautonomousagent.simulation.scenario import Scenario
+from pyautonomousagent.simulation.view import SimulationView
 
 __all__ = [
     "ENGINES",
@@ -20,6 +21,7 @@ __all__ = [
     "Scenario",
     "ScenarioError",
     "Simulation",
+    "SimulationView",
     "Values",
     "WorldObject",
     "register_mission",

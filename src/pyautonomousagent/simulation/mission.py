@@ -44,8 +44,8 @@ from pyautonomousagent.world import World
 
 if TYPE_CHECKING:
     from pyautonomousagent.recording import Recorder
-    from pyautonomousagent.simulation.run import Simulation
-    from pyautonomousagent.simulation.scenario import Scenario
+    from pyautonomousagent.simulation.scenario_view import ScenarioView
+    from pyautonomousagent.simulation.view import SimulationView
 
 _REQUIRED = object()
 
@@ -89,7 +89,7 @@ class MessageType:
     """
 
     name: str
-    handle: Callable[[Simulation, Delivery], None] | None
+    handle: Callable[[SimulationView, Delivery], None] | None
     recorded: bool = False
     doc: str = ""
     kernel: HandlerKernel | None = None
@@ -128,17 +128,17 @@ class Mission:
     columns: ClassVar[Mapping[str, Any]] = {}
     meanings: ClassVar[Mapping[str, tuple[str, str]]] = {}
 
-    def __init__(self, scenario: Scenario) -> None:
+    def __init__(self, scenario: ScenarioView) -> None:
         self.scenario = scenario
         self.params = scenario.parameters
 
     @classmethod
-    def check(cls, scenario: Scenario, reader: Reader) -> None:
+    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
         """Checks across fields, after each field was read (e.g. a named agent exists);
         raise ``reader.fail(...)``. Nothing by default."""
 
     @classmethod
-    def world_for(cls, scenario: Scenario, agents: int) -> Point:
+    def world_for(cls, scenario: ScenarioView, agents: int) -> Point:
         """The world (width, height), world units, that a run of ``scenario`` with ``agents``
         agents needs: the scenario's own by default; a mission whose layout grows with the
         swarm gives a larger one where the scenario's is too small (``pyaa bench`` runs
@@ -152,7 +152,7 @@ class Mission:
     def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
         """Phase 1: initial state and blackboard values (arrays are zero before)."""
 
-    def sense(self, sim: Simulation) -> np.ndarray | None:
+    def sense(self, sim: SimulationView) -> np.ndarray | None:
         """Phase 2: read the sensors into the swarm's columns.
 
         Returns:
@@ -160,7 +160,7 @@ class Mission:
         """
         return None
 
-    def compiled_sensors(self, sim: Simulation) -> SensorKernel | None:
+    def compiled_sensors(self, sim: SimulationView) -> SensorKernel | None:
         """Phase 2's :meth:`sense` for one agent, for the compiled engine; None where the
         sensors have no compiled form (the engine then calls :meth:`sense` every iteration).
         A mission that keeps the default :meth:`sense` senses nothing, which compiles."""

@@ -30,7 +30,7 @@ from pyautonomousagent.simulation.params import Param, Reader, ScenarioError
 from pyautonomousagent.state import Swarm
 
 if TYPE_CHECKING:
-    from pyautonomousagent.simulation.scenario import Scenario
+    from pyautonomousagent.simulation.scenario_view import ScenarioView
 
 
 class Model(Protocol):
@@ -60,7 +60,7 @@ class MotionModel:
     """
 
     name: str
-    build: Callable[[Scenario, Swarm, str, int, str | None], Model]
+    build: Callable[[ScenarioView, Swarm, str, int, str | None], Model]
     parameters: tuple[Param, ...] = ()
     section: str | None = None
     read_settings: Callable[[Reader, Any], Any] | None = None
@@ -91,21 +91,21 @@ def pyfly_installed() -> bool:
 
 
 def build_model(
-    scenario: Scenario, swarm: Swarm, engine: str, seed: int, implementation: str | None = None
+    scenario: ScenarioView, swarm: Swarm, engine: str, seed: int, implementation: str | None = None
 ) -> Model:
     """The motion model of ``scenario`` for ``swarm`` (see :class:`MotionModel`)."""
     return MOTION_MODELS.get(scenario.model).build(scenario, swarm, engine, seed, implementation)
 
 
 def _drone2d(
-    scenario: Scenario, swarm: Swarm, engine: str, seed: int, implementation: str | None
+    scenario: ScenarioView, swarm: Swarm, engine: str, seed: int, implementation: str | None
 ) -> Model:
     p = scenario.parameters
     return Drone2D(DroneParameters(p.max_speed, p.speed_step, p.turn_step), swarm.size)
 
 
 def _drone3d(
-    scenario: Scenario, swarm: Swarm, engine: str, seed: int, implementation: str | None
+    scenario: ScenarioView, swarm: Swarm, engine: str, seed: int, implementation: str | None
 ) -> Model:
     """The 3-D drone; its mission must declare the columns of ``COLUMNS_3D``.
 
@@ -127,7 +127,7 @@ def _drone3d(
 
 
 def _x8(
-    scenario: Scenario, swarm: Swarm, engine: str, seed: int, implementation: str | None
+    scenario: ScenarioView, swarm: Swarm, engine: str, seed: int, implementation: str | None
 ) -> Model:
     """The X8: vectorised on the batched engine, PyFly on the py_trees engine.
 

@@ -22,7 +22,7 @@ from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
 if TYPE_CHECKING:
-    from pyautonomousagent.simulation.run import Simulation
+    from pyautonomousagent.simulation.engine_api import LoopView
 
 log = logging.getLogger("pyautonomousagent")
 
@@ -52,7 +52,7 @@ def create_agents(
     return swarm
 
 
-def estimate_state(sim: Simulation) -> None:
+def estimate_state(sim: LoopView) -> None:
     """Phase 2: the mission's sensors, then motion, then last iteration's messages.
 
     Agents the sensors leave unable to move (e.g. out of energy) stay where they are.
@@ -62,7 +62,7 @@ def estimate_state(sim: Simulation) -> None:
     process_messages(sim)
 
 
-def process_messages(sim: Simulation) -> None:
+def process_messages(sim: LoopView) -> None:
     """Hand last iteration's deliveries to the mission's handlers, by message type.
 
     A delivered type that no handler takes is logged once per run (not silently dropped).
@@ -84,17 +84,17 @@ def process_messages(sim: Simulation) -> None:
     sim.inbox = []
 
 
-def decide(sim: Simulation) -> None:
+def decide(sim: LoopView) -> None:
     """Phase 3: tick every agent's behaviour tree once."""
     sim.engine.tick()
 
 
-def control(sim: Simulation) -> None:
+def control(sim: LoopView) -> None:
     """Phase 4: the motion model's control signals toward the requested speed and heading."""
     sim.model.control(sim.swarm.columns)
 
 
-def deliver_messages(sim: Simulation) -> None:
+def deliver_messages(sim: LoopView) -> None:
     """Phase 5: deliver this iteration's messages within range; the channel is cleared."""
     sim.inbox = sim.world.datalink.deliver(sim.swarm.columns["x"], sim.swarm.columns["y"])
     if sim.recorded_types and sim.inbox:
@@ -103,7 +103,7 @@ def deliver_messages(sim: Simulation) -> None:
         )
 
 
-def record(sim: Simulation) -> None:
+def record(sim: LoopView) -> None:
     """Phase 6: store the state and blackboard of every agent, the active behaviours and the
     traced agents' node statuses (on recorded iterations)."""
     recorder = sim.recorder

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
-import functools
 import logging
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol, TypeGuard, runtime_checkable
+from typing import Any
 
 import numpy as np
 import pyarrow as pa
@@ -28,9 +27,18 @@ from pyautonomousagent.inputs import shown
 from pyautonomousagent.names import agent_index
 from pyautonomousagent.progress import LINE_SECONDS, Progress
 from pyautonomousagent.randomness import CounterRandom
-from pyautonomousagent.recording import Recorder, check_memory, to_table, trace_table, traced_agents
+from pyautonomousagent.recording import (
+    Recorder,
+    available_memory,
+    check_memory,
+    to_table,
+    trace_table,
+    traced_agents,
+)
 from pyautonomousagent.registry import Registry
 from pyautonomousagent.simulation import phases
+from pyautonomousagent.simulation.costs import pick_engine, run_costs
+from pyautonomousagent.simulation.engine_api import Engine, fuses
 from pyautonomousagent.simulation.fit import check_tree
 from pyautonomousagent.simulation.mission import MessageType, Mission
 from pyautonomousagent.simulation.motion import Model, build_model
@@ -83,13 +91,18 @@ def _checked(
     return scenario, tree
 
 
+def recorded_columns(mission: Mission, tree: Node) -> int:
+    """How many columns a run of ``tree`` in ``mission`` records (the motion model's aside)."""
+    columns = len(MOTION_COLUMNS) + len(CONTROL_COLUMNS) + len(mission.columns)
+    columns += 1 + len(mission.blackboard())  # number_ticks and the mission's keys
+    return columns + len(tree_blackboard_keys(tree, mission.blackboard()))  # and the tree's
+
+
 def _check_fits(
     scenario: Scenario, mission: Mission, tree: Node, engine: str, record_every: int
 ) -> None:
     """Refuse, before anything is allocated, a run whose records cannot fit in memory."""
-    columns = len(MOTION_COLUMNS) + len(CONTROL_COLUMNS) + len(mission.columns)
-    columns += 1 + len(mission.blackboard())  # number_ticks and the mission's keys
-    columns += len(tree_blackboard_keys(tree, mission.blackboard()))  # and the tree's
+    columns = recorded_columns(mission, tree)
     nodes = sum(1 for _ in _walk(tree))
     per_agent = 100 + nodes * (2000 if engine == "pytrees" else 16)
     check_memory(scenario.agents, scenario.iterations, record_every, columns, per_agent)
@@ -110,53 +123,6 @@ def _world(scenario: Scenario, seed: int) -> World:
 FUSED = 500
 
 
-class Engine(Protocol):
-    """What the loop needs of a decision engine (Phase 3)."""
-
-    name: str
-
-    def __init__(
-        self, tree: Node, swarm: Swarm, world: World, defaults: Mapping[str, Any]
-    ) -> None: ...
-
-    def tick(self) -> None: ...
-
-    def node_statuses(self) -> np.ndarray: ...
-
-
-@runtime_checkable
-class FusedEngine(Protocol):
-    """An engine that can also run whole iterations itself (Phases 2-6 fused, e.g. the
-    compiled and GPU engines): :class:`Simulation` calls :meth:`prepare` once it is built,
-    :meth:`loop` before stepping an iteration in Python, and :meth:`sync` at the end of each
-    ``run`` and ``step``."""
-
-    def prepare(self, sim: Simulation) -> None:
-        """Compile (or load) what the run will call, before its first iteration."""
-        ...
-
-    def loop(self, sim: Simulation, count: int, typical: int | None = None) -> int:
-        """Run up to ``count`` whole iterations (all but the last one's Phase 5); how many
-        were run, 0 where the next iteration cannot be fused (``Simulation.step`` runs it)."""
-        ...
-
-    def sync(self, sim: Simulation) -> None:
-        """Finish the work in flight: the recorder holds every iteration run, the swarm's
-        arrays the state."""
-        ...
-
-
-def fuses(engine: Engine) -> TypeGuard[FusedEngine]:
-    """Whether ``engine`` is a :class:`FusedEngine` (by its class, decided once per class:
-    ``isinstance`` of a protocol costs 6-14 us, and the loop asks twice an iteration)."""
-    return _fusing_class(type(engine))
-
-
-@functools.cache
-def _fusing_class(kind: type) -> bool:
-    return issubclass(kind, FusedEngine)
-
-
 ENGINES: Registry[type[Engine]] = Registry("engine")
 ENGINES.register("pytrees", PyTreesEngine)
 ENGINES.register("batched", BatchedEngine)
@@ -164,38 +130,36 @@ ENGINES.register("compiled", CompiledEngine)
 ENGINES.register("gpu", GpuEngine)  # needs numba-cuda and a device (engines/gpu.py)
 
 
-#: Seconds of batched loop from which "auto" compiles: compiling a tree takes 5-30 s the
-#: first time (then well under 1 s from numba's cache), which a loop this long pays back.
-AUTO_COMPILE_SECONDS = 15.0
-#: The batched engine's loop cost on 2 cores: NumPy's fixed cost per iteration (about 250
-#: calls; gathering, 4 drones: 170 us) and the cost per agent-iteration (patrol, 10^6 drones:
-#: 65 ns), in seconds (docs/performance.md).
-BATCHED_PER_ITERATION = 1.5e-4
-BATCHED_PER_AGENT = 6.5e-8
-
-
-def batched_seconds(agents: int, iterations: int) -> float:
-    """About how long the batched engine's loop takes for a run, in seconds."""
-    return iterations * (BATCHED_PER_ITERATION + agents * BATCHED_PER_AGENT)
-
-
-def choose_engine(tree: Node, agents: int = 10**6, iterations: int = 4000) -> str:
-    """The engine "auto" picks for a run of ``agents`` x ``iterations``: "pytrees" if a leaf
-    of ``tree`` is a hand-written py_trees behaviour; else "gpu" where the tree compiles and
+def choose_engine(
+    tree: Node,
+    agents: int = 10**6,
+    iterations: int = 4000,
+    record_every: int = 1,
+    columns: int = 21,
+    compiled_ready: bool = False,
+) -> str:
+    """The engine "auto" picks for a run of ``agents`` x ``iterations`` recording every
+    ``record_every``-th iteration of ``columns`` columns: "pytrees" if a leaf of ``tree``
+    is a hand-written py_trees behaviour; else "gpu" where the tree compiles and
     :func:`~pyautonomousagent.engines.gpu.auto_takes_gpu` (a device, a run at least
     :data:`~pyautonomousagent.engines.gpu.AUTO_DRONE_ITERATIONS` drone-iterations; where the
     kernel cannot run the run, :meth:`Simulation.create` takes "compiled" instead); else
-    "compiled" where the batched
-    engine's loop would take at least :data:`AUTO_COMPILE_SECONDS` (:func:`batched_seconds`),
-    numba is installed and the tree compiles (see
-    :func:`~pyautonomousagent.engines.compiled.compilable`); else "batched".
-    (:meth:`Simulation.create` then takes "compiled" instead of "batched" where the run's
-    fused loop was compiled before: ``CompiledEngine.ready``.)"""
+    the faster of "batched" and "compiled" by their estimated costs of this run
+    (:func:`~pyautonomousagent.simulation.costs.run_costs`: seconds with the compile, which
+    ``compiled_ready`` says is in numba's cache already, and memory), never one that needs
+    more memory than is available or than the other by more than
+    :data:`~pyautonomousagent.simulation.costs.MEMORY_MARGIN`
+    (:func:`~pyautonomousagent.simulation.costs.pick_engine`); "batched" where numba is
+    missing or the tree does not compile (see
+    :func:`~pyautonomousagent.engines.compiled.compilable`).
+    (:meth:`Simulation.create` asks again with ``compiled_ready`` where the run's fused
+    loop was compiled before: ``CompiledEngine.ready``.)"""
     if any(node.type in BEHAVIOUR_TYPES for node in tree.leaves()):
         return "pytrees"
     if auto_takes_gpu(agents, iterations) and not compilable(tree):
         return "gpu"
-    if batched_seconds(agents, iterations) < AUTO_COMPILE_SECONDS:
+    costs = run_costs(agents, iterations, record_every, columns, compiled_ready)
+    if pick_engine(costs, available_memory()) == "batched":
         return "batched"
     why = compilable(tree)
     if why:
@@ -292,9 +256,11 @@ class Simulation:
         record_every = min(record_every, max(scenario.iterations, 1))  # initial and final
         tree = tree or scenario_tree(scenario)
         auto = engine == "auto"
-        if auto:
-            engine = choose_engine(tree, scenario.agents, scenario.iterations)
         mission = scenario.create_mission()
+        if auto:
+            columns = recorded_columns(mission, tree)
+            engine = choose_engine(tree, scenario.agents, scenario.iterations, record_every,
+                                   columns)  # fmt: skip
         _check_fits(scenario, mission, tree, engine, record_every)
         start = time.perf_counter()
         declared = tree_blackboard_keys(tree, mission.blackboard())  # scripts' entries
@@ -437,13 +403,17 @@ class Simulation:
 
 def _compiled_if_ready(sim: Simulation, tree: Node) -> None:
     """Auto's second look, once ``sim`` is built on the batched engine: the compiled engine
-    where this run's fused loop was compiled before on this machine (no wait, and faster at
-    every size); else note whether compiling it would serve (``sim.could_compile``)."""
+    where this run's fused loop was compiled before on this machine (no wait) and
+    :func:`choose_engine` takes it then (faster, within the memory); else note whether
+    compiling it would serve (``sim.could_compile``)."""
     compiled = CompiledEngine(tree, sim.swarm, sim.world, vars(sim.scenario.parameters))
-    if compiled.ready(sim):
-        sim.engine = compiled
-    else:
+    if not compiled.ready(sim):
         sim.could_compile = compiled.fuses(sim)
+        return
+    s, recorder = sim.scenario, sim.recorder
+    columns = len(recorder.columns)
+    if choose_engine(tree, s.agents, s.iterations, recorder.every, columns, True) == "compiled":
+        sim.engine = compiled
 
 
 def _traced(names: Sequence[str], trace: int | str | Sequence[str] | None) -> list[int]:

@@ -37,6 +37,7 @@ from pyautonomousagent.simulation.params import (
     Values,
     plain,
 )
+from pyautonomousagent.simulation.scenario_view import ScenarioView
 
 #: Parameters of the core itself (the datalink is part of the core).
 CORE_PARAMETERS = (
@@ -252,7 +253,7 @@ def _settings(reader: Reader, model: MotionModel, d: dict[str, Any]) -> Any:
     return model.read_settings(reader, d.get(model.section or ""))
 
 
-def check_point_in_world(reader: Reader, scenario: Scenario, point: Point, path: str) -> None:
+def check_point_in_world(reader: Reader, scenario: ScenarioView, point: Point, path: str) -> None:
     """Raise if ``point`` lies outside ``[0, width] x [0, height]``."""
     width, height = scenario.world
     if not (0.0 <= point[0] <= width and 0.0 <= point[1] <= height):

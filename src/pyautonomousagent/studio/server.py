@@ -1,12 +1,13 @@
 """The studio's web server: Python's own ``http.server``, JSON over HTTP, on 127.0.0.1.
 
 The stack is the standard library (no web framework to install or keep up to date): the
-page polls ``/api/frame`` while it plays and asks for the next frame only once the last one
-is drawn, so frames are dropped, never queued. A player thread advances the run at the chosen
-speed while Play is on. The page, the bundle (Blockly, built by ``npm run build``) and
-Blockly's media are served from the package; nothing comes from elsewhere.
+page keeps one ``/api/frame`` request in flight while it plays, answered once the run has
+moved past the frame it has (``after``), so frames are dropped, never queued. A player thread
+advances the run at the chosen speed, :data:`PLAYER_RATE` times a second, while Play is on.
+The page, the bundle (Blockly, built by ``npm run build``) and Blockly's media are served
+from the package; nothing comes from elsewhere.
 
-Routes (JSON in and out; errors are ``{"error": MESSAGE}`` with status 400):
+Routes (JSON in and out; errors are ``{"error": MESSAGE}`` with status 400)::
 
     GET  /                      the page
     GET  /static/...            the bundle and media
@@ -15,7 +16,8 @@ Routes (JSON in and out; errors are ``{"error": MESSAGE}`` with status 400):
     POST /api/upload?name=F     the file's bytes -> {"tree": BLOCKS} (the file loader's checks)
     POST /api/settings          {"parameters", "agents", "iterations", "seed"}
     POST /api/control           {"action": play|pause|step|reset, "speed": it/s, "steps": n}
-    GET  /api/frame?follow=K    the current frame
+    GET  /api/frame?follow=K&after=I  the current frame (while playing, once the run has
+                                passed iteration I, or after FRAME_WAIT seconds)
     GET  /api/export?format=F   the tree as an XML or YAML file's text
     POST /api/save-tree         {"name", "format"} -> writes NAME.xml|yaml in the folder
     POST /api/save-run          {"name", "overwrite"} -> writes runs/NAME as pyaa run does
@@ -51,7 +53,9 @@ REFUSED = (InputError, TreeError, LeafError, SaveError)
 #: own check, so a little more than that limit is read.
 MAX_BODY = MAX_FILE_BYTES + 1024
 #: Frames per second the player aims at while playing.
-PLAYER_RATE = 25.0
+PLAYER_RATE = 40.0
+#: Longest a frame request waits for the run to move on while playing, seconds.
+FRAME_WAIT = 0.25
 
 
 def static_folder() -> Path:
@@ -73,6 +77,7 @@ class Player:
         self.speed = 200.0
         self.playing = False
         self._stop = threading.Event()
+        self._moved = threading.Condition()
         self._thread = threading.Thread(target=self._loop, name="studio-player", daemon=True)
 
     def start(self) -> None:
@@ -84,11 +89,32 @@ class Player:
         self._stop.set()
         self._thread.join(timeout=5)
 
+    def set_playing(self, playing: bool) -> None:
+        """Play or pause; a frame request waiting for the run to move on is answered."""
+        self.playing = playing
+        self._notify()
+
+    def wait_past(self, iteration: int, timeout: float = FRAME_WAIT) -> None:
+        """While playing, wait (at most ``timeout`` seconds) until the run has moved past
+        ``iteration``, so that each frame drawn shows a new iteration."""
+        with self._moved:
+            self._moved.wait_for(
+                lambda: not self.playing or self.session.iteration() != iteration, timeout
+            )
+
+    def _notify(self) -> None:
+        with self._moved:
+            self._moved.notify_all()
+
     def _loop(self) -> None:
-        """Every 1/PLAYER_RATE s while playing: the iterations due since the last step at
-        ``speed`` (wall time, so the rate holds however long a step takes)."""
+        """Every 1/PLAYER_RATE s (on a fixed beat) while playing: the iterations due since
+        the last step at ``speed`` (wall time, so the rate holds however long a step takes)."""
         due, last = 0.0, time.monotonic()
-        while not self._stop.wait(1.0 / PLAYER_RATE):
+        beat = last
+        while True:
+            beat = max(beat + 1.0 / PLAYER_RATE, time.monotonic())
+            if self._stop.wait(beat - time.monotonic()):
+                return
             now = time.monotonic()
             elapsed, last = now - last, now
             if not self.playing:
@@ -97,14 +123,19 @@ class Player:
             due = min(due + self.speed * elapsed, self.speed)  # at most 1 s behind
             steps = int(due)
             due -= steps
-            try:
-                reached = self.session.advance(steps)
-            except REFUSED:
-                self.playing = False
-                continue
-            sim = self.session.sim
-            if sim is None or reached >= sim.scenario.iterations:
-                self.playing = False
+            self._step(steps)
+
+    def _step(self, steps: int) -> None:
+        """Advance ``steps`` iterations; pause at the run's end or when it cannot run."""
+        try:
+            reached = self.session.advance(steps)
+        except REFUSED:
+            self.set_playing(False)
+            return
+        sim = self.session.sim
+        if sim is None or reached >= sim.scenario.iterations:
+            self.playing = False
+        self._notify()
 
 
 class Studio:
@@ -157,12 +188,26 @@ class Studio:
             self._thread = None
 
     def _repr_html_(self) -> str:
-        """The studio in a notebook's output: served in a thread, shown in a frame."""
+        """The studio in a notebook's output: served in a thread, shown in a frame 900 px
+        high, with a link that opens it in a browser tab of its own (more room); without
+        the built front-end, the one line that says how to build it."""
+        if not has_bundle():
+            return (
+                "<p>The studio's front-end is not built: run <code>make lessons</code> (or "
+                "<code>cd studio &amp;&amp; npm ci &amp;&amp; npm run build</code>), then "
+                "this cell again.</p>"
+            )
         self.start()
         return (
-            f'<iframe src="{self.url}" title="pyAutonomousAgent studio" width="100%" '
-            'height="900" style="border: 1px solid #ccc"></iframe>'
+            f'<div class="pyaa-studio"><iframe src="{self.url}" title="pyAutonomousAgent '
+            'studio" width="100%" height="900" style="border: 1px solid #ccc"></iframe>'
+            f'<a href="{self.url}" target="_blank" rel="noopener">Open the studio in a tab '
+            f"of its own</a> ({self.url})</div>"
         )
+
+    def __repr__(self) -> str:
+        """What a plain-text front end shows."""
+        return f"Studio({self.session.base.name!r}) at {self.url}"
 
     def info(self) -> dict[str, Any]:
         """What the page needs at start."""
@@ -175,7 +220,7 @@ class Studio:
 
     def set_tree(self, data: dict[str, Any]) -> dict[str, Any]:
         """Check a tree of blocks; the run stops (Reset starts the new tree)."""
-        self.player.playing = False
+        self.player.set_playing(False)
         return self.session.set_tree(data.get("tree")).as_dict()
 
     def control(self, data: Any) -> dict[str, Any]:
@@ -188,15 +233,16 @@ class Studio:
         action = data.get("action")
         if action == "play":
             self.session.runnable()  # an invalid tree cannot run
-            self.player.playing = True
+            self.session.current()  # nor a run whose tree or parameters changed
+            self.player.set_playing(True)
         elif action == "pause":
-            self.player.playing = False
+            self.player.set_playing(False)
         elif action == "step":
-            self.player.playing = False
+            self.player.set_playing(False)
             steps = data.get("steps", 1)
             self.session.advance(steps if isinstance(steps, int) and steps > 0 else 1)
         elif action == "reset":
-            self.player.playing = False
+            self.player.set_playing(False)
             self.session.reset()
         else:
             raise InputError(f"unknown action {action!r}: play, pause, step or reset")
@@ -239,6 +285,9 @@ class _Handler(BaseHTTPRequestHandler):
             self._answer(self.studio.info)
         elif url.path == "/api/frame":
             follow = query.get("follow", [""])[0]
+            after = query.get("after", [""])[0]
+            if after.isdigit():
+                self.studio.player.wait_past(int(after))
             index = int(follow) if follow.isdigit() else None
             self._answer(lambda: {**self.studio.session.frame(index),
                                   "playing": self.studio.player.playing})  # fmt: skip
@@ -307,7 +356,7 @@ class _Handler(BaseHTTPRequestHandler):
         self._send(HTTPStatus.OK, result)
 
     def _send(self, status: HTTPStatus, data: Any) -> None:
-        payload = json.dumps(data, allow_nan=False).encode()
+        payload = json.dumps(data, allow_nan=False, separators=(",", ":")).encode()
         self.send_response(status)
         self.send_header("Content-Type", "application/json")
         self.send_header("Content-Length", str(len(payload)))

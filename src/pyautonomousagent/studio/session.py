@@ -19,12 +19,14 @@ from typing import Any
 
 import numpy as np
 
+from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.inputs import InputError, shown
 from pyautonomousagent.recording import node_list
 from pyautonomousagent.runs import check_target, claim_run, save_run, simulate, streaming
 from pyautonomousagent.scenarios import load
 from pyautonomousagent.simulation import Scenario, ScenarioError, Simulation
 from pyautonomousagent.simulation.scenario import parameter_list
+from pyautonomousagent.studio.live import EventFeed
 from pyautonomousagent.studio.trees import Block, Checked, check_blocks, tree_text
 
 #: What a saved tree or run may be called (a file or folder name in the studio's folder).
@@ -60,6 +62,11 @@ class Session:
         self.scenario: Scenario = self.base
         self.checked: Checked | None = None
         self.sim: Simulation | None = None
+        self.feed: EventFeed | None = None
+        self.run_tree: Node | None = None  # the tree the run was made with
+        #: What changed since the run on the screen began ("": it is current).
+        self.stale = ""
+        self.nodes: list[dict[str, Any]] = []  # the run's tree, node_list() once per run
         self.lock = threading.RLock()
 
     # --- settings -----------------------------------------------------------------------
@@ -101,19 +108,44 @@ class Session:
         )
         with self.lock:
             self.settings, self.scenario = settings, scenario
-            self.sim = None
-        return {"ok": True, "agents": scenario.agents, "iterations": scenario.iterations}
+            self._changed()
+            stale = self.stale
+        return {
+            "ok": True, "agents": scenario.agents, "iterations": scenario.iterations,
+            "stale": stale,
+        }  # fmt: skip
 
     # --- the tree -----------------------------------------------------------------------
 
     def set_tree(self, blocks: Block | None) -> Checked:
-        """Check a tree of blocks; a tree that can run replaces the run's tree (and the run
-        is reset), one that cannot keeps no tree, so nothing runs."""
+        """Check a tree of blocks; a tree that can run is the one the next run (Reset) runs,
+        one that cannot keeps no tree, so nothing new runs (see :meth:`_changed` for the
+        run under way)."""
         checked = check_blocks(blocks, self.scenario)
         with self.lock:
             self.checked = checked
-            self.sim = None
+            self._changed()
         return checked
+
+    def _changed(self) -> None:
+        """After a change of the tree or the settings: a run still at iteration 0 is
+        dropped (the next step starts the new one); a run under way stays on the screen,
+        can no longer be played or stepped, and :attr:`stale` says what changed, so that the
+        page offers Reset. A change undone (the same tree and settings as the run's) makes
+        the run current again."""
+        sim = self.sim
+        if sim is None:
+            self.stale = ""
+            return
+        changed = []
+        if self.checked is None or self.checked.tree != self.run_tree:
+            changed.append("the tree")
+        if (self.scenario, self.settings.seed) != (sim.scenario, sim.seed):
+            changed.append("the parameters")
+        if changed and sim.world.iteration == 0:
+            self.sim = self.feed = None
+            changed = []
+        self.stale = f"{' and '.join(changed)} changed during this run" if changed else ""
 
     def tree_file(self, fmt: str) -> str:
         """The checked tree as the text of an XML or YAML file."""
@@ -136,12 +168,27 @@ class Session:
         tree = self.runnable().tree
         with self.lock:
             self.sim = Simulation.create(self.scenario, seed=self.settings.seed, tree=tree)
+            self.run_tree, self.stale = tree, ""
+            self.feed = EventFeed(self.sim)
+            self.nodes = node_list(self.sim.recorder.nodes)
             return self.sim
+
+    def iteration(self) -> int:
+        """The iteration the run has reached (0: no run yet)."""
+        sim = self.sim
+        return 0 if sim is None else int(sim.world.iteration)
+
+    def current(self) -> None:
+        """InputError when the run on the screen is not of the tree and settings now (it
+        cannot go on: Reset starts the new one)."""
+        if self.stale:
+            raise InputError(f"{self.stale}: Reset runs the new one from iteration 0")
 
     def advance(self, iterations: int) -> int:
         """Run up to ``iterations`` more iterations (a new run first if there is none);
         returns the iteration reached."""
         with self.lock:
+            self.current()
             sim = self.sim or self.reset()
             if iterations > 0 and sim.world.iteration < sim.scenario.iterations:
                 sim.run(progress=False, iterations=iterations)
@@ -149,12 +196,13 @@ class Session:
 
     def frame(self, follow: int | None = None) -> dict[str, Any]:
         """What the canvas draws now: positions and headings, the marks, the followed
-        agent's node statuses, and per node how many agents have it active."""
+        agent's node statuses, per node how many agents have it active, and the run's
+        events (:meth:`EventFeed.frame`: counts for the plots, the recent ones placed)."""
         with self.lock:
-            sim = self.sim
-            if sim is None:
-                return {"iteration": 0, "running": False}
-            return frame_of(sim, follow)
+            sim, feed = self.sim, self.feed
+            if sim is None or feed is None:
+                return {"iteration": 0, "running": False, "stale": ""}
+            return {**frame_of(sim, follow, self.nodes), **feed.frame(), "stale": self.stale}
 
     # --- saving -------------------------------------------------------------------------
 
@@ -262,9 +310,10 @@ def _whole(value: Any, key: str, least: int) -> int | None:
     return int(number)
 
 
-def frame_of(sim: Simulation, follow: int | None) -> dict[str, Any]:
-    """The drawing of ``sim`` now (see :meth:`Session.frame`)."""
-    swarm, recorder = sim.swarm, sim.recorder
+def frame_of(sim: Simulation, follow: int | None, nodes: list[dict[str, Any]]) -> dict[str, Any]:
+    """The drawing of ``sim`` now (see :meth:`Session.frame`); ``nodes`` is
+    ``node_list(sim.recorder.nodes)``, which the session makes once per run."""
+    swarm = sim.swarm
     columns = swarm.columns
     frame: dict[str, Any] = {
         "iteration": int(sim.world.iteration),
@@ -272,10 +321,10 @@ def frame_of(sim: Simulation, follow: int | None) -> dict[str, Any]:
         "world": [float(sim.scenario.world[0]), float(sim.scenario.world[1])],
         "x": _rounded(columns["x"]),
         "y": _rounded(columns["y"]),
-        "heading": _rounded(columns["heading"]) if "heading" in columns else [],
-        "energy": _rounded(columns["energy"]) if "energy" in columns else [],
+        "heading": _rounded(columns["heading"], 1) if "heading" in columns else [],
+        "energy": _energy(columns["energy"]) if "energy" in columns else None,
         "altitude": _rounded(columns["z"]) if "z" in columns else [],
-        "active": active_counts(sim),
+        "active": active_counts(sim, nodes),
     }
     if follow is not None and 0 <= follow < swarm.size:
         frame["follow"] = {
@@ -283,9 +332,7 @@ def frame_of(sim: Simulation, follow: int | None) -> dict[str, Any]:
             "statuses": statuses_of(sim, follow),
             "blackboard": {k: _plain(v[follow]) for k, v in swarm.blackboard.items()},
         }
-    frame["nodes"] = [
-        {k: n[k] for k in ("name", "type", "depth")} for n in node_list(recorder.nodes)
-    ]
+    frame["nodes"] = [{k: n[k] for k in ("name", "type", "depth")} for n in nodes]
     return frame
 
 
@@ -297,9 +344,19 @@ def _plain(value: Any) -> Any:
     return item if isinstance(item, bool | int | float | str) else str(item)
 
 
-def _rounded(values: np.ndarray) -> list[float]:
-    """Values for drawing, 3 decimals (the canvas needs no more)."""
-    return [float(v) for v in np.round(np.asarray(values, dtype=np.float64)[:MAX_DRAWN], 3)]
+def _rounded(values: np.ndarray, decimals: int = 3) -> list[float]:
+    """Values for drawing, 3 decimals (the canvas needs no more; headings, in degrees, 1)."""
+    array = np.asarray(values, dtype=np.float64)[:MAX_DRAWN]
+    rounded: list[float] = np.round(array, decimals).tolist()
+    return rounded
+
+
+def _energy(values: np.ndarray) -> dict[str, float] | None:
+    """The swarm's mean and lowest energy (percent) for the plot; None for no agents."""
+    array = np.asarray(values, dtype=np.float64)
+    if array.size == 0:
+        return None
+    return {"mean": round(float(array.mean()), 3), "low": round(float(array.min()), 3)}
 
 
 def statuses_of(sim: Simulation, agent: int) -> list[str] | None:
@@ -312,11 +369,10 @@ def statuses_of(sim: Simulation, agent: int) -> list[str] | None:
     return [STATUS_NAMES.get(int(code), "invalid") for code in trace[-1]]
 
 
-def active_counts(sim: Simulation) -> list[int]:
+def active_counts(sim: Simulation, nodes: list[dict[str, Any]]) -> list[int]:
     """Per node (tick order), how many agents have it active at the last record: the
-    agent's active leaf and the nodes above it."""
+    agent's active leaf and the nodes above it (``nodes``: ``node_list`` of the run's)."""
     recorder = sim.recorder
-    nodes = node_list(recorder.nodes)
     behaviour = recorder.behaviour
     if behaviour is None or recorder.count == 0 or not nodes:
         return [0] * len(nodes)
@@ -324,7 +380,7 @@ def active_counts(sim: Simulation) -> list[int]:
     counts = np.bincount(leaves[leaves >= 0].astype(np.intp), minlength=len(nodes))
     total = counts.astype(np.int64)
     for i in range(len(nodes) - 1, 0, -1):  # children come after their parent
-        parent = int(nodes[i]["parent"])  # type: ignore[call-overload]
+        parent = int(nodes[i]["parent"])
         if parent >= 0:
             total[parent] += total[i]
     return [int(v) for v in total]

@@ -22,7 +22,7 @@ from pyautonomousagent.bt.build import build
 from pyautonomousagent.bt.document import DEFAULT_TREE_ID, Document, RawNode, document_from_node
 from pyautonomousagent.bt.files import document_from_bytes, parse_document, to_text_format
 from pyautonomousagent.bt.leaf import LEAF_TYPES
-from pyautonomousagent.bt.spec import Node, TreeError
+from pyautonomousagent.bt.spec import Node, TreeError, snake_case
 from pyautonomousagent.bt.vocabulary import tags
 from pyautonomousagent.bt.xml_format import format_value, write_xml
 from pyautonomousagent.inputs import InputError
@@ -37,6 +37,8 @@ BLOCKS_FILE = "blocks"
 MAX_BLOCKS = 2000
 #: What a node type or port name may be.
 WORD = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,99}")
+#: What a node's name may be: one line of printable characters, at most 100.
+NODE_NAME = re.compile(r"[^\x00-\x1f\x7f]{1,100}")
 
 
 @dataclass
@@ -65,11 +67,13 @@ def palette(scenario: Scenario) -> dict[str, Any]:
     """The blocks a tree for ``scenario`` may use: control nodes and decorators (file tag,
     symbol, one-line doc, parameters), and the leaves that fit the scenario (its mission's,
     then the general ones), each with its doc and ports (name, type hint, the parameter
-    that gives the default and its value)."""
+    that gives the default and its value). Each has the name a new block of it starts with:
+    the name the file loader gives an unnamed node of that type (its type in snake case)."""
     values = vars(scenario.parameters)
     controls = [
         {
             "type": t.tag,
+            "name": snake_case(t.tag),
             "kind": t.kind,
             "symbol": t.symbol,
             "doc": t.doc,
@@ -92,6 +96,7 @@ def palette(scenario: Scenario) -> dict[str, Any]:
         leaves.append(
             {
                 "type": cls.type_name,
+                "name": snake_case(cls.type_name),
                 "doc": _first_line(cls.__doc__),
                 "general": is_general(cls),
                 "ports": ports,
@@ -137,8 +142,26 @@ def to_document(root: Block) -> Document:
     return parse_document(text, "xml", BLOCKS_FILE)
 
 
+class BlockError(InputError):
+    """A block that is not plain data of the right shape; ``block`` is its index, depth
+    first."""
+
+    def __init__(self, message: str, block: int) -> None:
+        super().__init__(message)
+        self.block = block
+
+
 def _raw(block: Any, count: list[int]) -> RawNode:
     """A RawNode of one block (checked to be plain data of the right shape)."""
+    try:
+        return _raw_node(block, count)
+    except BlockError:
+        raise
+    except InputError as error:
+        raise BlockError(str(error), count[0] - 1) from None
+
+
+def _raw_node(block: Any, count: list[int]) -> RawNode:
     count[0] += 1
     if count[0] > MAX_BLOCKS:
         raise InputError(f"a tree of blocks has at most {MAX_BLOCKS} blocks")
@@ -151,6 +174,9 @@ def _raw(block: Any, count: list[int]) -> RawNode:
         raise InputError("a block's ports are a mapping and its children a list")
     if name is not None and not isinstance(name, str):
         raise InputError("a block's name is text")
+    name = name.strip() if name else None
+    if name and not NODE_NAME.fullmatch(name):
+        raise InputError(f"a node's name is one line of at most 100 characters, got {name[:40]!r}")
     if not all(WORD.fullmatch(str(k)) for k in ports):
         raise InputError("a port's name is a word of letters, digits and _")
     text = {str(k): str(v) for k, v in ports.items() if str(v).strip() != ""}
@@ -165,7 +191,7 @@ def check_blocks(root: Block | None, scenario: Scenario) -> Checked:
     try:
         document = to_document(root)
     except InputError as error:
-        return Checked(None, None, str(error), -1)
+        return Checked(None, None, str(error), getattr(error, "block", -1))
     except TreeError as error:
         return Checked(None, None, str(error), -1)
     return check_document(document, scenario)

@@ -31,9 +31,9 @@ from pyautonomousagent.missions.drones.mission import (
     read_radiation_sources,
 )
 from pyautonomousagent.render.marks import Mark
-from pyautonomousagent.simulation import Param, Simulation, WorldObject, register_mission
+from pyautonomousagent.simulation import Param, SimulationView, WorldObject, register_mission
 from pyautonomousagent.simulation.params import Point, Reader
-from pyautonomousagent.simulation.scenario import Scenario
+from pyautonomousagent.simulation.scenario_view import ScenarioView
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
@@ -135,7 +135,7 @@ class CrowdedMission(DroneMission):
     }  # fmt: skip
 
     @classmethod
-    def check(cls, scenario: Scenario, reader: Reader) -> None:
+    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
         """The risk distance lies within the sensor's range; the lattice, within the world."""
         p = scenario.parameters
         if p.collision_risk_distance > p.proximity_range:
@@ -147,7 +147,7 @@ class CrowdedMission(DroneMission):
         cls._check_lattice(scenario, reader)
 
     @classmethod
-    def _check_lattice(cls, scenario: Scenario, reader: Reader) -> None:
+    def _check_lattice(cls, scenario: ScenarioView, reader: Reader) -> None:
         """Every group's circle of slots lies in the world, else name the largest swarm that
         fits and the world this one needs."""
         p, agents = scenario.parameters, scenario.agents
@@ -172,7 +172,7 @@ class CrowdedMission(DroneMission):
             )
 
     @classmethod
-    def world_for(cls, scenario: Scenario, agents: int) -> Point:
+    def world_for(cls, scenario: ScenarioView, agents: int) -> Point:
         """The scenario's world, grown where the lattice of ``agents`` drones needs more."""
         p = scenario.parameters
         groups = -(-agents // p.group_size)
@@ -198,7 +198,7 @@ class CrowdedMission(DroneMission):
         self.collisions = Collisions(swarm.size, p.collision_radius, p.proximity_range)
         s["neighbour_distance"][:] = p.proximity_range
 
-    def sense(self, sim: Simulation) -> np.ndarray:
+    def sense(self, sim: SimulationView) -> np.ndarray:
         """The drones' sensors, then the proximity sensor and collisions (each colliding
         agent's damage rises by ``collision_damage`` per new collision; an event each)."""
         powered = super().sense(sim)
@@ -214,7 +214,7 @@ class CrowdedMission(DroneMission):
         return powered
 
     def _collided(
-        self, sim: Simulation, first: np.ndarray, second: np.ndarray, distance: np.ndarray
+        self, sim: SimulationView, first: np.ndarray, second: np.ndarray, distance: np.ndarray
     ) -> None:
         """Damage, counts and one ``collision`` event per new colliding pair."""
         s = sim.swarm.columns
@@ -227,7 +227,7 @@ class CrowdedMission(DroneMission):
         self._events(sim, t, first, second, distance)
 
     def _events(
-        self, sim: Simulation, t: np.ndarray, first: np.ndarray, second: np.ndarray,
+        self, sim: SimulationView, t: np.ndarray, first: np.ndarray, second: np.ndarray,
         distance: np.ndarray,
     ) -> None:  # fmt: skip
         """One ``collision`` event per pair (``first[k]``, ``second[k]``) colliding at
@@ -242,14 +242,14 @@ class CrowdedMission(DroneMission):
         if t.size:
             log.debug("iterations %d to %d: %d collision(s)", t[0], t[-1], t.size)
 
-    def _collect(self, sim: Simulation, through: int) -> None:
+    def _collect(self, sim: SimulationView, through: int) -> None:
         """The collisions the fused loop found up to iteration ``through``, as events; then
         room for what it found too little room for."""
         t, pairs, distance = self.collisions.take(through)
         self._events(sim, t, pairs[0], pairs[1], distance)
         self.collisions.make_room()
 
-    def compiled_sensors(self, sim: Simulation) -> SensorKernel | None:
+    def compiled_sensors(self, sim: SimulationView) -> SensorKernel | None:
         """The drones' compiled sensors, with the proximity sensor and collisions as a
         sensor of the whole swarm (:class:`~pyautonomousagent.kernels.SwarmSensorKernel`:
         the same :func:`~pyautonomousagent.missions.crowded.collisions.detect`) where

@@ -28,7 +28,7 @@ from pyautonomousagent.missions.drones.sensors import (
 )
 from pyautonomousagent.missions.drones.shared_data import SharedData
 from pyautonomousagent.render.marks import Mark
-from pyautonomousagent.simulation import MessageType, Mission, Param, Simulation, WorldObject
+from pyautonomousagent.simulation import MessageType, Mission, Param, SimulationView, WorldObject
 from pyautonomousagent.simulation.params import Point, Reader
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
@@ -147,7 +147,7 @@ class DroneMission(Mission):
         bb["x_current_destination_position"][:] = points[:, 0]
         bb["y_current_destination_position"][:] = points[:, 1]
 
-    def sense(self, sim: Simulation) -> np.ndarray:
+    def sense(self, sim: SimulationView) -> np.ndarray:
         """Energy drains; a drone with energy reads radiation and takes damage from it.
 
         Returns:
@@ -167,14 +167,14 @@ class DroneMission(Mission):
             self._stopped(sim, np.flatnonzero(~powered))
         return powered
 
-    def compiled_sensors(self, sim: Simulation) -> SensorKernel | None:
+    def compiled_sensors(self, sim: SimulationView) -> SensorKernel | None:
         """:meth:`sense` for one drone (``kernels.drain_energy``) while no radiation source
         is active; None otherwise, or where a subclass senses otherwise."""
         if type(self).sense is not DroneMission.sense:
             return None
         return self.drone_sensors(sim)
 
-    def drone_sensors(self, sim: Simulation) -> SensorKernel | None:
+    def drone_sensors(self, sim: SimulationView) -> SensorKernel | None:
         """:meth:`DroneMission.sense` compiled (``kernels.drain_energy``) while no radiation
         source is active, else None; for subclasses that sense more only at times."""
         if any(source.active for source in sim.world.objects.radiation_sources):
@@ -183,7 +183,7 @@ class DroneMission(Mission):
             drain_energy_of_one, ("energy",), (self.params.energy_use,), self._stopped
         )
 
-    def _stopped(self, sim: Simulation, rows: np.ndarray) -> None:
+    def _stopped(self, sim: SimulationView, rows: np.ndarray) -> None:
         sim.alert(rows, "zero energy", "zero energy: sensors off, not moving")
 
     def message_types(self) -> list[MessageType]:
@@ -194,7 +194,7 @@ class DroneMission(Mission):
                         kernel=kernel)
         ]  # fmt: skip
 
-    def store_shared_data(self, sim: Simulation, delivery: Delivery) -> None:
+    def store_shared_data(self, sim: SimulationView, delivery: Delivery) -> None:
         """Remember the latest "sharing data" per sender (sent last iteration)."""
         self.shared.store(delivery, sim.world.iteration - 1)
 

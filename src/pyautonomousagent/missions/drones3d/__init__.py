@@ -37,12 +37,12 @@ from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation import (
     MessageType,
     Param,
-    Simulation,
+    SimulationView,
     WorldObject,
     register_mission,
 )
 from pyautonomousagent.simulation.params import Reader
-from pyautonomousagent.simulation.scenario import Scenario
+from pyautonomousagent.simulation.scenario_view import ScenarioView
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
@@ -96,7 +96,7 @@ def read_points_3d(
     return tuple(read_point_3d(reader, p, f"{path}[{i}]") for i, p in enumerate(data))
 
 
-def check_3d(scenario: Scenario, reader: Reader, key: str) -> None:
+def check_3d(scenario: ScenarioView, reader: Reader, key: str) -> None:
     """The scenario flies the 3-D drone, and the points of ``world.<key>`` lie below its
     ceiling (``max_altitude``)."""
     if scenario.model != "drone3d":
@@ -109,7 +109,7 @@ def check_3d(scenario: Scenario, reader: Reader, key: str) -> None:
             )
 
 
-def sense_climb(mission: DroneMission, sim: Simulation) -> None:
+def sense_climb(mission: DroneMission, sim: SimulationView) -> None:
     """Phase 2, before the drones' sensors: climbing costs ``climb_energy_use`` percent per
     world unit climbed this iteration (the climb rate about to be flown)."""
     s = sim.swarm.columns
@@ -117,7 +117,7 @@ def sense_climb(mission: DroneMission, sim: Simulation) -> None:
     s["energy"][:] = drain_energy(s["energy"], mission.params.climb_energy_use * climbed)
 
 
-def compiled_sensors_3d(mission: DroneMission, sim: Simulation) -> SensorKernel | None:
+def compiled_sensors_3d(mission: DroneMission, sim: SimulationView) -> SensorKernel | None:
     """``sense_climb`` and the drones' sensors for one drone (``kernels.drain_energy_3d``)
     while no radiation source is active; None otherwise."""
     if any(source.active for source in sim.world.objects.radiation_sources):
@@ -166,7 +166,7 @@ class Gathering3DMission(GatheringMission):
     meanings: ClassVar[dict[str, tuple[str, str]]] = {**GatheringMission.meanings, **MEANINGS}
 
     @classmethod
-    def check(cls, scenario: Scenario, reader: Reader) -> None:
+    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
         """The gathering's checks; the 3-D drone; altitudes below the ceiling."""
         super().check(scenario, reader)
         check_3d(scenario, reader, "surveillance_positions")
@@ -183,12 +183,12 @@ class Gathering3DMission(GatheringMission):
         DroneMission.place(self, swarm, world, rng)
         set_surveillance_3d(swarm, cycled(self.scenario.objects.surveillance_positions, swarm.size))
 
-    def sense(self, sim: Simulation) -> np.ndarray:
+    def sense(self, sim: SimulationView) -> np.ndarray:
         """The climb's energy, then the drones' sensors."""
         sense_climb(self, sim)
         return super().sense(sim)
 
-    def compiled_sensors(self, sim: Simulation) -> SensorKernel | None:
+    def compiled_sensors(self, sim: SimulationView) -> SensorKernel | None:
         """:meth:`sense` for one drone, for the compiled engine's fused loop."""
         return compiled_sensors_3d(self, sim)
 
@@ -203,7 +203,7 @@ class Gathering3DMission(GatheringMission):
                                              SURVEILLANCE_3D, receive=Receive(adopt_point_3d))),
         ]  # fmt: skip
 
-    def adopt_gathering_position(self, sim: Simulation, delivery: Delivery) -> None:
+    def adopt_gathering_position(self, sim: SimulationView, delivery: Delivery) -> None:
         """The receiver's surveillance position becomes the message's x, y, z (the last one,
         in canonical order, if several arrived)."""
         bb = sim.swarm.blackboard
@@ -241,7 +241,7 @@ class Patrol3DMission(PatrolMission):
     }
 
     @classmethod
-    def check(cls, scenario: Scenario, reader: Reader) -> None:
+    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
         """The patrol's checks; the 3-D drone; altitudes below the ceiling."""
         super().check(scenario, reader)
         check_3d(scenario, reader, "patrol_positions")
@@ -263,12 +263,12 @@ class Patrol3DMission(PatrolMission):
         bb["index_current_surveillance_position"][:] = 1
         set_surveillance_3d(swarm, np.tile(np.asarray(first, dtype=np.float64), (swarm.size, 1)))
 
-    def sense(self, sim: Simulation) -> np.ndarray:
+    def sense(self, sim: SimulationView) -> np.ndarray:
         """The climb's energy, then the drones' sensors."""
         sense_climb(self, sim)
         return super().sense(sim)
 
-    def compiled_sensors(self, sim: Simulation) -> SensorKernel | None:
+    def compiled_sensors(self, sim: SimulationView) -> SensorKernel | None:
         """:meth:`sense` for one drone, for the compiled engine's fused loop."""
         return compiled_sensors_3d(self, sim)
 

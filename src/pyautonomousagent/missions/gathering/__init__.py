@@ -17,12 +17,13 @@ from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation import (
     MessageType,
     Param,
-    Simulation,
+    SimulationView,
     WorldObject,
     register_mission,
 )
 from pyautonomousagent.simulation.params import Reader
-from pyautonomousagent.simulation.scenario import Scenario, check_point_in_world
+from pyautonomousagent.simulation.scenario import check_point_in_world
+from pyautonomousagent.simulation.scenario_view import ScenarioView
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
@@ -46,7 +47,7 @@ class GatheringMission(DroneMission):
     )  # fmt: skip
 
     @classmethod
-    def check(cls, scenario: Scenario, reader: Reader) -> None:
+    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
         """The sender is one of the drones; positions lie in the world."""
         sender = scenario.parameters.gathering_sender
         number = sender.removeprefix(cls.agent_prefix)  # no list of names: agents may be 10**12
@@ -77,7 +78,7 @@ class GatheringMission(DroneMission):
                                              receive=Receive(adopt_point))),
         ]  # fmt: skip
 
-    def adopt_gathering_position(self, sim: Simulation, delivery: Delivery) -> None:
+    def adopt_gathering_position(self, sim: SimulationView, delivery: Delivery) -> None:
         """The receiver's surveillance position becomes the message's position (the last
         one, in canonical order, if several arrived)."""
         bb = sim.swarm.blackboard

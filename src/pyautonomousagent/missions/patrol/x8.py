@@ -21,8 +21,8 @@ from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
 from pyautonomousagent.bt.status import RUNNING, SUCCESS, status_if
 from pyautonomousagent.kernels import LeafKernel
 from pyautonomousagent.missions.drones.leaves import SPEED
-from pyautonomousagent.missions.patrol import PatrolMission
 from pyautonomousagent.missions.patrol import x8_kernels as k
+from pyautonomousagent.missions.patrol.mission import PatrolMission
 from pyautonomousagent.models.x8_modes import (
     ALTITUDE_COLUMN,
     CRUISE,
@@ -36,7 +36,8 @@ from pyautonomousagent.models.x8_modes import (
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation import WorldObject, register_mission
 from pyautonomousagent.simulation.params import Param, Reader
-from pyautonomousagent.simulation.scenario import Scenario, check_point_in_world
+from pyautonomousagent.simulation.scenario import check_point_in_world
+from pyautonomousagent.simulation.scenario_view import ScenarioView
 from pyautonomousagent.state import AgentView
 from pyautonomousagent.world import World
 
@@ -110,7 +111,7 @@ class X8PatrolMission(PatrolMission):
     }  # fmt: skip
 
     @classmethod
-    def check(cls, scenario: Scenario, reader: Reader) -> None:
+    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
         """The runway's aim point and approach fix lie in the world."""
         super().check(scenario, reader)
         runway = scenario.objects.runway

@@ -47,8 +47,8 @@ from pyautonomousagent.mission import (
     Param,
     Point,
     Reader,
-    Scenario,
-    Simulation,
+    ScenarioView,
+    SimulationView,
     Swarm,
     World,
     WorldObject,
@@ -137,7 +137,7 @@ class RadiationSearchMission(Mission):
     }
 
     @classmethod
-    def check(cls, scenario: Scenario, reader: Reader) -> None:
+    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
         """The source and the start positions lie in the world."""
         source = scenario.objects.radiation_source
         check_point_in_world(reader, scenario, (source.x, source.y), "world.radiation_source")
@@ -161,13 +161,13 @@ class RadiationSearchMission(Mission):
         s["x"][:], s["y"][:] = start[:, 0], start[:, 1]
         s["radiation"][:] = radiation_level(s["x"], s["y"], self.scenario.objects.radiation_source)
 
-    def sense(self, sim: Simulation) -> None:
+    def sense(self, sim: SimulationView) -> None:
         """Every drone reads the radiation level at its position; all of them move."""
         s = sim.swarm.columns
         s["radiation"][:] = radiation_level(s["x"], s["y"], self.scenario.objects.radiation_source)
         return None
 
-    def compiled_sensors(self, sim: Simulation) -> SensorKernel:
+    def compiled_sensors(self, sim: SimulationView) -> SensorKernel:
         """:meth:`sense` for one drone (``kernels.radiation_reading``)."""
         source = self.scenario.objects.radiation_source
         constants = (float(source.x), float(source.y), float(source.range))
@@ -182,7 +182,7 @@ class RadiationSearchMission(Mission):
                                              receive=Receive(take_found))),
         ]  # fmt: skip
 
-    def store_reported_position(self, sim: Simulation, delivery: Delivery) -> None:
+    def store_reported_position(self, sim: SimulationView, delivery: Delivery) -> None:
         """A receiver that knows no position yet takes the first ``found`` it received (in
         canonical order: by sender); one that knows a position keeps it."""
         bb = sim.swarm.blackboard

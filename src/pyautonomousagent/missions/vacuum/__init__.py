@@ -53,8 +53,8 @@ from pyautonomousagent.mission import (
     Point,
     Reader,
     Recorder,
-    Scenario,
-    Simulation,
+    ScenarioView,
+    SimulationView,
     Swarm,
     World,
     WorldObject,
@@ -152,7 +152,7 @@ class VacuumMission(Mission):
     }
 
     @classmethod
-    def check(cls, scenario: Scenario, reader: Reader) -> None:
+    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
         """drone2d motion; obstacles and start positions in the room, the starts clear of
         the obstacles; a sonar that sees farther than one step; a turn range and a grid
         that make sense."""
@@ -211,7 +211,7 @@ class VacuumMission(Mission):
         self.fresh = np.zeros(swarm.size, dtype=np.int64)  # the compiled grid's, per robot
         self.winner = np.full(self.grid.free.size, NOBODY)  # the GPU's, per cell
 
-    def sense(self, sim: Simulation) -> np.ndarray:
+    def sense(self, sim: SimulationView) -> np.ndarray:
         """Clean under the brushes that ran, read the sonar, stop robots about to collide.
 
         Returns:
@@ -224,7 +224,7 @@ class VacuumMission(Mission):
         next_x, next_y = next_position(s["x"], s["y"], s["speed"], s["heading"])
         return ~self.room.blocked(next_x, next_y, STOP_MARGIN)
 
-    def compiled_sensors(self, sim: Simulation) -> SensorKernel:
+    def compiled_sensors(self, sim: SimulationView) -> SensorKernel:
         """:meth:`sense` compiled: the sonar and the stop rule per robot
         (``kernels.sonar_and_stop``, the room's rectangles and circles as its state), and the
         cleaning as a sensor of the whole swarm (``kernels.clean_grid`` once an iteration on

@@ -1,0 +1,76 @@
+"""The patrol mission: drones patrol between two surveillance positions and refuel at low
+energy (the paper's Fig. 11-12)."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+
+from pyautonomousagent.missions.drones.leaves import PATROL
+from pyautonomousagent.missions.drones.mission import DroneMission
+from pyautonomousagent.render.marks import Mark
+from pyautonomousagent.simulation import WorldObject, register_mission
+from pyautonomousagent.simulation.params import Point, Reader
+from pyautonomousagent.simulation.scenario import check_point_in_world
+from pyautonomousagent.simulation.scenario_view import ScenarioView
+from pyautonomousagent.state import Swarm
+from pyautonomousagent.world import World
+
+
+def read_patrol_positions(reader: Reader, data: Any, path: str) -> tuple[Point, ...]:
+    """Exactly two [x, y]."""
+    return reader.points(data, path, 2, 2)
+
+
+@register_mission
+class PatrolMission(DroneMission):
+    """Fig. 12's mission: every drone alternates between the two patrol positions."""
+
+    name = "patrol"
+    description = "drones patrol between two surveillance positions and refuel"
+    world_objects: ClassVar[tuple[WorldObject, ...]] = (
+        *DroneMission.world_objects,
+        WorldObject("patrol_positions", read_patrol_positions,
+                    doc="the two positions patrolled by every drone; the first is the first"),
+    )  # fmt: skip
+
+    meanings: ClassVar[dict[str, tuple[str, str]]] = {
+        **DroneMission.meanings,
+        "index_current_surveillance_position": (
+            "",
+            "blackboard: patrol position flown to (1 or 2)",
+        ),
+        "x_surveillance_position_1": ("world unit", "blackboard: patrol position 1, east"),
+        "y_surveillance_position_1": ("world unit", "blackboard: patrol position 1, north"),
+        "x_surveillance_position_2": ("world unit", "blackboard: patrol position 2, east"),
+        "y_surveillance_position_2": ("world unit", "blackboard: patrol position 2, north"),
+    }
+
+    @classmethod
+    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
+        """Positions lie in the world."""
+        for key in ("refueling_positions", "patrol_positions"):
+            for i, point in enumerate(getattr(scenario.objects, key)):
+                check_point_in_world(reader, scenario, point, f"world.{key}[{i}]")
+
+    def blackboard(self) -> dict[str, Any]:
+        """Table 3 plus the two patrol positions and the index of the current one."""
+        keys = super().blackboard()
+        keys.update({k: np.float64 for k in PATROL})
+        keys["index_current_surveillance_position"] = np.int64
+        return keys
+
+    def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
+        """On the refuelling slots; the first patrol position is the first destination."""
+        super().place(swarm, world, rng)
+        (x1, y1), (x2, y2) = self.scenario.objects.patrol_positions
+        bb = swarm.blackboard
+        bb["x_surveillance_position_1"][:], bb["y_surveillance_position_1"][:] = x1, y1
+        bb["x_surveillance_position_2"][:], bb["y_surveillance_position_2"][:] = x2, y2
+        bb["index_current_surveillance_position"][:] = 1
+        self.set_surveillance(swarm, np.tile([x1, y1], (swarm.size, 1)))
+
+    def marks(self) -> list[Mark]:
+        """Slots R1.., the two patrol positions S1, S2."""
+        return [*super().marks(), *self.surveillance_marks(self.scenario.objects.patrol_positions)]
