@@ -189,6 +189,7 @@ def sequence_rule(n: Ops) -> None:
     (BT.CPP's: in this run, or this tick without memory). Remembers the child it ticks
     (-1: none), and whether no child succeeded yet."""
     memory = n.params["memory"]
+    skips = any(n.skippable(k) for k in range(n.kids))
     fresh = n.let("fresh", n.status() != RUNNING)
     with n.when(fresh):
         n.halt(0)
@@ -197,21 +198,31 @@ def sequence_rule(n: Ops) -> None:
         n.finish(SUCCESS)
         return
     start = n.let("start", n.pick(fresh, 0, n.memory())) if memory else 0
-    with n.when(fresh if memory else True):
-        n.set_memory(1, slot=1)  # no child succeeded yet in this run
+    if skips:
+        with n.when(fresh if memory else True):
+            n.set_memory(1, slot=1)  # no child succeeded yet in this run
     for k in range(n.kids):
         with n.when(start <= k):
             if memory:
                 n.set_memory(k)
             result = n.tick(k)
-            stop = n.let("stop", (result != SUCCESS) & (result != SKIPPED))
+            stop = n.let("stop", _neither(n, k, result, SUCCESS))
             if not memory:
                 with n.when(stop):
                     n.halt(k + 1)
             n.finish(result, where=stop)
-            with n.when(result == SUCCESS):
-                n.set_memory(0, slot=1)
-    n.finish(n.pick(n.memory(1) == 1, SKIPPED, SUCCESS))
+            if skips:
+                with n.when(result == SUCCESS if n.skippable(k) else True):
+                    n.set_memory(0, slot=1)
+    n.finish(n.pick(n.memory(1) == 1, SKIPPED, SUCCESS) if skips else SUCCESS)
+
+
+def _neither(n: Ops, k: int, result: Any, proceed: int) -> Any:
+    """Whether child ``k``'s ``result`` is neither ``proceed`` nor SKIPPED (the latter asked
+    only of a child that may be skipped)."""
+    if n.skippable(k):
+        return (result != proceed) & (result != SKIPPED)
+    return result != proceed
 
 
 def fallback_rule(n: Ops) -> None:
@@ -232,21 +243,24 @@ def fallback_rule(n: Ops) -> None:
         with n.when(previous > k):
             n.halt(k, k + 1)
     start = previous if memory else 0
-    with n.when(fresh if memory else True):
-        n.set_memory(1, slot=1)  # no child failed yet in this run
+    skips = any(n.skippable(k) for k in range(n.kids))
+    if skips:
+        with n.when(fresh if memory else True):
+            n.set_memory(1, slot=1)  # no child failed yet in this run
     for k in range(n.kids):
         with n.when(start <= k):
             result = n.tick(k)
-            chosen = n.let("chosen", (result != FAILURE) & (result != SKIPPED))
+            chosen = n.let("chosen", _neither(n, k, result, FAILURE))
             with n.when(chosen):
                 n.set_memory(k)
                 with n.when(previous != k):
                     n.halt(k + 1)
             n.finish(result, where=chosen)
-            with n.when(result == FAILURE):
-                n.set_memory(0, slot=1)
+            if skips:
+                with n.when(result == FAILURE if n.skippable(k) else True):
+                    n.set_memory(0, slot=1)
     n.set_memory(n.kids - 1)
-    n.finish(n.pick(n.memory(1) == 1, SKIPPED, FAILURE))
+    n.finish(n.pick(n.memory(1) == 1, SKIPPED, FAILURE) if skips else FAILURE)
 
 
 # -- py_trees composites, written with BT.CPP's tags -------------------------------------------
@@ -590,9 +604,11 @@ def try_catch_rule(n: Ops) -> None:
     SKIPPED when it was all skipped. Remembers the child to tick (0..N-2 in the try block,
     N-1 in the catch) and whether no try child succeeded yet."""
     catch = n.kids - 1
+    skips = any(n.skippable(k) for k in range(catch))
     with n.when(n.status() != RUNNING):
         n.set_memory(0)
-        n.set_memory(1, slot=1)  # no try child succeeded yet
+        if skips:
+            n.set_memory(1, slot=1)  # no try child succeeded yet
     for k in range(catch):
         with n.when(n.memory() <= k):
             result = n.tick(k)
@@ -602,12 +618,13 @@ def try_catch_rule(n: Ops) -> None:
             with n.when(result == FAILURE):
                 n.halt(0)
                 n.set_memory(catch)
-            with n.when(result == SUCCESS):
-                n.set_memory(0, slot=1)
+            if skips:
+                with n.when(result == SUCCESS):
+                    n.set_memory(0, slot=1)
     with n.when(n.memory() != catch):
         n.halt(0)
         n.set_memory(0)
-        n.finish(n.pick(n.memory(1) == 1, SKIPPED, SUCCESS))
+        n.finish(n.pick(n.memory(1) == 1, SKIPPED, SUCCESS) if skips else SUCCESS)
     result = n.tick(catch)
     with n.when(result != RUNNING):
         n.halt(0)

@@ -2,8 +2,7 @@
 
 The batched engine ticks it over NumPy arrays; the compiled and GPU engines generate their
 kernels from it. A subtree is the contiguous range ``[i, end[i])`` of nodes in pre-order.
-Also here, once for every engine: how BehaviorTree.CPP's pre-condition attributes decide a
-node (:data:`PRE_CONDITIONS`) and what a Switch's cases compare with (:func:`case_values`).
+Also here, once for every engine: what a Switch's cases compare with (:func:`case_values`).
 """
 
 from __future__ import annotations
@@ -16,18 +15,6 @@ import numpy as np
 
 from pyautonomousagent.bt.script_leaves import literal
 from pyautonomousagent.bt.spec import Node, control_params
-from pyautonomousagent.bt.status import FAILURE, SKIPPED, SUCCESS
-
-#: BehaviorTree.CPP's pre-condition attributes in the order it checks them: (attribute, the
-#: status, a code of :mod:`pyautonomousagent.bt.status`, the node gets without a tick, the
-#: script's truth value that decides it, whether it is also asked of a RUNNING node, which
-#: is then halted first). Asked of a node that does not resume (not RUNNING), in order.
-PRE_CONDITIONS = (
-    ("_failureIf", FAILURE, True, False),
-    ("_successIf", SUCCESS, True, False),
-    ("_skipIf", SKIPPED, True, False),
-    ("_while", SKIPPED, False, True),
-)
 
 
 @dataclass(frozen=True)

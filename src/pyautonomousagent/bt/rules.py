@@ -39,6 +39,10 @@ class Ops(Protocol):
     @property
     def params(self) -> Mapping[str, Any]: ...
 
+    def skippable(self, k: int) -> bool:
+        """Whether child ``k`` may be SKIPPED (fixed when the tree is built: ``spec.may_skip``);
+        a rule keeps BT.CPP's bookkeeping of skipped children only where one may be."""
+
     def status(self) -> Any:
         """The node's own status before this tick (a code of :mod:`.status`)."""
 

@@ -21,6 +21,7 @@ from typing import Any
 
 from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType
 from pyautonomousagent.bt.nodes import BlackboardRef as BlackboardRef
+from pyautonomousagent.bt.status import FAILURE, SKIPPED, SUCCESS
 
 PARALLEL_POLICIES = ("SuccessOnAll", "SuccessOnOne")
 
@@ -149,8 +150,19 @@ def check_structure(root: Node) -> None:
                 )
 
 
+#: BehaviorTree.CPP's pre-condition attributes in the order it checks them: (attribute, the
+#: status, a code of :mod:`pyautonomousagent.bt.status`, the node gets without a tick, the
+#: script's truth value that decides it, whether it is also asked of a RUNNING node, which
+#: is then halted first). Asked of a node that does not resume (not RUNNING), in order.
+PRE_CONDITIONS = (
+    ("_failureIf", FAILURE, True, False),
+    ("_successIf", SUCCESS, True, False),
+    ("_skipIf", SKIPPED, True, False),
+    ("_while", SKIPPED, False, True),
+)
+
 #: Scripting attributes that may make a node SKIPPED (BehaviorTree.CPP's pre-conditions).
-SKIPPING = ("_skipIf", "_while")
+SKIPPING = tuple(key for key, status, *_ in PRE_CONDITIONS if status == SKIPPED)
 
 
 def may_skip(node: Node) -> bool:

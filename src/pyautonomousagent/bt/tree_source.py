@@ -15,6 +15,7 @@ from typing import Any
 
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.program import Program
+from pyautonomousagent.bt.spec import may_skip
 
 
 class Source:
@@ -29,7 +30,7 @@ class Source:
 
     def _op(self, op: str, other: Any, flip: bool = False) -> Source:
         left, right = (other, self) if flip else (self, other)
-        return Source(f"({_text(left)} {op} {_text(right)})")
+        return Source(f"({source_text(left)} {op} {source_text(right)})")
 
     def __eq__(self, other: Any) -> Source:  # type: ignore[override]
         return self._op("==", other)
@@ -64,7 +65,7 @@ class Source:
     __hash__ = None  # type: ignore[assignment]
 
 
-def _text(value: Any) -> str:
+def source_text(value: Any) -> str:
     """Source text of a value: a :class:`Source`, a bool or a whole number."""
     if isinstance(value, bool):
         return str(value)
@@ -89,6 +90,9 @@ class SourceOps:
     def _emit(self, line: str) -> None:
         self.lines.append("    " * self._depth + line)
 
+    def skippable(self, k: int) -> bool:
+        return may_skip(self.program.nodes[self.children[k]])
+
     def status(self) -> Source:
         return Source(f"st[{self.i}, a]")
 
@@ -96,7 +100,7 @@ class SourceOps:
         return Source(f"cur[{self.row + slot}, a]")
 
     def set_memory(self, value: Any, slot: int = 0) -> None:
-        self._emit(f"cur[{self.row + slot}, a] = {_text(value)}")
+        self._emit(f"cur[{self.row + slot}, a] = {source_text(value)}")
 
     def child(self, k: int) -> Source:
         return Source(f"st[{self.children[k]}, a]")
@@ -120,10 +124,10 @@ class SourceOps:
     def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
         if not isinstance(cond, Source):
             return if_true if cond else if_false
-        return Source(f"({_text(if_true)} if {cond.text} else {_text(if_false)})")
+        return Source(f"({source_text(if_true)} if {cond.text} else {source_text(if_false)})")
 
     def lookup(self, table: tuple[int, ...], value: Any) -> Source:
-        return Source(f"({', '.join(map(str, table))},)[{_text(value)}]")
+        return Source(f"({', '.join(map(str, table))},)[{source_text(value)}]")
 
     @contextmanager
     def when(self, cond: Any) -> Iterator[None]:
@@ -142,7 +146,7 @@ class SourceOps:
 
     def finish(self, status: Any, where: Any = True) -> None:
         with self.when(where):
-            self._emit(f"st[{self.i}, a] = {_text(status)}")
+            self._emit(f"st[{self.i}, a] = {source_text(status)}")
             if self._depth or isinstance(where, Source):
                 self._emit("break")
 

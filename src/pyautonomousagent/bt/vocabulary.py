@@ -17,8 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType
-from pyautonomousagent.bt.program import PRE_CONDITIONS
-from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.bt.spec import PRE_CONDITIONS, Node
 
 
 @dataclass(frozen=True)
@@ -90,7 +89,11 @@ UNSUPPORTED: dict[str, str] = {
 #: BehaviorTree.CPP's scripting attributes, any node may have them (see Node.scripts): the
 #: pre-conditions (:data:`~pyautonomousagent.bt.program.PRE_CONDITIONS`), then the others.
 SCRIPT_ATTRIBUTES = (
-    *(pre[0] for pre in PRE_CONDITIONS), "_onSuccess", "_onFailure", "_post", "_onHalted"
+    *(pre[0] for pre in PRE_CONDITIONS),
+    "_onSuccess",
+    "_onFailure",
+    "_post",
+    "_onHalted",
 )
 
 #: Scripting attributes refused, with the reason (none: BT.CPP 4.8's all run).

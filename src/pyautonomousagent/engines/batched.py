@@ -29,14 +29,16 @@ from pyautonomousagent.allocator import reuse_freed_memory
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
 from pyautonomousagent.bt.nodes import NODE_TYPES
-from pyautonomousagent.bt.program import PRE_CONDITIONS, case_values, compile_tree
+from pyautonomousagent.bt.program import case_values, compile_tree
 from pyautonomousagent.bt.rules import Rule
 from pyautonomousagent.bt.script import Script, parse
 from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import (
+    PRE_CONDITIONS,
     Node,
     TreeError,
     check_entries,
+    may_skip,
     parallel_threshold,
 )
 from pyautonomousagent.bt.status import (
@@ -471,6 +473,9 @@ class MaskedOps:
         if self._eff is None:
             self._eff = self._alive if self._guard is None else self._alive & self._guard
         return self._eff
+
+    def skippable(self, k: int) -> bool:
+        return may_skip(self._engine.program.nodes[self.children[k]])
 
     def status(self) -> np.ndarray:
         return self._status

@@ -22,11 +22,11 @@ import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from pyautonomousagent.bt import program
 from pyautonomousagent.bt import status as codes
 from pyautonomousagent.bt.program import case_values
 from pyautonomousagent.bt.script import parse
 from pyautonomousagent.bt.script_leaves import iterations
+from pyautonomousagent.bt.spec import PRE_CONDITIONS as PRE_CONDITION_CODES
 from pyautonomousagent.bt.spec import parallel_threshold
 
 
@@ -307,9 +307,9 @@ class Switch(py_trees.composites.Composite):
         yield self
 
 
-#: :data:`~pyautonomousagent.bt.program.PRE_CONDITIONS` with py_trees' statuses.
+#: :data:`~pyautonomousagent.bt.PRE_CONDITION_CODES` with py_trees' statuses.
 PRE_CONDITIONS: tuple[tuple[str, Any, bool, bool], ...] = tuple(
-    (key, TO_PYTREES[code], *rest) for key, code, *rest in program.PRE_CONDITIONS
+    (key, TO_PYTREES[code], *rest) for key, code, *rest in PRE_CONDITION_CODES
 )
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import operator
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator, Mapping
-from functools import partial
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -21,10 +21,10 @@ from py_trees.common import Status
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
 from pyautonomousagent.bt.nodes import CONTROL, NODE_TYPES
-from pyautonomousagent.bt.rules import Rule
-from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params
+from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params, may_skip
 from pyautonomousagent.bt.status import invalid_status
-from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, FROM_PYTREES, TO_PYTREES, with_scripts
+from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, TO_PYTREES, with_scripts
+from pyautonomousagent.engines.pytrees_rules import tick_method
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -148,6 +148,8 @@ def _control_behaviour(
     node: Node, children: list[py_trees.behaviour.Behaviour]
 ) -> py_trees.behaviour.Behaviour:
     """The py_trees composite or decorator for a control node."""
+    if NODE_TYPES[node.type].rule is not None:
+        return _rule_behaviour(node, children)
     return PYTREES_NODES[node.type](node.name, children, control_params(node))
 
 
@@ -163,124 +165,78 @@ def _parallel(
     return py_trees.composites.Parallel(name, policy, children)
 
 
-class _Ruled:
-    """A node type with a rule (:mod:`pyautonomousagent.bt.rules`) for one agent: its tick
-    runs the rule with a :class:`ScalarOps` (py_trees' ``stop`` halts it as it halts any
-    composite or decorator)."""
+class RuleComposite(py_trees.composites.Composite):
+    """A control node type with a rule, as a py_trees composite: its class's ``tick`` is the
+    rule written for its shape (:func:`~pyautonomousagent.engines.pytrees_rules.tick_method`),
+    its memory ``m0``, ``m1``, ... (0 before it is first set)."""
 
-    ops: ScalarOps
-    rule: Rule
-
-    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
-        """Run the rule, then yield this node."""
-        self.ops.alive = self.ops.guard = True
-        self.rule(self.ops)
-        yield self  # type: ignore[misc]
+    def __init__(self, name: str, children: list[Any], slots: int) -> None:
+        super().__init__(name, children)
+        for slot in range(slots):
+            setattr(self, f"m{slot}", 0)
 
     def update(self) -> Status:  # pragma: no cover - tick() does the work
-        return self.status  # type: ignore[attr-defined]
+        return self.status
+
+    def stop(self, new_status: Status = Status.INVALID) -> None:
+        """Halted (INVALID): the children are halted too; take the status (py_trees' ``stop``
+        without its debug lines, whose text it builds on every call)."""
+        if new_status == Status.INVALID:
+            self.current_child = None
+            _halt(self.children)
+        self.terminate(new_status)
+        self.status = new_status
 
 
-class RuleComposite(_Ruled, py_trees.composites.Composite):
-    """A control node type with a rule, as a py_trees composite."""
+class RuleDecorator(py_trees.decorators.Decorator):
+    """A decorator type with a rule, as a py_trees decorator (see :class:`RuleComposite`)."""
 
-    def __init__(
-        self, name: str, children: list[Any], params: dict[str, Any], rule: Rule, slots: int
-    ) -> None:
-        super().__init__(name, children)
-        self.ops, self.rule = ScalarOps(self, params, slots), rule
-
-
-class RuleDecorator(_Ruled, py_trees.decorators.Decorator):
-    """A decorator type with a rule, as a py_trees decorator."""
-
-    def __init__(
-        self, name: str, children: list[Any], params: dict[str, Any], rule: Rule, slots: int
-    ) -> None:
+    def __init__(self, name: str, children: list[Any], slots: int) -> None:
         super().__init__(name=name, child=children[0])
-        self.ops, self.rule = ScalarOps(self, params, slots), rule
+        for slot in range(slots):
+            setattr(self, f"m{slot}", 0)
+
+    def update(self) -> Status:  # pragma: no cover - tick() does the work
+        return self.status
+
+    def stop(self, new_status: Status = Status.INVALID) -> None:
+        """As :meth:`RuleComposite.stop`."""
+        if new_status == Status.INVALID:
+            _halt(self.children)
+        self.terminate(new_status)
+        self.status = new_status
 
 
-class ScalarOps:
-    """:class:`~pyautonomousagent.bt.rules.Ops` of one agent's node: values plain status codes
-    and whole numbers; a step under a condition that does not hold does nothing. The child
-    ticked last is py_trees' ``current_child``."""
+@cache
+def _rule_class(
+    type_name: str, kids: int, params: tuple[tuple[str, Any], ...], skippable: tuple[bool, ...]
+) -> type:
+    """The py_trees class of a node type with a rule, for one shape (see ``tick_method``)."""
+    record = NODE_TYPES.get(type_name)
+    base = RuleComposite if record.kind == CONTROL else RuleDecorator
+    tick = tick_method(type_name, kids, params, skippable)
+    return type(type_name, (base,), {"tick": tick, "__doc__": record.tags[0].doc})
 
-    def __init__(self, node: Any, params: dict[str, Any], slots: int) -> None:
-        self.node, self.params, self.kids = node, params, len(node.children)
-        self.memorised, self.alive, self.guard = [0] * slots, True, True
-        self._outer: list[bool] = []
 
-    def status(self) -> int:
-        return FROM_PYTREES[self.node.status]
-
-    def memory(self, slot: int = 0) -> int:
-        return self.memorised[slot]
-
-    def set_memory(self, value: Any, slot: int = 0) -> None:
-        if self.alive and self.guard:
-            self.memorised[slot] = int(value)
-
-    def child(self, k: int) -> int:
-        return FROM_PYTREES[self.node.children[k].status]
-
-    def tick(self, k: int) -> int:
-        child = self.node.children[k]
-        if self.alive and self.guard:
-            self.node.current_child = child
-            deque(child.tick(), maxlen=0)
-        return FROM_PYTREES[child.status]
-
-    def halt(self, first: int, last: int | None = None) -> None:
-        if self.alive and self.guard:
-            _halt(self.node.children[first:last])
-
-    def let(self, name: str, value: Any) -> Any:
-        return value
-
-    def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
-        return if_true if cond else if_false
-
-    def lookup(self, table: tuple[int, ...], value: Any) -> int:
-        return table[value]
-
-    def when(self, cond: Any) -> ScalarOps:
-        """A block for this agent if ``cond`` holds (and every block around it)."""
-        self._outer.append(self.guard)
-        self.guard = self.guard and bool(cond)
-        return self
-
-    def __enter__(self) -> None:
-        return None
-
-    def __exit__(self, *exc: object) -> None:
-        self.guard = self._outer.pop()
-
-    def finish(self, status: Any, where: Any = True) -> None:
-        if self.alive and self.guard and where:
-            self.node.status = TO_PYTREES[int(status)]
-            self.alive = False
+def _rule_behaviour(node: Node, children: list[Any]) -> py_trees.behaviour.Behaviour:
+    """The py_trees behaviour of a node whose type has a rule."""
+    params = tuple(sorted(control_params(node).items()))
+    skippable = tuple(may_skip(child) for child in node.children)
+    cls = _rule_class(node.type, len(children), params, skippable)
+    behaviour: py_trees.behaviour.Behaviour = cls(node.name, children, NODE_TYPES[node.type].memory)
+    return behaviour
 
 
 _decorators = py_trees.decorators
 #: Node type -> py_trees behaviour, called with (name, children, parameters): one entry per
-#: record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES`; py_trees' own node types are
-#: py_trees' classes, the others BT.CPP's (``engines/btcpp.py``) or derived from their rule
-#: (:class:`RuleBehaviour`).
+#: record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES` without a rule; py_trees' own
+#: node types are py_trees' classes, the others BT.CPP's (``engines/btcpp.py``). A type with
+#: a rule is a class derived from it (:func:`_rule_class`).
 PYTREES_NODES: dict[str, Callable[[str, list[Any], dict[str, Any]], Any]] = {
     "PyTreesParallel": _parallel,
     "PyTreesRepeat": lambda name, kids, p: _decorators.Repeat(name, kids[0], p["num_success"]),
     "PyTreesRetry": lambda name, kids, p: _decorators.Retry(name, kids[0], p["num_failures"]),
     **BTCPP_BEHAVIOURS,
-}
-PYTREES_NODES |= {
-    name: partial(
-        RuleComposite if record.kind == CONTROL else RuleDecorator,
-        rule=record.rule,
-        slots=record.memory,
-    )
-    for name, record in NODE_TYPES.items()
-    if record.rule is not None
 }
 
 

@@ -1,0 +1,151 @@
+"""A node type's rule as the ``tick`` of a py_trees behaviour, generated once per node shape.
+
+The rule (:mod:`pyautonomousagent.bt.rules`) is run once with :class:`ScalarSourceOps`, which
+writes what it does for one agent as Python source: a generator method over ``self`` (a
+py_trees composite or decorator) whose statuses are py_trees' own, compared by identity, and
+whose memory is ``self.m0``, ``self.m1``, ... The source is compiled once per node type,
+parameters, number of children and which children may be SKIPPED (:func:`tick_method`), so
+a tick runs straight-line code with no rule interpreted.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from functools import cache
+from typing import Any
+
+from pyautonomousagent.bt.nodes import NODE_TYPES
+from pyautonomousagent.bt.status import INVALID
+from pyautonomousagent.bt.tree_source import Source, source_text
+from pyautonomousagent.engines.btcpp import FROM_PYTREES, TO_PYTREES
+
+
+class StatusSource(Source):
+    """A py_trees status in the generated code: ``==``/``!=`` a status code (or another
+    status) are identity tests against py_trees' status objects."""
+
+    def _op(self, op: str, other: Any, flip: bool = False) -> Source:
+        if op not in ("==", "!="):
+            raise TypeError(f"a status is compared with == or != only, not {op}")
+        test = "is" if op == "==" else "is not"
+        return Source(f"({self.text} {test} {_status_text(other)})")
+
+
+def _status_text(value: Any) -> str:
+    """Source of a status: a status code (its py_trees status's name in the namespace), a
+    :class:`StatusSource`, or another :class:`Source` holding a code (looked up)."""
+    if isinstance(value, StatusSource):
+        return value.text
+    if isinstance(value, Source):
+        return f"STATUS[{value.text}]"
+    return f"S{int(value)}"
+
+
+class ScalarSourceOps:
+    """:class:`~pyautonomousagent.bt.rules.Ops` that writes a rule as the body of a py_trees
+    ``tick`` for one agent: the children are ``c0``, ``c1``, ...; a ``finish`` sets
+    ``self.status``, yields ``self`` and returns."""
+
+    def __init__(self, kids: int, params: Mapping[str, Any], skippable: tuple[bool, ...]):
+        self.kids, self.params, self._skippable = kids, params, skippable
+        self.lines: list[str] = []
+        self._depth = 1
+        self.tables: dict[str, dict[int, Any]] = {}
+
+    def _emit(self, line: str) -> None:
+        self.lines.append("    " * self._depth + line)
+
+    def skippable(self, k: int) -> bool:
+        return self._skippable[k]
+
+    def status(self) -> StatusSource:
+        return StatusSource("self.status")
+
+    def memory(self, slot: int = 0) -> Source:
+        return Source(f"self.m{slot}")
+
+    def set_memory(self, value: Any, slot: int = 0) -> None:
+        text = f"CODE[id({value.text})]" if isinstance(value, StatusSource) else source_text(value)
+        self._emit(f"self.m{slot} = {text}")
+
+    def child(self, k: int) -> StatusSource:
+        return StatusSource(f"c{k}.status")
+
+    def tick(self, k: int) -> StatusSource:
+        self._emit(f"self.current_child = c{k}")
+        self._emit(f"run(c{k}.tick())")
+        self._emit(f"result = c{k}.status")
+        return StatusSource("result")
+
+    def halt(self, first: int, last: int | None = None) -> None:
+        for k in range(self.kids)[first:last]:
+            self._emit(f"if c{k}.status is not S{INVALID}:")
+            self._emit(f"    c{k}.stop(S{INVALID})")
+
+    def let(self, name: str, value: Any) -> Any:
+        if not isinstance(value, Source):
+            return value
+        self._emit(f"{name} = {value.text}")
+        return type(value)(name)
+
+    def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
+        if not isinstance(cond, Source):
+            return if_true if cond else if_false
+        if isinstance(if_true, StatusSource) or isinstance(if_false, StatusSource):
+            true, false = _status_text(if_true), _status_text(if_false)
+            return StatusSource(f"({true} if {cond.text} else {false})")
+        return Source(f"({source_text(if_true)} if {cond.text} else {source_text(if_false)})")
+
+    def lookup(self, table: tuple[int, ...], value: Any) -> StatusSource:
+        name = f"TABLE{len(self.tables)}"
+        self.tables[name] = {id(TO_PYTREES[a]): TO_PYTREES[b] for a, b in enumerate(table)}
+        return StatusSource(f"{name}[id({source_text(value)})]")
+
+    @contextmanager
+    def when(self, cond: Any) -> Iterator[None]:
+        if not isinstance(cond, Source):
+            if not cond:
+                raise ValueError("a rule's condition is false whatever the agent")
+            yield
+            return
+        self._emit(f"if {cond.text}:")
+        self._depth += 1
+        size = len(self.lines)
+        yield
+        if len(self.lines) == size:
+            self.lines.pop()  # nothing to do: no block (a condition has no side effect)
+        self._depth -= 1
+
+    def finish(self, status: Any, where: Any = True) -> None:
+        with self.when(where):
+            self._emit(f"self.status = {_status_text(status)}")
+            self._emit("yield self")
+            self._emit("return")
+
+
+@cache
+def tick_method(
+    type_name: str, kids: int, params: tuple[tuple[str, Any], ...], skippable: tuple[bool, ...]
+) -> Callable[[Any], Iterator[Any]]:
+    """The ``tick`` of a node of ``type_name`` with ``kids`` children, parameters ``params``
+    (name, value) and children that may be SKIPPED where ``skippable`` says so: its rule
+    written by :class:`ScalarSourceOps` and compiled (cached: the arguments are the shape)."""
+    rule = NODE_TYPES.get(type_name).rule
+    assert rule is not None, type_name
+    ops = ScalarSourceOps(kids, dict(params), skippable)
+    rule(ops)
+    children = "".join(f"c{k}, " for k in range(kids))
+    head = [f"    {children}= self.children"] if kids else []
+    source = "\n".join(["def tick(self):", *head, *ops.lines])
+    namespace: dict[str, Any] = {f"S{code}": status for code, status in TO_PYTREES.items()}
+    namespace |= ops.tables
+    namespace |= {
+        "STATUS": tuple(TO_PYTREES[code] for code in range(len(TO_PYTREES))),
+        "CODE": {id(status): code for status, code in FROM_PYTREES.items()},
+        "run": deque(maxlen=0).extend,
+    }
+    exec(compile(source, f"<{type_name} rule>", "exec"), namespace)
+    tick: Callable[[Any], Iterator[Any]] = namespace["tick"]
+    return tick
