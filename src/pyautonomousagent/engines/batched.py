@@ -13,8 +13,8 @@ subtree is the contiguous range ``[i, end[i])``. Per-node state is held per agen
 A node is ticked for the agents whose tick reaches it (a boolean mask), and every
 rule of py_trees 2.x is reproduced: which children are ticked, which statuses are kept,
 and which RUNNING subtrees are halted (set INVALID) and when. A node type with a rule
-(:mod:`pyautonomousagent.bt.rules`) runs it through :class:`MaskedOps`, values arrays over
-agents and conditions masks; the others have a method here. Leaves run their
+(:mod:`pyautonomousagent.bt.rules`) runs its rule written as NumPy code over masks
+(:mod:`pyautonomousagent.engines.batched_rules`); the others have a method here. Leaves run their
 engine-independent ``evaluate`` once for all those agents.
 """
 
@@ -30,7 +30,6 @@ from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.program import case_values, compile_tree
-from pyautonomousagent.bt.rules import Rule
 from pyautonomousagent.bt.script import Script, parse
 from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import (
@@ -38,7 +37,6 @@ from pyautonomousagent.bt.spec import (
     Node,
     TreeError,
     check_entries,
-    may_skip,
     parallel_threshold,
 )
 from pyautonomousagent.bt.status import (
@@ -49,6 +47,7 @@ from pyautonomousagent.bt.status import (
     SUCCESS,
     invalid_status,
 )
+from pyautonomousagent.engines.batched_rules import rule_ticker
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -119,7 +118,8 @@ class BatchedEngine:
         self._watched = {
             i for i in range(n) if any(i <= j < program.end[i] for j in watch)
         }  # nodes whose subtree has something to tell when halted
-        self._tickers = [self._ticker(i) for i in range(n)]
+        self._tickers: list[Callable[[np.ndarray], None]] = []  # rule tickers hold this list
+        self._tickers.extend(self._ticker(i) for i in range(n))
         for i in self._attributes:
             self._tickers[i] = self._with_scripts(i, self._tickers[i])
 
@@ -127,9 +127,9 @@ class BatchedEngine:
         node = self.program.nodes[i]
         if not node.is_control:
             return lambda mask: self._leaf(i, mask)
+        if NODE_TYPES.get(node.type).rule is not None:
+            return rule_ticker(self, i, self.swarm.size)
         method = BATCHED_NODES[node.type]
-        if method is _rule_ticker:
-            return MaskedOps(self, i).run
         return lambda mask: method(self, i, mask)
 
     def tick(self) -> None:
@@ -440,116 +440,9 @@ class BatchedEngine:
                 self._halt_children(i, 0, finished)
 
 
-class MaskedOps:
-    """:class:`~pyautonomousagent.bt.rules.Ops` of control node ``i`` for all agents at once:
-    values are arrays over agents (N,), a condition narrows the mask of the agents a step
-    applies to, and a ``finish`` takes its agents out of the rest of the rule."""
-
-    def __init__(self, engine: BatchedEngine, i: int) -> None:
-        self._engine = engine
-        rule = NODE_TYPES.get(engine.program.nodes[i].type).rule
-        assert rule is not None
-        self._rule: Rule = rule
-        self.children = engine.program.children[i]
-        self.kids = len(self.children)
-        self.params = engine.program.params[i]
-        slots = NODE_TYPES.get(engine.program.nodes[i].type).memory
-        self._status = engine.status[i]
-        self._memory = np.zeros((slots, engine.swarm.size), np.int64)  # see Ops.memory
-        self._alive, self._guard = engine._everyone, None
-        self._eff: np.ndarray | None = None
-        self._outer: list[tuple[np.ndarray | None, np.ndarray | None]] = []
-        self._tables: dict[tuple[int, ...], np.ndarray] = {}
-
-    _guard: np.ndarray | None
-
-    def run(self, mask: np.ndarray) -> None:
-        """Tick the node for the agents of ``mask``."""
-        self._alive, self._guard, self._eff = mask.copy(), None, None
-        self._rule(self)
-
-    def _mask(self) -> np.ndarray:
-        """The agents the current step applies to (cached until a block or finish)."""
-        if self._eff is None:
-            self._eff = self._alive if self._guard is None else self._alive & self._guard
-        return self._eff
-
-    def skippable(self, k: int) -> bool:
-        return may_skip(self._engine.program.nodes[self.children[k]])
-
-    def status(self) -> np.ndarray:
-        return self._status
-
-    def memory(self, slot: int = 0) -> np.ndarray:
-        return self._memory[slot]
-
-    def set_memory(self, value: Any, slot: int = 0) -> None:
-        np.copyto(self._memory[slot], value, where=self._mask())
-
-    def child(self, k: int) -> np.ndarray:
-        return self._engine.status[self.children[k]]
-
-    def tick(self, k: int) -> np.ndarray:
-        mask = self._mask()
-        if _some(mask):
-            self._engine._tickers[self.children[k]](mask)
-        return self._engine.status[self.children[k]]
-
-    def halt(self, first: int, last: int | None = None) -> None:
-        mask = self._mask()
-        if _some(mask):
-            for child in self.children[first:last]:
-                self._engine._halt(child, mask)
-
-    def let(self, name: str, value: Any) -> Any:
-        return value.copy() if isinstance(value, np.ndarray) else value
-
-    def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
-        if isinstance(cond, np.ndarray):
-            return np.where(cond, if_true, if_false)
-        return if_true if cond else if_false
-
-    def lookup(self, table: tuple[int, ...], value: Any) -> np.ndarray:
-        if table not in self._tables:
-            self._tables[table] = np.asarray(table, dtype=np.int8)
-        return self._tables[table][value]
-
-    def when(self, cond: Any) -> MaskedOps:
-        """A block for the agents where ``cond`` holds (a static condition must hold)."""
-        self._outer.append((self._guard, self._eff))
-        if isinstance(cond, np.ndarray):
-            self._guard = cond if self._guard is None else self._guard & cond
-            self._eff = None
-        elif not cond:
-            raise ValueError("a rule's condition is false whatever the agent")
-        return self
-
-    def __enter__(self) -> None:
-        return None
-
-    def __exit__(self, *exc: object) -> None:
-        self._guard, self._eff = self._outer.pop()
-        if self._eff is not None and self._eff is not self._alive:
-            self._eff = None  # the agents alive may have changed inside the block
-
-    def finish(self, status: Any, where: Any = True) -> None:
-        mask = self._mask()
-        if isinstance(where, np.ndarray):
-            mask = mask & where
-        np.copyto(self._status, status, where=mask)
-        self._alive &= ~mask
-        self._eff = None
-
-
-def _rule_ticker(engine: BatchedEngine, i: int, mask: np.ndarray) -> None:
-    """A node type with a rule, ticked by a :class:`MaskedOps` (the engine's ticker makes
-    one per node, once)."""
-    MaskedOps(engine, i).run(mask)
-
-
 #: Node type -> the method that ticks it, called with (engine, node index, mask): one entry
-#: per record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES`, those with a rule derived
-#: from it (:func:`_rule_ticker`).
+#: per record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES` without a rule (those with
+#: one run it: :func:`~pyautonomousagent.engines.batched_rules.rule_ticker`).
 BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
     "PyTreesParallel": BatchedEngine._parallel,
     "PyTreesRepeat": BatchedEngine._counted,
@@ -562,7 +455,4 @@ BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
     "Delay": BatchedEngine._delay,
     "Timeout": BatchedEngine._timeout,
     **{f"Switch{n}": BatchedEngine._switch for n in range(2, 7)},
-}
-BATCHED_NODES |= {
-    name: _rule_ticker for name, record in NODE_TYPES.items() if record.rule is not None
 }
