@@ -99,7 +99,7 @@ def test_a_sweep_compiles_once_before_its_runs_and_says_so(
     tmp_path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     from pyautonomousagent.experiments import Experiment, sweep
-    from pyautonomousagent.experiments.sweep import base_scenario, compile_once
+    from pyautonomousagent.experiments.sweeps import base_scenario, compile_once
 
     monkeypatch.setenv("PYAA_CACHE_DIR", str(tmp_path / "cache"))
     said: list[str] = []

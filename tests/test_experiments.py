@@ -28,7 +28,7 @@ from pyautonomousagent.experiments import (
 from pyautonomousagent.experiments import measures as m
 from pyautonomousagent.experiments.plot import summarize, t95
 from pyautonomousagent.experiments.spec import inclusive_range, parse_vary
-from pyautonomousagent.experiments.sweep import base_scenario, check
+from pyautonomousagent.experiments.sweeps import base_scenario, check
 from pyautonomousagent.missions.drones import measures as drone_measures
 from pyautonomousagent.missions.gathering import measures as gathering_measures
 

@@ -185,7 +185,7 @@ def test_the_scenario_schema_refuses_text_and_fractional_whole_numbers() -> None
 
 def test_the_worked_study_file_is_valid() -> None:
     """examples/patrol-sensitivity.yaml: the 1536 runs docs/experiments.md describes."""
-    from pyautonomousagent.experiments.sweep import base_scenario, check
+    from pyautonomousagent.experiments.sweeps import base_scenario, check
 
     path = Path(__file__).parents[1] / "examples" / "patrol-sensitivity.yaml"
     experiment = Experiment.from_file(path)

@@ -28,7 +28,7 @@ from pyautonomousagent.experiments.measures import Measure, RunData
 from pyautonomousagent.experiments.runner import partition_dir
 from pyautonomousagent.experiments.series import TIMESERIES, checkpoints
 from pyautonomousagent.experiments.spec import ExperimentError
-from pyautonomousagent.experiments.sweep import base_scenario
+from pyautonomousagent.experiments.sweeps import base_scenario
 from pyautonomousagent.progress import Progress
 from tests.test_experiments import same_rows
 

@@ -174,7 +174,7 @@ class Experiment:
         """Every point: the grid crossed with the random samples (in that order), or the
         design's points (whole numbers where the design marks a parameter so, as
         :func:`for_scenario` does from the scenario's
-        schema: :func:`~pyautonomousagent.experiments.sweep.sweep` calls it; floats before)."""
+        schema: :func:`~pyautonomousagent.experiments.sweeps.sweep` calls it; floats before)."""
         if self.design is not None:
             return self.design.points()
         names = list(self.vary)
