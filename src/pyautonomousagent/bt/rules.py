@@ -3,17 +3,18 @@
 A rule is a function of one argument, ``n``, an :class:`Ops`: the node as one engine sees it.
 It says, for the agents whose tick reaches the node, which children are ticked, which are
 halted, what the node remembers and what it returns, through ``n``'s few operations only:
-values are opaque (an int, a NumPy array over agents, or a piece of generated source) and
-combine with ``==``, ``!=``, ``<``, ``<=``, ``>``, ``>=``, ``&`` and ``|``; a condition
-on them is taken with ``with n.when(cond):``, never with ``if``. Python's own ``if`` and
-``for`` see only what is fixed when the tree is built: the number of children and the
-parameters. Each engine gives its form by implementing :class:`Ops`:
+values are opaque (a whole number or a piece of generated source) and combine with ``==``,
+``!=``, ``<``, ``<=``, ``>``, ``>=``, ``&`` and ``|``; a condition on them is taken with
+``with n.when(cond):``, never with ``if``. Python's own ``if`` and ``for`` see only what is
+fixed when the tree is built: the number of children, the parameters and which children
+may be SKIPPED. Each engine gives its form by implementing :class:`Ops` that writes code,
+run once when the tree is built (values are source text, conditions ``if`` blocks):
 
-- the py_trees engine runs the rule for one agent, values plain ints (``engines/pytrees.py``);
-- the batched engine runs it once for all agents, values arrays over agents, conditions masks
-  (``engines/batched.py``);
-- the compiled and GPU engines run it once to write its code for agent ``a``, values source
-  text, conditions ``if`` blocks (:mod:`pyautonomousagent.bt.tree_source`).
+- the py_trees engine: a py_trees node's ``tick`` for one agent (``engines/pytrees_rules.py``);
+- the batched engine: NumPy code for all agents, values arrays over agents, conditions masks
+  (``engines/batched_rules.py``); a value ``let`` inside a ``when`` block is read only there;
+- the compiled and GPU engines: the code for agent ``a``
+  (:mod:`pyautonomousagent.bt.tree_source`).
 
 The rules of the node types live with their records (:mod:`pyautonomousagent.bt.nodes`).
 """

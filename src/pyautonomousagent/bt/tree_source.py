@@ -9,7 +9,7 @@ which writes what it does for agent ``a`` instead of doing it. ``st`` holds the 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from typing import Any
 
@@ -72,7 +72,66 @@ def source_text(value: Any) -> str:
     return value.text if isinstance(value, Source) else str(int(value))
 
 
-class SourceOps:
+class CodeOps:
+    """What the :class:`~pyautonomousagent.bt.rules.Ops` that write a rule as code share: the
+    lines (:attr:`lines`, indented by block), a ``let`` kept in a local, a ``pick``, and a
+    ``when`` block opened by :meth:`_open` (a block left empty is dropped: a condition has
+    no side effect); a static condition must hold. ``skippable``: per child, may it be
+    SKIPPED (``spec.may_skip``)."""
+
+    def __init__(self, kids: int, params: Mapping[str, Any], skippable: Sequence[bool]) -> None:
+        self.kids, self.params, self._skippable = kids, params, tuple(skippable)
+        self.lines: list[str] = []
+        self._depth = 0
+
+    def _emit(self, line: str) -> None:
+        self.lines.append("    " * self._depth + line)
+
+    def skippable(self, k: int) -> bool:
+        return self._skippable[k]
+
+    def _local(self, name: str) -> str:
+        """The name of a rule's local ``name`` in the code."""
+        return name
+
+    def let(self, name: str, value: Any) -> Any:
+        if not isinstance(value, Source):
+            return value
+        self._emit(f"{self._local(name)} = {value.text}")
+        return type(value)(self._local(name))
+
+    def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
+        if not isinstance(cond, Source):
+            return if_true if cond else if_false
+        return Source(f"({source_text(if_true)} if {cond.text} else {source_text(if_false)})")
+
+    def _open(self, cond: Source) -> list[str]:
+        """The lines that open a block for ``cond``."""
+        return [f"if {cond.text}:"]
+
+    def _close(self) -> None:
+        """After a block (its lines written, the depth back to the enclosing one)."""
+
+    @contextmanager
+    def when(self, cond: Any) -> Iterator[None]:
+        if not isinstance(cond, Source):
+            if not cond:
+                raise ValueError("a rule's condition is false whatever the agent")
+            yield
+            return
+        size = len(self.lines)
+        for line in self._open(cond):
+            self._emit(line)
+        head = len(self.lines)
+        self._depth += 1
+        yield
+        self._depth -= 1
+        self._close()
+        if len(self.lines) == head:
+            del self.lines[size:]
+
+
+class SourceOps(CodeOps):
     """:class:`~pyautonomousagent.bt.rules.Ops` that writes node ``i``'s rule as code for agent
     ``a``: its lines in :attr:`lines`, children written in place by ``expand``; a ``finish``
     leaves the node's ``while True:`` block with ``break``; locals end in ``_<i>``."""
@@ -82,16 +141,11 @@ class SourceOps:
     ) -> None:
         self.program, self.i, self.row, self._expand = program, i, row, expand
         self.children = program.children[i]
-        self.kids = len(self.children)
-        self.params = program.params[i]
-        self.lines: list[str] = []
-        self._depth = 0
+        skippable = [may_skip(program.nodes[child]) for child in self.children]
+        super().__init__(len(self.children), program.params[i], skippable)
 
-    def _emit(self, line: str) -> None:
-        self.lines.append("    " * self._depth + line)
-
-    def skippable(self, k: int) -> bool:
-        return may_skip(self.program.nodes[self.children[k]])
+    def _local(self, name: str) -> str:
+        return f"{name}_{self.i}"
 
     def status(self) -> Source:
         return Source(f"st[{self.i}, a]")
@@ -115,34 +169,8 @@ class SourceOps:
         for child in self.children[first:last]:
             self._emit(f"halt(a, st, {child}, {self.program.end[child]})")
 
-    def let(self, name: str, value: Any) -> Any:
-        if not isinstance(value, Source):
-            return value
-        self._emit(f"{name}_{self.i} = {value.text}")
-        return Source(f"{name}_{self.i}")
-
-    def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
-        if not isinstance(cond, Source):
-            return if_true if cond else if_false
-        return Source(f"({source_text(if_true)} if {cond.text} else {source_text(if_false)})")
-
     def lookup(self, table: tuple[int, ...], value: Any) -> Source:
         return Source(f"({', '.join(map(str, table))},)[{source_text(value)}]")
-
-    @contextmanager
-    def when(self, cond: Any) -> Iterator[None]:
-        if not isinstance(cond, Source):
-            if not cond:
-                raise ValueError("a rule's condition is false whatever the agent")
-            yield
-            return
-        self._emit(f"if {cond.text}:")
-        self._depth += 1
-        size = len(self.lines)
-        yield
-        if len(self.lines) == size:
-            self._emit("pass")
-        self._depth -= 1
 
     def finish(self, status: Any, where: Any = True) -> None:
         with self.when(where):

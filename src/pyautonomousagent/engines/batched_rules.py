@@ -10,8 +10,7 @@ engine, bound to that node's rows, so a tick interprets no rule.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from typing import Any, Protocol
 
 import numpy as np
@@ -19,7 +18,7 @@ import numpy as np
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.program import Program
 from pyautonomousagent.bt.spec import may_skip
-from pyautonomousagent.bt.tree_source import Source, source_text
+from pyautonomousagent.bt.tree_source import CodeOps, Source, source_text
 
 
 class ArraySource(Source):
@@ -31,29 +30,24 @@ class ArraySource(Source):
         return ArraySource(f"({source_text(left)} {op} {source_text(right)})")
 
 
-class ArraySourceOps:
+class ArraySourceOps(CodeOps):
     """:class:`~pyautonomousagent.bt.rules.Ops` that writes node ``i``'s rule as the body of
     ``tick(mask)``: its own status row is ``st``, child ``k``'s ``S<k>`` (ticked by
-    ``tickers[child](e)``, halted by ``halt(k, e)``), memory slot ``s`` the row ``M<s>``; the mask
-    of the current block is ``e<depth>``."""
+    ``tickers[child](e)``, halted by ``halt(child, e)``), memory slot ``s`` the row ``M<s>``;
+    the mask of the agents of the current block is ``e<depth>``."""
 
     def __init__(self, program: Program, i: int) -> None:
         self.children = program.children[i]
-        self.kids = len(self.children)
-        self.params = program.params[i]
-        self._skippable = [may_skip(program.nodes[c]) for c in self.children]
+        skippable = [may_skip(program.nodes[c]) for c in self.children]
+        super().__init__(len(self.children), program.params[i], skippable)
         self.lines = ["e0 = mask.copy()"]
         self.tables: dict[str, np.ndarray] = {}
-        self._depth = 0
         self._dead: int | None = None  # a block (depth) every agent of which has finished
         self._some = [True]  # per depth: its mask is known to have an agent (no finish since)
 
     def _emit(self, line: str) -> None:
         if self._dead is None or self._depth < self._dead:
-            self.lines.append("    " * self._depth + line)
-
-    def skippable(self, k: int) -> bool:
-        return self._skippable[k]
+            super()._emit(line)
 
     def status(self) -> ArraySource:
         return ArraySource("st")
@@ -69,10 +63,8 @@ class ArraySourceOps:
 
     def _call(self, calls: list[str]) -> None:
         """``calls`` for the agents of the current block, if it has any left."""
-        if not calls:
-            return
         known = self._some[self._depth]
-        if not known:
+        if calls and not known:
             self._emit(f"if count(e{self._depth}):")
         for call in calls:
             self._emit(("" if known else "    ") + call)
@@ -85,11 +77,9 @@ class ArraySourceOps:
         self._call([f"halt({child}, e{self._depth})" for child in self.children[first:last]])
 
     def let(self, name: str, value: Any) -> Any:
-        if not isinstance(value, Source):
-            return value
-        view = value.text.isidentifier()  # a row of the engine's: keep it as it is now
-        self._emit(f"{name} = {value.text}{'.copy()' if view else ''}")
-        return ArraySource(name)
+        if isinstance(value, Source) and value.text.isidentifier():
+            value = ArraySource(f"{value.text}.copy()")  # a row of the engine's: as it is now
+        return super().let(name, value)
 
     def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
         if not isinstance(cond, Source):
@@ -101,25 +91,14 @@ class ArraySourceOps:
         self.tables[name] = np.asarray(table, dtype=np.int8)
         return ArraySource(f"{name}[{source_text(value)}]")
 
-    @contextmanager
-    def when(self, cond: Any) -> Iterator[None]:
-        if not isinstance(cond, Source):
-            if not cond:
-                raise ValueError("a rule's condition is false whatever the agent")
-            yield
-            return
-        depth, size = self._depth, len(self.lines)
-        self._emit(f"e{depth + 1} = e{depth} & {cond.text}")
-        self._emit(f"if count(e{depth + 1}):")
-        self._depth += 1
-        self._some.append(True)
-        yield
-        self._some.pop()
-        self._depth -= 1
+    def _open(self, cond: Source) -> list[str]:
+        depth = self._depth
+        self._some[depth + 1 :] = [True]
+        return [f"e{depth + 1} = e{depth} & {cond.text}", f"if count(e{depth + 1}):"]
+
+    def _close(self) -> None:
         if self._dead is not None and self._dead > self._depth:
             self._dead = None
-        if len(self.lines) == size + 2:
-            del self.lines[size:]  # nothing to do: no block (a condition has no side effect)
 
     def finish(self, status: Any, where: Any = True) -> None:
         depth, value = self._depth, source_text(status)

@@ -12,13 +12,12 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
 from functools import cache
 from typing import Any
 
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.status import INVALID
-from pyautonomousagent.bt.tree_source import Source, source_text
+from pyautonomousagent.bt.tree_source import CodeOps, Source, source_text
 from pyautonomousagent.engines.btcpp import FROM_PYTREES, TO_PYTREES
 
 
@@ -43,22 +42,15 @@ def _status_text(value: Any) -> str:
     return f"S{int(value)}"
 
 
-class ScalarSourceOps:
+class ScalarSourceOps(CodeOps):
     """:class:`~pyautonomousagent.bt.rules.Ops` that writes a rule as the body of a py_trees
     ``tick`` for one agent: the children are ``c0``, ``c1``, ...; a ``finish`` sets
     ``self.status``, yields ``self`` and returns."""
 
     def __init__(self, kids: int, params: Mapping[str, Any], skippable: tuple[bool, ...]):
-        self.kids, self.params, self._skippable = kids, params, skippable
-        self.lines: list[str] = []
+        super().__init__(kids, params, skippable)
         self._depth = 1
         self.tables: dict[str, dict[int, Any]] = {}
-
-    def _emit(self, line: str) -> None:
-        self.lines.append("    " * self._depth + line)
-
-    def skippable(self, k: int) -> bool:
-        return self._skippable[k]
 
     def status(self) -> StatusSource:
         return StatusSource("self.status")
@@ -67,8 +59,8 @@ class ScalarSourceOps:
         return Source(f"self.m{slot}")
 
     def set_memory(self, value: Any, slot: int = 0) -> None:
-        text = f"CODE[id({value.text})]" if isinstance(value, StatusSource) else source_text(value)
-        self._emit(f"self.m{slot} = {text}")
+        code = f"CODE[id({value.text})]" if isinstance(value, StatusSource) else None
+        self._emit(f"self.m{slot} = {code or source_text(value)}")
 
     def child(self, k: int) -> StatusSource:
         return StatusSource(f"c{k}.status")
@@ -84,39 +76,16 @@ class ScalarSourceOps:
             self._emit(f"if c{k}.status is not S{INVALID}:")
             self._emit(f"    c{k}.stop(S{INVALID})")
 
-    def let(self, name: str, value: Any) -> Any:
-        if not isinstance(value, Source):
-            return value
-        self._emit(f"{name} = {value.text}")
-        return type(value)(name)
-
     def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
-        if not isinstance(cond, Source):
-            return if_true if cond else if_false
-        if isinstance(if_true, StatusSource) or isinstance(if_false, StatusSource):
+        if isinstance(cond, Source) and StatusSource in (type(if_true), type(if_false)):
             true, false = _status_text(if_true), _status_text(if_false)
             return StatusSource(f"({true} if {cond.text} else {false})")
-        return Source(f"({source_text(if_true)} if {cond.text} else {source_text(if_false)})")
+        return super().pick(cond, if_true, if_false)
 
     def lookup(self, table: tuple[int, ...], value: Any) -> StatusSource:
         name = f"TABLE{len(self.tables)}"
         self.tables[name] = {id(TO_PYTREES[a]): TO_PYTREES[b] for a, b in enumerate(table)}
         return StatusSource(f"{name}[id({source_text(value)})]")
-
-    @contextmanager
-    def when(self, cond: Any) -> Iterator[None]:
-        if not isinstance(cond, Source):
-            if not cond:
-                raise ValueError("a rule's condition is false whatever the agent")
-            yield
-            return
-        self._emit(f"if {cond.text}:")
-        self._depth += 1
-        size = len(self.lines)
-        yield
-        if len(self.lines) == size:
-            self.lines.pop()  # nothing to do: no block (a condition has no side effect)
-        self._depth -= 1
 
     def finish(self, status: Any, where: Any = True) -> None:
         with self.when(where):
