@@ -165,15 +165,10 @@ def _parallel(
     return py_trees.composites.Parallel(name, policy, children)
 
 
-class RuleComposite(py_trees.composites.Composite):
-    """A control node type with a rule, as a py_trees composite: its class's ``tick`` is the
-    rule written for its shape (:func:`~pyautonomousagent.engines.pytrees_rules.tick_method`),
-    its memory ``m0``, ``m1``, ... (0 before it is first set)."""
-
-    def __init__(self, name: str, children: list[Any], slots: int) -> None:
-        super().__init__(name, children)
-        for slot in range(slots):
-            setattr(self, f"m{slot}", 0)
+class _Ruled(py_trees.behaviour.Behaviour):
+    """A node type with a rule, for one agent: its class's ``tick`` is the rule written for
+    its shape (:func:`~pyautonomousagent.engines.pytrees_rules.tick_method`), its memory
+    ``m0``, ``m1``, ... (0 before it is first set)."""
 
     def update(self) -> Status:  # pragma: no cover - tick() does the work
         return self.status
@@ -182,29 +177,26 @@ class RuleComposite(py_trees.composites.Composite):
         """Halted (INVALID): the children are halted too; take the status (py_trees' ``stop``
         without its debug lines, whose text it builds on every call)."""
         if new_status == Status.INVALID:
-            self.current_child = None
+            setattr(self, "current_child", None)  # noqa: B010 - a composite's, py_trees' type
             _halt(self.children)
         self.terminate(new_status)
         self.status = new_status
 
 
-class RuleDecorator(py_trees.decorators.Decorator):
-    """A decorator type with a rule, as a py_trees decorator (see :class:`RuleComposite`)."""
+class RuleComposite(_Ruled, py_trees.composites.Composite):
+    """A control node type with a rule, as a py_trees composite."""
+
+    def __init__(self, name: str, children: list[Any], slots: int) -> None:
+        super().__init__(name, children)
+        self.__dict__.update((f"m{slot}", 0) for slot in range(slots))
+
+
+class RuleDecorator(_Ruled, py_trees.decorators.Decorator):
+    """A decorator type with a rule, as a py_trees decorator."""
 
     def __init__(self, name: str, children: list[Any], slots: int) -> None:
         super().__init__(name=name, child=children[0])
-        for slot in range(slots):
-            setattr(self, f"m{slot}", 0)
-
-    def update(self) -> Status:  # pragma: no cover - tick() does the work
-        return self.status
-
-    def stop(self, new_status: Status = Status.INVALID) -> None:
-        """As :meth:`RuleComposite.stop`."""
-        if new_status == Status.INVALID:
-            _halt(self.children)
-        self.terminate(new_status)
-        self.status = new_status
+        self.__dict__.update((f"m{slot}", 0) for slot in range(slots))
 
 
 @cache
