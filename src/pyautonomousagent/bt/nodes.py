@@ -206,11 +206,10 @@ def sequence_rule(n: Ops) -> None:
             if memory:
                 n.set_memory(k)
             result = n.tick(k)
-            stop = n.let("stop", _neither(n, k, result, SUCCESS))
-            if not memory:
-                with n.when(stop):
+            with n.when(_neither(n, k, result, SUCCESS)):
+                if not memory:
                     n.halt(k + 1)
-            n.finish(result, where=stop)
+                n.finish(result)
             if skips:
                 with n.when(result == SUCCESS if n.skippable(k) else True):
                     n.set_memory(0, slot=1)
@@ -250,12 +249,11 @@ def fallback_rule(n: Ops) -> None:
     for k in range(n.kids):
         with n.when(start <= k):
             result = n.tick(k)
-            chosen = n.let("chosen", _neither(n, k, result, FAILURE))
-            with n.when(chosen):
+            with n.when(_neither(n, k, result, FAILURE)):
                 n.set_memory(k)
                 with n.when(previous != k):
                     n.halt(k + 1)
-            n.finish(result, where=chosen)
+                n.finish(result)
             if skips:
                 with n.when(result == FAILURE if n.skippable(k) else True):
                     n.set_memory(0, slot=1)

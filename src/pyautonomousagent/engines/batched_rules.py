@@ -114,7 +114,7 @@ class ArraySourceOps(CodeOps):
             self._emit(f"done = e{depth} & {source_text(where)}")
         self._emit(f"copyto(st, {value}, where={done})")
         for outer in range(depth + (where is not True)):
-            self._emit(f"e{outer} &= ~{done}")
+            self._emit(f"e{outer} ^= {done}")  # done is within every enclosing mask
         self._emit("if not count(e0):")
         self._emit("    return")
         self._some[0] = True
