@@ -148,9 +148,9 @@ def _control_behaviour(
     node: Node, children: list[py_trees.behaviour.Behaviour]
 ) -> py_trees.behaviour.Behaviour:
     """The py_trees composite or decorator for a control node."""
-    if NODE_TYPES[node.type].rule is not None:
-        return _rule_behaviour(node, children)
-    return PYTREES_NODES[node.type](node.name, children, control_params(node))
+    if node.type in PYTREES_NODES or NODE_TYPES[node.type].rule is None:
+        return PYTREES_NODES[node.type](node.name, children, control_params(node))
+    return _rule_behaviour(node, children)
 
 
 def _parallel(
@@ -223,7 +223,7 @@ _decorators = py_trees.decorators
 #: Node type -> py_trees behaviour, called with (name, children, parameters): one entry per
 #: record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES` without a rule; py_trees' own
 #: node types are py_trees' classes, the others BT.CPP's (``engines/btcpp.py``). A type with
-#: a rule is a class derived from it (:func:`_rule_class`).
+#: a rule is a class derived from it (:func:`_rule_class`) unless given an entry here.
 PYTREES_NODES: dict[str, Callable[[str, list[Any], dict[str, Any]], Any]] = {
     "PyTreesParallel": _parallel,
     "PyTreesRepeat": lambda name, kids, p: _decorators.Repeat(name, kids[0], p["num_success"]),
