@@ -72,6 +72,11 @@ def source_text(value: Any) -> str:
     return value.text if isinstance(value, Source) else str(int(value))
 
 
+#: At most this many children are halted in a row of code each; more, by a loop (the code of
+#: a node then grows linearly, not quadratically, with its children).
+UNROLLED = 4
+
+
 class CodeOps:
     """What the :class:`~pyautonomousagent.bt.rules.Ops` that write a rule as code share: the
     lines (:attr:`lines`, indented by block), a ``let`` kept in a local, a ``pick``, and a

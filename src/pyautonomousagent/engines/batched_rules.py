@@ -18,7 +18,7 @@ import numpy as np
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.program import Program
 from pyautonomousagent.bt.spec import may_skip
-from pyautonomousagent.bt.tree_source import CodeOps, Source, source_text
+from pyautonomousagent.bt.tree_source import UNROLLED, CodeOps, Source, source_text
 
 
 class ArraySource(Source):
@@ -74,7 +74,11 @@ class ArraySourceOps(CodeOps):
         return ArraySource(f"S{k}")
 
     def halt(self, first: int, last: int | None = None) -> None:
-        self._call([f"halt({child}, e{self._depth})" for child in self.children[first:last]])
+        chosen = self.children[first:last]
+        if len(chosen) > UNROLLED:  # a loop: the code stays linear in the children
+            self._call([f"for child in KIDS[{first}:{last}]:", f"    halt(child, e{self._depth})"])
+        else:
+            self._call([f"halt({child}, e{self._depth})" for child in chosen])
 
     def let(self, name: str, value: Any) -> Any:
         if isinstance(value, Source) and value.text.isidentifier():
@@ -149,6 +153,7 @@ def rule_ticker(engine: BatchedTree, i: int, size: int) -> Callable[[np.ndarray]
         **ops.tables,
         "tickers": engine._tickers,
         "halt": engine._halt,
+        "KIDS": tuple(ops.children),
         "count": np.count_nonzero,
         "copyto": np.copyto,
         "where": np.where,

@@ -17,7 +17,7 @@ from typing import Any
 
 from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.status import INVALID
-from pyautonomousagent.bt.tree_source import CodeOps, Source, source_text
+from pyautonomousagent.bt.tree_source import UNROLLED, CodeOps, Source, source_text
 from pyautonomousagent.engines.btcpp import FROM_PYTREES, TO_PYTREES
 
 
@@ -72,9 +72,15 @@ class ScalarSourceOps(CodeOps):
         return StatusSource("result")
 
     def halt(self, first: int, last: int | None = None) -> None:
-        for k in range(self.kids)[first:last]:
-            self._emit(f"if c{k}.status is not S{INVALID}:")
-            self._emit(f"    c{k}.stop(S{INVALID})")
+        chosen = [f"c{k}" for k in range(self.kids)[first:last]]
+        if len(chosen) > UNROLLED:  # a loop: the code stays linear in the children
+            self._emit(f"for child in self.children[{first}:{last}]:")
+            chosen = ["child"]
+            self._depth += 1
+        for child in chosen:
+            self._emit(f"if {child}.status is not S{INVALID}:")
+            self._emit(f"    {child}.stop(S{INVALID})")
+        self._depth -= chosen == ["child"]
 
     def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
         if isinstance(cond, Source) and StatusSource in (type(if_true), type(if_false)):
