@@ -41,9 +41,11 @@ def _build_docs() -> ModuleType:
     return module
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def site(executed_lessons: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The site, built by ``scripts/build_docs.py`` from the executed lessons."""
+    """The site, built by ``scripts/build_docs.py`` from the executed lessons, once per
+    session: its tests share a worker with the lessons' (``xdist_group``), which may run
+    between them, and a module-scoped site was built again after each (about 4 minutes)."""
     pytest.importorskip("sphinx", reason="the [docs] extra is not installed (make docs)")
     pytest.importorskip("myst_nb", reason="the [docs] extra is not installed (make docs)")
     out = tmp_path_factory.mktemp("site") / "site"

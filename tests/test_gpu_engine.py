@@ -4,6 +4,7 @@ run through numba's CUDA simulator against the batched engine, bit for bit."""
 from __future__ import annotations
 
 import ast
+import inspect
 import json
 import os
 import subprocess
@@ -17,9 +18,11 @@ import pytest
 
 from pyautonomousagent import Simulation, cli, jit, load, runs
 from pyautonomousagent.engines import gpu
-from pyautonomousagent.engines.compiled_source import Constants
 from pyautonomousagent.engines.gpu_source import kernel_module_source
-from pyautonomousagent.simulation.run import ENGINES, choose_engine, scenario_tree
+from pyautonomousagent.loop.layout import Constants
+from pyautonomousagent.loop.source import alias
+from pyautonomousagent.models import drone2d
+from pyautonomousagent.simulation.run import ENGINES, choose_engine, gpu_engine, scenario_tree
 from pyautonomousagent.testing import check_same_runs
 
 needs_numba = pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
@@ -36,8 +39,10 @@ def test_the_device_name_is_text_whether_numba_cuda_gives_bytes_or_str() -> None
 
 
 def test_gpu_is_a_registered_engine() -> None:
+    """Registered as the GPU engine on a compiled engine (its host: the two engines import
+    none of each other)."""
     assert "gpu" in ENGINES
-    assert ENGINES.get("gpu") is gpu.GpuEngine
+    assert ENGINES.get("gpu") is gpu_engine
 
 
 class _NoDeviceError(Exception):
@@ -127,7 +132,9 @@ def _kernel_source(agents: int = 4) -> str:
     fused = engine._fusable(sim)
     assert fused is not None and fused.messaging is None
     layout = engine.layout.__class__(**{**vars(engine.layout), "constants": Constants()})
-    return kernel_module_source(engine.program, engine.kernels, layout, fused.sensors)
+    return kernel_module_source(
+        engine.program, engine.kernels, layout, fused.sensors, engine.stages
+    )
 
 
 @needs_numba
@@ -137,8 +144,10 @@ def test_the_kernel_is_the_compiled_generators_code_for_one_thread() -> None:
     kernel = next(n for n in tree.body if isinstance(n, ast.FunctionDef))
     assert kernel.name == "block_gpu"
     assert "a = cuda.grid(1)" in source
-    assert "sincos_degrees(heading)" in source  # no library sin/cos on the device
+    assert f"{alias(drone2d.step_agent)}(" in source  # the model's own per-agent step
     assert "math.sin" not in source and "math.cos" not in source
+    step = inspect.getsource(drone2d.step_agent.py_func)
+    assert "sincos_one(h)" in step and "math." not in step  # no library sin/cos on the device
     assert "prange" not in source.split("import", 3)[-1]  # one agent a thread, no CPU threads
 
 

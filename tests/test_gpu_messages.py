@@ -16,10 +16,12 @@ from pathlib import Path
 import pytest
 
 from pyautonomousagent import Simulation, jit, load
-from pyautonomousagent.engines.compiled_source import Constants
 from pyautonomousagent.engines.gpu_messages import DeviceMessages
 from pyautonomousagent.engines.gpu_source import message_module_source
+from pyautonomousagent.loop.layout import Constants
+from pyautonomousagent.loop.source import alias
 from pyautonomousagent.missions import gathering
+from pyautonomousagent.models import drone2d
 
 NEAR, SENDER, EACH = DeviceMessages.NEAR, DeviceMessages.SENDER, DeviceMessages.EACH
 
@@ -37,7 +39,7 @@ def _message_source(scenario: str) -> str:
         **{**vars(engine.layout), "constants": Constants(), "vertical": fused.vertical}
     )
     return message_module_source(
-        engine.program, engine.kernels, layout, fused.sensors, fused.messaging
+        engine.program, engine.kernels, layout, fused.sensors, fused.messaging, engine.stages
     )
 
 
@@ -53,7 +55,7 @@ def test_the_message_kernels_are_generated_python_without_libm(scenario: str) ->
     assert kinds == {"sense_move", "tick", "handle_sender_", *per_type}
     assert all(f"{kind}{k}" in names for kind in per_type for k in (0, 1))  # two types
     assert "handle_sender_0" in names and "handle_sender_1" not in names  # shared data's
-    assert "sincos_degrees(heading)" in source
+    assert f"{alias(drone2d.step_agent)}(" in source  # its sin/cos: kernels.sincos_degrees
     assert not re.search(r"math\.(sin|cos|tan|atan2?|hypot|exp|log)\b", source)
     assert "prange" not in source and "np." not in source.split("import", 4)[-1]
 

@@ -34,7 +34,7 @@ from typing import Any
 import pytest
 
 from pyautonomousagent.engines import gpu
-from pyautonomousagent.engines.compiled import load_source
+from pyautonomousagent.loop.modules import load_source
 
 #: The device the PTX is for: compute capability 9.0 (H100, H200).
 CC = (9, 0)

@@ -52,7 +52,7 @@ class FromEntry(Leaf):
         return np.asarray(value, dtype=np.int8) if isinstance(value, np.ndarray) else int(value)
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(read_status, (self.key,))
+        return LeafKernel(read_status, {"statuses": self.key})
 
 
 def from_entry(name: str) -> Node:

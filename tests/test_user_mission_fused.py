@@ -33,26 +33,26 @@ from pyautonomousagent.mission import Mission, Param, register_mission
 
 
 @njit
-def sense_beacon(a, x, y, distance, beacon_x, beacon_y):
+def sense_beacon(a, x, y, beacon_distance, beacon_x, beacon_y):
     """The beacon-distance sensor of agent a; it can always move."""
-    distance[a] = hypot_of_one(x[a] - beacon_x[a], y[a] - beacon_y[a])
+    beacon_distance[a] = hypot_of_one(x[a] - beacon_x[a], y[a] - beacon_y[a])
     return True
 
 
 @njit
-def near(a, distance, radius):
-    return SUCCESS if distance[a] <= radius else FAILURE
+def near(a, beacon_distance, radius):
+    return SUCCESS if beacon_distance[a] <= radius else FAILURE
 
 
 @njit
-def hover(a, speed):
-    speed[a] = 0.0
+def hover(a, requested_speed):
+    requested_speed[a] = 0.0
     return RUNNING
 
 
 @njit
-def fly(a, speed, cruise):
-    speed[a] = cruise
+def fly(a, requested_speed, cruise):
+    requested_speed[a] = cruise
     return RUNNING
 
 
@@ -124,7 +124,8 @@ class ActionFlyToBeaconA(Leaf):
         return RUNNING
 
     def kernel(self, world):
-        heading = Later(bearing_of_one, ("x", "y", "beacon_x", "beacon_y"), "requested_heading")
+        toward = {"x": "x", "y": "y", "to_x": "beacon_x", "to_y": "beacon_y"}  # by parameter
+        heading = Later(bearing_of_one, toward, "requested_heading")
         return LeafKernel(fly, ("requested_speed",), (self.speed,), later=heading)
 '''
 

@@ -8,8 +8,9 @@ by returning a :class:`SensorKernel` from
 that has no kernel runs on the batched engine instead.
 
 A kernel function takes the agent's row ``a`` first, then the arrays it names (shape (N,),
-read and written at ``[a]``), then its constants; it must give the same bits as the NumPy
-``evaluate``/``sense`` it stands for (the engine-identity tests hold them equal).
+read and written at ``[a]``; matched to its parameters by name, :data:`Columns`), then its
+constants; it must give the same bits as the NumPy ``evaluate``/``sense`` it stands for (the
+engine-identity tests hold them equal).
 
 Messages: a leaf that broadcasts declares what it sends (:class:`Sends`) and its kernel gets
 an outbox after its arrays; a mission's message type may have a :class:`HandlerKernel`, the
@@ -26,7 +27,7 @@ from __future__ import annotations
 import functools
 import inspect
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -40,6 +41,55 @@ if TYPE_CHECKING:
 ITERATION = "@iteration"
 
 
+#: How a kernel names the swarm columns (or blackboard keys) it is passed: a tuple, in the order
+#: of its function's array parameters, each parameter named as its column; or a mapping from
+#: parameter name to column (any order), where they differ (e.g. a kernel used for several
+#: columns, or :data:`ITERATION`).
+Columns = tuple[str, ...] | Mapping[str, str]
+
+
+def _qualified(function: Callable[..., Any], names: tuple[str, ...]) -> str:
+    """``name(a, b, ...)`` of ``function`` (its ``py_func``'s for an njit function)."""
+    python = getattr(function, "py_func", function)
+    return f"{getattr(python, '__qualname__', python)!s}({', '.join(names)})"
+
+
+def bind_columns(what: str, function: Callable[..., Any], leading: tuple[str, ...],
+                 columns: Columns) -> tuple[str, ...]:  # fmt: skip
+    """The columns ``function`` is passed, in the order of its array parameters (those after
+    the ``leading`` ones), matched by name: a tuple's columns must be named as the parameters
+    they are passed as, a mapping's keys must be exactly those parameters. Raises TypeError
+    naming the kernel, the parameter and the column that do not match, where the kernel is
+    declared, before any code is generated or compiled. A function with ``*args`` takes a
+    tuple unchecked."""
+    names = _parameter_names(function)
+    if names is None:
+        if isinstance(columns, Mapping):
+            raise TypeError(f"{what} {_qualified(function, ('*args',))} cannot take columns "
+                            "by name: it has no named array parameters")  # fmt: skip
+        return tuple(columns)
+    arrays = names[len(leading) : len(leading) + len(columns)]
+    if isinstance(columns, Mapping):
+        unknown = [k for k in columns if k not in arrays]
+        missing = [p for p in arrays if p not in columns]
+        if unknown or missing:
+            raise TypeError(
+                f"{what} {_qualified(function, names)} is given columns for "
+                f"{', '.join(map(repr, unknown)) or 'no other parameter'}, but not for its "
+                f"array parameter(s) {', '.join(map(repr, missing)) or '(none)'} "
+                f"(its arrays: {', '.join(arrays)})"
+            )
+        return tuple(columns[p] for p in arrays)
+    for parameter, column in zip(arrays, columns, strict=False):
+        if parameter != column:
+            raise TypeError(
+                f"{what} {_qualified(function, names)} would be passed column {column!r} as "
+                f"parameter {parameter!r}: name the parameter as the column, or give the "
+                f"columns by name ({{{parameter!r}: {column!r}, ...}})"
+            )
+    return tuple(columns)
+
+
 def check_arity(what: str, function: Callable[..., Any], leading: tuple[str, ...],
                 passed: dict[str, int]) -> None:  # fmt: skip
     """Raise TypeError, naming the kernel and what it is passed, where ``function`` (an
@@ -50,11 +100,24 @@ def check_arity(what: str, function: Callable[..., Any], leading: tuple[str, ...
     expected = len(leading) + sum(passed.values())
     if names is not None and len(names) != expected:
         given = ", ".join([*leading, *(f"{n} {k}" for k, n in passed.items() if n)])
-        python = getattr(function, "py_func", function)
         raise TypeError(
-            f"{what} {getattr(python, '__qualname__', python)!s}({', '.join(names)}) takes "
-            f"{len(names)} arguments, but is passed {expected}: {given}"
+            f"{what} {_qualified(function, names)} takes {len(names)} arguments, but is "
+            f"passed {expected}: {given}"
         )
+
+
+def _bind(kernel: Any, *functions: tuple[str, Callable[..., Any], tuple[str, ...]]) -> None:
+    """Set ``kernel.names`` to its columns in the order of its functions' array parameters
+    (:func:`bind_columns`), the same for each of ``functions`` (what, function, leading)
+    that are passed the same arrays."""
+    bound = [bind_columns(what, f, leading, kernel.names) for what, f, leading in functions]
+    for (what, function, _), columns in zip(functions[1:], bound[1:], strict=True):
+        if columns != bound[0]:
+            raise TypeError(
+                f"{what} {_qualified(function, columns)} takes its arrays in another order "
+                f"than {functions[0][0]}: {', '.join(bound[0])}"
+            )
+    object.__setattr__(kernel, "names", bound[0])
 
 
 @functools.lru_cache(maxsize=4096)
@@ -103,16 +166,17 @@ class Later:
 
     Attributes:
         function: ``function(*values) -> value`` (an njit function of numbers).
-        names: the swarm columns or blackboard keys whose entries it takes, in order.
+        names: the swarm columns or blackboard keys whose entries it takes (:data:`Columns`).
         target: the column or key it writes.
     """
 
     function: Callable[..., Any]
-    names: tuple[str, ...]
+    names: Columns
     target: str
 
     def __post_init__(self) -> None:
         check_arity("Later", self.function, (), {"values": len(self.names)})
+        _bind(self, ("Later", self.function, ()))
 
 
 @dataclass(frozen=True)
@@ -122,7 +186,7 @@ class LeafKernel:
     Attributes:
         function: ``function(a, *arrays, [outbox,] *constants) -> status code`` (an njit
             function).
-        names: the swarm columns or blackboard keys passed as arrays, in order;
+        names: the swarm columns or blackboard keys passed as arrays (:data:`Columns`);
             :data:`ITERATION` passes the iteration number.
         constants: numbers passed after the arrays (port values, an agent row, ...).
         sends: what the leaf broadcasts (its outbox comes after the arrays), or None.
@@ -131,7 +195,7 @@ class LeafKernel:
     """
 
     function: Callable[..., int]
-    names: tuple[str, ...]
+    names: Columns
     constants: tuple[float | int, ...] = ()
     sends: Sends | None = None
     later: Later | None = None
@@ -140,6 +204,7 @@ class LeafKernel:
         passed = {"arrays": len(self.names), "outbox": int(self.sends is not None),
                   "constants": len(self.constants)}  # fmt: skip
         check_arity("LeafKernel", self.function, ("a",), passed)
+        _bind(self, ("LeafKernel", self.function, ("a",)))
 
 
 @dataclass(frozen=True)
@@ -183,7 +248,8 @@ class HandlerKernel:
             the ``count`` messages sent at iteration ``t - 1``, in canonical order (by sender,
             then sending order); it must do what the Python handler does with them.
         fields: the payload names, in ``data`` row order.
-        names: swarm columns or blackboard keys passed as arrays (shape (N,)), in order.
+        names: swarm columns or blackboard keys passed as arrays (shape (N,);
+            :data:`Columns`).
         state: arrays of the mission's run state passed as they are (e.g. what each agent
             heard), in order.
         constants: numbers passed last.
@@ -197,7 +263,7 @@ class HandlerKernel:
 
     function: Callable[..., None]
     fields: tuple[str, ...]
-    names: tuple[str, ...] = ()
+    names: Columns = ()
     state: tuple[Any, ...] = ()
     constants: tuple[float | int, ...] = ()
     receive: Receive | None = None
@@ -206,10 +272,12 @@ class HandlerKernel:
     def __post_init__(self) -> None:
         passed = {"arrays": len(self.names), "state arrays": len(self.state),
                   "constants": len(self.constants)}  # fmt: skip
-        check_arity("HandlerKernel", self.function, ("t", "senders", "data", "count"), passed)
+        everyone, one = ("t", "senders", "data", "count"), ("r", "m", "t", "senders", "data")
+        check_arity("HandlerKernel", self.function, everyone, passed)
         if self.receive is not None and self.receive.state is None:  # else: its state's size
-            check_arity("Receive", self.receive.function, ("r", "m", "t", "senders", "data"),
-                        passed)  # fmt: skip
+            check_arity("Receive", self.receive.function, one, passed)
+        receive = () if self.receive is None else (("Receive", self.receive.function, one),)
+        _bind(self, ("HandlerKernel", self.function, everyone), *receive)
 
 
 @dataclass(frozen=True)
@@ -228,7 +296,7 @@ class SwarmSensorKernel:
         apply: ``apply(a, moving, *arrays, *state, *constants)`` (njit, inline), for agent
             ``a`` right after its per-agent sensors (``moving``: what they returned): puts
             what ``detect`` found into the agent's columns.
-        names: the swarm columns or blackboard keys passed as arrays, in order.
+        names: the swarm columns or blackboard keys passed as arrays (:data:`Columns`).
         state: arrays of the mission's run state passed as they are, in order.
         constants: numbers passed last.
         collect: ``collect(sim, through)``, after a fused call, as many times as it needs,
@@ -245,7 +313,7 @@ class SwarmSensorKernel:
 
     detect: Callable[..., int]
     apply: Callable[..., None]
-    names: tuple[str, ...]
+    names: Columns
     state: tuple[Any, ...] = ()
     constants: tuple[float | int, ...] = ()
     collect: Callable[[SimulationView, int], None] | None = None
@@ -258,6 +326,9 @@ class SwarmSensorKernel:
         check_arity("SwarmSensorKernel apply", self.apply, ("a", "moving"), passed)
         for step in self.device:
             check_arity("SwarmSensorKernel device step", step, ("a", "t"), passed)
+        steps = [("SwarmSensorKernel device step", step, ("a", "t")) for step in self.device]
+        _bind(self, ("SwarmSensorKernel detect", self.detect, ("t",)),
+              ("SwarmSensorKernel apply", self.apply, ("a", "moving")), *steps)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -267,7 +338,7 @@ class SensorKernel:
     Attributes:
         function: ``function(a, *arrays, *state, *constants) -> bool``: updates agent ``a``'s
             sensed columns and says whether it can move this iteration (an njit function).
-        names: the swarm columns or blackboard keys passed as arrays, in order.
+        names: the swarm columns or blackboard keys passed as arrays (:data:`Columns`).
         constants: numbers passed after the arrays and the state.
         stopped: ``stopped(sim, rows)`` is called, with ``sim.world.iteration`` set, for the
             agents (int array) found unable to move for the first time in a run of
@@ -279,7 +350,7 @@ class SensorKernel:
     """
 
     function: Callable[..., bool]
-    names: tuple[str, ...]
+    names: Columns
     constants: tuple[float | int, ...] = ()
     stopped: Callable[[SimulationView, Any], None] | None = None
     swarm: SwarmSensorKernel | None = None
@@ -289,6 +360,7 @@ class SensorKernel:
         passed = {"arrays": len(self.names), "state arrays": len(self.state),
                   "constants": len(self.constants)}  # fmt: skip
         check_arity("SensorKernel", self.function, ("a",), passed)
+        _bind(self, ("SensorKernel", self.function, ("a",)))
 
 
 @njit(inline="always")

@@ -22,15 +22,10 @@ after it.
 
 from __future__ import annotations
 
-import hashlib
-import importlib.util
 import logging
-import os
-import re
-import sys
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
@@ -38,20 +33,22 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from pyautonomousagent import jit
-from pyautonomousagent.bt.leaf import Leaf, check_leaves, leaf_type, make_leaf
-from pyautonomousagent.bt.program import Program, compile_tree
-from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_entries
-from pyautonomousagent.bt.tree_source import memory_rows, memory_size
+from pyautonomousagent.bt.leaf import Leaf, leaf_type
+from pyautonomousagent.bt.program import compile_tree
+from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError
 from pyautonomousagent.engines.compiled_source import (
     CHUNK,
-    Constants,
-    Layout,
-    Messaging,
-    deferrable,
+    _control,
+    _motion,
     module_source,
     supported,
+    tree_body,
 )
-from pyautonomousagent.kernels import LeafKernel, Sends, SensorKernel
+from pyautonomousagent.loop.arguments import ordered, parameters
+from pyautonomousagent.loop.engine import LoopEngine
+from pyautonomousagent.loop.layout import Constants, Fused
+from pyautonomousagent.loop.modules import cache_folder, load_source, module_name
+from pyautonomousagent.loop.source import Stages
 from pyautonomousagent.models.drone2d import Drone2D
 from pyautonomousagent.models.drone3d import Drone3D
 from pyautonomousagent.record_blocks import RecordBlock
@@ -60,7 +57,6 @@ from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
 if TYPE_CHECKING:
-    from pyautonomousagent.datalink import Datalink, Delivery
     from pyautonomousagent.recording import Recorder
     from pyautonomousagent.simulation.engine_api import LoopView
 
@@ -95,48 +91,6 @@ def compilable(tree: Node) -> str:
     return ""
 
 
-def cache_folder() -> Path:
-    """Where generated modules are kept: ``$PYAA_CACHE_DIR``, else
-    ``$XDG_CACHE_HOME/pyautonomousagent/compiled`` (``~/.cache`` by default)."""
-    if os.environ.get("PYAA_CACHE_DIR"):
-        return Path(os.environ["PYAA_CACHE_DIR"])
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "pyautonomousagent" / "compiled"
-
-
-def module_name(source: str) -> str:
-    """The name of generated ``source``'s module: a hash of it and of the files of the
-    modules it imports from (numba's cache checks only the generated file, so a changed
-    kernel must give a new name)."""
-    digest = hashlib.sha256(source.encode())
-    for module in sorted(set(re.findall(r"^from (\S+) import", source, re.MULTILINE))):
-        spec = importlib.util.find_spec(module)
-        if spec is not None and spec.origin and os.path.isfile(spec.origin):
-            digest.update(Path(spec.origin).read_bytes())
-    return "pyaa_tree_" + digest.hexdigest()[:24]
-
-
-def load_source(source: str) -> ModuleType:
-    """Import generated ``source`` as a module from a file named by :func:`module_name`
-    (written once; numba caches the compiled functions beside it)."""
-    name = module_name(source)
-    if name in sys.modules:
-        return sys.modules[name]
-    folder = cache_folder()
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{name}.py"
-    if not path.exists():
-        temporary = folder / f"{name}.{os.getpid()}.tmp"
-        temporary.write_text(source)
-        temporary.replace(path)
-    spec = importlib.util.spec_from_file_location(name, path)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
-
-
 #: Where :meth:`CompiledEngine.prepare` says that it compiles, and how long it took.
 compile_log = logging.getLogger("pyautonomousagent.compile")
 #: Set-up seconds from which :meth:`CompiledEngine.prepare` says how long compiling took
@@ -162,18 +116,7 @@ PARALLEL_AGENTS = 20_000
 SHARE = 8
 
 
-@dataclass(frozen=True)
-class Fused:
-    """What the fused loop of a run calls: the mission's compiled sensors and, where the
-    tree sends messages, their compiled handling; for the 3-D drone, its vertical
-    parameters (``Layout.vertical``)."""
-
-    sensors: SensorKernel
-    messaging: Messaging | None
-    vertical: tuple[float, float, float] | None = None
-
-
-class CompiledEngine:
+class CompiledEngine(LoopEngine):
     """Phase 3 (and, where possible, Phases 2-6) compiled with numba; the batched engine's
     semantics and bits.
 
@@ -183,47 +126,19 @@ class CompiledEngine:
     """
 
     name = "compiled"
+    #: The per-agent source of the fused loop's stages, also the GPU engine's kernels'.
+    stages = Stages(motion=_motion, tree=tree_body, control=_control)
 
     def __init__(self, tree: Node, swarm: Swarm, world: World, defaults: Mapping[str, Any]) -> None:
         why = compilable(tree)
         if why:
             raise TreeError(f"the compiled engine cannot run this tree: {why}")
-        check_leaves(tree, swarm, defaults)
-        check_entries(tree, swarm.blackboard)
-        self.program: Program = compile_tree(tree)
-        self.swarm, self.world = swarm, world
-        self.kernels: dict[int, LeafKernel] = {}
-        for i, node in enumerate(self.program.nodes):
-            if not node.is_control:
-                kernel = make_leaf(node, defaults).kernel(world)
-                if kernel is None:
-                    raise TreeError(f"leaf {node.name!r} ({node.type}) has no kernel")
-                self.kernels[i] = kernel
-        rows = memory_rows(self.program)
-        senders = tuple(i for i, kernel in sorted(self.kernels.items()) if kernel.sends)
-        self.layout = Layout(
-            tuple(swarm.columns) + tuple(swarm.blackboard),
-            rows,
-            senders,
-            deferrable(self.program, self.kernels),
-        )
-        self.pending = np.full(swarm.size, -1, dtype=np.int32)  # deferred Later steps
-        self.status = np.zeros((len(self.program.nodes), swarm.size), dtype=np.int8)
-        self.current = np.zeros((memory_size(self.program), swarm.size), dtype=np.int32)
-        self.outboxes = {i: np.zeros((3 + len(self._sends(i).fields), swarm.size)) for i in senders}
-        self.arrays = [{**swarm.columns, **swarm.blackboard}[k] for k in self.layout.names]
-        self.arrays += list(self.outboxes.values())
+        super().__init__(tree, swarm, world, defaults)
         self._module: ModuleType | None = None
         self._fused: Fused | None = None
         self._constants: tuple[np.ndarray, np.ndarray] = Constants().arrays()
-        self._inboxes: list[tuple[np.ndarray, np.ndarray]] | None = None
         self._no_climb = np.zeros(0)  # the fused loop's u_w argument for the 2-D drone
         self._blocks: RecordBlock | None = None  # where the fused loop writes its records
-
-    def _sends(self, node: int) -> Sends:
-        sends = self.kernels[node].sends
-        assert sends is not None
-        return sends
 
     def _code(self, fused: Fused | None) -> ModuleType:
         if self._module is None or (fused is not None and self._fused is None):
@@ -247,16 +162,6 @@ class CompiledEngine:
         code.tick(self.world.iteration, self.status, self.current, self.pending, *self._constants,
                   *self.arrays)  # fmt: skip
         self._send(self.world.datalink)
-
-    def _send(self, datalink: Datalink) -> None:
-        """Hand the outboxes' messages to ``datalink``, leaf by leaf in node order, senders in
-        ascending rows: the batched engine's calls of ``Leaf.broadcast``."""
-        for i, box in self.outboxes.items():
-            rows = np.flatnonzero(box[0] == 1.0)
-            if rows.size:
-                sends = self._sends(i)
-                data = {f: box[3 + j, rows] for j, f in enumerate(sends.fields)}
-                datalink.send(rows, sends.type, data, (box[1, rows], box[2, rows]))
 
     def prepare(self, sim: LoopView) -> None:
         """Compile (or load from numba's cache) what this run will call, before its loop:
@@ -305,23 +210,6 @@ class CompiledEngine:
         fused = self._fusable(sim)
         return fused is not None and self._marker(sim, fused).exists()
 
-    def fuses(self, sim: LoopView) -> bool:
-        """Whether :meth:`loop` can run ``sim``'s iterations (from its start)."""
-        return self._fusable(sim) is not None
-
-    def why_not_fused(self, sim: LoopView) -> str:
-        """Why :meth:`loop` cannot run ``sim``'s iterations from its start (then each
-        iteration runs Phases 2 and 4-6 in NumPy and ticks the compiled tree), or ""."""
-        if self._fusable(sim) is not None:
-            return ""
-        if sim.mission.compiled_sensors(sim) is None:
-            return f"mission {sim.mission.name!r}'s sensors (Phase 2) have no compiled form"
-        if not isinstance(sim.model, Drone2D):
-            return f"the motion model {sim.model.name!r} has no compiled form"
-        if self.layout.outboxes and self._messaging(sim) is None:
-            return "a message type the tree sends has no compiled handler"
-        return "the C library's sin/cos do not give NumPy's bits on this CPU"
-
     def _marker(self, sim: LoopView, fused: Fused) -> Path:
         """The file saying that the fused functions ``sim``'s loop calls (serial and
         parallel: :meth:`variants`) are in numba's cache."""
@@ -344,10 +232,6 @@ class CompiledEngine:
         if fused.messaging is not None or fused.sensors.swarm is not None:
             return parallel if self.swarm.size >= PARALLEL_AGENTS else serial
         return parallel if iterations * self.swarm.size >= PARALLEL else serial
-
-    def node_statuses(self) -> np.ndarray:
-        """Status codes after the last tick, shape (nodes in tick order, N), int8."""
-        return self.status.copy()
 
     def loop(self, sim: LoopView, count: int, typical: int | None = None) -> int:
         """Run up to ``count`` whole iterations in compiled code; return how many were run:
@@ -375,12 +259,13 @@ class CompiledEngine:
         count = blocks.fit(start, count) if count else 0
         stopped = np.full(self.swarm.size, -1, dtype=np.int64)  # the iteration each stopped at
         arguments = self._arguments(sim, fused, model, blocks, row0, count, stopped)
+        values = ordered(parameters(block, 5), arguments, function)
         import numba
 
         groups = -(-self.swarm.size // CHUNK)
         share = max(1, groups // (SHARE * numba.get_num_threads()))
         with numba.parallel_chunksize(share):  # a core that others slow down takes less
-            done = block(start, count, every, row0, CHUNK, *arguments)
+            done = block(start, count, every, row0, CHUNK, *values)
         if fused.messaging is not None and done:
             sim.inbox = []  # handled in the first iteration
         if done:
@@ -398,79 +283,27 @@ class CompiledEngine:
     def _arguments(
         self, sim: LoopView, fused: Fused, model: Drone2D | Drone3D, blocks: RecordBlock,
         row0: int, count: int, stopped: np.ndarray,
-    ) -> tuple[Any, ...]:  # fmt: skip
-        """The fused function's arguments after ``t0, count, every, row0, chunk``: the
-        state, the control signals, the record arrays from record ``row0`` (empty ones for
-        ``count`` 0: compiling only), the parameters, the sensors' state, then the messages'
-        and the swarm sensor's; ``stopped`` (shape (N,), int64, -1) gets the iteration at
-        which each agent is found unable to move."""
+    ) -> dict[str, Any]:  # fmt: skip
+        """The fused function's arguments after ``t0, count, every, row0, chunk``, by
+        parameter name: the tree's state, the control signals, the record arrays from record
+        ``row0`` (empty ones for ``count`` 0: compiling only), the parameters and the
+        sensors' state, then the messages' and the swarm sensor's; ``stopped`` (shape (N,),
+        int64, -1) gets the iteration at which each agent is found unable to move."""
         recorder = sim.recorder
-        u_climb = model.u_climb if isinstance(model, Drone3D) else self._no_climb
         traced_at = np.full(self.swarm.size, -1, dtype=np.int64)
         traced_at[recorder.traced] = np.arange(recorder.traced.size)
         columns, traces, behaviour = blocks.arrays(row0) if count else self._empty(recorder)
         assert behaviour is not None  # checked by _fusable
-        p = model.params
-        arguments = (
-            self.status, self.current, self.pending, *self._constants, *self.arrays,
-            model.u_speed, model.u_heading, u_climb, *columns, traces,
-            traced_at, behaviour, recorder._leaf_rows.astype(np.int64), stopped,
-            p.max_speed, p.speed_step, p.turn_step, *fused.sensors.state,
-        )  # fmt: skip
+        records = dict(zip(self.layout.record_names, columns, strict=True))
+        leaf_rows = recorder._leaf_rows.astype(np.int64)
+        records |= {"traces": traces, "traced_at": traced_at, "behaviour": behaviour}
+        records |= {"leaf_rows": leaf_rows, "stopped_at": stopped}
+        arguments = self._tree_arguments(self._constants)
+        arguments |= self._control_arguments(model, self._no_climb) | records
+        arguments |= self._model_arguments(model, fused.sensors)
         if fused.messaging is not None:
-            arguments += tuple(self._inbox(sim, fused.messaging))
-        if fused.sensors.swarm is not None:
-            arguments += fused.sensors.swarm.state
-        return arguments
-
-    def _inbox(self, sim: LoopView, messaging: Messaging) -> list[Any]:
-        """The arguments of ``block_messages_*`` after the common ones: the datalink's range,
-        ``order``, ``counts``, ``lowest``, each type's inbox (senders, data) filled with
-        ``sim.inbox`` (deliveries that reached everyone, checked by :meth:`_fusable`), and
-        the handlers' state."""
-        types = messaging.types
-        if self._inboxes is None or len(self._inboxes) != len(types):
-            self._inboxes = []
-            for k, handler in enumerate(messaging.handlers):
-                leaves = sum(1 for kind, _ in messaging.senders.values() if kind == k)
-                capacity = leaves * self.swarm.size  # one message per sending leaf and agent
-                self._inboxes.append((np.zeros(capacity, dtype=np.int64),
-                                      np.zeros((len(handler.fields), capacity))))  # fmt: skip
-        order = np.full(len(types), -1, dtype=np.int64)
-        counts = np.zeros(len(types), dtype=np.int64)
-        for j, delivery in enumerate(sim.inbox):
-            messages = delivery.messages
-            k = types.index(messages.type)
-            senders, data = self._inboxes[k]
-            m = len(messages)
-            senders[:m] = messages.senders
-            for f, name in enumerate(messaging.handlers[k].fields):
-                data[f, :m] = messages.data[name]
-            order[j], counts[k] = k, m
-        inboxes = [array for pair in self._inboxes for array in pair]
-        state = [array for handler in messaging.handlers for array in handler.state]
-        lowest = np.zeros(len(types), dtype=np.int64)
-        return [sim.world.datalink.range, order, counts, lowest, *inboxes, *state]
-
-    def _messaging(self, sim: LoopView) -> Messaging | None:
-        """The compiled handling of the messages the tree sends, or None where a type sent
-        has no compiled handler in ``sim`` (or one that reads a field not sent)."""
-        types = tuple(dict.fromkeys(self._sends(i).type for i in self.layout.outboxes))
-        handlers = []
-        for kind in types:
-            declared = sim.handlers.get(kind)
-            if declared is None or declared.kernel is None:
-                return None
-            handlers.append(declared.kernel)
-        senders = {}
-        for i in self.layout.outboxes:
-            sends = self._sends(i)
-            k = types.index(sends.type)
-            if not set(handlers[k].fields) <= set(sends.fields):
-                return None
-            senders[i] = (k, tuple(3 + sends.fields.index(f) for f in handlers[k].fields))
-        recorded = tuple(sim.handlers[kind].recorded for kind in types)
-        return Messaging(types, tuple(handlers), recorded, senders)
+            arguments |= self._message_arguments(sim, fused.messaging)
+        return arguments | self._swarm_arguments(fused.sensors)
 
     def _empty(self, recorder: Recorder) -> tuple[list[np.ndarray], np.ndarray, np.ndarray]:
         """Empty record arrays of the types the fused loop writes (the columns in layout
@@ -479,63 +312,3 @@ class CompiledEngine:
         n = self.swarm.size
         columns = [np.empty((0, n), recorder.columns.dtypes[k]) for k in self.layout.names]
         return columns, recorder.traces[:0], np.empty((0, n), np.int16)
-
-    def _fusable(self, sim: LoopView) -> Fused | None:
-        """What :meth:`loop` calls where it can run ``sim`` now, else None: the mission's
-        compiled sensors and the 2-D or 3-D drone; a tree that sends nothing with no message in
-        flight, or one whose messages have compiled handlers, the messages in flight having
-        reached everyone; records of the layout's columns."""
-        if not isinstance(sim.model, Drone2D | Drone3D):  # first: it is asked every iteration
-            return None
-        sensors = sim.mission.compiled_sensors(sim)
-        recorder = sim.recorder
-        if (
-            sensors is None
-            or sim.world.datalink.channel
-            or list(recorder.columns) != list(self.layout.names)
-            or not recorder.wants_statuses  # (not .behaviour: it stores it in full)
-        ):
-            return None
-        messaging = self._messaging(sim) if self.layout.outboxes else None
-        if self.layout.outboxes and messaging is None:
-            return None
-        if any(not self._takes(d, messaging) for d in sim.inbox):
-            return None
-        model = sim.model
-        if isinstance(model, Drone3D):
-            p = model.params
-            return Fused(sensors, messaging, (p.max_climb_rate, p.climb_step, p.max_altitude))
-        return Fused(sensors, messaging)
-
-    @staticmethod
-    def _takes(delivery: Delivery, messaging: Messaging | None) -> bool:
-        """Whether the fused loop handles ``delivery`` (of ``sim.inbox``): one that reached
-        everyone, of a type the tree sends."""
-        return (
-            delivery.to_all and messaging is not None and delivery.messages.type in messaging.types
-        )
-
-    @staticmethod
-    def _after(
-        sim: LoopView, sensors: SensorKernel, start: int, count: int, stopped: np.ndarray
-    ) -> None:
-        """The bookkeeping of a fused run: the sensors' alerts and what the swarm sensor
-        kept, in order of iteration (an iteration's alerts first, as Phase 2 raises them),
-        the world's clock, the recorder's iterations and count."""
-        collect = sensors.swarm.collect if sensors.swarm is not None else None
-        for t in np.unique(stopped[stopped >= 0]).tolist():
-            if collect is not None:
-                collect(sim, t - 1)
-            sim.world.iteration = t
-            if sensors.stopped is not None:
-                sensors.stopped(sim, np.flatnonzero(stopped == t))
-        if collect is not None:
-            collect(sim, start + count)
-        sim.world.iteration = start + count
-        recorder = sim.recorder
-        for t in range(start + 1, start + count + 1):
-            if recorder.due(t):
-                recorder.iterations[recorder.count] = t
-                recorder.count += 1
-        for listener in recorder.listeners:  # e.g. the states written while the run goes
-            listener(recorder.count)

@@ -15,21 +15,21 @@ keeps them; ``c0, c1, ...`` are the swarm's columns and blackboard arrays in
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from typing import Any
-
-import numpy as np
 
 from pyautonomousagent.bt import tree_source as source
 from pyautonomousagent.bt.program import Program
-from pyautonomousagent.kernels import (
-    ITERATION,
-    HandlerKernel,
-    Later,
-    LeafKernel,
-    SensorKernel,
-    SwarmSensorKernel,
+from pyautonomousagent.kernels import LeafKernel, SensorKernel
+from pyautonomousagent.loop.layout import Layout, Messaging
+from pyautonomousagent.loop.source import (
+    _later,
+    _later_pass,
+    _swarm_args,
+    alias,
+    fused_arguments,
+    motion_functions,
 )
 
 #: Agents ticked together over a run of iterations in the fused loop: their records of one
@@ -37,102 +37,10 @@ from pyautonomousagent.kernels import (
 CHUNK = 256
 
 
-class Constants:
-    """The numbers the generated code reads at run time (ports, parameters, agent rows): not
-    written into it, so that one compiled module serves every value. Each call site's
-    numbers get slots in two arrays, ``kf`` (float64) and ``ki`` (int64: whole numbers and
-    flags), arguments of every generated function."""
-
-    def __init__(self) -> None:
-        self._slots: dict[tuple[str, int], str] = {}
-        self.floats: list[float] = []
-        self.ints: list[int] = []
-
-    def refs(self, site: str, values: Sequence[Any]) -> list[str]:
-        """Where the code reads ``values`` of call site ``site`` (e.g. ``"leaf 3"``)."""
-        refs = []
-        for j, value in enumerate(values):
-            key = (site, j)
-            if key not in self._slots:
-                if isinstance(value, bool | int | np.integer):
-                    self.ints.append(int(value))
-                    self._slots[key] = f"ki[{len(self.ints) - 1}]"
-                else:
-                    self.floats.append(float(value))
-                    self._slots[key] = f"kf[{len(self.floats) - 1}]"
-            refs.append(self._slots[key])
-        return refs
-
-    def arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        """``kf`` and ``ki`` (never empty: numba types an empty list poorly)."""
-        return (np.array(self.floats or [0.0], dtype=np.float64),
-                np.array(self.ints or [0], dtype=np.int64))  # fmt: skip
-
-
-@dataclass(frozen=True)
-class Layout:
-    """Where the generated code finds things.
-
-    Attributes:
-        names: the arrays ``c0, c1, ...``: swarm columns, then blackboard keys.
-        memory_rows: node index -> its row of ``cur`` (``bt.tree_source.memory_rows``).
-        outboxes: the nodes whose leaves send messages (their kernels' ``Sends``), in node
-            order; each has an outbox ``o<node>`` (see :class:`~pyautonomousagent.kernels.Sends`).
-        deferred: the leaves whose ``Later`` step is done for all agents after the tree
-            (:func:`deferrable`); the tree marks each agent's in ``pend`` (-1: none).
-        constants: the numbers the code reads from ``kf`` and ``ki``, filled while the
-            source is written.
-        vertical: the 3-D drone's ``(max_climb_rate, climb_step, max_altitude)`` where the
-            motion model is the 3-D drone (its altitude and climb rate are moved too, the
-            control signal u_w kept in ``uc``), else None (the 2-D drone).
-    """
-
-    names: tuple[str, ...]
-    memory_rows: Mapping[int, int]
-    outboxes: tuple[int, ...] = ()
-    deferred: tuple[int, ...] = ()
-    constants: Constants = field(default_factory=Constants)
-    vertical: tuple[float, float, float] | None = None
-
-    @property
-    def arrays(self) -> str:
-        """The arrays' argument list: ``c0, c1, ...``, then the outboxes ``o<node>, ...``."""
-        return ", ".join([f"c{j}" for j in range(len(self.names))] + self.outbox_names)
-
-    @property
-    def outbox_names(self) -> list[str]:
-        """The outboxes of the sending leaves, in node order."""
-        return [f"o{i}" for i in self.outboxes]
-
-    def array(self, name: str) -> str:
-        """The variable holding array ``name`` (``t`` for the iteration)."""
-        return "t" if name == ITERATION else f"c{self.names.index(name)}"
-
-
 def supported(program: Program) -> bool:
     """Whether every control node of ``program`` has a compiled form: a rule
     (:attr:`~pyautonomousagent.bt.nodes.NodeType.rule`) and no scripting attribute."""
     return source.has_source(program)
-
-
-def deferrable(program: Program, kernels: Mapping[int, LeafKernel]) -> tuple[int, ...]:
-    """The leaves with a ``Later`` step that no node ticked after them can see: every
-    ancestor returns at once when its child is RUNNING (its record ``yields``), so the tick
-    ends with the leaf."""
-    deferred = []
-    for i, kernel in sorted(kernels.items()):
-        up = int(program.parent[i])
-        while up >= 0 and source.node_record(program, up).yields:
-            up = int(program.parent[up])
-        if kernel.later is not None and up < 0:
-            deferred.append(i)
-    return tuple(deferred)
-
-
-def alias(function: Any) -> str:
-    """The name a kernel function is imported under: its module and name, made one word."""
-    py = getattr(function, "py_func", function)
-    return "K_" + f"{py.__module__}.{py.__qualname__}".replace(".", "_")
 
 
 def _call(kernel: LeafKernel, layout: Layout, node: int) -> str:
@@ -152,28 +60,6 @@ def _leaf_lines(i: int, kernels: Mapping[int, LeafKernel], layout: Layout, ticks
     return [*lines, f"{ticks}[a] += 1"]
 
 
-def _later(later: Later, layout: Layout) -> str:
-    """The statement of a ``Later`` step for agent ``a``."""
-    values = ", ".join(f"{layout.array(name)}[a]" for name in later.names)
-    return f"{layout.array(later.target)}[a] = {alias(later.function)}({values})"
-
-
-def _later_pass(
-    kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, then: str, indent: str
-) -> str:
-    """A loop over ``agents`` doing the deferred ``Later`` steps the tree marked in ``pend``,
-    then ``then`` (code for agent ``a``, indented by 4, e.g. Phase 4), indented by
-    ``indent``."""
-    lines = [f"for a in {agents}:", "    p = pend[a]", "    if p >= 0:"]
-    for i in layout.deferred:
-        later = kernels[i].later
-        assert later is not None
-        lines += [f"        if p == {i}:", f"            {_later(later, layout)}"]
-    lines.append("        pend[a] = -1")
-    if then:  # a loop of its own: the steps above run many agents at a time
-        lines.append(f"for a in {agents}:")
-    body = "\n".join(indent + line for line in lines)
-    return body + ("\n" + then if then else "")
 
 
 def tree_body(
@@ -197,14 +83,6 @@ def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:
     return f"S({', '.join(args)})"
 
 
-def _swarm_args(swarm: SwarmSensorKernel, layout: Layout) -> list[str]:
-    """The arguments of a swarm sensor's functions after the first ones: its arrays, its state
-    ``ws0, ws1, ...`` (arguments of the fused function) and its constants."""
-    args = [layout.array(name) for name in swarm.names]
-    args += [f"ws{j}" for j in range(len(swarm.state))]
-    return args + layout.constants.refs("swarm", swarm.constants)
-
-
 def _swarm_apply(sensors: SensorKernel, layout: Layout) -> str:
     """After agent ``a``'s sensors, what the swarm sensor found for it (a line of its own);
     "" without a swarm sensor."""
@@ -223,71 +101,42 @@ def _swarm_detect(sensors: SensorKernel, layout: Layout) -> str:
             return done"""
 
 
+#: What the fused functions pass for a parameter of this name of the motion model's
+#: functions (:func:`~pyautonomousagent.loop.source.motion_functions`); the 3-D drone's are
+#: read from :attr:`Layout.vertical`, any other is the column.
+_MOTION_ARGS = {"u_speed": "us", "u_heading": "uh", "u_climb": "uc"} | {
+    name: name for name in ("a", "moving", "max_speed", "speed_step", "turn_step")
+}
+_VERTICAL = ("max_climb_rate", "climb_step", "max_altitude")
+
+
+def _model_calls(functions: Sequence[Any], layout: Layout, indent: str) -> str:
+    """A line per function: its call for agent ``a``, its arguments matched by name."""
+    vertical = dict(zip(_VERTICAL, layout.constants.refs("drone3d", layout.vertical or ()),
+                        strict=False))  # fmt: skip
+    lines = []
+    for function in functions:
+        names = inspect.signature(getattr(function, "py_func", function)).parameters
+        args = [_MOTION_ARGS.get(n) or vertical.get(n) or layout.array(n) for n in names]
+        lines.append(f"{indent}{alias(function)}({', '.join(args)})")
+    return "\n".join(lines)
+
+
 def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
-    """Phase 2 for agent ``a``: the sensors, then the 2-D drone's step (and the 3-D drone's
-    altitude, :func:`_vertical_motion`). The sine and cosine are
-    :func:`~pyautonomousagent.kernels.sincos_degrees`, the NumPy path's operations: the same
-    bits on every CPU, and in a GPU kernel compiled without FMA contraction."""
-    c = {name: layout.array(name) for name in layout.names}
-    x, y, v, h = c["x"], c["y"], c["speed"], c["heading"]
+    """Phase 2 for agent ``a``: the sensors, the motion model's step
+    (:func:`~pyautonomousagent.loop.source.motion_functions`; one that cannot move stops),
+    ``stopped_at`` keeping the first iteration it could not."""
     lines = f"""moving = {_sensor_call(sensors, layout)}{_swarm_apply(sensors, layout)}
-if moving:
-    heading = {h}[a]
-    speed = {v}[a]
-    sine, cosine = sincos_degrees(heading)
-    {x}[a] = {x}[a] + speed * sine
-    {y}[a] = {y}[a] + speed * cosine
-    {v}[a] = np_minimum(np_maximum(speed + us[a], 0.0), max_speed)
-    {h}[a] = wrap_degrees(heading + uh[a]){_vertical_motion(layout)}
-else:
-    {v}[a] = 0.0{_vertical_stop(layout)}
-    if stopped_at[a] < 0:
-        stopped_at[a] = t"""
+{_model_calls(motion_functions(layout)[0], layout, "")}
+if not moving and stopped_at[a] < 0:
+    stopped_at[a] = t"""
     return "\n".join(indent + line for line in lines.splitlines())
-
-
-def _vertical_refs(layout: Layout) -> tuple[str, str, str]:
-    """Where the code reads the 3-D drone's max_climb_rate, climb_step and max_altitude."""
-    assert layout.vertical is not None
-    top, step, ceiling = layout.constants.refs("drone3d", layout.vertical)
-    return top, step, ceiling
-
-
-def _vertical_motion(layout: Layout) -> str:
-    """The 3-D drone's eqs. 5-6 for agent ``a`` (``models.drone3d.advance_vertical``), after
-    the 2-D step in :func:`_motion`; "" for the 2-D drone."""
-    if layout.vertical is None:
-        return ""
-    z, w = layout.array("z"), layout.array("climb_rate")
-    top, _, ceiling = _vertical_refs(layout)
-    return f"""
-    climb = {w}[a]
-    {z}[a] = np_minimum(np_maximum({z}[a] + climb, 0.0), {ceiling})
-    {w}[a] = np_minimum(np_maximum(climb + uc[a], -{top}), {top})"""
-
-
-def _vertical_stop(layout: Layout) -> str:
-    """A 3-D drone that cannot move stops climbing; "" for the 2-D drone."""
-    return "" if layout.vertical is None else f"\n    {layout.array('climb_rate')}[a] = 0.0"
 
 
 def _control(layout: Layout, indent: str) -> str:
-    """Phase 4 for agent ``a``: the 2-D drone's speed and turn steps toward the requests
-    (and the 3-D drone's climb step toward the requested altitude)."""
-    v, h = layout.array("speed"), layout.array("heading")
-    rs, rh = layout.array("requested_speed"), layout.array("requested_heading")
-    lines = f"""us[a] = speed_step * np_sign({rs}[a] - {v}[a])
-error = wrap_degrees({rh}[a] - {h}[a])
-if error > 180.0:
-    error = error - 360.0
-uh[a] = turn_step * np_sign(error)"""
-    if layout.vertical is not None:  # eq. 7, models.drone3d.climb_control
-        z, w, ra = (layout.array(k) for k in ("z", "climb_rate", "requested_altitude"))
-        top, step, _ = _vertical_refs(layout)
-        lines += f"""
-wanted = np_minimum(np_maximum({ra}[a] - ({z}[a] + {w}[a]), -{top}), {top})
-uc[a] = np_minimum(np_maximum(wanted - {w}[a], -{step}), {step})"""
-    return "\n".join(indent + line for line in lines.splitlines())
+    """Phase 4 for agent ``a``: the motion model's control
+    (:func:`~pyautonomousagent.loop.source.motion_functions`)."""
+    return _model_calls(motion_functions(layout)[1], layout, indent)
 
 
 def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, indent: str) -> str:
@@ -297,22 +146,6 @@ def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, inde
     if not layout.deferred:
         return _control(layout, indent + " " * 4)
     return _later_pass(kernels, layout, agents, _control(layout, indent + " " * 4), indent)
-
-
-#: The arguments of the fused functions from the node statuses on (see
-#: :func:`block_function`), less the sensors' state (:func:`fused_arguments`).
-_FUSED_ARGS = """st, cur, pend, kf, ki, {arrays}, us, uh, uc,
-           {records}, traces, traced_at, behaviour, leaf_rows, stopped_at,
-           max_speed, speed_step, turn_step"""
-
-
-def fused_arguments(layout: Layout, sensors: SensorKernel) -> str:
-    """The arguments of the fused functions (and the GPU kernels) from the node statuses on:
-    :data:`_FUSED_ARGS`, then the sensors' state ``ss0, ss1, ...``
-    (``SensorKernel.state``)."""
-    records = ", ".join(f"r{j}" for j in range(len(layout.names)))
-    state = "".join(f", ss{j}" for j in range(len(sensors.state)))
-    return _FUSED_ARGS.format(arrays=layout.arrays, records=records) + state
 
 
 def block_function(
@@ -354,34 +187,6 @@ def {name}(t0, count, every, row0, chunk, {fused_arguments(layout, sensors)}):
                     record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)
     return count
 """
-
-
-@dataclass(frozen=True)
-class Messaging:
-    """The message types the tree sends, for :func:`message_block_function`.
-
-    Attributes:
-        types: the types, in order of their first sending node (type ``k`` is index ``k``).
-        handlers: each type's compiled handler.
-        recorded: each type's ``MessageType.recorded``.
-        senders: sending node -> (its type's index, outbox row of each handler field).
-    """
-
-    types: tuple[str, ...]
-    handlers: tuple[HandlerKernel, ...]
-    recorded: tuple[bool, ...]
-    senders: Mapping[int, tuple[int, tuple[int, ...]]]
-
-    @property
-    def inboxes(self) -> str:
-        """The inbox arguments ``ib_s0, ib_d0, ...`` (senders, data per type)."""
-        return ", ".join(f"ib_s{k}, ib_d{k}" for k in range(len(self.types)))
-
-    @property
-    def state(self) -> str:
-        """The handlers' state arguments ``hs<type>_<j>``."""
-        names = [f"hs{k}_{j}" for k, h in enumerate(self.handlers) for j in range(len(h.state))]
-        return ", ".join(names)
 
 
 def _handle(messaging: Messaging, layout: Layout) -> str:
@@ -550,10 +355,8 @@ import math
 from numba import njit, prange
 from numpy import uint64 as U  # agent rows as unsigned: no check for negative indices
 
-from pyautonomousagent.engines.compiled_runtime import halt, record_statuses
-from pyautonomousagent.kernels import (
-    hypot, np_maximum, np_minimum, np_sign, sincos_degrees, wrap_degrees,
-)
+from pyautonomousagent.loop.runtime import halt, record_statuses
+from pyautonomousagent.kernels import hypot
 """
 
 
@@ -572,6 +375,7 @@ def module_source(
     lines = [HEADER]
     used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
     used |= {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
+    used |= {alias(f): f for group in motion_functions(layout) for f in group}
     if sensors is not None:
         used["S"] = sensors.function
     if sensors is not None and sensors.swarm is not None:

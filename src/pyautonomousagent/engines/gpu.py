@@ -37,25 +37,25 @@ from __future__ import annotations
 import sys
 import time
 import types
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.engines import cuda_jit
-from pyautonomousagent.engines.compiled import CompiledEngine, load_source
-from pyautonomousagent.engines.compiled_source import Constants, Layout, Messaging
-from pyautonomousagent.engines.gpu_records import RecordGroups
+from pyautonomousagent.engines.gpu_records import RecordGroups, Slot
 from pyautonomousagent.engines.gpu_source import kernel_module_source, message_module_source
 from pyautonomousagent.inputs import InputError
 from pyautonomousagent.kernels import SensorKernel
+from pyautonomousagent.loop.arguments import ordered, parameters
+from pyautonomousagent.loop.engine import LoopEngine
+from pyautonomousagent.loop.layout import Constants, Fused, Layout, Messaging
+from pyautonomousagent.loop.modules import load_source
+from pyautonomousagent.loop.source import fused_parameters, record_parameters, swarm_state_names
 from pyautonomousagent.models.drone2d import Drone2D
 from pyautonomousagent.models.drone3d import Drone3D
-from pyautonomousagent.state import Swarm
-from pyautonomousagent.world import World
 
 if TYPE_CHECKING:
     from pyautonomousagent.datalink import Delivery
@@ -223,8 +223,11 @@ def fma_free(kernel: Any) -> bool:
     return not any("fma." in ptx for ptx in kernel.inspect_asm().values())
 
 
-class GpuEngine(CompiledEngine):
-    """The compiled engine with its fused loop on a CUDA device (see the module's docstring).
+class GpuEngine(LoopEngine):
+    """The fused loop of a ``host`` engine's tree on a CUDA device (see the module's
+    docstring): it shares the host's arrays (:meth:`LoopEngine._share`), writes its kernels
+    with the host's per-agent stages (``host.stages``), and has the host tick the iterations
+    stepped on the CPU. (The simulation gives it a compiled engine of the run's tree.)
 
     Raises:
         GpuUnavailableError: no numba-cuda, CuPy or device (see :func:`gpu_problem`).
@@ -232,14 +235,15 @@ class GpuEngine(CompiledEngine):
 
     name = "gpu"
 
-    def __init__(self, tree: Node, swarm: Swarm, world: World, defaults: Mapping[str, Any]) -> None:
+    def __init__(self, host: LoopEngine) -> None:
         require_gpu()
-        super().__init__(tree, swarm, world, defaults)
+        self._share(host)
+        self.host, self.stages = host, host.stages
         self._kernel: Any = None
         self._messages: DeviceMessages | None = None
         self._kernel_constants: tuple[np.ndarray, np.ndarray] = (np.zeros(1), np.zeros(1, int))
-        self._device: list[Any] | None = None
-        self._readings: list[Any] = []  # the sensors' state (SensorKernel.state), on the device
+        self._device: dict[str, Any] | None = None  # the state, by parameter name
+        self._readings: dict[str, Any] = {}  # the sensors' state (ss<j>), on the device
         self._swarm_kernels: list[Any] = []  # the swarm sensor's device steps (swarm_<j>)
         self._swarm_state: tuple[np.ndarray, ...] = ()  # its state (host), written on the device
         self._swarm_device: list[Any] = []  # and on the device
@@ -247,6 +251,11 @@ class GpuEngine(CompiledEngine):
         self._host_synced = -1  # the iteration the state copied back is of
         self._groups: RecordGroups | None = None
         self.timings = dict.fromkeys(TIMINGS, 0.0)
+
+    def tick(self) -> None:
+        """Tick the tree once for every agent on the CPU (the host's tick: an iteration the
+        kernels cannot run)."""
+        self.host.tick()
 
     def prepare(self, sim: LoopView) -> None:
         """Compile the kernel before the loop.
@@ -271,7 +280,9 @@ class GpuEngine(CompiledEngine):
         start = time.perf_counter()
         layout = replace(self.layout, constants=Constants(), vertical=fused.vertical)
         if fused.messaging is None:
-            source = kernel_module_source(self.program, self.kernels, layout, fused.sensors)
+            source = kernel_module_source(
+                self.program, self.kernels, layout, fused.sensors, self.stages
+            )
             self._kernel = load_kernel(source)
             steps = len(swarm.device) if swarm is not None else 0
             self._swarm_kernels = [load_kernel(source, f"swarm_{j}") for j in range(steps)]
@@ -296,7 +307,9 @@ class GpuEngine(CompiledEngine):
         (:mod:`~pyautonomousagent.engines.gpu_messages`); the source."""
         from pyautonomousagent.engines.gpu_messages import DeviceMessages
 
-        source = message_module_source(self.program, self.kernels, layout, sensors, messaging)
+        source = message_module_source(
+            self.program, self.kernels, layout, sensors, messaging, self.stages
+        )
         names = [line.split("(")[0][4:] for line in source.splitlines() if line.startswith("def ")]
         kernels = {name: load_kernel(source, name) for name in names}
         self._messages = DeviceMessages(kernels, messaging, self.layout.names, self.swarm.size)
@@ -340,7 +353,7 @@ class GpuEngine(CompiledEngine):
 
     def ready(self, sim: LoopView) -> bool:
         """False: "auto" picks the GPU engine by the run's size (:func:`auto_takes_gpu`),
-        not by what numba's cache holds (``CompiledEngine.ready``)."""
+        not by what numba's cache holds (as the compiled engine's ``ready``)."""
         return False
 
     def runs(self, sim: LoopView) -> bool:
@@ -370,13 +383,26 @@ class GpuEngine(CompiledEngine):
         state = sum(array.nbytes for array in arrays) / self.swarm.size
         return 2 * state + self._groups.row_bytes / self.swarm.size / sim.recorder.every
 
-    def _state(self, sim: LoopView) -> list[Any]:
-        """The state the kernel reads and writes, in argument order (host arrays)."""
+    def _state(self, sim: LoopView) -> dict[str, Any]:
+        """The state the kernel reads and writes, by parameter name (host arrays): the
+        tree's and the control signals."""
         model = sim.model
         assert isinstance(model, Drone2D | Drone3D)
-        u_climb = model.u_climb if isinstance(model, Drone3D) else np.zeros(1)
-        return [self.status, self.current, self.pending, *self._kernel_constants, *self.arrays,
-                model.u_speed, model.u_heading, u_climb]  # fmt: skip
+        tree = self._tree_arguments(self._kernel_constants)
+        return tree | self._control_arguments(model, np.zeros(1))
+
+    def _arguments(self, sim: LoopView, fused: Fused, slot: Slot) -> dict[str, Any]:
+        """The kernels' arguments after the leading ones, by parameter name (device arrays
+        and the parameters): the state, the records of ``slot``, the motion's parameters,
+        the sensors' state and the swarm sensor's."""
+        model = sim.model
+        assert isinstance(model, Drone2D | Drone3D)
+        assert self._device is not None and self._groups is not None
+        records = record_parameters(self.layout)
+        arguments = self._device | dict(zip(records, self._groups.arguments(slot), strict=True))
+        arguments |= self._model_arguments(model, fused.sensors) | self._readings
+        swarm = swarm_state_names(fused.sensors.swarm)
+        return arguments | dict(zip(swarm, self._swarm_device, strict=True))
 
     def loop(self, sim: LoopView, count: int, typical: int | None = None) -> int:
         """:meth:`_loop` with NVVM's FMA contraction off (:func:`no_fma`): a kernel that is
@@ -413,32 +439,31 @@ class GpuEngine(CompiledEngine):
         fresh = self._device is None or self._synced != start  # new, or stepped on the CPU
         if fresh:
             sent = time.perf_counter()
-            self._device = [cuda.to_device(array) for array in self._state(sim)]
-            self._readings = [cuda.to_device(array) for array in fused.sensors.state]
+            self._device = {k: cuda.to_device(array) for k, array in self._state(sim).items()}
+            self._readings = {f"ss{j}": cuda.to_device(array)
+                              for j, array in enumerate(fused.sensors.state)}  # fmt: skip
             swarm = fused.sensors.swarm
             self._swarm_state = swarm.state if swarm is not None else ()
             self._swarm_device = [cuda.to_device(array) for array in self._swarm_state]
             self._host_synced = start
             self.timings["state"] += time.perf_counter() - sent
-        assert self._device is not None
         n = self.swarm.size
         slot = self._groups.slot(sim)
-        p = model.params
-        arguments = (
-            *self._device, *self._groups.arguments(slot), p.max_speed, p.speed_step, p.turn_step,
-            *self._readings,
-        )  # fmt: skip
+        arguments = self._arguments(sim, fused, slot)
         began = time.perf_counter()
         if self._swarm_kernels:
             self._swarm_loop(start, count, every, row0, arguments)
             done = count
         elif self._messages is None:
-            blocks = max(1, -(-n // THREADS))
-            launch = self._kernel[blocks, THREADS, self._groups.stream]
-            launch(start, count, every, row0, *arguments)
+            values = ordered(parameters(self._kernel, 4), arguments, "block_gpu")
+            launch = self._kernel[max(1, -(-n // THREADS)), THREADS, self._groups.stream]
+            launch(start, count, every, row0, *values)
             done = count
         else:
-            done = self._message_loop(sim, fresh, arguments, count, row0)
+            lines = fused_parameters(self.layout, fused.sensors)
+            common = [name for line in lines for name in line]  # the kernels' first ones
+            values = ordered(common, arguments, "the message kernels")
+            done = self._message_loop(sim, fresh, tuple(values), count, row0)
         self._groups.launched(slot, start, done, fused.sensors, time.perf_counter() - began)
         self._synced = sim.world.iteration = start + done
         if self._messages is not None and done:
@@ -459,33 +484,38 @@ class GpuEngine(CompiledEngine):
             return
         began = time.perf_counter()
         assert self._groups is not None  # made with the device's state, by prepare
-        hosts = [*self._state(sim), *self._swarm_state]
-        for host, device in zip(hosts, [*self._device, *self._swarm_device], strict=True):
+        hosts = [*self._state(sim).values(), *self._swarm_state]
+        devices = [*self._device.values(), *self._swarm_device]
+        for host, device in zip(hosts, devices, strict=True):
             device.copy_to_host(host, stream=self._groups.stream)
         self._groups.stream.synchronize()
         self._host_synced = self._synced
         self.timings["state"] += time.perf_counter() - began
 
     def _swarm_loop(
-        self, start: int, count: int, every: int, row0: int, arguments: tuple[Any, ...]
+        self, start: int, count: int, every: int, row0: int, arguments: dict[str, Any]
     ) -> None:
         """Iterations ``start + 1 .. start + count`` of a run with a sensor of the whole swarm:
         per iteration its device steps (``gpu_source.swarm_kernels``) over every agent, then
         one iteration of ``block_gpu``, all on the records' stream. ``count`` 0 launches each
-        once on no agent (compiling them)."""
+        once on no agent (compiling them). ``arguments``: ``block_gpu``'s, by name (the
+        steps take some of them)."""
         from pyautonomousagent.engines.gpu_reduce import shape  # numba.cuda: the [gpu] extra
 
-        assert self._device is not None and self._groups is not None
+        assert self._groups is not None
         n, stream = self.swarm.size, self._groups.stream
-        kf, ki = self._device[3:5]
-        arrays = self._device[5 : 5 + len(self.arrays)]
-        state = self._swarm_device
+        steps = []
+        for j, kernel in enumerate(self._swarm_kernels):
+            names = parameters(kernel, 2)  # after t, n: kf, ki, the arrays, the swarm state
+            some = {name: arguments[name] for name in names if name in arguments}
+            steps.append((kernel, ordered(names, some, f"swarm_{j}")))
+        values = ordered(parameters(self._kernel, 4), arguments, "block_gpu")
         blocks = max(1, -(-n // THREADS))
         for t in range(start + 1, start + max(count, 1) + 1):
-            for kernel in self._swarm_kernels:
-                kernel[(*shape(n), stream)](t, n if count else 0, kf, ki, *arrays, *state)
+            for kernel, state in steps:
+                kernel[(*shape(n), stream)](t, n if count else 0, *state)
             launch = self._kernel[blocks, THREADS, stream]
-            launch(t - 1, 1 if count else 0, every, row0, *arguments, *state)
+            launch(t - 1, 1 if count else 0, every, row0, *values)
 
     def _message_loop(
         self, sim: LoopView, fresh: bool, arguments: tuple[Any, ...], count: int, row0: int

@@ -44,9 +44,9 @@ import numpy as np
 from numba import cuda as numba_cuda
 
 from pyautonomousagent.arrays import hypot
-from pyautonomousagent.engines.compiled_source import Messaging
 from pyautonomousagent.engines.gpu_grid import DeviceGrid
 from pyautonomousagent.engines.gpu_reduce import Workspace, bounding_box, exclusive_scan, shape
+from pyautonomousagent.loop.layout import Messaging
 
 if TYPE_CHECKING:
     from pyautonomousagent.simulation.engine_api import LoopView

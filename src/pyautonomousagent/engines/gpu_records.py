@@ -19,7 +19,7 @@ The host waits for the device only where it must:
 
 Handing a group over (in order of iterations) stores its rows in the recorder
 (:meth:`~pyautonomousagent.recording.Recorder.store_group`: compact columns stay compact),
-then does the compiled engine's bookkeeping (``CompiledEngine._after``): the sensors' alerts
+then does the fused loop's bookkeeping (``LoopEngine._after``): the sensors' alerts
 of the agents that stopped, in order of iteration, the recorder's iterations and count, and
 its listeners, which hand finished records to the Parquet writer's thread
 (:class:`~pyautonomousagent.streaming.StatesStream`): so the kernel never waits on the disk.
@@ -42,8 +42,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pyautonomousagent.engines.compiled import CompiledEngine
 from pyautonomousagent.kernels import SensorKernel
+from pyautonomousagent.loop.engine import LoopEngine
 from pyautonomousagent.record_blocks import RECORD_BLOCK_BYTES, fitting
 from pyautonomousagent.recording import Recorder
 
@@ -221,7 +221,7 @@ class RecordGroups:
 
     def _hand_over(self, sim: LoopView, group: Group) -> None:
         """Wait for ``group``'s copy, store its rows in the recorder and do its bookkeeping
-        (``CompiledEngine._after``: alerts, the recorder's count, its listeners), the clock
+        (``LoopEngine._after``: alerts, the recorder's count, its listeners), the clock
         kept at the engine's iteration."""
         slot = group.slot
         slot.events["copied"].synchronize()
@@ -231,7 +231,7 @@ class RecordGroups:
         recorded = {k: v[:rows] for k, v in zip(self.names, columns, strict=True)}
         self.recorder.store_group(group.row0, recorded, traces[:rows], behaviour[:rows])
         now = sim.world.iteration
-        CompiledEngine._after(sim, group.sensors, group.start, group.count, stopped)
+        LoopEngine._after(sim, group.sensors, group.start, group.count, stopped)
         sim.world.iteration = now
         host = time.perf_counter() - began
         if self.on_device:

@@ -1,7 +1,9 @@
 """The paper's 2-D point-mass drone (eqs. 1-4) and its bang-bang control system (Phase 4).
 
 Heading is in degrees, measured clockwise from north (+y), as in aviation: a drone with
-heading 90 flies east (+x). All functions work on whole arrays of shape ``(N,)``.
+heading 90 flies east (+x). The NumPy functions work on whole arrays of shape ``(N,)``;
+beside each, its per-agent form (``*_agent``: the same operations in the same order on row
+``a``; the compiled engine's loop and the GPU kernel call it).
 """
 
 from __future__ import annotations
@@ -11,6 +13,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from pyautonomousagent.arrays import sincos_degrees, wrap_degrees
+from pyautonomousagent.jit import njit
+from pyautonomousagent.kernels import np_maximum, np_minimum, np_sign
+from pyautonomousagent.kernels import sincos_degrees as sincos_one
+from pyautonomousagent.kernels import wrap_degrees as wrap_one
 
 
 @dataclass(frozen=True)
@@ -56,6 +62,23 @@ def advance(
     return new_x, new_y, new_speed, new_heading
 
 
+@njit(inline="always")
+def step_agent(a: int, moving: bool, x: np.ndarray, y: np.ndarray, speed: np.ndarray,
+               heading: np.ndarray, u_speed: np.ndarray, u_heading: np.ndarray,
+               max_speed: float) -> None:  # fmt: skip
+    """:meth:`Drone2D.advance` of agent row ``a``: :func:`advance` written into its entries
+    of the arrays (shape (N,)) where ``moving``, else its speed set to 0."""
+    if not moving:
+        speed[a] = 0.0
+        return
+    h, v = heading[a], speed[a]
+    sine, cosine = sincos_one(h)
+    x[a] = x[a] + v * sine
+    y[a] = y[a] + v * cosine
+    speed[a] = np_minimum(np_maximum(v + u_speed[a], 0.0), max_speed)
+    heading[a] = wrap_one(h + u_heading[a])
+
+
 def next_position(
     x: np.ndarray, y: np.ndarray, speed: np.ndarray, heading: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -99,6 +122,30 @@ def control(
     return u_speed, u_heading
 
 
+@njit(inline="always")
+def control_agent(a: int, speed: np.ndarray, heading: np.ndarray, requested_speed: np.ndarray,
+                  requested_heading: np.ndarray, u_speed: np.ndarray, u_heading: np.ndarray,
+                  speed_step: float, turn_step: float) -> None:  # fmt: skip
+    """:func:`control` of agent row ``a``, written into ``u_speed[a]`` and ``u_heading[a]``
+    (arrays shape (N,); the steps as in :class:`DroneParameters`)."""
+    u_speed[a] = speed_step * np_sign(requested_speed[a] - speed[a])
+    error = wrap_one(requested_heading[a] - heading[a])
+    if error > 180.0:
+        error = error - 360.0
+    u_heading[a] = turn_step * np_sign(error)
+
+
+def settle(s: dict[str, np.ndarray], new: dict[str, np.ndarray], moving: np.ndarray,
+           stopped: str) -> None:  # fmt: skip
+    """The ``new`` columns (shape (N,) each) into the swarm's ``s`` where ``moving`` (shape
+    (N,), bool); elsewhere the column ``stopped`` (a rate: speed, climb rate) set to 0."""
+    everyone = bool(moving.all())
+    for key, value in new.items():
+        np.copyto(s[key], value, where=True if everyone else moving)
+    if not everyone:
+        s[stopped][~moving] = 0.0
+
+
 class Drone2D:
     """The 2-D drone as the swarm's motion model: Phase 2 motion and Phase 4 control.
 
@@ -130,11 +177,7 @@ class Drone2D:
         new = advance(
             s["x"], s["y"], s["speed"], s["heading"], self.u_speed, self.u_heading, self.params
         )
-        everyone = bool(moving.all())
-        for key, value in zip(("x", "y", "speed", "heading"), new, strict=True):
-            np.copyto(s[key], value, where=True if everyone else moving)
-        if not everyone:
-            s["speed"][~moving] = 0.0
+        settle(s, dict(zip(("x", "y", "speed", "heading"), new, strict=True)), moving, "speed")
 
     def control(self, s: dict[str, np.ndarray]) -> None:
         """Phase 4: control signals toward the requested speed and heading."""

@@ -15,7 +15,8 @@ control signal ``u_w``:
   whole, so the altitude settles instead of limit-cycling.
 
 Only ``+ - min max`` act on the altitude, so every engine and every SIMD level gives the
-same bits. All functions work on whole arrays of shape ``(N,)``.
+same bits. The NumPy functions work on whole arrays of shape ``(N,)``; beside each, its
+per-agent form (``*_agent``, on row ``a``: see :mod:`~pyautonomousagent.models.drone2d`).
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pyautonomousagent.jit import njit
+from pyautonomousagent.kernels import np_maximum, np_minimum
 from pyautonomousagent.models import drone2d
 
 #: The swarm columns the 3-D drone moves and follows, name -> dtype: altitude (world units
@@ -45,29 +48,20 @@ MEANINGS_3D: dict[str, tuple[str, str]] = {
 
 
 @dataclass(frozen=True)
-class Drone3DParameters:
-    """Parameters of the 3-D drone model.
+class Drone3DParameters(drone2d.DroneParameters):
+    """Parameters of the 3-D drone model: the 2-D drone's (``max_speed``, ``speed_step``,
+    ``turn_step``: :class:`~pyautonomousagent.models.drone2d.DroneParameters`), then:
 
     Attributes:
-        max_speed, speed_step, turn_step: the 2-D drone's (world units per iteration,
-            world units per iteration, degrees per iteration).
         max_climb_rate: largest climb or sink rate, world units per iteration.
         climb_step: largest change of the climb rate in one iteration (the control signal
             u_w's magnitude), world units per iteration per iteration.
         max_altitude: ceiling, world units above the ground.
     """
 
-    max_speed: float = 0.1
-    speed_step: float = 0.1
-    turn_step: float = 1.0
     max_climb_rate: float = 0.05
     climb_step: float = 0.05
     max_altitude: float = 100.0
-
-    @property
-    def horizontal(self) -> drone2d.DroneParameters:
-        """The 2-D drone's parameters."""
-        return drone2d.DroneParameters(self.max_speed, self.speed_step, self.turn_step)
 
 
 def clip(value: np.ndarray, low: float, high: float) -> np.ndarray:
@@ -91,6 +85,19 @@ def advance_vertical(
     return new_z, new_climb
 
 
+@njit(inline="always")
+def climb_agent(a: int, moving: bool, z: np.ndarray, climb_rate: np.ndarray, u_climb: np.ndarray,
+                max_climb_rate: float, max_altitude: float) -> None:  # fmt: skip
+    """:func:`advance_vertical` of agent row ``a`` written into its entries of the arrays
+    (shape (N,)) where ``moving``, else its climb rate set to 0."""
+    if not moving:
+        climb_rate[a] = 0.0
+        return
+    w = climb_rate[a]
+    z[a] = np_minimum(np_maximum(z[a] + w, 0.0), max_altitude)
+    climb_rate[a] = np_minimum(np_maximum(w + u_climb[a], -max_climb_rate), max_climb_rate)
+
+
 def climb_control(
     z: np.ndarray, climb: np.ndarray, requested_altitude: np.ndarray, params: Drone3DParameters
 ) -> np.ndarray:
@@ -106,55 +113,37 @@ def climb_control(
     return clip(wanted - climb, -params.climb_step, params.climb_step)
 
 
-class Drone3D:
-    """The 3-D drone as the swarm's motion model: Phase 2 motion and Phase 4 control.
+@njit(inline="always")
+def climb_control_agent(a: int, z: np.ndarray, climb_rate: np.ndarray,
+                        requested_altitude: np.ndarray, u_climb: np.ndarray,
+                        max_climb_rate: float, climb_step: float) -> None:  # fmt: skip
+    """:func:`climb_control` of agent row ``a``, written into ``u_climb[a]`` (shape (N,))."""
+    w = climb_rate[a]
+    wanted = np_minimum(
+        np_maximum(requested_altitude[a] - (z[a] + w), -max_climb_rate), max_climb_rate
+    )
+    u_climb[a] = np_minimum(np_maximum(wanted - w, -climb_step), climb_step)
 
-    Reads and writes the swarm's ``x``, ``y``, ``speed``, ``heading`` and the columns of
-    :data:`COLUMNS_3D`; holds the control signals of the last Phase 4.
 
-    Args:
-        params: model parameters.
-        n_agents: number of agents N.
-    """
+class Drone3D(drone2d.Drone2D):
+    """The 3-D drone as the swarm's motion model: the 2-D drone's, with the altitude: also
+    moves and follows the columns of :data:`COLUMNS_3D` and holds the control signal u_w."""
 
     name = "drone3d"
+    params: Drone3DParameters
 
     def __init__(self, params: Drone3DParameters, n_agents: int) -> None:
-        self.params = params
-        self.u_speed = np.zeros(n_agents)
-        self.u_heading = np.zeros(n_agents)
+        super().__init__(params, n_agents)
         self.u_climb = np.zeros(n_agents)
 
-    def columns(self) -> dict[str, np.ndarray]:
-        """Model state recorded beside the swarm's columns (none: z and the climb rate are
-        swarm columns)."""
-        return {}
-
     def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None:
-        """Eqs. 1-6 where ``moving`` (shape (N,), bool); the others stop where they are
-        (speed and climb rate 0).
-
-        Args:
-            s: the swarm's state columns, updated in place.
-            moving: agents that move this iteration (those with energy).
-        """
-        horizontal = drone2d.advance(
-            s["x"], s["y"], s["speed"], s["heading"], self.u_speed, self.u_heading,
-            self.params.horizontal,
-        )  # fmt: skip
-        vertical = advance_vertical(s["z"], s["climb_rate"], self.u_climb, self.params)
-        everyone = bool(moving.all())
-        keys = ("x", "y", "speed", "heading", "z", "climb_rate")
-        for key, value in zip(keys, (*horizontal, *vertical), strict=True):
-            np.copyto(s[key], value, where=True if everyone else moving)
-        if not everyone:
-            s["speed"][~moving] = 0.0
-            s["climb_rate"][~moving] = 0.0
+        """Eqs. 1-6 where ``moving`` (shape (N,), bool) in the columns ``s``; the others stop
+        where they are (speed and climb rate 0)."""
+        z, climb = advance_vertical(s["z"], s["climb_rate"], self.u_climb, self.params)
+        super().advance(s, moving)
+        drone2d.settle(s, {"z": z, "climb_rate": climb}, moving, "climb_rate")
 
     def control(self, s: dict[str, np.ndarray]) -> None:
         """Phase 4: control signals toward the requested speed, heading and altitude."""
-        self.u_speed, self.u_heading = drone2d.control(
-            s["speed"], s["heading"], s["requested_speed"], s["requested_heading"],
-            self.params.horizontal,
-        )  # fmt: skip
+        super().control(s)
         self.u_climb = climb_control(s["z"], s["climb_rate"], s["requested_altitude"], self.params)

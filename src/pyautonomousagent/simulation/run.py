@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -21,7 +21,7 @@ from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.datalink import Datalink, Delivery
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.compiled import CompiledEngine, compilable
-from pyautonomousagent.engines.gpu import GpuEngine, auto_takes_gpu
+from pyautonomousagent.engines.gpu import GpuEngine, auto_takes_gpu, require_gpu
 from pyautonomousagent.engines.pytrees import PyTreesEngine
 from pyautonomousagent.inputs import shown
 from pyautonomousagent.names import agent_index
@@ -123,11 +123,28 @@ def _world(scenario: Scenario, seed: int) -> World:
 FUSED = 500
 
 
-ENGINES: Registry[type[Engine]] = Registry("engine")
+#: What makes a run's decision engine: ``(tree, swarm, world, defaults) -> engine``.
+EngineFactory = Callable[[Node, Swarm, World, Mapping[str, Any]], Engine]
+
+
+def gpu_engine(tree: Node, swarm: Swarm, world: World, defaults: Mapping[str, Any]) -> GpuEngine:
+    """The GPU engine on a compiled engine of ``tree``, its host: the host ticks the
+    iterations stepped on the CPU and writes the per-agent code of the kernels (the two
+    engines import none of each other).
+
+    Raises:
+        GpuUnavailableError: no numba-cuda, CuPy or device (checked first).
+        TreeError: the compiled engine cannot take ``tree``.
+    """
+    require_gpu()
+    return GpuEngine(CompiledEngine(tree, swarm, world, defaults))
+
+
+ENGINES: Registry[EngineFactory] = Registry("engine")
 ENGINES.register("pytrees", PyTreesEngine)
 ENGINES.register("batched", BatchedEngine)
 ENGINES.register("compiled", CompiledEngine)
-ENGINES.register("gpu", GpuEngine)  # needs numba-cuda and a device (engines/gpu.py)
+ENGINES.register("gpu", gpu_engine)  # needs numba-cuda and a device (engines/gpu.py)
 
 
 def choose_engine(
@@ -299,7 +316,7 @@ class Simulation:
             _compiled_if_ready(sim, tree)
         if auto and isinstance(sim.engine, GpuEngine) and not sim.engine.runs(sim):
             log.debug("engine auto: compiled, not gpu: the kernel cannot run this run")
-            sim.engine = CompiledEngine(tree, swarm, world, vars(scenario.parameters))
+            sim.engine = sim.engine.host  # the compiled engine of the run's tree
         phases.record(sim)  # the initial state, iteration 0
         if fuses(sim.engine):
             sim.engine.prepare(sim)  # e.g. compile before the loop

@@ -27,19 +27,20 @@ AHEAD = 90.0
 
 
 @njit(inline="always")
-def closer_than(a: int, distance: np.ndarray, threshold: float) -> int:
-    """Condition_Collision_Risk: SUCCESS if ``distance[a] < threshold``."""
-    return SUCCESS if distance[a] < threshold else FAILURE
+def closer_than(a: int, neighbour_distance: np.ndarray, threshold: float) -> int:
+    """Condition_Collision_Risk: SUCCESS if ``neighbour_distance[a] < threshold``."""
+    return SUCCESS if neighbour_distance[a] < threshold else FAILURE
 
 
 @njit(inline="always")
-def avoid(a: int, heading: np.ndarray, towards: np.ndarray, requested_speed: np.ndarray,
-          requested_heading: np.ndarray, cruise: float) -> int:  # fmt: skip
+def avoid(a: int, heading: np.ndarray, neighbour_bearing: np.ndarray,
+          requested_speed: np.ndarray, requested_heading: np.ndarray,
+          cruise: float) -> int:  # fmt: skip
     """Action_Avoid_Collision."""
-    turn = wrap_degrees_of_one(towards[a] - heading[a])
+    turn = wrap_degrees_of_one(neighbour_bearing[a] - heading[a])
     ahead = turn < AHEAD or turn > 360.0 - AHEAD
     requested_speed[a] = 0.0 if ahead else cruise
-    requested_heading[a] = wrap_degrees_of_one(towards[a] + 180.0)
+    requested_heading[a] = wrap_degrees_of_one(neighbour_bearing[a] + 180.0)
     return RUNNING
 
 

@@ -25,21 +25,21 @@ def destination_reached(a: int, x: np.ndarray, y: np.ndarray, to_x: np.ndarray,
 
 
 @njit(inline="always")
-def at_most(a: int, values: np.ndarray, threshold: float) -> int:
-    """Condition_Low_Energy_Level: SUCCESS if ``values[a] <= threshold``."""
-    return SUCCESS if values[a] <= threshold else FAILURE
+def at_most(a: int, energy: np.ndarray, threshold: float) -> int:
+    """Condition_Low_Energy_Level: SUCCESS if ``energy[a] <= threshold``."""
+    return SUCCESS if energy[a] <= threshold else FAILURE
 
 
 @njit(inline="always")
-def above(a: int, values: np.ndarray, threshold: float) -> int:
-    """Condition_Radiation_Detected: SUCCESS if ``values[a] > threshold``."""
-    return SUCCESS if values[a] > threshold else FAILURE
+def above(a: int, radiation: np.ndarray, threshold: float) -> int:
+    """Condition_Radiation_Detected: SUCCESS if ``radiation[a] > threshold``."""
+    return SUCCESS if radiation[a] > threshold else FAILURE
 
 
 @njit(inline="always")
-def at_least(a: int, values: np.ndarray, threshold: float) -> int:
-    """Condition_High_Damage_Level: SUCCESS if ``values[a] >= threshold``."""
-    return SUCCESS if values[a] >= threshold else FAILURE
+def at_least(a: int, damage: np.ndarray, threshold: float) -> int:
+    """Condition_High_Damage_Level: SUCCESS if ``damage[a] >= threshold``."""
+    return SUCCESS if damage[a] >= threshold else FAILURE
 
 
 @njit(inline="always")
@@ -51,11 +51,11 @@ def gathering_moment(a: int, iteration: int, moment: int, sender: int) -> int:
 
 
 @njit(inline="always")
-def navigate(a: int, speed: np.ndarray, cruise: float) -> int:
+def navigate(a: int, requested_speed: np.ndarray, cruise: float) -> int:
     """Action_Navigate_To_Destination_A: the requested speed; RUNNING. Its last step, the
     requested heading, is ``kernels.bearing`` of the position and the destination (a
     ``Later``)."""
-    speed[a] = cruise
+    requested_speed[a] = cruise
     return RUNNING
 
 

@@ -34,8 +34,16 @@ PATROL = (
 )
 #: The control references a navigating leaf writes.
 REQUESTED = ("requested_heading", "requested_speed")
-#: The arrays of ``kernels.patrol_position``, in its order.
-PATROL_ARRAYS = (PATROL[0], *DESTINATION, *SURVEILLANCE, *PATROL[1:])
+#: The position and the destination as the kernels' ``x, y, to_x, to_y`` (parameter -> column:
+#: ``kernels.destination_reached``, ``pyautonomousagent.kernels.bearing``).
+TOWARD_DESTINATION = {"x": "x", "y": "y", "to_x": DESTINATION[0], "to_y": DESTINATION[1]}
+#: The surveillance position as the kernels' point ``px, py`` (parameter -> key).
+SURVEILLANCE_POINT = {"px": SURVEILLANCE[0], "py": SURVEILLANCE[1]}
+#: The arrays of ``kernels.patrol_position``, parameter -> column.
+PATROL_ARRAYS = dict(
+    zip(("index", "to_x", "to_y", "sx", "sy", "x1", "y1", "x2", "y2"),
+        (PATROL[0], *DESTINATION, *SURVEILLANCE, *PATROL[1:]), strict=True)
+)  # fmt: skip
 #: What "sharing data" carries: the sender's state, in payload order.
 STATE = ("x", "y", "speed", "heading", "damage", "energy")
 SPEED = Port("speed", float, "reference_speed", 0.0, "cruise speed requested, units per iteration")
@@ -60,7 +68,7 @@ class ConditionDestinationReached(Leaf):
         return success_if(dx <= self.distance * self.distance)
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.destination_reached, ("x", "y", *DESTINATION), (self.distance,))
+        return LeafKernel(k.destination_reached, TOWARD_DESTINATION, (self.distance,))
 
 
 @register_leaf
@@ -98,7 +106,7 @@ class ConditionGatheringMoment(Leaf):
     def kernel(self, world: World) -> LeafKernel:
         return LeafKernel(
             k.gathering_moment,
-            (ITERATION,),
+            {"iteration": ITERATION},
             (self.iteration, world.agent_index.get(self.sender, -1)),
         )
 
@@ -151,7 +159,7 @@ class ActionNavigateToDestinationA(Leaf):
         return RUNNING
 
     def kernel(self, world: World) -> LeafKernel:
-        heading = Later(bearing_of_one, ("x", "y", *DESTINATION), "requested_heading")
+        heading = Later(bearing_of_one, TOWARD_DESTINATION, "requested_heading")
         return LeafKernel(k.navigate, ("requested_speed",), (self.speed,), later=heading)
 
 
@@ -159,6 +167,13 @@ def _set_destination(agents: AgentView, x: Any, y: Any) -> int:
     agents.blackboard.x_current_destination_position = x
     agents.blackboard.y_current_destination_position = y
     return SUCCESS
+
+
+def _destination_from(source: tuple[str, str]) -> dict[str, str]:
+    """``kernels.copy_destination``'s arrays, parameter -> column: destination := ``source``
+    (two blackboard keys, x and y)."""
+    return {"to_x": DESTINATION[0], "to_y": DESTINATION[1], "from_x": source[0],
+            "from_y": source[1]}  # fmt: skip
 
 
 @register_leaf
@@ -173,7 +188,7 @@ class ActionSetDestinationEqualToSurveillanceS(Leaf):
         return _set_destination(agents, bb.x_surveillance_position, bb.y_surveillance_position)
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.copy_destination, DESTINATION + SURVEILLANCE)
+        return LeafKernel(k.copy_destination, _destination_from(SURVEILLANCE))
 
 
 @register_leaf
@@ -188,7 +203,7 @@ class ActionSetDestinationEqualToRefuelingS(Leaf):
         return _set_destination(agents, bb.x_refueling_position, bb.y_refueling_position)
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.copy_destination, DESTINATION + REFUELING)
+        return LeafKernel(k.copy_destination, _destination_from(REFUELING))
 
 
 def _go_to_patrol_position(agents: AgentView, index: Any) -> int:
@@ -248,7 +263,9 @@ class ActionTransmitGatheringMessageS(Leaf):
 
     def kernel(self, world: World) -> LeafKernel:
         return LeafKernel(
-            k.transmit_point, ("x", "y", *SURVEILLANCE), sends=Sends(GATHERING, ("x", "y"))
+            k.transmit_point,
+            {"x": "x", "y": "y", **SURVEILLANCE_POINT},
+            sends=Sends(GATHERING, ("x", "y")),
         )
 
 

@@ -29,6 +29,7 @@ from pyautonomousagent.missions.drones3d.leaves import (
     PATROL_3D,
     REFUELING_3D,
     SURVEILLANCE_3D,
+    SURVEILLANCE_POINT_3D,
 )
 from pyautonomousagent.missions.gathering import GatheringMission
 from pyautonomousagent.missions.patrol import PatrolMission
@@ -200,7 +201,8 @@ class Gathering3DMission(GatheringMission):
             MessageType(GATHERING, self.adopt_gathering_position, recorded=True,
                         doc="x, y, z: the position to gather on",
                         kernel=HandlerKernel(adopt_point_everyone_3d, ("x", "y", "z"),
-                                             SURVEILLANCE_3D, receive=Receive(adopt_point_3d))),
+                                             SURVEILLANCE_POINT_3D,
+                                             receive=Receive(adopt_point_3d))),
         ]  # fmt: skip
 
     def adopt_gathering_position(self, sim: SimulationView, delivery: Delivery) -> None:

@@ -88,9 +88,9 @@ def land(a: int, z: np.ndarray, heading: np.ndarray, requested_speed: np.ndarray
 
 
 @njit(inline="always")
-def request_altitude(a: int, altitude: np.ndarray, value: float) -> int:
+def request_altitude(a: int, requested_altitude: np.ndarray, value: float) -> int:
     """Action_Request_Altitude_S; SUCCESS."""
-    altitude[a] = value
+    requested_altitude[a] = value
     return SUCCESS
 
 

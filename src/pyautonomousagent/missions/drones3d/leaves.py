@@ -27,6 +27,7 @@ from pyautonomousagent.missions.drones.leaves import (
     REFUELING,
     SPEED,
     SURVEILLANCE,
+    TOWARD_DESTINATION,
 )
 from pyautonomousagent.missions.drones3d import kernels as k
 from pyautonomousagent.state import AgentView
@@ -41,8 +42,17 @@ PATROL_3D = (
     PATROL[1], PATROL[2], "z_surveillance_position_1",
     PATROL[3], PATROL[4], "z_surveillance_position_2",
 )  # fmt: skip
-#: The arrays of ``kernels.patrol_position_3d``, in its order.
-PATROL_ARRAYS_3D = (PATROL_3D[0], *DESTINATION_3D, *SURVEILLANCE_3D, *PATROL_3D[1:])
+#: The destination as the kernels' ``to_x, to_y, to_z`` (parameter -> key).
+TO_DESTINATION_3D = dict(zip(("to_x", "to_y", "to_z"), DESTINATION_3D, strict=True))
+#: The surveillance position as the kernels' point ``px, py, pz`` (parameter -> key).
+SURVEILLANCE_POINT_3D = dict(zip(("px", "py", "pz"), SURVEILLANCE_3D, strict=True))
+#: The position and the destination as ``kernels.destination_reached_3d``'s arrays.
+TOWARD_DESTINATION_3D = {"x": "x", "y": "y", "z": "z", **TO_DESTINATION_3D}
+#: The arrays of ``kernels.patrol_position_3d``, parameter -> key.
+PATROL_ARRAYS_3D = dict(
+    zip(("index", "to_x", "to_y", "to_z", "sx", "sy", "sz", "x1", "y1", "z1", "x2", "y2", "z2"),
+        (PATROL_3D[0], *DESTINATION_3D, *SURVEILLANCE_3D, *PATROL_3D[1:]), strict=True)
+)  # fmt: skip
 DISTANCE = Port("distance", float, "destination_tolerance", 0.0, "world units")
 SLOPE = Port("slope", float, "descent_slope", 0.0,
              "steepest descent toward a lower destination, world units down per world unit "
@@ -68,8 +78,7 @@ class ConditionDestinationReached3D(Leaf):
         return success_if(near & (abs(dz) <= self.distance))
 
     def kernel(self, world: World) -> LeafKernel:
-        names = ("x", "y", "z", *DESTINATION_3D)
-        return LeafKernel(k.destination_reached_3d, names, (self.distance,))
+        return LeafKernel(k.destination_reached_3d, TOWARD_DESTINATION_3D, (self.distance,))
 
 
 def _sqrt(value: Any) -> Any:
@@ -110,8 +119,9 @@ class ActionNavigateToDestination3DA(Leaf):
         return RUNNING
 
     def kernel(self, world: World) -> LeafKernel:
-        heading = Later(bearing_of_one, ("x", "y", *DESTINATION), "requested_heading")
-        names = ("x", "y", "z", *DESTINATION_3D, "requested_speed", "requested_altitude")
+        heading = Later(bearing_of_one, TOWARD_DESTINATION, "requested_heading")
+        names = {**TOWARD_DESTINATION_3D, "speed": "requested_speed",
+                 "altitude": "requested_altitude"}  # fmt: skip
         constants = (self.speed, self.distance, self.slope)
         return LeafKernel(k.navigate_3d, names, constants, later=heading)
 
@@ -158,6 +168,12 @@ def _set_destination(agents: AgentView, x: Any, y: Any, z: Any) -> int:
     return SUCCESS
 
 
+def _destination_from(source: tuple[str, ...]) -> dict[str, str]:
+    """``kernels.copy_destination_3d``'s arrays, parameter -> key: destination := ``source``
+    (three blackboard keys, x, y and z)."""
+    return {**TO_DESTINATION_3D, **dict(zip(("from_x", "from_y", "from_z"), source, strict=True))}
+
+
 @register_leaf
 class ActionSetDestinationEqualToSurveillance3DS(Leaf):
     """Destination := the surveillance position, with its altitude; SUCCESS."""
@@ -173,7 +189,7 @@ class ActionSetDestinationEqualToSurveillance3DS(Leaf):
         )  # fmt: skip
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.copy_destination_3d, DESTINATION_3D + SURVEILLANCE_3D)
+        return LeafKernel(k.copy_destination_3d, _destination_from(SURVEILLANCE_3D))
 
 
 @register_leaf
@@ -190,7 +206,7 @@ class ActionSetDestinationEqualToRefueling3DS(Leaf):
         )
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.copy_destination_3d, DESTINATION_3D + REFUELING_3D)
+        return LeafKernel(k.copy_destination_3d, _destination_from(REFUELING_3D))
 
 
 def _go_to_patrol_position(agents: AgentView, index: Any) -> int:
@@ -255,6 +271,7 @@ class ActionTransmitGatheringMessage3DS(Leaf):
 
     def kernel(self, world: World) -> LeafKernel:
         return LeafKernel(
-            k.transmit_point_3d, ("x", "y", *SURVEILLANCE_3D),
+            k.transmit_point_3d,
+            {"x": "x", "y": "y", **SURVEILLANCE_POINT_3D},
             sends=Sends(GATHERING, ("x", "y", "z")),
         )  # fmt: skip

@@ -10,7 +10,7 @@ import numpy as np
 from pyautonomousagent.datalink import Delivery
 from pyautonomousagent.kernels import HandlerKernel, Receive
 from pyautonomousagent.missions.drones.kernels import adopt_point, adopt_point_everyone
-from pyautonomousagent.missions.drones.leaves import GATHERING, SURVEILLANCE
+from pyautonomousagent.missions.drones.leaves import GATHERING, SURVEILLANCE_POINT
 from pyautonomousagent.missions.drones.mission import DroneMission, cycled, read_points
 from pyautonomousagent.missions.gathering import measures  # noqa: F401  (registers them)
 from pyautonomousagent.render.marks import Mark
@@ -74,7 +74,7 @@ class GatheringMission(DroneMission):
             *super().message_types(),
             MessageType(GATHERING, self.adopt_gathering_position, recorded=True,
                         doc="x, y: the position to gather on",
-                        kernel=HandlerKernel(adopt_point_everyone, ("x", "y"), SURVEILLANCE,
+                        kernel=HandlerKernel(adopt_point_everyone, ("x", "y"), SURVEILLANCE_POINT,
                                              receive=Receive(adopt_point))),
         ]  # fmt: skip
 

@@ -193,10 +193,11 @@ class ActionLandA(Leaf):
         return status_if(parked, SUCCESS, RUNNING)
 
     def kernel(self, world: World) -> LeafKernel:
-        names = ("x", "y", PHASE_COLUMN, MODE_COLUMN, "requested_heading", "requested_speed")
+        names = {"x": "x", "y": "y", "phase": PHASE_COLUMN, "mode": MODE_COLUMN,
+                 "heading": "requested_heading", "speed": "requested_speed",
+                 "altitude": ALTITUDE_COLUMN, "leg": LEG}  # fmt: skip
         return LeafKernel(
-            k.land,
-            (*names, ALTITUDE_COLUMN, LEG),
+            k.land, names,
             (*self.constants(world), self.capture, self.ceiling, self.approach_speed,
              self.speed),
         )  # fmt: skip
@@ -219,5 +220,6 @@ class ActionTakeOffA(Leaf):
         return status_if(flying, SUCCESS, RUNNING)
 
     def kernel(self, world: World) -> LeafKernel:
-        names = (PHASE_COLUMN, MODE_COLUMN, "heading", "requested_heading", "requested_speed")
+        names = {"phase": PHASE_COLUMN, "mode": MODE_COLUMN, "heading": "heading",
+                 "requested_heading": "requested_heading", "speed": "requested_speed"}  # fmt: skip
         return LeafKernel(k.take_off, names, (self.speed,))

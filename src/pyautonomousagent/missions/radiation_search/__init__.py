@@ -61,7 +61,7 @@ from pyautonomousagent.missions.radiation_search.kernels import (
     store_found_everyone,
     take_found,
 )
-from pyautonomousagent.missions.radiation_search.leaves import FOUND, REPORTED
+from pyautonomousagent.missions.radiation_search.leaves import FOUND, REPORTED_ARRAYS
 
 __all__ = ["FOUND", "RadiationSearchMission", "Source", "leaves", "radiation_level"]
 
@@ -178,7 +178,7 @@ class RadiationSearchMission(Mission):
         return [
             MessageType(FOUND, self.store_reported_position, recorded=True,
                         doc="x, y: where the sender detected the source",
-                        kernel=HandlerKernel(store_found_everyone, ("x", "y"), REPORTED,
+                        kernel=HandlerKernel(store_found_everyone, ("x", "y"), REPORTED_ARRAYS,
                                              receive=Receive(take_found))),
         ]  # fmt: skip
 

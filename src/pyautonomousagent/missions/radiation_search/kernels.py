@@ -118,11 +118,12 @@ def take_found(r: int, m: int, t: int, senders: np.ndarray, data: np.ndarray,
 
 @njit
 def store_found_everyone(t: int, senders: np.ndarray, data: np.ndarray, count: int,
-                         reported: np.ndarray, px: np.ndarray, py: np.ndarray) -> None:  # fmt: skip
+                         reported: np.ndarray, to_x: np.ndarray,
+                         to_y: np.ndarray) -> None:  # fmt: skip
     """``RadiationSearchMission.store_reported_position`` of a delivery that reached everyone:
     :func:`take_found` of every message for every drone but its sender, in canonical order
-    (``px``, ``py``: the reported positions)."""
+    (``to_x``, ``to_y``: the reported positions)."""
     for r in range(reported.shape[0]):
         for m in range(count):
             if senders[m] != r:
-                take_found(r, m, t, senders, data, reported, px, py)
+                take_found(r, m, t, senders, data, reported, to_x, to_y)

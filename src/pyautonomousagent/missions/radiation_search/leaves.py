@@ -22,6 +22,11 @@ FOUND = "found"
 """The message type a drone broadcasts when it detects the source: ``x``, ``y`` where."""
 REPORTED = ("source_reported", "x_reported_position", "y_reported_position")
 """Blackboard keys: whether the drone knows a reported position (0/1), and where it is."""
+REPORTED_ARRAYS = dict(zip(("reported", "to_x", "to_y"), REPORTED, strict=True))
+"""The same as the kernels' parameters ``reported, to_x, to_y`` take them (parameter -> key)."""
+TOWARD_REPORTED = {"x": "x", "y": "y", "to_x": REPORTED[1], "to_y": REPORTED[2]}
+"""The position and the reported one as the kernels' ``x, y, to_x, to_y``
+(``kernels.at_reported_position``, ``pyautonomousagent.kernels.bearing``)."""
 SPEED = Port("speed", float, "search_speed", 0.0, "world units per iteration")
 
 
@@ -51,7 +56,7 @@ class ConditionSourceReported(Leaf):
         return success_if(agents.blackboard.source_reported == 1)
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.source_reported, ("source_reported",))
+        return LeafKernel(k.source_reported, {"reported": REPORTED[0]})
 
 
 @register_leaf
@@ -70,7 +75,7 @@ class ConditionAtReportedPosition(Leaf):
         return success_if(dx * dx + dy * dy <= self.distance * self.distance)
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.at_reported_position, ("x", "y", *REPORTED[1:]), (self.distance,))
+        return LeafKernel(k.at_reported_position, TOWARD_REPORTED, (self.distance,))
 
 
 @register_leaf
@@ -89,7 +94,8 @@ class ActionReportSourceS(Leaf):
         return SUCCESS
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.report_source, ("x", "y", *REPORTED), sends=Sends(FOUND, ("x", "y")))
+        names = {"x": "x", "y": "y", **REPORTED_ARRAYS}
+        return LeafKernel(k.report_source, names, sends=Sends(FOUND, ("x", "y")))
 
 
 @register_leaf
@@ -110,7 +116,7 @@ class ActionFlyToReportedPositionA(Leaf):
         return RUNNING
 
     def kernel(self, world: World) -> LeafKernel:
-        heading = Later(bearing_of_one, ("x", "y", *REPORTED[1:]), "requested_heading")
+        heading = Later(bearing_of_one, TOWARD_REPORTED, "requested_heading")
         return LeafKernel(k.fly, ("requested_speed",), (self.speed,), later=heading)
 
 
@@ -165,5 +171,6 @@ class ActionWanderA(Leaf):
             *seed_halves(world.random.seed), self.stream, self.period, m,
             world.width - m, world.height - m, world.width / 2, world.height / 2, self.speed,
         )  # fmt: skip
-        names = (ITERATION, "x", "y", "requested_speed", "requested_heading")
+        names = {"t": ITERATION, "x": "x", "y": "y", "requested_speed": "requested_speed",
+                 "requested_heading": "requested_heading"}  # fmt: skip
         return LeafKernel(k.wander, names, constants)

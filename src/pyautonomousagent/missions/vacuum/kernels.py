@@ -28,9 +28,10 @@ def collision(a: int, sonar: np.ndarray, distance: float) -> int:
 
 
 @njit(inline="always")
-def avoid(a: int, t: int, heading: np.ndarray, cruise: np.ndarray, requested_speed: np.ndarray,
-          requested_heading: np.ndarray, seed_high: int, seed_low: int, stream: int,
-          min_angle: float, max_angle: float, step: float) -> int:  # fmt: skip
+def avoid(a: int, t: int, heading: np.ndarray, cruise_heading: np.ndarray,
+          requested_speed: np.ndarray, requested_heading: np.ndarray, seed_high: int,
+          seed_low: int, stream: int, min_angle: float, max_angle: float,
+          step: float) -> int:  # fmt: skip
     """Action_Avoid_Obstacle_S at iteration ``t``: where the robot holds its cruise heading
     (less than ``step`` degrees off it; exactly on it for ``step`` 0), a new cruise heading
     turned right or left (draw 0 of ``Leaf.uniform`` below 0.5: right) by an angle in
@@ -38,7 +39,7 @@ def avoid(a: int, t: int, heading: np.ndarray, cruise: np.ndarray, requested_spe
     speed 0 toward the cruise heading; SUCCESS. (A draw is a pure function of its key, so
     drawing only where it is used gives the NumPy leaf's numbers.)"""
     h = heading[a]
-    goal = cruise[a]
+    goal = cruise_heading[a]
     off = wrap_degrees(h - goal)
     off = np_minimum(off, 360.0 - off)  # degrees still to turn, [0, 180]
     settled = off < step if step > 0.0 else off <= 0.0
@@ -48,17 +49,17 @@ def avoid(a: int, t: int, heading: np.ndarray, cruise: np.ndarray, requested_spe
         if step > 0.0:
             angle = np_maximum(step * math.floor(angle / step), step)
         goal = wrap_degrees(h + (angle if right else -angle))
-    cruise[a] = goal
+    cruise_heading[a] = goal
     requested_heading[a] = goal
     requested_speed[a] = 0.0
     return SUCCESS
 
 
 @njit(inline="always")
-def navigate(a: int, cruise: np.ndarray, requested_speed: np.ndarray,
+def navigate(a: int, cruise_heading: np.ndarray, requested_speed: np.ndarray,
              requested_heading: np.ndarray, speed: float) -> int:  # fmt: skip
     """Action_Navigate_S: the cruise heading at ``speed``; SUCCESS."""
-    requested_heading[a] = cruise[a]
+    requested_heading[a] = cruise_heading[a]
     requested_speed[a] = speed
     return SUCCESS
 

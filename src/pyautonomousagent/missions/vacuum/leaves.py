@@ -83,7 +83,9 @@ class ActionAvoidObstacleS(Leaf):
         return SUCCESS
 
     def kernel(self, world: World) -> LeafKernel:
-        names = (ITERATION, "heading", *CRUISE, "requested_speed", "requested_heading")
+        names = {"t": ITERATION, "heading": "heading", "cruise_heading": CRUISE[0],
+                 "requested_speed": "requested_speed",
+                 "requested_heading": "requested_heading"}  # fmt: skip
         constants = (*seed_halves(world.random.seed), self.stream, float(self.min_angle),
                      float(self.max_angle), float(self.step))  # fmt: skip
         return LeafKernel(k.avoid, names, constants)

@@ -1,4 +1,5 @@
-"""Helpers the compiled engine's generated code calls (numba-compiled; see compiled_source)."""
+"""Helpers the fused loop's generated code calls, on the CPU and the GPU (numba-compiled; see
+engines/compiled_source.py and engines/gpu_source.py)."""
 
 from __future__ import annotations
 
