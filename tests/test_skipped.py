@@ -98,6 +98,25 @@ def test_a_skipped_child_under_a_node_without_a_rule_is_refused() -> None:
     check_structure(decorator("Repeat", "r", kept, num_cycles=2))
 
 
+def test_a_record_says_what_may_be_skipped_and_where_and_the_message_follows() -> None:
+    from pyautonomousagent.bt.nodes import DECORATOR, NODE_TYPES, NodeType
+
+    with NODE_TYPES.scoped():  # a new node type is its record: nothing else names it
+        NODE_TYPES.register("Once2", NodeType(
+            "Once2", DECORATOR, 1, 1, skipped_when=lambda params: True))  # fmt: skip
+        NODE_TYPES.register("Taker", NodeType("Taker", DECORATOR, 1, 1, skips=True))
+        once = decorator("Once2", "o", scripted("a", "S"))
+        with pytest.raises(TreeError) as error:
+            check_structure(decorator("Repeat", "r", once, num_cycles=2))
+        message = str(error.value)
+        assert "(_skipIf, _while, RunOnce, Once2)" in message
+        assert "Sequence, Fallback, RunOnce, TryCatch, Taker or status-mapping" in message
+        check_structure(decorator("Taker", "t", once))
+    with pytest.raises(TreeError, match="Sequence, Fallback, RunOnce, TryCatch or status"):
+        check_structure(decorator("Repeat", "r", decorator("RunOnce", "o", scripted("a", "S")),
+                                  num_cycles=2))  # fmt: skip
+
+
 def test_files_with_skip_attributes_and_run_once_load(tmp_path) -> None:
     path = tmp_path / "skip.xml"
     path.write_text(

@@ -135,6 +135,8 @@ class NodeType:
             node ticked after that child sees the tick: compiled leaves may defer a step).
         skips: True if the rule says what a SKIPPED child does (BT.CPP's); a child that
             may be SKIPPED is refused under the others.
+        skipped_when: for a type whose rule may return SKIPPED of itself (not through a
+            child): whether a node with these parameters (defaults filled in) may.
     """
 
     name: str
@@ -149,6 +151,7 @@ class NodeType:
     memory: int = 0
     yields: bool = False
     skips: bool = False
+    skipped_when: Callable[[Mapping[str, Any]], bool] | None = None
 
     def defaults(self) -> dict[str, Any]:
         """Parameter -> default (None for required ones)."""
@@ -568,6 +571,7 @@ _decorator(
     memory=1,
     skips=True,
     yields=True,
+    skipped_when=lambda params: bool(params["then_skip"]),
 )
 
 

@@ -166,15 +166,28 @@ SKIPPING = tuple(key for key, status, *_ in PRE_CONDITIONS if status == SKIPPED)
 
 
 def may_skip(node: Node) -> bool:
-    """Whether ``node`` may return SKIPPED: it has ``_skipIf`` or ``_while``, it is a RunOnce
-    with ``then_skip``, or of a node type that passes SKIPPED on (its record ``skips``) with
-    a child that may (conservatively: a Sequence is SKIPPED only when all children are)."""
+    """Whether ``node`` may return SKIPPED: it has ``_skipIf`` or ``_while``, its record says
+    that it may of itself with its parameters (``skipped_when``: RunOnce's ``then_skip``), or
+    it is of a node type that passes SKIPPED on (its record ``skips``) with a child that may
+    (conservatively: a Sequence is SKIPPED only when all children are)."""
     if any(key in node.scripts for key in SKIPPING):
         return True
-    if node.type == "RunOnce" and node.params.get("then_skip", True):
+    if not node.is_control:
+        return False
+    record = node_type(node.type)
+    params = {**record.defaults(), **node.params}
+    if record.skipped_when is not None and record.skipped_when(params):
         return True
-    skips = node.is_control and node_type(node.type).skips
-    return skips and any(may_skip(child) for child in node.children)
+    return record.skips and any(may_skip(child) for child in node.children)
+
+
+def _skip_help() -> tuple[str, str]:
+    """What may make a node SKIPPED (the pre-conditions, the node types that may return it of
+    themselves) and the node types that say what a SKIPPED child does, for messages."""
+    records = NODE_TYPES.values()
+    causes = [*SKIPPING, *(r.name for r in records if r.skipped_when is not None)]
+    takers = [r.name for r in records if r.skips and r.status_map is None]
+    return ", ".join(causes), ", ".join(takers) + " or status-mapping decorator"
 
 
 def _check_skipped_children(node: Node) -> None:
@@ -186,10 +199,10 @@ def _check_skipped_children(node: Node) -> None:
     if child is None:
         return
     if not node_type(node.type).skips:
+        causes, takers = _skip_help()
         raise TreeError(
             f"{node.type} {node.name!r} cannot take child {child.name!r}, which may be "
-            "SKIPPED (_skipIf, _while, RunOnce then_skip): put it under a Sequence, "
-            "Fallback, TryCatch, RunOnce or status-mapping decorator"
+            f"SKIPPED ({causes}): put it under a {takers}"
         )
     held = sorted(set(node.scripts) - {"_onSuccess", "_onFailure", "_post"})
     if held:

@@ -60,8 +60,6 @@ def _leaf_lines(i: int, kernels: Mapping[int, LeafKernel], layout: Layout, ticks
     return [*lines, f"{ticks}[a] += 1"]
 
 
-
-
 def tree_body(
     program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, indent: str
 ) -> str:
