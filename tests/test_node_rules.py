@@ -98,3 +98,58 @@ def test_every_rule_gives_the_batched_engines_statuses(engine: str) -> None:
         differ = np.argwhere(a != b)
         assert not differ.size, f"tick {t}: node {names[differ[0][0]]}, agent {differ[0][1]}"
     assert len({int(c) for tick in want for c in tick.ravel()}) == 5  # every status seen
+
+
+def _wide_tree(width: int) -> Node:
+    """Every rule node type that takes any number of children, each with ``width`` of them
+    (leaves, some under a RunOnce, so that children may be SKIPPED)."""
+    leaves = iter(f"w{k}" for k in range(20 * width))
+
+    def kids(skipping: bool = False) -> tuple[Node, ...]:
+        made = [from_entry(next(leaves)) for _ in range(width)]
+        if skipping:
+            made[3] = Node("RunOnce", f"once_{next(leaves)}", (made[3],), {})
+        return tuple(made)
+
+    def node(kind: str, *children: Node, **params: object) -> Node:
+        return Node(kind, f"{kind.lower()}_{next(leaves)}", children, params)
+
+    return node("Sequence",
+        node("Fallback", *kids(), memory=True), node("Fallback", *kids(True), memory=False),
+        node("Sequence", *kids(True), memory=True), node("Sequence", *kids(), memory=False),
+        node("SequenceWithMemory", *kids()), node("AsyncSequence", *kids()),
+        node("AsyncFallback", *kids()), node("TryCatch", *kids(True)),
+        memory=False,
+    )  # fmt: skip
+
+
+def test_nodes_with_many_children_give_the_py_trees_engines_statuses_on_batched() -> None:
+    from pyautonomousagent.engines.batched_rules import ROLLED
+
+    tree = _wide_tree(ROLLED + 9)  # the batched engine writes their children's blocks as loops
+    check_structure(tree)
+    want, got = _statuses("batched", tree), _statuses("pytrees", tree)
+    names = [node.name for node in tree.walk()]
+    for t, (a, b) in enumerate(zip(want, got, strict=True), start=1):
+        differ = np.argwhere(a != b)
+        assert not differ.size, f"tick {t}: node {names[differ[0][0]]}, agent {differ[0][1]}"
+    assert len({int(c) for tick in want for c in tick.ravel()}) == 5  # every status seen
+
+
+def test_a_node_with_many_children_is_written_as_loops_for_the_batched_engine() -> None:
+    from pyautonomousagent.bt.program import compile_tree
+    from pyautonomousagent.engines.batched_rules import ROLLED, ArraySourceOps, roll
+
+    sizes = []
+    for width in (ROLLED + 9, 10 * ROLLED):
+        program = compile_tree(_wide_tree(width))
+        for i in range(1, len(program.nodes)):  # every node with many children
+            if len(program.children[i]) < width:
+                continue
+            ops = ArraySourceOps(program, i)
+            NODE_TYPES.get(program.nodes[i].type).rule(ops)
+            rolled = roll(ops.lines)
+            assert any(line.startswith("for q in range(") for line in rolled)
+            assert len(rolled) < len(ops.lines) / 2
+            sizes.append(len(rolled))
+    assert sizes[: len(sizes) // 2] == sizes[len(sizes) // 2 :]  # the same, whatever the width

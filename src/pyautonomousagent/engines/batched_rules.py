@@ -10,6 +10,7 @@ engine, bound to that node's rows, so a tick interprets no rule.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from typing import Any, Protocol
 
@@ -74,11 +75,10 @@ class ArraySourceOps(CodeOps):
         return ArraySource(f"S{k}")
 
     def halt(self, first: int, last: int | None = None) -> None:
-        chosen = self.children[first:last]
-        if len(chosen) > UNROLLED:  # a loop: the code stays linear in the children
+        if len(range(len(self.children))[first:last]) > UNROLLED:  # a loop: linear code
             self._call([f"for child in KIDS[{first}:{last}]:", f"    halt(child, e{self._depth})"])
         else:
-            self._call([f"halt({child}, e{self._depth})" for child in chosen])
+            self._call([f"halt({child}, e{self._depth})" for child in self.children[first:last]])
 
     def let(self, name: str, value: Any) -> Any:
         if isinstance(value, Source) and value.text.isidentifier():
@@ -126,6 +126,87 @@ class ArraySourceOps(CodeOps):
             self._dead = depth
 
 
+#: A run of at least this many statement groups alike but for numbers that grow by fixed
+#: steps (a node's blocks for child after child) becomes a loop: the code of a node with
+#: many children stays small (compiling 600,000 lines took minutes and gigabytes).
+ROLLED = 16
+
+_NUMBER = re.compile(r"(\d+)")
+
+
+def _statements(lines: list[str]) -> list[list[str]]:
+    """``lines`` cut into top-level statements (a line without indent starts one)."""
+    statements: list[list[str]] = []
+    for line in lines:
+        if line.startswith(" ") and statements:
+            statements[-1].append(line)
+        else:
+            statements.append([line])
+    return statements
+
+
+def _template(group: list[list[str]]) -> tuple[list[str], list[int]]:
+    """A group of statements' text cut around its numbers, and those numbers."""
+    parts = _NUMBER.split("\n".join(line for statement in group for line in statement))
+    return parts[::2], list(map(int, parts[1::2]))
+
+
+def _loop(
+    group: list[list[str]], first: list[int], step: list[int], times: int
+) -> list[str] | None:
+    """``group`` for ``q`` in ``range(times)`` as one loop, each number ``first + step * q``;
+    None where a number that changes is part of a name other than a child's row ``S<k>``."""
+    text = "\n".join(line for statement in group for line in statement)
+    out, end, j = [], 0, 0
+    for m in _NUMBER.finditer(text):
+        value = str(first[j]) if step[j] == 0 else f"{first[j]} + {step[j]} * q"
+        before = text[end : m.start()]
+        if step[j] and before[-1:].isidentifier():
+            if not (before.endswith("S") and not before[-2:-1].isidentifier()):
+                return None
+            before, value = before[:-1], f"S[{value}]"
+        else:
+            value = value if step[j] == 0 else f"({value})"
+        out.append(before + value)
+        end, j = m.end(), j + 1
+    out.append(text[end:])
+    return [f"for q in range({times}):", *("    " + line for line in "".join(out).split("\n"))]
+
+
+def roll(lines: list[str]) -> list[str]:
+    """``lines`` (a rule's code, no indent at its top level) with every run of at least
+    :data:`ROLLED` groups of 1 to 4 statements that differ only by numbers growing by fixed
+    steps written as one loop over ``q`` (children's rows ``S<k>`` as ``S[...]``)."""
+    statements, out, i = _statements(lines), [], 0
+    while i < len(statements):
+        best: tuple[int, list[str]] | None = None
+        for size in range(1, 5):
+            groups = [statements[i + size * g : i + size * (g + 1)] for g in range(2)]
+            if len(groups[1]) < size:
+                break
+            (shape, first), (other, second) = (_template(g) for g in groups)
+            if shape != other:
+                continue
+            step, times = [b - a for a, b in zip(first, second, strict=True)], 2
+            while i + size * (times + 1) <= len(statements):
+                follows = _template(statements[i + size * times : i + size * (times + 1)])
+                expected = [a + s * times for a, s in zip(first, step, strict=True)]
+                if follows != (shape, expected):
+                    break
+                times += 1
+            loop = _loop(statements[i : i + size], first, step, times) if times >= ROLLED else None
+            if loop is not None:  # the shortest period that repeats
+                best = (times * size, loop)
+                break
+        if best is None:
+            out += statements[i]
+            i += 1
+        else:
+            out += best[1]
+            i += best[0]
+    return out
+
+
 class BatchedTree(Protocol):
     """What a rule's ticker needs of the batched engine."""
 
@@ -144,11 +225,13 @@ def rule_ticker(engine: BatchedTree, i: int, size: int) -> Callable[[np.ndarray]
     assert record.rule is not None, record.name
     ops = ArraySourceOps(engine.program, i)
     record.rule(ops)
-    source = "\n".join(["def tick(mask):", *("    " + line for line in ops.lines)])
+    lines = roll(ops.lines) if len(ops.children) >= ROLLED else ops.lines
+    source = "\n".join(["def tick(mask):", *("    " + line for line in lines)])
     memory = np.zeros((record.memory, size), np.int64)
     namespace: dict[str, Any] = {
         "st": engine.status[i],
         **{f"S{k}": engine.status[c] for k, c in enumerate(ops.children)},
+        "S": tuple(engine.status[c] for c in ops.children),
         **{f"M{slot}": memory[slot] for slot in range(record.memory)},
         **ops.tables,
         "tickers": engine._tickers,

@@ -72,15 +72,17 @@ class ScalarSourceOps(CodeOps):
         return StatusSource("result")
 
     def halt(self, first: int, last: int | None = None) -> None:
-        chosen = [f"c{k}" for k in range(self.kids)[first:last]]
+        chosen = range(self.kids)[first:last]  # a range: no list of all the children
         if len(chosen) > UNROLLED:  # a loop: the code stays linear in the children
             self._emit(f"for child in self.children[{first}:{last}]:")
-            chosen = ["child"]
+            names = ["child"]
             self._depth += 1
-        for child in chosen:
+        else:
+            names = [f"c{k}" for k in chosen]
+        for child in names:
             self._emit(f"if {child}.status is not S{INVALID}:")
             self._emit(f"    {child}.stop(S{INVALID})")
-        self._depth -= chosen == ["child"]
+        self._depth -= names == ["child"]
 
     def pick(self, cond: Any, if_true: Any, if_false: Any) -> Any:
         if isinstance(cond, Source) and StatusSource in (type(if_true), type(if_false)):
