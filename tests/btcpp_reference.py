@@ -22,7 +22,7 @@ import numpy as np
 from pyautonomousagent.bt.document import document_from_node
 from pyautonomousagent.bt.leaf import LEAF_TYPES, Leaf
 from pyautonomousagent.bt.spec import Node
-from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
+from pyautonomousagent.bt.status import FAILURE, RUNNING, SKIPPED, SUCCESS
 from pyautonomousagent.bt.vocabulary import BTCPP_LEAVES
 from pyautonomousagent.bt.xml_format import write_xml
 from pyautonomousagent.engines.batched import BatchedEngine
@@ -102,7 +102,7 @@ def ours(
     return roots, events
 
 
-BT_STATUS = {"SUCCESS": SUCCESS, "FAILURE": FAILURE, "RUNNING": RUNNING}
+BT_STATUS = {"SUCCESS": SUCCESS, "FAILURE": FAILURE, "RUNNING": RUNNING, "SKIPPED": SKIPPED}
 
 
 def btcpp_xml(tree: Node) -> str:

@@ -64,7 +64,7 @@ def random_tree(rng: np.random.Generator, leaves: list[str], depth: int = 0) -> 
             n = len(kids)
             params[key] = int(rng.choice([*range(1, n + 1), *range(-n, 0)]))
         elif key == "then_skip":
-            params[key] = False
+            params[key] = bool(rng.random() < 0.5)
         elif key == "if":
             params[key] = str(rng.choice(["gate > 0", "gate == 0", "!(gate > 0) || false"]))
         elif key == "variable":
@@ -84,7 +84,13 @@ ATTRIBUTES = {
     "_onFailure": ["gate := 1 - gate"],
     "_post": ["gate := gate", "gate := 0"],
     "_onHalted": ["gate := 1"],
+    "_skipIf": ["gate > 0", "gate == 0"],
+    "_while": ["gate > 0", "gate == 0"],
 }
+
+
+#: The pre-condition attributes.
+PRE = ("_failureIf", "_successIf", "_skipIf", "_while")
 
 
 def with_attributes(rng: np.random.Generator, root: Node) -> Node:
@@ -95,7 +101,7 @@ def with_attributes(rng: np.random.Generator, root: Node) -> Node:
         for key in rng.choice(sorted(ATTRIBUTES), size=int(rng.integers(1, 3)), replace=False):
             scripts[str(key)] = str(rng.choice(ATTRIBUTES[str(key)]))
     if root.name.startswith("c"):  # BT.CPP may leave it un-reset: see test_btcpp_nodes.py
-        scripts = {k: v for k, v in scripts.items() if k not in ("_failureIf", "_successIf")}
+        scripts = {k: v for k, v in scripts.items() if k not in PRE}
     return replace(root, children=kids, scripts=scripts)
 
 

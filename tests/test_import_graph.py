@@ -20,8 +20,10 @@ PACKAGE = "pyautonomousagent"
 #: module under engines/ must be listed, so that a new one is placed deliberately.
 ENGINE_OF = {
     "pytrees": "pytrees",
+    "pytrees_rules": "pytrees",
     "btcpp": "pytrees",  # BT.CPP's node semantics, ticked one tree per agent
     "batched": "batched",
+    "batched_rules": "batched",
     "compiled": "compiled",
     "compiled_source": "compiled",
     "gpu": "gpu",

@@ -1,4 +1,5 @@
-"""The py_trees engine's own Sequence, Selector and decorators tick as py_trees' classes do."""
+"""The py_trees engine's Sequence, Fallback and decorators (from their rules) tick as py_trees'
+classes do."""
 
 from __future__ import annotations
 
@@ -46,12 +47,13 @@ def _current_children(engine: pytrees.PyTreesEngine) -> list[Any]:
 @given(trees(TICKS, AGENTS))
 def test_quiet_nodes_tick_as_py_trees_nodes(tree: Node) -> None:
     ours = make_harness(tree, AGENTS)
-    saved = {k: pytrees.PYTREES_NODES[k] for k in PLAIN_NODES}
+    assert not PLAIN_NODES.keys() & pytrees.PYTREES_NODES.keys()  # ours: from their rules
     pytrees.PYTREES_NODES.update(PLAIN_NODES)
     try:
         plain = make_harness(tree, AGENTS)
     finally:
-        pytrees.PYTREES_NODES.update(saved)
+        for name in PLAIN_NODES:
+            del pytrees.PYTREES_NODES[name]
     assert isinstance(ours.engine, pytrees.PyTreesEngine)
     assert isinstance(plain.engine, pytrees.PyTreesEngine)
     for tick in range(1, TICKS + 1):

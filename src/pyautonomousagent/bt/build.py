@@ -370,8 +370,6 @@ def _param_fix(tag: Tag, children: int) -> str:
         return "use a whole number >= 1, or -1 for no limit"
     if tag.spec == "Precondition":
         return "write `if` in BehaviorTree.CPP's scripting language (docs/tree-files.md)"
-    if tag.spec == "RunOnce":
-        return 'write then_skip="false" (a skipped node is not supported)'
     if tag.spec in ("Delay", "Timeout"):
         return "use a whole number of milliseconds >= 0 (simulated time)"
     return "use a whole number >= 1"

@@ -4,14 +4,15 @@ A record says everything the engine-independent code needs: how many children th
 takes, its parameters with their defaults and checks, the tags files write it with (and the
 parameters a tag fixes: ``ReactiveSequence`` is ``Sequence`` with ``memory=False``), its
 symbol for pictures, and whether BehaviorTree.CPP has it built in. The spec
-(:mod:`~pyautonomousagent.bt.spec`), the file readers and writers, the pictures and both
-engines read the records; an engine implements a type under the record's name
-(``engines/pytrees.py``'s ``PYTREES_NODES``, ``engines/batched.py``'s ``BATCHED_NODES``).
+(:mod:`~pyautonomousagent.bt.spec`), the file readers and writers, the pictures and the
+engines read the records. A record with a ``rule`` (:mod:`~pyautonomousagent.bt.rules`)
+says its semantics once, and every engine derives its form from that; a record without one
+is implemented by hand under its name in the py_trees and batched engines
+(``engines/btcpp.py``'s ``BTCPP_BEHAVIOURS``, ``engines/batched.py``'s ``BATCHED_NODES``).
 
 Type names are BehaviorTree.CPP's tags where BT.CPP has the node; py_trees' own decorators
 keep their py_trees names, and py_trees' Repeat/Retry/Parallel are ``PyTrees...``.
-Adding a node type: register a record here, then implement it in both engines (a test
-checks that each record has both).
+Adding a node type: register a record here with its rule, and its tests.
 """
 
 from __future__ import annotations
@@ -20,7 +21,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from pyautonomousagent.bt.rules import Ops, Rule
 from pyautonomousagent.bt.script import ScriptError, parse
+from pyautonomousagent.bt.status import FAILURE, NAMES, RUNNING, SKIPPED, SUCCESS
 from pyautonomousagent.registry import Registry
 
 CONTROL = "Control"
@@ -125,6 +128,15 @@ class NodeType:
             if there is one).
         builtin: True if BehaviorTree.CPP 4 has it (Groot2 knows it already).
         status_map: for a decorator that maps its child's status: {child: own} by name.
+        rule: its semantics, for every engine (:mod:`~pyautonomousagent.bt.rules`); None
+            for a type each engine implements by hand.
+        memory: how many whole numbers per agent the rule remembers (``Ops.memory``).
+        yields: True if the node returns at once, RUNNING, when a child is RUNNING (so no
+            node ticked after that child sees the tick: compiled leaves may defer a step).
+        skips: True if the rule says what a SKIPPED child does (BT.CPP's); a child that
+            may be SKIPPED is refused under the others.
+        skipped_when: for a type whose rule may return SKIPPED of itself (not through a
+            child): whether a node with these parameters (defaults filled in) may.
     """
 
     name: str
@@ -135,6 +147,11 @@ class NodeType:
     tags: tuple[FileTag, ...] = ()
     builtin: bool = True
     status_map: Mapping[str, str] | None = None
+    rule: Rule | None = None
+    memory: int = 0
+    yields: bool = False
+    skips: bool = False
+    skipped_when: Callable[[Mapping[str, Any]], bool] | None = None
 
     def defaults(self) -> dict[str, Any]:
         """Parameter -> default (None for required ones)."""
@@ -154,6 +171,10 @@ def _tag(tag: str, symbol: str, doc: str, **fixed: Any) -> tuple[FileTag, ...]:
 
 
 def _decorator(name: str, tag: str, symbol: str, doc: str, **kwargs: Any) -> NodeType:
+    status_map = kwargs.get("status_map")
+    if status_map is not None:
+        rule = mapped_rule(status_map)
+        kwargs.update(rule=rule, yields=status_map.get("RUNNING") is None, skips=True)
     return add(NodeType(name, DECORATOR, 1, 1, tags=_tag(tag, symbol, doc), **kwargs))
 
 
@@ -163,19 +184,119 @@ def _control(name: str, least: int, most: int | None, symbol: str, doc: str, **k
 
 MEMORY = Param("memory", bool, None, boolean, in_files=False)
 
+
+def sequence_rule(n: Ops) -> None:
+    """py_trees' Sequence: ticks the children in order from the first (with ``memory``, from
+    the RUNNING one) until one neither succeeds nor is skipped, which it returns; without
+    memory the children after that one are halted. SKIPPED when every child was skipped
+    (BT.CPP's: in this run, or this tick without memory). Remembers the child it ticks
+    (-1: none), and whether no child succeeded yet."""
+    memory = n.params["memory"]
+    skips = any(n.skippable(k) for k in range(n.kids))
+    fresh = n.let("fresh", n.status() != RUNNING)
+    with n.when(fresh):
+        n.halt(0)
+    if not n.kids:
+        n.set_memory(-1)
+        n.finish(SUCCESS)
+        return
+    start = n.let("start", n.pick(fresh, 0, n.memory())) if memory else 0
+    if skips:
+        with n.when(fresh if memory else True):
+            n.set_memory(1, slot=1)  # no child succeeded yet in this run
+    for k in range(n.kids):
+        with n.when(start <= k):
+            if memory:
+                n.set_memory(k)
+            result = n.tick(k)
+            with n.when(_neither(n, k, result, SUCCESS)):
+                if not memory:
+                    n.halt(k + 1)
+                n.finish(result)
+            if skips:
+                with n.when(result == SUCCESS if n.skippable(k) else True):
+                    n.set_memory(0, slot=1)
+    n.finish(n.pick(n.memory(1) == 1, SKIPPED, SUCCESS) if skips else SUCCESS)
+
+
+def _neither(n: Ops, k: int, result: Any, proceed: int) -> Any:
+    """Whether child ``k``'s ``result`` is neither ``proceed`` nor SKIPPED (the latter asked
+    only of a child that may be skipped)."""
+    if n.skippable(k):
+        return (result != proceed) & (result != SKIPPED)
+    return result != proceed
+
+
+def fallback_rule(n: Ops) -> None:
+    """py_trees' Selector: tries the children in order from the first (with ``memory``, from
+    the remembered one, halting those before it) until one neither fails nor is skipped,
+    which it returns and remembers; a newly chosen child halts the ones after it. SKIPPED
+    when every child was skipped (as Sequence); remembers whether no child failed yet."""
+    memory = n.params["memory"]
+    fresh = n.let("fresh", n.status() != RUNNING)
+    with n.when(fresh):
+        n.set_memory(0)
+    if not n.kids:
+        n.set_memory(-1)
+        n.finish(FAILURE)
+        return
+    previous = n.let("previous", n.memory())
+    for k in range(n.kids - 1) if memory else ():
+        with n.when(previous > k):
+            n.halt(k, k + 1)
+    start = previous if memory else 0
+    skips = any(n.skippable(k) for k in range(n.kids))
+    if skips:
+        with n.when(fresh if memory else True):
+            n.set_memory(1, slot=1)  # no child failed yet in this run
+    for k in range(n.kids):
+        with n.when(start <= k):
+            result = n.tick(k)
+            with n.when(_neither(n, k, result, FAILURE)):
+                n.set_memory(k)
+                with n.when(previous != k):
+                    n.halt(k + 1)
+                n.finish(result)
+            if skips:
+                with n.when(result == FAILURE if n.skippable(k) else True):
+                    n.set_memory(0, slot=1)
+    n.set_memory(n.kids - 1)
+    n.finish(n.pick(n.memory(1) == 1, SKIPPED, FAILURE) if skips else FAILURE)
+
+
 # -- py_trees composites, written with BT.CPP's tags -------------------------------------------
 add(NodeType("Sequence", CONTROL, 0, None, (MEMORY,), (
     FileTag("Sequence", {"memory": True}, "→",
             "ticks children in order; resumes at a RUNNING child; restarts after a failure"),
     FileTag("ReactiveSequence", {"memory": False}, "R→",
             "ticks children from the first on every tick"),
-)))  # fmt: skip
+), rule=sequence_rule, memory=2, yields=True, skips=True))  # fmt: skip
 add(NodeType("Fallback", CONTROL, 0, None, (MEMORY,), (
     FileTag("Fallback", {"memory": True}, "?",
             "tries children in order until one does not fail; resumes at a RUNNING child"),
     FileTag("ReactiveFallback", {"memory": False}, "R?",
             "tries children from the first on every tick"),
-)))  # fmt: skip
+), rule=fallback_rule, memory=2, yields=True, skips=True))  # fmt: skip
+
+
+def mapped_rule(status_map: Mapping[str, str]) -> Rule:
+    """A status-mapping decorator: ticks the child and returns its status mapped through
+    ``status_map`` ({child: own} by name); a child left RUNNING under a finished decorator is
+    halted."""
+    codes = {name: code for code, name in NAMES.items()}
+    table = [*range(len(NAMES))]
+    for child, own in status_map.items():
+        table[codes[child]] = codes[own]
+
+    def rule(n: Ops) -> None:
+        result = n.tick(0)
+        new = n.let("new", n.lookup(tuple(table), result))
+        with n.when((new != RUNNING) & (result == RUNNING)):
+            n.halt(0)
+        n.finish(new)
+
+    return rule
+
 
 # -- status-mapping decorators ----------------------------------------------------------------
 _decorator(
@@ -203,8 +324,8 @@ _decorator(
     "KeepRunningUntilFailure",
     "KeepRunningUntilFailure",
     "∞",
-    "RUNNING when the child succeeds; FAILURE when it fails",
-    status_map={"SUCCESS": "RUNNING"},
+    "RUNNING when the child succeeds (or is skipped); FAILURE when it fails",
+    status_map={"SUCCESS": "RUNNING", "SKIPPED": "RUNNING"},
 )
 for _name, _map in {
     "FailureIsRunning": {"FAILURE": "RUNNING"},
@@ -215,13 +336,105 @@ for _name, _map in {
     _change = ", ".join(f"{a} becomes {b}" for a, b in _map.items()) or "returns the child's"
     _decorator(_name, _name, "", f"py_trees: child {_change}", builtin=False, status_map=_map)
 
+
 # -- BehaviorTree.CPP's own semantics (one tick = one tickExactlyOnce(), docs/tree-files.md) --
+def sequence_with_memory_rule(n: Ops) -> None:
+    """BT.CPP's SequenceWithMemory: resumes at the remembered child (kept on halt); after a
+    child that succeeded at its first tick it yields (RUNNING, a wake-up); a child that does
+    not succeed is returned and remembered; starts over only after success."""
+    start = n.let("start", n.memory())
+    for k in range(n.kids):
+        with n.when(start <= k):
+            woke = n.let("woke", n.child(k) != RUNNING)
+            result = n.tick(k)
+            if k + 1 < n.kids:
+                with n.when(woke & (result == SUCCESS)):
+                    n.set_memory(k + 1)
+                    n.finish(RUNNING)
+            with n.when(result != SUCCESS):
+                n.set_memory(k)
+                n.finish(result)
+    n.set_memory(0)
+    n.finish(SUCCESS)
+
+
+def async_rule(proceed: int) -> Rule:
+    """BT.CPP's AsyncSequence (``proceed`` SUCCESS) and AsyncFallback (FAILURE): a memory
+    Sequence / Fallback that yields (RUNNING) after a child that ended with ``proceed`` at
+    its first tick, and goes on at the next tick. Remembers the child to tick."""
+
+    def rule(n: Ops) -> None:
+        with n.when(n.status() != RUNNING):
+            n.set_memory(0)
+        start = n.let("start", n.memory())
+        for k in range(n.kids):
+            with n.when(start <= k):
+                woke = n.let("woke", n.child(k) != RUNNING)
+                result = n.tick(k)
+                with n.when(result != proceed):
+                    n.set_memory(n.pick(result == RUNNING, k, 0))
+                    n.finish(result)
+                if k + 1 < n.kids:
+                    with n.when(woke):
+                        n.set_memory(k + 1)
+                        n.finish(RUNNING)
+        n.set_memory(0)
+        n.finish(proceed)
+
+    return rule
+
+
+def if_then_else_rule(n: Ops) -> None:
+    """BT.CPP's IfThenElse: the first child decides (unless a branch runs): SUCCESS ticks the
+    second, FAILURE the third (with two children: FAILURE); a finished branch resets all.
+    Remembers the running branch (0: none, ask the condition)."""
+    with n.when(n.status() != RUNNING):
+        n.set_memory(0)
+    with n.when(n.memory() == 0):
+        result = n.tick(0)
+        with n.when(result == SUCCESS):
+            n.set_memory(1)
+        if n.kids == 3:
+            with n.when(result == FAILURE):
+                n.set_memory(2)
+        n.finish(result, where=n.memory() == 0)
+    for branch in range(1, n.kids):
+        with n.when(n.memory() == branch):
+            result = n.let("result", n.tick(branch))  # kept: the halt below resets it
+            with n.when(result != RUNNING):
+                n.halt(0)
+                n.set_memory(0)
+            n.finish(result)
+
+
+def while_do_else_rule(n: Ops) -> None:
+    """BT.CPP's WhileDoElse: the first child is asked on every tick; SUCCESS ticks the second
+    (halting the third), FAILURE the third (halting the second) or fails; all are reset when
+    both the condition and the branch finished."""
+    asked = n.let("asked", n.tick(0))
+    yes, no = asked == SUCCESS, asked == FAILURE
+    with n.when(yes):
+        n.halt(2)
+        n.tick(1)
+    if n.kids == 3:
+        with n.when(no):
+            n.halt(1, 2)
+            n.tick(2)
+    otherwise = n.child(2) if n.kids == 3 else asked
+    result = n.let("result", n.pick(yes, n.child(1), n.pick(no, otherwise, asked)))
+    with n.when((asked != RUNNING) & (result != RUNNING)):
+        n.halt(0)
+    n.finish(result)
+
+
 _control(
     "SequenceWithMemory",
     1,
     None,
     "→*",
     "like Sequence, but after a failure resumes at the failed child",
+    rule=sequence_with_memory_rule,
+    memory=1,
 )
 _control(
     "AsyncSequence",
@@ -229,6 +442,8 @@ _control(
     None,
     "→a",
     "like Sequence, but yields (RUNNING) after a child that succeeded at once",
+    rule=async_rule(SUCCESS),
+    memory=1,
 )
 _control(
     "AsyncFallback",
@@ -236,11 +451,26 @@ _control(
     None,
     "?a",
     "like Fallback, but yields (RUNNING) after a child that failed at once",
+    rule=async_rule(FAILURE),
+    memory=1,
 )
 _control(
-    "IfThenElse", 2, 3, "if", "child 1 decides: SUCCESS ticks child 2, FAILURE child 3 (or fails)"
+    "IfThenElse",
+    2,
+    3,
+    "if",
+    "child 1 decides: SUCCESS ticks child 2, FAILURE child 3 (or fails)",
+    rule=if_then_else_rule,
+    memory=1,
 )
-_control("WhileDoElse", 2, 3, "while", "like IfThenElse, but asks child 1 again on every tick")
+_control(
+    "WhileDoElse",
+    2,
+    3,
+    "while",
+    "like IfThenElse, but asks child 1 again on every tick",
+    rule=while_do_else_rule,
+)
 _control(
     "Parallel",
     1,
@@ -292,15 +522,6 @@ def msec(value: Any, children: int) -> str:
     return ""
 
 
-def _then_skip(value: Any, children: int) -> str:
-    if value is False:
-        return ""
-    return (
-        f"must be false, got {value!r}: a skipped node (BehaviorTree.CPP's SKIPPED) has no "
-        "equal on the py_trees engine"
-    )
-
-
 _decorator(
     "Precondition",
     "Precondition",
@@ -325,12 +546,32 @@ _decorator(
     "halts the child and fails when it runs longer than msec of simulated time",
     params=(Param("msec", int, None, msec),),
 )
+
+
+def run_once_rule(n: Ops) -> None:
+    """BT.CPP's RunOnce: ticks the child until it succeeds or fails once, then returns that
+    status for ever without ticking it (``then_skip``: SKIPPED instead). Remembers the
+    status (0: none yet)."""
+    done = n.let("done", n.memory())
+    with n.when(done != 0):
+        n.finish(SKIPPED if n.params["then_skip"] else done)
+    result = n.tick(0)
+    with n.when((result == SUCCESS) | (result == FAILURE)):
+        n.set_memory(result)
+    n.finish(result)
+
+
 _decorator(
     "RunOnce",
     "RunOnce",
     "once",
-    "ticks the child until it finishes once, then returns that status for ever",
-    params=(Param("then_skip", bool, True, _then_skip),),
+    "ticks the child until it finishes once; then SKIPPED (then_skip=false: that status)",
+    params=(Param("then_skip", bool, True, boolean),),
+    rule=run_once_rule,
+    memory=1,
+    skips=True,
+    yields=True,
+    skipped_when=lambda params: bool(params["then_skip"]),
 )
 
 
@@ -356,6 +597,63 @@ for _cases in range(2, 7):
              "last; a running child of another case is halted"),
     )  # fmt: skip
     add(_decorator_or_control)
+
+
+def try_catch_rule(n: Ops) -> None:
+    """BT.CPP 4.9's TryCatch: children 1..N-1 are a Sequence with memory (the try block); if
+    one fails, all are reset and the last child (the catch) is ticked until it finishes, when
+    all are reset and the node fails; SUCCESS (all reset) when the try block succeeded,
+    SKIPPED when it was all skipped. Remembers the child to tick (0..N-2 in the try block,
+    N-1 in the catch) and whether no try child succeeded yet."""
+    catch = n.kids - 1
+    skips = any(n.skippable(k) for k in range(catch))
+    with n.when(n.status() != RUNNING):
+        n.set_memory(0)
+        if skips:
+            n.set_memory(1, slot=1)  # no try child succeeded yet
+    for k in range(catch):
+        with n.when(n.memory() <= k):
+            result = n.tick(k)
+            with n.when(result == RUNNING):
+                n.set_memory(k)
+                n.finish(RUNNING)
+            with n.when(result == FAILURE):
+                n.halt(0)
+                n.set_memory(catch)
+            if skips:
+                with n.when(result == SUCCESS):
+                    n.set_memory(0, slot=1)
+    with n.when(n.memory() != catch):
+        n.halt(0)
+        n.set_memory(0)
+        n.finish(n.pick(n.memory(1) == 1, SKIPPED, SUCCESS) if skips else SUCCESS)
+    result = n.tick(catch)
+    with n.when(result != RUNNING):
+        n.halt(0)
+        n.set_memory(0)
+    n.finish(n.pick(result == RUNNING, RUNNING, FAILURE))
+
+
+def _no_catch_on_halt(value: Any, children: int) -> str:
+    if value is False:
+        return ""
+    return f"must be false, got {value!r}: no engine ticks a child while halting its parent"
+
+
+_control(
+    "TryCatch",
+    2,
+    None,
+    "try",
+    "BT.CPP 4.9: children but the last in sequence; if one fails, the last (catch) runs, "
+    "then FAILURE",
+    params=(Param("catch_on_halt", bool, False, _no_catch_on_halt),),
+    builtin=False,  # not in BT.CPP 4.8, the version held against: files declare it
+    rule=try_catch_rule,
+    memory=2,
+    skips=True,
+    yields=True,
+)
 
 # -- py_trees nodes BehaviorTree.CPP lacks ----------------------------------------------------
 _decorator(

@@ -2,8 +2,7 @@
 
 The batched engine ticks it over NumPy arrays; the compiled and GPU engines generate their
 kernels from it. A subtree is the contiguous range ``[i, end[i])`` of nodes in pre-order.
-Also here, once for every engine: how BehaviorTree.CPP's pre-condition attributes decide a
-node (:data:`PRE_CONDITIONS`) and what a Switch's cases compare with (:func:`case_values`).
+Also here, once for every engine: what a Switch's cases compare with (:func:`case_values`).
 """
 
 from __future__ import annotations
@@ -16,12 +15,6 @@ import numpy as np
 
 from pyautonomousagent.bt.script_leaves import literal
 from pyautonomousagent.bt.spec import Node, control_params
-from pyautonomousagent.bt.status import FAILURE, SUCCESS
-
-#: BehaviorTree.CPP's pre-condition attributes in the order it checks them, each with the
-#: status (a code of :mod:`pyautonomousagent.bt.status`) the node gets, without a tick,
-#: where the script holds and the node does not resume (it is not RUNNING).
-PRE_CONDITIONS = (("_failureIf", FAILURE), ("_successIf", SUCCESS))
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,8 @@
 """Node statuses as small integers, shared by both engines and the recorded traces.
 
-The codes mirror :class:`py_trees.common.Status`; arrays of them have dtype int8.
+The codes mirror :class:`py_trees.common.Status`, plus BehaviorTree.CPP's SKIPPED (a node
+that was not executed: a ``_skipIf``/``_while`` pre-condition, a ``RunOnce`` that ran); arrays
+of them have dtype int8.
 """
 
 from __future__ import annotations
@@ -13,8 +15,15 @@ INVALID = 0
 SUCCESS = 1
 FAILURE = 2
 RUNNING = 3
+SKIPPED = 4
 
-NAMES = {INVALID: "INVALID", SUCCESS: "SUCCESS", FAILURE: "FAILURE", RUNNING: "RUNNING"}
+NAMES = {
+    INVALID: "INVALID",
+    SUCCESS: "SUCCESS",
+    FAILURE: "FAILURE",
+    RUNNING: "RUNNING",
+    SKIPPED: "SKIPPED",
+}
 
 
 def status_if(condition: Any, if_true: int, if_false: int) -> Any:

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType
-from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.bt.spec import PRE_CONDITIONS, Node
 
 
 @dataclass(frozen=True)
@@ -72,11 +72,11 @@ BTCPP_LEAVES = frozenset(
 #: BehaviorTree.CPP 4 built-ins that pyAutonomousAgent does not run, with the reason.
 UNSUPPORTED: dict[str, str] = {
     **dict.fromkeys(
-        ["ManualSelector", "TryCatch", "AlwaysRunning"],
+        ["ManualSelector", "AlwaysRunning"],
         "it is not a built-in of BehaviorTree.CPP 4.8 (the version held against)",
     ),
     **dict.fromkeys(
-        ["Delay", "Timeout", "Sleep", "RunOnce", "Precondition", "LoopInt", "LoopDouble",
+        ["Delay", "Timeout", "Sleep", "Precondition", "LoopInt", "LoopDouble",
          "LoopString", "LoopBool", "SkipUnlessUpdated", "WaitValueUpdate", "WasEntryUpdated"],
         "it needs wall-clock time, scripting or blackboard entries of its own",
     ),
@@ -86,14 +86,18 @@ UNSUPPORTED: dict[str, str] = {
     ),
 }  # fmt: skip
 
-#: BehaviorTree.CPP's scripting attributes, any node may have them (see Node.scripts).
-SCRIPT_ATTRIBUTES = ("_failureIf", "_successIf", "_onSuccess", "_onFailure", "_post", "_onHalted")
+#: BehaviorTree.CPP's scripting attributes, any node may have them (see Node.scripts): the
+#: pre-conditions (:data:`~pyautonomousagent.bt.program.PRE_CONDITIONS`), then the others.
+SCRIPT_ATTRIBUTES = (
+    *(pre[0] for pre in PRE_CONDITIONS),
+    "_onSuccess",
+    "_onFailure",
+    "_post",
+    "_onHalted",
+)
 
-#: Scripting attributes refused, with the reason.
-REFUSED_ATTRIBUTES = {
-    "_skipIf": "it makes the node SKIPPED, a status py_trees does not have",
-    "_while": "it makes the node SKIPPED, a status py_trees does not have",
-}
+#: Scripting attributes refused, with the reason (none: BT.CPP 4.8's all run).
+REFUSED_ATTRIBUTES: dict[str, str] = {}
 
 
 def tag_of(node: Node) -> Tag:

@@ -5,15 +5,16 @@ order (pre-order), each with its parent, its children and the end of its subtree
 subtree is the contiguous range ``[i, end[i])``. Per-node state is held per agent:
 
 - ``status``: shape (nodes, N), int8 codes of :mod:`pyautonomousagent.bt.status`;
-- ``current``: per Sequence/Selector node, shape (N,), the child index it remembers
-  (py_trees' ``current_child``), -1 for none;
-- ``counter``: per Repeat/Retry node, shape (N,), its successes / failures so far (and the
-  remembered child or loop count of BehaviorTree.CPP's SequenceWithMemory, Repeat and
-  RetryUntilSuccessful).
+- ``counter``: per control node, shape (N,), what it remembers: the child index of a rule's
+  ``memory`` (py_trees' ``current_child`` of a Sequence/Selector), the successes / failures
+  of Repeat/Retry, the remembered child or loop count of BehaviorTree.CPP's
+  SequenceWithMemory, Repeat and RetryUntilSuccessful.
 
 A node is ticked for the agents whose tick reaches it (a boolean mask), and every
 rule of py_trees 2.x is reproduced: which children are ticked, which statuses are kept,
-and which RUNNING subtrees are halted (set INVALID) and when. Leaves run their
+and which RUNNING subtrees are halted (set INVALID) and when. A node type with a rule
+(:mod:`pyautonomousagent.bt.rules`) runs its rule written as NumPy code over masks
+(:mod:`pyautonomousagent.engines.batched_rules`); the others have a method here. Leaves run their
 engine-independent ``evaluate`` once for all those agents.
 """
 
@@ -27,14 +28,15 @@ import numpy as np
 from pyautonomousagent.allocator import reuse_freed_memory
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
-from pyautonomousagent.bt.program import PRE_CONDITIONS, case_values, compile_tree
+from pyautonomousagent.bt.nodes import NODE_TYPES
+from pyautonomousagent.bt.program import case_values, compile_tree
 from pyautonomousagent.bt.script import Script, parse
 from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import (
+    PRE_CONDITIONS,
     Node,
     TreeError,
     check_entries,
-    node_type,
     parallel_threshold,
 )
 from pyautonomousagent.bt.status import (
@@ -45,6 +47,7 @@ from pyautonomousagent.bt.status import (
     SUCCESS,
     invalid_status,
 )
+from pyautonomousagent.engines.batched_rules import rule_ticker
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -58,14 +61,6 @@ def _some(mask: np.ndarray) -> bool:
     """Whether any entry of ``mask`` holds (``count_nonzero`` costs a quarter of ``any()``
     on a thousand entries)."""
     return bool(np.count_nonzero(mask))
-
-
-def _status_table(type_name: str) -> np.ndarray:
-    """Lookup table child status -> own status of a status-mapping decorator."""
-    table = np.arange(len(NAMES), dtype=np.int8)
-    for child, own in (node_type(type_name).status_map or {}).items():
-        table[_CODES[child]] = _CODES[own]
-    return table
 
 
 class BatchedEngine:
@@ -98,12 +93,6 @@ class BatchedEngine:
         self.swarm, self.world, self.defaults = swarm, world, defaults
         n = len(program.nodes)
         self.status = np.zeros((n, swarm.size), dtype=np.int8)
-        kinds = [node.type for node in program.nodes]
-        self.current = {
-            i: np.full(swarm.size, -1, dtype=np.int32)
-            for i, kind in enumerate(kinds)
-            if kind in ("Sequence", "Fallback")
-        }
         self.counter = {
             i: np.zeros(swarm.size, dtype=np.int64)
             for i, node in enumerate(program.nodes)
@@ -119,11 +108,6 @@ class BatchedEngine:
         self._ticks = swarm.blackboard["number_ticks"]
         self._everyone = np.ones(swarm.size, dtype=bool)
         self._all = swarm.agents(slice(None))  # the view of every agent, made once
-        self._tables = {
-            i: _status_table(node.type)
-            for i, node in enumerate(program.nodes)
-            if node.is_control and node_type(node.type).status_map is not None
-        }
         self._scripts: dict[int, Script] = {}
         self._attributes = {
             i: {key: parse(code) for key, code in node.scripts.items()}
@@ -134,7 +118,8 @@ class BatchedEngine:
         self._watched = {
             i for i in range(n) if any(i <= j < program.end[i] for j in watch)
         }  # nodes whose subtree has something to tell when halted
-        self._tickers = [self._ticker(i) for i in range(n)]
+        self._tickers: list[Callable[[np.ndarray], None]] = []  # rule tickers hold this list
+        self._tickers.extend(self._ticker(i) for i in range(n))
         for i in self._attributes:
             self._tickers[i] = self._with_scripts(i, self._tickers[i])
 
@@ -142,8 +127,8 @@ class BatchedEngine:
         node = self.program.nodes[i]
         if not node.is_control:
             return lambda mask: self._leaf(i, mask)
-        if i in self._tables:
-            return lambda mask: self._decorator(i, mask)
+        if NODE_TYPES.get(node.type).rule is not None:
+            return rule_ticker(self, i, self.swarm.size)
         method = BATCHED_NODES[node.type]
         return lambda mask: method(self, i, mask)
 
@@ -185,16 +170,19 @@ class BatchedEngine:
 
     def _with_scripts(self, i: int, ticker: Callable[[np.ndarray], None]) -> Callable:
         """``ticker`` with node ``i``'s scripting attributes (see engines/btcpp.py's
-        ``with_scripts``): pre-conditions for the agents it does not resume, then its tick
-        for the others, then the post scripts by status."""
+        ``with_scripts``): pre-conditions (``PRE_CONDITIONS``), then its tick for the
+        agents they did not decide, then the post scripts by status."""
         scripts, status = self._attributes[i], self.status[i]
 
         def tick(mask: np.ndarray) -> None:
             going = mask.copy()
-            for key, result in PRE_CONDITIONS:
-                asked = going & (status != RUNNING)
+            for key, result, holds, running in PRE_CONDITIONS:
+                asked = going if running else going & (status != RUNNING)
                 if key in scripts and _some(asked):
-                    decided = self._truth(scripts[key], asked)
+                    truth = self._truth(scripts[key], asked)
+                    decided = asked & (truth if holds else ~truth)
+                    if running:
+                        self._halt(i, decided & (status == RUNNING))
                     np.copyto(status, result, where=decided)
                     going &= ~decided
             if _some(going):
@@ -260,74 +248,6 @@ class BatchedEngine:
                 "of if/and/or, or run the tree with engine='pytrees'"
             ) from None
 
-    def _sequence(self, i: int, mask: np.ndarray) -> None:
-        kids, memory = self.program.children[i], self.program.params[i]["memory"]
-        status, current = self.status[i], self.current[i]
-        fresh = mask & (status != RUNNING)
-        self._halt_children(i, 0, fresh)
-        if not kids:
-            np.copyto(status, SUCCESS, where=mask)
-            np.copyto(current, -1, where=mask)
-            return
-        start, last_start, going = self._sequence_start(memory, mask, fresh, current)
-        for k, child in enumerate(kids):
-            if _some(going):
-                if memory:
-                    np.copyto(current, k, where=going)
-                self._tickers[child](going)
-                result = self.status[child]
-                succeeded = result == SUCCESS
-                stopped = going & ~succeeded
-                if not memory:
-                    self._halt_children(i, k + 1, stopped)
-                np.copyto(status, result, where=stopped)
-                going &= succeeded
-            if start is not None and k < last_start:
-                going |= mask & (start == k + 1)
-        np.copyto(status, SUCCESS, where=going)
-
-    @staticmethod
-    def _sequence_start(
-        memory: bool, mask: np.ndarray, fresh: np.ndarray, current: np.ndarray
-    ) -> tuple[np.ndarray | None, int, np.ndarray]:
-        """Where each agent's sequence starts: (child index per agent or None when all start
-        at the first child, the largest start, the agents starting at the first child)."""
-        resuming = mask & ~fresh
-        if memory and _some(resuming):
-            start = np.where(fresh, 0, current)
-            return start, int(start[resuming].max()), mask & (start == 0)
-        return None, 0, mask.copy()
-
-    def _selector(self, i: int, mask: np.ndarray) -> None:
-        kids, memory = self.program.children[i], self.program.params[i]["memory"]
-        status, current = self.status[i], self.current[i]
-        np.copyto(current, 0, where=mask & (status != RUNNING))
-        if not kids:
-            np.copyto(status, FAILURE, where=mask)
-            np.copyto(current, -1, where=mask)
-            return
-        previous = current.copy()
-        if memory:
-            for k in range(len(kids) - 1):
-                self._halt(kids[k], mask & (previous > k))
-            going = mask & (previous == 0)
-        else:
-            going = mask.copy()
-        for k, child in enumerate(kids):
-            if _some(going):
-                self._tickers[child](going)
-                result = self.status[child]
-                failed = result == FAILURE
-                chosen = going & ~failed
-                np.copyto(current, k, where=chosen)
-                self._halt_children(i, k + 1, chosen & (previous != k))
-                np.copyto(status, result, where=chosen)
-                going &= failed
-            if memory and k + 1 < len(kids):
-                going |= mask & (previous == k + 1)
-        np.copyto(status, FAILURE, where=going)
-        np.copyto(current, len(kids) - 1, where=going)
-
     def _parallel(self, i: int, mask: np.ndarray) -> None:
         kids, params = self.program.children[i], self.program.params[i]
         status = self.status[i]
@@ -347,12 +267,6 @@ class BatchedEngine:
         for k, child in enumerate(kids):
             self._halt(child, finished & (results[k] == RUNNING))
         np.copyto(status, new, where=mask)
-
-    def _decorator(self, i: int, mask: np.ndarray) -> None:
-        child = self.program.children[i][0]
-        self._tickers[child](mask)
-        result = self.status[child]
-        self._settle(i, child, mask, result, self._tables[i][result])
 
     def _counted(self, i: int, mask: np.ndarray) -> None:
         """PyTreesRepeat (counts successes) and PyTreesRetry (counts failures), as py_trees'
@@ -384,28 +298,6 @@ class BatchedEngine:
     # BehaviorTree.CPP's control nodes (see engines/btcpp.py for the same rules on py_trees).
     # ``counter`` holds SequenceWithMemory's remembered child and the loop counts of
     # Repeat / RetryUntilSuccessful; ``_done`` marks the finished children of a Parallel.
-
-    def _sequence_with_memory(self, i: int, mask: np.ndarray) -> None:
-        index, status, kids = self.counter[i], self.status[i], self.program.children[i]
-        start = index.copy()
-        alive = mask.copy()
-        for k, child in enumerate(kids):
-            ticked = alive & (start <= k)
-            if _some(ticked):
-                fresh = self.status[child] != RUNNING
-                self._tickers[child](ticked)
-                result = self.status[child]
-                stopped = ticked & (result != SUCCESS)
-                if k + 1 < len(kids):  # a wake-up: yield after a first-tick success
-                    woken = ticked & fresh & (result == SUCCESS)
-                    np.copyto(index, k + 1, where=woken)
-                    np.copyto(status, RUNNING, where=woken)
-                    alive &= ~woken
-                np.copyto(index, k, where=stopped)
-                np.copyto(status, result, where=stopped)
-                alive &= ~stopped
-        np.copyto(index, 0, where=alive)
-        np.copyto(status, SUCCESS, where=alive)
 
     def _btcpp_loop(self, i: int, mask: np.ndarray) -> None:
         """Repeat (again on SUCCESS) and RetryUntilSuccessful (again on FAILURE): the child
@@ -460,74 +352,6 @@ class BatchedEngine:
                 np.copyto(status, np.where(won, SUCCESS, FAILURE), where=ended)
                 alive &= ~ended
         np.copyto(status, RUNNING, where=alive)
-
-    def _async_sequence(self, i: int, mask: np.ndarray, proceed: int) -> None:
-        """AsyncSequence (``proceed`` SUCCESS) and AsyncFallback (``proceed`` FAILURE); the
-        remembered child is in ``counter``."""
-        kids, index, status = self.program.children[i], self.counter[i], self.status[i]
-        np.copyto(index, 0, where=mask & (status != RUNNING))
-        start = index.copy()
-        alive = mask.copy()
-        for k, child in enumerate(kids):
-            ticked = alive & (start <= k)
-            if not _some(ticked):
-                continue
-            fresh = self.status[child] != RUNNING
-            self._tickers[child](ticked)
-            result = self.status[child]
-            stopped = ticked & (result != proceed)
-            np.copyto(status, result, where=stopped)
-            np.copyto(index, np.where(result == RUNNING, k, 0), where=stopped)
-            alive &= ~stopped
-            if k + 1 < len(kids):
-                woken = ticked & fresh & (result == proceed)
-                np.copyto(index, k + 1, where=woken)
-                np.copyto(status, RUNNING, where=woken)
-                alive &= ~woken
-        np.copyto(index, 0, where=alive)
-        np.copyto(status, proceed, where=alive)
-
-    def _if_then_else(self, i: int, mask: np.ndarray) -> None:
-        """IfThenElse; the running branch (0: none, ask the condition) is in ``counter``."""
-        kids, branch, status = self.program.children[i], self.counter[i], self.status[i]
-        np.copyto(branch, 0, where=mask & (status != RUNNING))
-        asking = mask & (branch == 0)
-        if _some(asking):
-            self._tickers[kids[0]](asking)
-            result = self.status[kids[0]]
-            np.copyto(branch, 1, where=asking & (result == SUCCESS))
-            if len(kids) == 3:
-                np.copyto(branch, 2, where=asking & (result == FAILURE))
-            np.copyto(status, result, where=asking & (branch == 0))
-        for b in range(1, len(kids)):
-            going = mask & (branch == b)
-            if _some(going):
-                self._tickers[kids[b]](going)
-                result = self.status[kids[b]]
-                np.copyto(status, result, where=going)
-                finished = going & (result != RUNNING)
-                self._halt_children(i, 0, finished)
-                np.copyto(branch, 0, where=finished)
-
-    def _while_do_else(self, i: int, mask: np.ndarray) -> None:
-        """WhileDoElse: the condition is asked on every tick."""
-        kids, status = self.program.children[i], self.status[i]
-        self._tickers[kids[0]](mask)
-        asked = self.status[kids[0]].copy()
-        result = asked.copy()
-        yes, no = mask & (asked == SUCCESS), mask & (asked == FAILURE)
-        if len(kids) == 3:
-            self._halt(kids[2], yes)
-        if _some(yes):
-            self._tickers[kids[1]](yes)
-            np.copyto(result, self.status[kids[1]], where=yes)
-        if len(kids) == 3:
-            self._halt(kids[1], no)
-            if _some(no):
-                self._tickers[kids[2]](no)
-                np.copyto(result, self.status[kids[2]], where=no)
-        self._halt_children(i, 0, mask & (asked != RUNNING) & (result != RUNNING))
-        np.copyto(status, result, where=mask)
 
     def _parallel_all(self, i: int, mask: np.ndarray) -> None:
         """ParallelAll: ``_done`` marks the finished children."""
@@ -615,39 +439,20 @@ class BatchedEngine:
                 np.copyto(running, 0, where=finished)
                 self._halt_children(i, 0, finished)
 
-    def _run_once(self, i: int, mask: np.ndarray) -> None:
-        """RunOnce then_skip=false; ``counter`` holds the remembered status (0: none yet)."""
-        child, result, status = self.program.children[i][0], self.counter[i], self.status[i]
-        going = mask & (result == 0)
-        np.copyto(status, result, where=mask & ~going)
-        if _some(going):
-            self._tickers[child](going)
-            outcome = self.status[child]
-            np.copyto(status, outcome, where=going)
-            np.copyto(result, outcome, where=going & (outcome != RUNNING))
-
 
 #: Node type -> the method that ticks it, called with (engine, node index, mask): one entry
-#: per record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES` (status-mapping decorators
-#: all use ``_decorator`` with the record's ``status_map``).
+#: per record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES` without a rule (those with
+#: one run it: :func:`~pyautonomousagent.engines.batched_rules.rule_ticker`).
 BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
-    "Sequence": BatchedEngine._sequence,
-    "Fallback": BatchedEngine._selector,
     "PyTreesParallel": BatchedEngine._parallel,
     "PyTreesRepeat": BatchedEngine._counted,
     "PyTreesRetry": BatchedEngine._counted,
-    "SequenceWithMemory": BatchedEngine._sequence_with_memory,
     "Parallel": BatchedEngine._btcpp_parallel,
     "Repeat": BatchedEngine._btcpp_loop,
     "RetryUntilSuccessful": BatchedEngine._btcpp_loop,
-    "AsyncSequence": lambda engine, i, mask: engine._async_sequence(i, mask, SUCCESS),
-    "AsyncFallback": lambda engine, i, mask: engine._async_sequence(i, mask, FAILURE),
-    "IfThenElse": BatchedEngine._if_then_else,
-    "WhileDoElse": BatchedEngine._while_do_else,
     "ParallelAll": BatchedEngine._parallel_all,
     "Precondition": BatchedEngine._precondition,
     "Delay": BatchedEngine._delay,
     "Timeout": BatchedEngine._timeout,
-    "RunOnce": BatchedEngine._run_once,
     **{f"Switch{n}": BatchedEngine._switch for n in range(2, 7)},
 }

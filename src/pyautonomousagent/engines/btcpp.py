@@ -5,8 +5,6 @@ ticked, what is returned, what is remembered) in py_trees' terms: a halted node 
 ``INVALID`` (BT.CPP's ``IDLE``) and a finished node keeps its last status for display.
 The batched engine implements the same rules on arrays; docs/tree-files.md has the table.
 
-- :class:`SequenceWithMemory`: a sequence that, after a failure, resumes at the failed
-  child; it keeps its place even when halted, and starts over only after success.
 - :class:`RetryUntilSuccessful` / :class:`Repeat`: tick the child again *within the same
   tick* after a failure (resp. success), up to ``num_attempts`` (resp. ``num_cycles``) times.
 - :class:`Parallel`: ticks the children that have not finished yet, left to right, and
@@ -17,68 +15,37 @@ The batched engine implements the same rules on arrays; docs/tree-files.md has t
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from enum import Enum
 from typing import Any
 
 import py_trees
 from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
-from pyautonomousagent.bt import program
 from pyautonomousagent.bt import status as codes
 from pyautonomousagent.bt.program import case_values
 from pyautonomousagent.bt.script import parse
 from pyautonomousagent.bt.script_leaves import iterations
+from pyautonomousagent.bt.spec import PRE_CONDITIONS as PRE_CONDITION_CODES
 from pyautonomousagent.bt.spec import parallel_threshold
 
+
+class Skipped(Enum):
+    """BehaviorTree.CPP's SKIPPED, a status py_trees lacks: a py_trees node's ``status``
+    where it was skipped (it is neither RUNNING nor INVALID to py_trees)."""
+
+    SKIPPED = "SKIPPED"
+
+
 #: Status codes (:mod:`pyautonomousagent.bt.status`) as py_trees' statuses, and back.
-TO_PYTREES = {
+TO_PYTREES: dict[int, Any] = {
     codes.INVALID: Status.INVALID,
     codes.SUCCESS: Status.SUCCESS,
     codes.FAILURE: Status.FAILURE,
     codes.RUNNING: Status.RUNNING,
+    codes.SKIPPED: Skipped.SKIPPED,
 }
 FROM_PYTREES = {v: k for k, v in TO_PYTREES.items()}
-
-
-class SequenceWithMemory(py_trees.composites.Composite):
-    """BT.CPP ``SequenceWithMemory``: resumes at the running or failed child.
-
-    Args:
-        name: the node's name.
-        children: the children, ticked left to right.
-    """
-
-    def __init__(self, name: str, children: Sequence[Behaviour]) -> None:
-        super().__init__(name, list(children))
-        self.index = 0  # the child to tick first; kept on halt, as in BT.CPP 4
-
-    def tick(self) -> Iterator[Behaviour]:
-        """Tick from the remembered child on; stop at the first child that does not succeed,
-        or yield (RUNNING) after a child that succeeded at its first tick (a wake-up)."""
-        if self.status != Status.RUNNING:
-            self.initialise()
-        for k in range(self.index, len(self.children)):
-            child = self.children[k]
-            self.current_child = child
-            fresh = child.status != Status.RUNNING
-            yield from child.tick()
-            if child.status == Status.SUCCESS:
-                if fresh and k + 1 < len(self.children):
-                    self.index = k + 1
-                    self.status = Status.RUNNING
-                    yield self
-                    return
-                continue
-            self.index = k
-            if child.status == Status.RUNNING:
-                self.status = Status.RUNNING
-            else:
-                self.stop(child.status)
-            yield self
-            return
-        self.index = 0
-        self.stop(Status.SUCCESS)
-        yield self
 
 
 class _Loop(py_trees.decorators.Decorator):
@@ -200,99 +167,6 @@ def _halt_all(children: Sequence[Behaviour]) -> None:
             child.stop(Status.INVALID)
 
 
-class AsyncSequence(py_trees.composites.Composite):
-    """BT.CPP ``AsyncSequence`` (``proceed=SUCCESS``) and ``AsyncFallback``
-    (``proceed=FAILURE``): a Sequence / Fallback with memory that, after a child ended with
-    ``proceed`` at its first tick, yields (RUNNING) and goes on at the next tick."""
-
-    def __init__(self, name: str, children: Sequence[Behaviour], proceed: Status) -> None:
-        super().__init__(name, list(children))
-        self.proceed = proceed
-        self.index = 0
-
-    def tick(self) -> Iterator[Behaviour]:
-        """Tick from the remembered child; stop at a child that does not end with proceed."""
-        if self.status != Status.RUNNING:
-            self.index = 0
-            self.initialise()
-        for k in range(self.index, len(self.children)):
-            child = self.children[k]
-            fresh = child.status != Status.RUNNING
-            yield from child.tick()
-            if child.status == self.proceed:
-                if fresh and k + 1 < len(self.children):
-                    self.index, self.status = k + 1, Status.RUNNING
-                    yield self
-                    return
-                continue
-            self.index = k if child.status == Status.RUNNING else 0
-            self.status = child.status
-            yield self
-            return
-        self.index = 0
-        self.status = self.proceed
-        yield self
-
-
-class IfThenElse(py_trees.composites.Composite):
-    """BT.CPP ``IfThenElse``: the first child decides; SUCCESS ticks the second, FAILURE the
-    third (or fails, with two children); a running branch is resumed without asking again."""
-
-    def __init__(self, name: str, children: Sequence[Behaviour]) -> None:
-        super().__init__(name, list(children))
-        self.branch = 0
-
-    def tick(self) -> Iterator[Behaviour]:
-        """Ask the condition (unless a branch is running), then tick the chosen branch."""
-        if self.status != Status.RUNNING:
-            self.branch = 0
-            self.initialise()
-        if self.branch == 0:
-            condition = self.children[0]
-            yield from condition.tick()
-            if condition.status == Status.SUCCESS:
-                self.branch = 1
-            elif condition.status == Status.FAILURE and len(self.children) == 3:
-                self.branch = 2
-            else:
-                self.status = condition.status
-                yield self
-                return
-        branch = self.children[self.branch]
-        yield from branch.tick()
-        self.status = branch.status
-        if branch.status != Status.RUNNING:
-            _halt_all(self.children)
-            self.branch = 0
-        yield self
-
-
-class WhileDoElse(py_trees.composites.Composite):
-    """BT.CPP ``WhileDoElse``: the first child is asked on every tick; SUCCESS ticks the
-    second (halting the third), FAILURE the third (halting the second) or fails."""
-
-    def tick(self) -> Iterator[Behaviour]:
-        """Ask the condition, then tick the branch it picks; reset all when it finishes."""
-        if self.status != Status.RUNNING:
-            self.initialise()
-        condition = self.children[0]
-        yield from condition.tick()
-        result = condition.status
-        if result == Status.SUCCESS:
-            if len(self.children) == 3:
-                _halt_all(self.children[2:])
-            yield from self.children[1].tick()
-            result = self.children[1].status
-        elif result == Status.FAILURE and len(self.children) == 3:
-            _halt_all(self.children[1:2])
-            yield from self.children[2].tick()
-            result = self.children[2].status
-        if condition.status != Status.RUNNING and result != Status.RUNNING:
-            _halt_all(self.children)
-        self.status = result
-        yield self
-
-
 class ParallelAll(py_trees.composites.Composite):
     """BT.CPP ``ParallelAll``: ticks the unfinished children until all have finished; then
     FAILURE if at least ``max_failures`` of them failed (-1: all, -2: all but one, ...)."""
@@ -400,29 +274,6 @@ class Timeout(_Timed):
         yield self
 
 
-class RunOnce(py_trees.decorators.Decorator):
-    """BT.CPP ``RunOnce then_skip="false"``: ticks the child until it finishes once, then
-    returns that status without ticking it again."""
-
-    def __init__(self, name: str, child: Behaviour) -> None:
-        super().__init__(name=name, child=child)
-        self.result: Status | None = None
-
-    def tick(self) -> Iterator[Behaviour]:
-        """The remembered status, or the child's."""
-        if self.result is None:
-            yield from self.decorated.tick()
-            if self.decorated.status != Status.RUNNING:
-                self.result = self.decorated.status
-            self.status = self.decorated.status
-        else:
-            self.status = self.result
-        yield self
-
-    def update(self) -> Status:  # pragma: no cover - tick() does the work
-        return self.decorated.status
-
-
 class Switch(py_trees.composites.Composite):
     """BT.CPP ``Switch2``...``Switch6``: ticks the child of the first case equal to the
     agent's entry ``variable`` (else the last child); a running child of another case is
@@ -456,17 +307,18 @@ class Switch(py_trees.composites.Composite):
         yield self
 
 
-#: Pre-conditions in BT.CPP's order: attribute -> the status it returns when its script holds.
-#: :data:`~pyautonomousagent.bt.program.PRE_CONDITIONS` with py_trees' statuses.
-PRE_CONDITIONS = tuple((key, TO_PYTREES[code]) for key, code in program.PRE_CONDITIONS)
+#: :data:`~pyautonomousagent.bt.PRE_CONDITION_CODES` with py_trees' statuses.
+PRE_CONDITIONS: tuple[tuple[str, Any, bool, bool], ...] = tuple(
+    (key, TO_PYTREES[code], *rest) for key, code, *rest in PRE_CONDITION_CODES
+)
 
 
 def with_scripts(behaviour: Behaviour, scripts: Mapping[str, str], agent: Any) -> Behaviour:
     """Give ``behaviour`` BehaviorTree.CPP's scripting attributes, run on ``agent``'s
-    blackboard: ``_failureIf``/``_successIf`` decide without a tick when the node does not
-    resume (it is not RUNNING); after a tick that finishes the node, ``_onSuccess`` or
-    ``_onFailure``, then ``_post`` (as BT.CPP 4.8: not after RUNNING); ``_onHalted`` when a
-    RUNNING node is halted, after its children's."""
+    blackboard: the pre-conditions (``_failureIf``, ``_successIf``, ``_skipIf``, ``_while``)
+    decide without a tick (``_while`` also halts a RUNNING node); after a tick that
+    finishes the node, ``_onSuccess`` or ``_onFailure``, then ``_post`` (as BT.CPP 4.8: not
+    after RUNNING); ``_onHalted`` when a RUNNING node is halted, after its children's."""
     parsed = {key: parse(code) for key, code in scripts.items()}
     board = agent.blackboard
     tick, stop = behaviour.tick, behaviour.stop
@@ -480,13 +332,15 @@ def with_scripts(behaviour: Behaviour, scripts: Mapping[str, str], agent: Any) -
             parsed["_post"].run(board)
 
     def scripted_tick() -> Iterator[Behaviour]:
-        if behaviour.status != Status.RUNNING:
-            for key, status in PRE_CONDITIONS:
-                if key in parsed and parsed[key].truth(board):
-                    behaviour.status = status
-                    post()
-                    yield behaviour
-                    return
+        for key, status, holds, running in PRE_CONDITIONS:
+            asked = running or behaviour.status != Status.RUNNING
+            if key in parsed and asked and bool(parsed[key].truth(board)) == holds:
+                if behaviour.status == Status.RUNNING:
+                    behaviour.stop(Status.INVALID)
+                behaviour.status = status
+                post()
+                yield behaviour
+                return
         for node in tick():
             if node is behaviour:  # its last step: parents decide on seeing it
                 post()
@@ -505,21 +359,15 @@ def with_scripts(behaviour: Behaviour, scripts: Mapping[str, str], agent: Any) -
 
 #: Node type -> py_trees behaviour, called with (name, children, parameters).
 BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Behaviour]] = {
-    "SequenceWithMemory": lambda name, kids, p: SequenceWithMemory(name, kids),
     "Parallel": lambda name, kids, p: Parallel(name, kids, p["success_count"], p["failure_count"]),
     "Repeat": lambda name, kids, p: Repeat(name, kids[0], p["num_cycles"]),
     "RetryUntilSuccessful": lambda name, kids, p: RetryUntilSuccessful(
         name, kids[0], p["num_attempts"]
     ),
-    "AsyncSequence": lambda name, kids, p: AsyncSequence(name, kids, Status.SUCCESS),
-    "AsyncFallback": lambda name, kids, p: AsyncSequence(name, kids, Status.FAILURE),
-    "IfThenElse": lambda name, kids, p: IfThenElse(name, kids),
-    "WhileDoElse": lambda name, kids, p: WhileDoElse(name, kids),
     "ParallelAll": lambda name, kids, p: ParallelAll(name, kids, p["max_failures"]),
     "Precondition": lambda name, kids, p: Precondition(name, kids[0], p["if"], p["else"]),
     "Delay": lambda name, kids, p: Delay(name, kids[0], p["delay_msec"]),
     "Timeout": lambda name, kids, p: Timeout(name, kids[0], p["msec"]),
-    "RunOnce": lambda name, kids, p: RunOnce(name, kids[0]),
     **{
         f"Switch{n}": lambda name, kids, p: Switch(name, kids, p["variable"].key, case_values(p))
         for n in range(2, 7)

@@ -1,28 +1,26 @@
 """The compiled engine's code generator: a tree (and the run's sensors and motion) as Python
 source for numba.
 
-Every node of the flattened tree (:class:`~pyautonomousagent.engines.batched.Program`)
+Every node of the flattened tree (:class:`~pyautonomousagent.bt.program.Program`)
 becomes a block of straight-line code that ticks it for agent row ``a`` at iteration ``t``
-(:func:`tree_body`): ``st`` holds the node statuses (nodes, N) int8 and ``cur`` the remembered
-child of each Sequence/Fallback (one row per such node, (M, N) int32), exactly as the batched
-engine keeps them; ``c0, c1, ...`` are the swarm's columns and blackboard arrays in
+(:func:`tree_body`, written by :mod:`pyautonomousagent.bt.tree_source` from the node types'
+rules): ``st`` holds the node statuses (nodes, N) int8 and ``cur`` what each node with
+``memory`` remembers (one row per such node, (M, N) int32), exactly as the batched engine
+keeps them; ``c0, c1, ...`` are the swarm's columns and blackboard arrays in
 :attr:`Layout.names` order. A leaf calls its :class:`~pyautonomousagent.kernels.LeafKernel`.
-The rules are the batched engine's (``_sequence``, ``_selector``, ``_decorator``), written
-for one agent. ``tick`` ticks every agent; ``block_serial``/``block_parallel`` run whole
-iterations (sensors, the 2-D drone's motion, with the 3-D drone's altitude where
+``tick`` ticks every agent; ``block_serial``/``block_parallel`` run whole iterations
+(sensors, the 2-D drone's motion, with the 3-D drone's altitude where
 :attr:`Layout.vertical` is set, the tree, control and recording) agent by agent.
 """
 
 from __future__ import annotations
 
 import inspect
-import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from pyautonomousagent.bt.nodes import NODE_TYPES
+from pyautonomousagent.bt import tree_source as source
 from pyautonomousagent.bt.program import Program
-from pyautonomousagent.bt.status import FAILURE, NAMES, RUNNING, SUCCESS
 from pyautonomousagent.kernels import LeafKernel, SensorKernel
 from pyautonomousagent.loop.layout import Layout, Messaging
 from pyautonomousagent.loop.source import (
@@ -34,23 +32,15 @@ from pyautonomousagent.loop.source import (
     motion_functions,
 )
 
-_CODES = {name: code for code, name in NAMES.items()}
-
 #: Agents ticked together over a run of iterations in the fused loop: their records of one
 #: iteration are contiguous (2 KiB per column), and their state stays in the L2 cache.
 CHUNK = 256
 
 
 def supported(program: Program) -> bool:
-    """Whether every control node of ``program`` has a compiled form (Sequence, Fallback and
-    status-mapping decorators, without scripts)."""
-    for node in program.nodes:
-        if node.scripts:
-            return False
-        plain = node.type in ("Sequence", "Fallback") or not node.is_control
-        if not plain and NODE_TYPES.get(node.type).status_map is None:
-            return False
-    return True
+    """Whether every control node of ``program`` has a compiled form: a rule
+    (:attr:`~pyautonomousagent.bt.nodes.NodeType.rule`) and no scripting attribute."""
+    return source.has_source(program)
 
 
 def _call(kernel: LeafKernel, layout: Layout, node: int) -> str:
@@ -60,111 +50,28 @@ def _call(kernel: LeafKernel, layout: Layout, node: int) -> str:
     return f"{alias(kernel.function)}({', '.join(args)})"
 
 
-def _halts(program: Program, kids: Sequence[int], indent: str) -> list[str]:
-    return [f"{indent}halt(a, st, {k}, {program.end[k]})" for k in kids]
-
-
-def _sequence(program: Program, i: int, row: int, memory: bool) -> list[str]:
-    kids = program.children[i]
-    lines = [f"    fresh = st[{i}, a] != {RUNNING}", "    if fresh:"]
-    lines += _halts(program, kids, "        ") or ["        pass"]
-    if not kids:
-        return [*lines, f"    st[{i}, a] = {SUCCESS}", f"    cur[{row}, a] = -1"]
-    lines.append(f"    start = cur[{row}, a] if not fresh else 0" if memory else "    start = 0")
-    for k, child in enumerate(kids):
-        lines += [f"    if start <= {k}:"]
-        if memory:
-            lines.append(f"        cur[{row}, a] = {k}")
-        lines += [f"        n{child}(a, t, st, cur, ARRAYS)", f"        res = st[{child}, a]"]
-        lines.append(f"        if res != {SUCCESS}:")
-        if not memory:
-            lines += _halts(program, kids[k + 1 :], "            ")
-        lines += [f"            st[{i}, a] = res", "            return"]
-    return [*lines, f"    st[{i}, a] = {SUCCESS}"]
-
-
-def _selector(program: Program, i: int, row: int, memory: bool) -> list[str]:
-    kids = program.children[i]
-    lines = [f"    if st[{i}, a] != {RUNNING}:", f"        cur[{row}, a] = 0"]
-    if not kids:
-        return [*lines, f"    st[{i}, a] = {FAILURE}", f"    cur[{row}, a] = -1"]
-    lines.append(f"    previous = cur[{row}, a]")
-    for k in range(len(kids) - 1) if memory else ():
-        lines += [f"    if previous > {k}:", *_halts(program, [kids[k]], "        ")]
-    lines.append("    start = previous" if memory else "    start = 0")
-    for k, child in enumerate(kids):
-        lines += [f"    if start <= {k}:", f"        n{child}(a, t, st, cur, ARRAYS)"]
-        lines += [f"        res = st[{child}, a]", f"        if res != {FAILURE}:"]
-        lines += [f"            cur[{row}, a] = {k}", f"            if previous != {k}:"]
-        lines += _halts(program, kids[k + 1 :], "                ") or ["                pass"]
-        lines += [f"            st[{i}, a] = res", "            return"]
-    return [*lines, f"    st[{i}, a] = {FAILURE}", f"    cur[{row}, a] = {len(kids) - 1}"]
-
-
-def _decorator(program: Program, i: int) -> list[str]:
-    child = program.children[i][0]
-    mapping = {code: code for code in NAMES}
-    for before, after in (NODE_TYPES.get(program.nodes[i].type).status_map or {}).items():
-        mapping[_CODES[before]] = _CODES[after]
-    table = ", ".join(str(mapping[code]) for code in sorted(mapping))
-    return [
-        f"    n{child}(a, t, st, cur, ARRAYS)",
-        f"    res = st[{child}, a]",
-        f"    new = ({table},)[res]",
-        f"    if new != {RUNNING} and res == {RUNNING}:",
-        f"        halt(a, st, {child}, {program.end[child]})",
-        f"    st[{i}, a] = new",
-    ]
-
-
-def _node_lines(
-    program: Program, i: int, kernels: Mapping[int, LeafKernel], layout: Layout, ticks: str
-) -> list[str]:
-    """Node ``i``'s rules, indented by 4, its children as ``n<child>(...)`` lines."""
-    node = program.nodes[i]
-    if not node.is_control:
-        lines = [f"    st[{i}, a] = {_call(kernels[i], layout, i)}"]
-        later = kernels[i].later
-        if later is not None:
-            lines.append(
-                f"    pend[a] = {i}" if i in layout.deferred else f"    {_later(later, layout)}"
-            )
-        return [*lines, f"    {ticks}[a] += 1"]
-    if node.type in ("Sequence", "Fallback"):
-        build = _sequence if node.type == "Sequence" else _selector
-        return build(program, i, layout.memory_rows[i], bool(program.params[i]["memory"]))
-    return _decorator(program, i)
-
-
-_CHILD = re.compile(r"^(\s*)n(\d+)\(a, t, st, cur, ARRAYS\)$")
-_LOCALS = re.compile(r"\b(fresh|start|previous|res|new)\b")
+def _leaf_lines(i: int, kernels: Mapping[int, LeafKernel], layout: Layout, ticks: str) -> list[str]:
+    """Leaf ``i``'s call of its kernel for agent ``a`` (and its ``Later`` step, or its mark in
+    ``pend`` where deferred), then its tick counted."""
+    lines = [f"st[{i}, a] = {_call(kernels[i], layout, i)}"]
+    later = kernels[i].later
+    if later is not None:
+        lines.append(f"pend[a] = {i}" if i in layout.deferred else _later(later, layout))
+    return [*lines, f"{ticks}[a] += 1"]
 
 
 def tree_body(
     program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, indent: str
 ) -> str:
     """The tick of agent ``a`` at iteration ``t`` as straight-line code, indented by
-    ``indent``: each control node is a ``while True:`` block left with ``break`` (its
-    ``return``), children written in place, locals suffixed with the node index. One body
-    with no calls between nodes: numba passes no arrays between functions (which costs
-    reference counting per call and made a tick ten times slower)."""
+    ``indent`` (:func:`pyautonomousagent.bt.tree_source.tree_body`, the node types' rules),
+    after the outboxes are cleared (nothing sent yet this tick)."""
     ticks = layout.array("number_ticks")
-
-    def expand(i: int) -> list[str]:
-        lines = []
-        for line in _node_lines(program, i, kernels, layout, ticks):
-            line = _LOCALS.sub(lambda m: f"{m.group(1)}_{i}", line[4:])
-            child = _CHILD.match(line)
-            if child:
-                lines += [child.group(1) + inner for inner in expand(int(child.group(2)))]
-            else:
-                lines.append(re.sub(r"\breturn\b", "break", line))
-        if not program.nodes[i].is_control:
-            return lines
-        return ["while True:", *("    " + line for line in lines), "    break"]
-
-    clear = [f"o{i}[0, a] = 0.0" for i in layout.outboxes]  # nothing sent yet this tick
-    return "\n".join(indent + line for line in clear + expand(0))
+    clear = "".join(f"{indent}o{i}[0, a] = 0.0\n" for i in layout.outboxes)
+    body = source.tree_body(
+        program, lambda i: _leaf_lines(i, kernels, layout, ticks), layout.memory_rows, indent
+    )
+    return clear + body
 
 
 def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:

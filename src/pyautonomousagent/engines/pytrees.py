@@ -11,6 +11,7 @@ from __future__ import annotations
 import operator
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator, Mapping
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -19,9 +20,11 @@ from py_trees.common import Status
 
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
-from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params
+from pyautonomousagent.bt.nodes import CONTROL, NODE_TYPES
+from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params, may_skip
 from pyautonomousagent.bt.status import invalid_status
 from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, TO_PYTREES, with_scripts
+from pyautonomousagent.engines.pytrees_rules import tick_method
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
 
@@ -101,139 +104,11 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
             self.leaf.halt(self.agent, self.world)
 
 
-class Sequence(py_trees.composites.Sequence):
-    """py_trees' ``Sequence`` (as in py_trees 2.6), ticked and stopped without its debug
-    lines, whose text py_trees builds on every call, logging on or not."""
-
-    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
-        """Tick the children in order from the first (or, with memory, the RUNNING one);
-        stop at the first that does not succeed, halting the later ones (without memory)."""
-        children = self.children
-        start = 0
-        if self.status != Status.RUNNING:
-            self.current_child = children[0] if children else None
-            for child in children:
-                if child.status != Status.INVALID:
-                    child.stop(Status.INVALID)
-            self.initialise()
-        elif self.memory and self.current_child is not None:
-            start = children.index(self.current_child)
-        else:
-            self.current_child = children[0] if children else None
-        for k in range(start, len(children)):
-            child = self.current_child = children[k]
-            for node in child.tick():
-                yield node
-                if node is child and node.status != Status.SUCCESS:
-                    if not self.memory:
-                        _halt(children[k + 1 :])
-                    if node.status != Status.RUNNING:
-                        self.stop(node.status)
-                    else:
-                        self.status = node.status
-                    yield self
-                    return
-        if not children:
-            self.current_child = None
-        self.stop(Status.SUCCESS)
-        yield self
-
-    def stop(self, new_status: Status = Status.INVALID) -> None:
-        """py_trees' ``Composite.stop``: see :func:`_stop_composite`."""
-        _stop_composite(self, new_status)
-
-
-class Selector(py_trees.composites.Selector):
-    """py_trees' ``Selector`` (as in py_trees 2.6), ticked and stopped without its debug
-    lines, as :class:`Sequence`."""
-
-    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
-        """Tick the children in order from the first (or, with memory, the remembered one)
-        until one runs or succeeds; a newly chosen child halts the ones after it."""
-        children = self.children
-        if self.status != Status.RUNNING:
-            self.current_child = children[0] if children else None
-            self.initialise()
-        if not children:
-            self.current_child = None
-            self.stop(Status.FAILURE)
-            yield self
-            return
-        start = 0
-        if self.memory and self.current_child is not None:  # set above unless RUNNING
-            start = children.index(self.current_child)
-            _halt(children[:start])
-        previous = self.current_child
-        for child in children[start:]:
-            for node in child.tick():
-                yield node
-                if node is child and node.status in (Status.RUNNING, Status.SUCCESS):
-                    self.current_child = child
-                    if previous is not child:
-                        _halt(children[children.index(child) + 1 :])
-                    if node.status == Status.SUCCESS:
-                        self.stop(node.status)
-                    else:
-                        self.status = node.status
-                    yield self
-                    return
-        self.stop(Status.FAILURE)
-        self.current_child = children[-1]
-        yield self
-
-    def stop(self, new_status: Status = Status.INVALID) -> None:
-        """py_trees' ``Composite.stop``: see :func:`_stop_composite`."""
-        _stop_composite(self, new_status)
-
-
-def _stop_composite(composite: py_trees.composites.Composite, new_status: Status) -> None:
-    """py_trees' ``Composite.stop``: when halted (INVALID), forget the current child and halt
-    the children; terminate; take the status. Its ``iterator``, which py_trees never reads,
-    is left as it is (py_trees makes a new generator on every stop)."""
-    if new_status == Status.INVALID:
-        composite.current_child = None
-        _halt(composite.children)
-    composite.terminate(new_status)
-    composite.status = new_status
-
-
 def _halt(behaviours: list[py_trees.behaviour.Behaviour]) -> None:
     """Stop (INVALID) each of ``behaviours`` that is not INVALID already."""
     for behaviour in behaviours:
         if behaviour.status != Status.INVALID:
             behaviour.stop(Status.INVALID)
-
-
-class _QuietDecorator(py_trees.decorators.Decorator):
-    """py_trees' ``Decorator.tick`` and ``stop`` without their debug lines (text built on
-    every call) and without the check that ``update`` returned a status, which the
-    status-mapping decorators always do (``list(Status)`` built on every tick)."""
-
-    def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
-        """Initialise unless RUNNING, tick the child, update, stop unless RUNNING, yield."""
-        if self.status != Status.RUNNING:
-            self.initialise()
-        yield from self.decorated.tick()
-        new_status = self.update()
-        if new_status != Status.RUNNING:
-            self.stop(new_status)
-        self.status = new_status
-        yield self
-
-    def stop(self, new_status: Status) -> None:
-        """Terminate; stop the child when halted, or when it still runs; take the status."""
-        self.terminate(new_status)
-        if new_status == Status.INVALID:
-            self.decorated.stop(new_status)
-        if self.decorated.status == Status.RUNNING:
-            self.decorated.stop(Status.INVALID)
-        self.status = new_status
-
-
-def _quiet(cls: type) -> type:
-    """The py_trees decorator class ``cls`` (same name) with :class:`_QuietDecorator`'s
-    ``tick`` and ``stop``."""
-    return type(cls.__name__, (_QuietDecorator, cls), {"__doc__": cls.__doc__})
 
 
 BehaviourFactory = Callable[..., AgentBehaviour]
@@ -273,7 +148,9 @@ def _control_behaviour(
     node: Node, children: list[py_trees.behaviour.Behaviour]
 ) -> py_trees.behaviour.Behaviour:
     """The py_trees composite or decorator for a control node."""
-    return PYTREES_NODES[node.type](node.name, children, control_params(node))
+    if node.type in PYTREES_NODES or NODE_TYPES[node.type].rule is None:
+        return PYTREES_NODES[node.type](node.name, children, control_params(node))
+    return _rule_behaviour(node, children)
 
 
 def _parallel(
@@ -288,28 +165,69 @@ def _parallel(
     return py_trees.composites.Parallel(name, policy, children)
 
 
-def _decorator(cls: type) -> Callable[[str, list[Any], dict[str, Any]], Any]:
-    quiet = _quiet(cls)
-    return lambda name, kids, params: quiet(name, kids[0])
+class _Ruled(py_trees.behaviour.Behaviour):
+    """A node type with a rule, for one agent: its class's ``tick`` is the rule written for
+    its shape (:func:`~pyautonomousagent.engines.pytrees_rules.tick_method`), its memory
+    ``m0``, ``m1``, ... (0 before it is first set)."""
+
+    def update(self) -> Status:  # pragma: no cover - tick() does the work
+        return self.status
+
+    def stop(self, new_status: Status = Status.INVALID) -> None:
+        """Halted (INVALID): the children are halted too; take the status (py_trees' ``stop``
+        without its debug lines, whose text it builds on every call)."""
+        if new_status == Status.INVALID:
+            setattr(self, "current_child", None)  # noqa: B010 - a composite's, py_trees' type
+            _halt(self.children)
+        self.terminate(new_status)
+        self.status = new_status
+
+
+class RuleComposite(_Ruled, py_trees.composites.Composite):
+    """A control node type with a rule, as a py_trees composite."""
+
+    def __init__(self, name: str, children: list[Any], slots: int) -> None:
+        super().__init__(name, children)
+        self.__dict__.update((f"m{slot}", 0) for slot in range(slots))
+
+
+class RuleDecorator(_Ruled, py_trees.decorators.Decorator):
+    """A decorator type with a rule, as a py_trees decorator."""
+
+    def __init__(self, name: str, children: list[Any], slots: int) -> None:
+        super().__init__(name=name, child=children[0])
+        self.__dict__.update((f"m{slot}", 0) for slot in range(slots))
+
+
+@cache
+def _rule_class(
+    type_name: str, kids: int, params: tuple[tuple[str, Any], ...], skippable: tuple[bool, ...]
+) -> type:
+    """The py_trees class of a node type with a rule, for one shape (see ``tick_method``)."""
+    record = NODE_TYPES.get(type_name)
+    base = RuleComposite if record.kind == CONTROL else RuleDecorator
+    tick = tick_method(type_name, kids, params, skippable)
+    return type(type_name, (base,), {"tick": tick, "__doc__": record.tags[0].doc})
+
+
+def _rule_behaviour(node: Node, children: list[Any]) -> py_trees.behaviour.Behaviour:
+    """The py_trees behaviour of a node whose type has a rule."""
+    params = tuple(sorted(control_params(node).items()))
+    skippable = tuple(may_skip(child) for child in node.children)
+    cls = _rule_class(node.type, len(children), params, skippable)
+    behaviour: py_trees.behaviour.Behaviour = cls(node.name, children, NODE_TYPES[node.type].memory)
+    return behaviour
 
 
 _decorators = py_trees.decorators
 #: Node type -> py_trees behaviour, called with (name, children, parameters): one entry per
-#: record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES`.
+#: record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES` without a rule; py_trees' own
+#: node types are py_trees' classes, the others BT.CPP's (``engines/btcpp.py``). A type with
+#: a rule is a class derived from it (:func:`_rule_class`) unless given an entry here.
 PYTREES_NODES: dict[str, Callable[[str, list[Any], dict[str, Any]], Any]] = {
-    "Sequence": lambda name, kids, p: Sequence(name, p["memory"], kids),
-    "Fallback": lambda name, kids, p: Selector(name, p["memory"], kids),
     "PyTreesParallel": _parallel,
     "PyTreesRepeat": lambda name, kids, p: _decorators.Repeat(name, kids[0], p["num_success"]),
     "PyTreesRetry": lambda name, kids, p: _decorators.Retry(name, kids[0], p["num_failures"]),
-    "Inverter": _decorator(_decorators.Inverter),
-    "ForceSuccess": _decorator(_decorators.FailureIsSuccess),
-    "ForceFailure": _decorator(_decorators.SuccessIsFailure),
-    "KeepRunningUntilFailure": _decorator(_decorators.SuccessIsRunning),
-    "FailureIsRunning": _decorator(_decorators.FailureIsRunning),
-    "RunningIsFailure": _decorator(_decorators.RunningIsFailure),
-    "RunningIsSuccess": _decorator(_decorators.RunningIsSuccess),
-    "PassThrough": _decorator(_decorators.PassThrough),
     **BTCPP_BEHAVIOURS,
 }
 

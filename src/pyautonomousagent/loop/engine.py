@@ -11,6 +11,7 @@ import numpy as np
 from pyautonomousagent.bt.leaf import check_leaves, make_leaf
 from pyautonomousagent.bt.program import Program, compile_tree
 from pyautonomousagent.bt.spec import Node, TreeError, check_entries
+from pyautonomousagent.bt.tree_source import memory_rows, memory_size
 from pyautonomousagent.kernels import LeafKernel, Sends, SensorKernel
 from pyautonomousagent.loop.layout import Fused, Layout, Messaging, deferrable
 from pyautonomousagent.loop.source import Stages, swarm_state_names
@@ -54,17 +55,16 @@ class LoopEngine:
                 if kernel is None:
                     raise TreeError(f"leaf {node.name!r} ({node.type}) has no kernel")
                 self.kernels[i] = kernel
-        memory = [i for i, n in enumerate(self.program.nodes) if n.type in ("Sequence", "Fallback")]
         senders = tuple(i for i, kernel in sorted(self.kernels.items()) if kernel.sends)
         self.layout = Layout(
             tuple(swarm.columns) + tuple(swarm.blackboard),
-            {i: k for k, i in enumerate(memory)},
+            memory_rows(self.program),
             senders,
             deferrable(self.program, self.kernels),
         )
         self.pending = np.full(swarm.size, -1, dtype=np.int32)  # deferred Later steps
         self.status = np.zeros((len(self.program.nodes), swarm.size), dtype=np.int8)
-        self.current = np.full((len(memory), swarm.size), -1, dtype=np.int32)
+        self.current = np.zeros((memory_size(self.program), swarm.size), dtype=np.int32)
         self.outboxes = {i: np.zeros((3 + len(self._sends(i).fields), swarm.size)) for i in senders}
         self.arrays = [{**swarm.columns, **swarm.blackboard}[k] for k in self.layout.names]
         self.arrays += list(self.outboxes.values())

@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from pyautonomousagent.bt.nodes import NODE_TYPES
 from pyautonomousagent.bt.program import Program
+from pyautonomousagent.bt.tree_source import node_record
 from pyautonomousagent.kernels import ITERATION, HandlerKernel, LeafKernel, SensorKernel
 
 
@@ -53,7 +53,7 @@ class Layout:
 
     Attributes:
         names: the arrays ``c0, c1, ...``: swarm columns, then blackboard keys.
-        memory_rows: node index -> its row of ``cur`` (Sequence and Fallback nodes).
+        memory_rows: node index -> its first row of ``cur`` (``bt.tree_source.memory_rows``).
         outboxes: the nodes whose leaves send messages (their kernels' ``Sends``), in node
             order; each has an outbox ``o<node>`` (see :class:`~pyautonomousagent.kernels.Sends`).
         deferred: the leaves whose ``Later`` step is done for all agents after the tree
@@ -99,20 +99,14 @@ class Layout:
 
 def deferrable(program: Program, kernels: Mapping[int, LeafKernel]) -> tuple[int, ...]:
     """The leaves with a ``Later`` step that no node ticked after them can see: every
-    ancestor returns at once when its child is RUNNING (a Sequence, a Fallback, or a
-    decorator that maps RUNNING to RUNNING), so the tick ends with the leaf."""
+    ancestor returns at once when its child is RUNNING (its record ``yields``), so the tick
+    ends with the leaf."""
     deferred = []
     for i, kernel in sorted(kernels.items()):
-        if kernel.later is None:
-            continue
-        up, safe = int(program.parent[i]), True
-        while up >= 0 and safe:
-            node = program.nodes[up]
-            if node.type not in ("Sequence", "Fallback"):
-                status_map = NODE_TYPES.get(node.type).status_map or {}
-                safe = status_map.get("RUNNING", "RUNNING") == "RUNNING"
+        up = int(program.parent[i])
+        while up >= 0 and node_record(program, up).yields:
             up = int(program.parent[up])
-        if safe:
+        if kernel.later is not None and up < 0:
             deferred.append(i)
     return tuple(deferred)
 
