@@ -1,7 +1,9 @@
 """Two checkouts of the project measured side by side: ``pyaa bench`` of each, alternated.
 
 The machine is shared and noisy, so the two revisions' runs alternate (A B A B ...) and each
-case keeps its best loop time and its peak memory; the table gives B's ratio to A's. Each run
+case keeps its best and its median loop time and its peak memory; the table gives B's ratio
+to A's (of a sub-second loop, one lucky run can move the best by 10 % or more: the median of
+many rounds is the steadier figure). Each run
 is ``python -m pyautonomousagent.cli bench ... --json`` with ``PYTHONPATH=<checkout>/src``,
 so both use this interpreter's packages (numba, NumPy) and differ only in the project's code.
 
@@ -9,7 +11,7 @@ so both use this interpreter's packages (numba, NumPy) and differ only in the pr
         --iterations 4000 --engines batched,compiled
 
 Prints one line per case: scenario, engine, agents x iterations, record rate, A's and B's best
-loop seconds and B/A, A's and B's peak MB and B/A.
+loop seconds and B/A, their median loop seconds and B/A, A's and B's peak MB and B/A.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import sys
 from collections import defaultdict
@@ -63,13 +66,16 @@ def main() -> None:
                 loops[side][case(row)].append(row["loop_s"])
                 peaks[side][case(row)].append(row["peak_mb"])
             print(f"# round {r + 1}/{args.repeat}: {side} done", file=sys.stderr, flush=True)
-    print("scenario engine agents x iterations every | loop s: a  b  b/a | peak MB: a  b  b/a")
+    print("scenario engine agents x iterations every | best loop s: a  b  b/a "
+          "| median loop s: a  b  b/a | peak MB: a  b  b/a")  # fmt: skip
     for key in loops["a"]:
         la, lb = min(loops["a"][key]), min(loops["b"][key])
+        ma, mb = statistics.median(loops["a"][key]), statistics.median(loops["b"][key])
         pa, pb = max(peaks["a"][key]), max(peaks["b"][key])
         scenario, engine, agents, iterations, every = key
         print(f"{scenario} {engine} {agents} x {iterations} {every} | {la:.3f} {lb:.3f} "
-              f"{lb / la:.3f} | {pa:.0f} {pb:.0f} {pb / pa:.3f}")  # fmt: skip
+              f"{lb / la:.3f} | {ma:.3f} {mb:.3f} {mb / ma:.3f} | {pa:.0f} {pb:.0f} "
+              f"{pb / pa:.3f}")  # fmt: skip
 
 
 if __name__ == "__main__":
