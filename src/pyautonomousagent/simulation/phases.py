@@ -138,10 +138,9 @@ def account_fused(
     if collect is not None:
         collect(sim, start + count)
     sim.world.iteration = now
-    recorder = sim.recorder
-    for t in range(start + 1, start + count + 1):
-        if recorder.due(t):
-            recorder.iterations[recorder.count] = t
-            recorder.count += 1
+    recorder, every = sim.recorder, sim.recorder.every
+    due = np.arange((start // every + 1) * every, start + count + 1, every)  # Recorder.due's
+    recorder.iterations[recorder.count : recorder.count + due.size] = due
+    recorder.count += due.size
     for listener in recorder.listeners:  # e.g. the states written while the run goes
         listener(recorder.count)
