@@ -314,7 +314,7 @@ class GpuEngine(LoopEngine):
         kernels = {name: load_kernel(source, name) for name in names}
         common = [name for line in fused_parameters(layout, sensors) for name in line]
         xy = (common.index(layout.array("x")), common.index(layout.array("y")))
-        self._messages = DeviceMessages(kernels, messaging, xy, self.swarm.size)
+        self._messages = DeviceMessages(kernels, messaging, common, xy, self.swarm.size)
         return source
 
     @staticmethod
@@ -462,9 +462,7 @@ class GpuEngine(LoopEngine):
             launch(start, count, every, row0, *values)
             done = count
         else:
-            lines = fused_parameters(self.layout, fused.sensors)
-            common = [name for line in lines for name in line]  # the kernels' first ones
-            values = ordered(common, arguments, "the message kernels")
+            values = ordered(self._messages.common, arguments, "the message kernels")
             done = self._message_loop(sim, fresh, tuple(values), count, row0)
         self._groups.launched(slot, start, done, fused.sensors, time.perf_counter() - began)
         self._synced = start + done  # the clock: the simulation advances it by ``done``

@@ -72,8 +72,9 @@ class DeviceMessages:
             ``handle_all_<k>``, ``handle_sender_<k>``, ``handle_each_<k>``,
             ``handle_near_<k>``, ``flag_<k>``, ``scatter_<k>``).
         messaging: the tree's message types and their handlers.
-        xy: where the agents' x and y arrays are among the kernels' common arguments
-            (``loop.source.fused_parameters``), found by name.
+        common: the names of the kernels' common parameters, in order
+            (``loop.source.fused_parameters``, flattened).
+        xy: where the agents' x and y arrays are among them, found by name.
         n: agents.
     """
 
@@ -89,9 +90,11 @@ class DeviceMessages:
     ROOM = 8
 
     def __init__(
-        self, kernels: dict[str, Any], messaging: Messaging, xy: tuple[int, int], n: int
-    ) -> None:
+        self, kernels: dict[str, Any], messaging: Messaging, common: list[str],
+        xy: tuple[int, int], n: int,
+    ) -> None:  # fmt: skip
         self.kernels, self.messaging, self.n = kernels, messaging, n
+        self.common = common
         self.xy = xy  # where x and y are in the kernels' common arguments (found by name)
         types = len(messaging.types)
         self.width = [sum(1 for kind, _ in messaging.senders.values() if kind == k)
