@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from pyautonomousagent.bt.spec import leaf, reactive_fallback, sequence
-from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
+from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SKIPPED, SUCCESS
 from pyautonomousagent.render.btlog import (
     MAGIC,
     RECORD,
@@ -158,3 +158,14 @@ def test_write_btlog_refuses_another_ending(tmp_path, ours):
     _, recorder = ours
     with pytest.raises(ValueError, match=r"\.btlog"):
         write_btlog(tmp_path / "x.log", tiny_tree(), recorder.iterations, recorder.trace(0))
+
+
+def test_every_status_has_its_behaviortree_cpp_code():
+    # A skipped node (a _skipIf, a RunOnce that ran) is logged as BT.CPP's SKIPPED, 4.
+    assert set(TO_BTCPP) == set(NAMES)
+    assert sorted(TO_BTCPP.values()) == list(range(len(NAMES)))
+    trace = np.array([[SUCCESS, INVALID], [SKIPPED, RUNNING], [SKIPPED, FAILURE]], np.int8)
+    log = transitions(np.array([0, 1, 2]), trace, usec_per_iteration=10)
+    assert log["usec"].tolist() == [0, 10, 10, 20]
+    assert log["uid"].tolist() == [1, 1, 2, 2]
+    assert log["status"].tolist() == [2, 4, 1, 3]

@@ -25,6 +25,10 @@ NAMES = {
     SKIPPED: "SKIPPED",
 }
 
+#: Each code's value in BehaviorTree.CPP 4's ``NodeStatus`` (its ``.btlog`` files): IDLE 0
+#: (our INVALID), RUNNING 1, SUCCESS 2, FAILURE 3, SKIPPED 4.
+BTCPP_CODES = {INVALID: 0, RUNNING: 1, SUCCESS: 2, FAILURE: 3, SKIPPED: 4}
+
 
 def status_if(condition: Any, if_true: int, if_false: int) -> Any:
     """``if_true`` where ``condition`` holds, else ``if_false``: an int, or an int8 array."""

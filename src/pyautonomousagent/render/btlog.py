@@ -30,7 +30,7 @@ import numpy as np
 
 from pyautonomousagent.bt.files import to_text_format
 from pyautonomousagent.bt.spec import Node
-from pyautonomousagent.bt.status import FAILURE, INVALID, RUNNING, SUCCESS
+from pyautonomousagent.bt.status import BTCPP_CODES, INVALID
 
 MAGIC = b"BTCPP4-FileLogger2"
 """The file's first bytes."""
@@ -38,10 +38,8 @@ PROTOCOL = 1
 """The protocol byte after the magic."""
 RECORD = 9
 """Bytes per transition record."""
-IDLE, BT_RUNNING, BT_SUCCESS, BT_FAILURE, SKIPPED = range(5)
-"""BehaviorTree.CPP 4's ``NodeStatus`` codes."""
-TO_BTCPP = {INVALID: IDLE, RUNNING: BT_RUNNING, SUCCESS: BT_SUCCESS, FAILURE: BT_FAILURE}
-"""Our status code -> BehaviorTree.CPP's."""
+TO_BTCPP = BTCPP_CODES
+"""Our status code -> BehaviorTree.CPP 4's ``NodeStatus`` code, for every code."""
 USEC_PER_ITERATION = 100_000
 """Default log time of one iteration: 0.1 s, so Groot2 replays 10 iterations a second."""
 
