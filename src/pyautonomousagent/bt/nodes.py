@@ -13,13 +13,18 @@ is implemented by hand under its name in the py_trees and batched engines
 Type names are BehaviorTree.CPP's tags where BT.CPP has the node; py_trees' own decorators
 keep their py_trees names, and py_trees' Repeat/Retry/Parallel are ``PyTrees...``.
 Adding a node type: register a record here with its rule, and its tests.
+
+BehaviorTree.CPP's SKIPPED lives here too, beside its code in
+:mod:`~pyautonomousagent.bt.status`: the pre-conditions that give it (:data:`PRE_CONDITIONS`),
+the records that return it of themselves (``skipped_when``) or pass it on (``skips``), and
+the checks built on them (:func:`may_skip`, :func:`skip_problem`). No other module names it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 from pyautonomousagent.bt.rules import Ops, Rule
 from pyautonomousagent.bt.script import ScriptError, parse
@@ -677,3 +682,84 @@ add(NodeType("PyTreesParallel", CONTROL, 0, None, (
     Param("synchronise", bool, True, boolean),
 ), _tag("PyTreesParallel", "", "py_trees Parallel: ticks all children; policy SuccessOnAll "
         "or SuccessOnOne"), builtin=False))  # fmt: skip
+
+
+# -- SKIPPED: what may return it, and which node types may take a child that does -------------
+#: BehaviorTree.CPP's pre-condition attributes in the order it checks them: (attribute, the
+#: status, a code of :mod:`pyautonomousagent.bt.status`, the node gets without a tick, the
+#: script's truth value that decides it, whether it is also asked of a RUNNING node, which
+#: is then halted first). Asked of a node that does not resume (not RUNNING), in order.
+PRE_CONDITIONS = (
+    ("_failureIf", FAILURE, True, False),
+    ("_successIf", SUCCESS, True, False),
+    ("_skipIf", SKIPPED, True, False),
+    ("_while", SKIPPED, False, True),
+)
+
+#: Scripting attributes that may make a node SKIPPED (BehaviorTree.CPP's pre-conditions).
+SKIPPING = tuple(key for key, status, *_ in PRE_CONDITIONS if status == SKIPPED)
+
+
+class TreeNode(Protocol):
+    """What the skip checks read of a tree node (a :class:`~pyautonomousagent.bt.spec.Node`)."""
+
+    @property
+    def type(self) -> str: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def is_control(self) -> bool: ...
+    @property
+    def params(self) -> Mapping[str, Any]: ...
+    @property
+    def scripts(self) -> Mapping[str, str]: ...
+    @property
+    def children(self) -> Sequence[TreeNode]: ...
+
+
+def may_skip(node: TreeNode) -> bool:
+    """Whether ``node`` may return SKIPPED: it has ``_skipIf`` or ``_while``, its record says
+    that it may of itself with its parameters (``skipped_when``: RunOnce's ``then_skip``), or
+    it is of a node type that passes SKIPPED on (its record ``skips``) with a child that may
+    (conservatively: a Sequence is SKIPPED only when all children are)."""
+    if any(key in node.scripts for key in SKIPPING):
+        return True
+    if not node.is_control:
+        return False
+    record = NODE_TYPES.get(node.type)
+    params = {**record.defaults(), **node.params}
+    if record.skipped_when is not None and record.skipped_when(params):
+        return True
+    return record.skips and any(may_skip(child) for child in node.children)
+
+
+def _skip_help() -> tuple[str, str]:
+    """What may make a node SKIPPED (the pre-conditions, the node types that may return it of
+    themselves) and the node types that say what a SKIPPED child does, for messages."""
+    records = NODE_TYPES.values()
+    causes = [*SKIPPING, *(r.name for r in records if r.skipped_when is not None)]
+    takers = [r.name for r in records if r.skips and r.status_map is None]
+    return ", ".join(causes), ", ".join(takers) + " or status-mapping decorator"
+
+
+def skip_problem(node: TreeNode) -> str | None:
+    """Why control node ``node`` cannot have its children, or None when it can: a child may
+    be SKIPPED and ``node``'s type does not say what a skipped child does (its record's
+    ``skips``), or ``node`` has a pre-condition or ``_onHalted``: BT.CPP leaves a node whose
+    own tick returned SKIPPED RUNNING, which no engine here mirrors."""
+    child = next((c for c in node.children if may_skip(c)), None)
+    if child is None:
+        return None
+    if not NODE_TYPES.get(node.type).skips:
+        causes, takers = _skip_help()
+        return (
+            f"{node.type} {node.name!r} cannot take child {child.name!r}, which may be "
+            f"SKIPPED ({causes}): put it under a {takers}"
+        )
+    held = sorted(set(node.scripts) - {"_onSuccess", "_onFailure", "_post"})
+    if held:
+        return (
+            f"{node.type} {node.name!r} may be SKIPPED through child {child.name!r}, so it "
+            f"cannot have {', '.join(held)} (BehaviorTree.CPP then keeps it RUNNING)"
+        )
+    return None

@@ -41,7 +41,7 @@ class Ops(Protocol):
     def params(self) -> Mapping[str, Any]: ...
 
     def skippable(self, k: int) -> bool:
-        """Whether child ``k`` may be SKIPPED (fixed when the tree is built: ``spec.may_skip``);
+        """Whether child ``k`` may be SKIPPED (fixed when the tree is built: ``nodes.may_skip``);
         a rule keeps BT.CPP's bookkeeping of skipped children only where one may be."""
 
     def status(self) -> Any:

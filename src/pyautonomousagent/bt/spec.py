@@ -19,9 +19,8 @@ from collections.abc import Container, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType
+from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType, skip_problem
 from pyautonomousagent.bt.nodes import BlackboardRef as BlackboardRef
-from pyautonomousagent.bt.status import FAILURE, SKIPPED, SUCCESS
 
 PARALLEL_POLICIES = ("SuccessOnAll", "SuccessOnOne")
 
@@ -140,7 +139,9 @@ def check_structure(root: Node) -> None:
         if count < record.least or (record.most is not None and count > record.most):
             raise TreeError(f"{node.type} {node.name!r} needs {_arity(record)}, has {count}")
         control_params(node)
-        _check_skipped_children(node)
+        problem = skip_problem(node)
+        if problem:
+            raise TreeError(problem)
         if node.type == "Sequence" and node.params.get("memory") is False:
             asynchronous = sum(child.type == "AsyncSequence" for child in node.children)
             if asynchronous > 1:
@@ -148,68 +149,6 @@ def check_structure(root: Node) -> None:
                     f"reactive sequence {node.name!r} has {asynchronous} AsyncSequence children; "
                     "BehaviorTree.CPP allows one"
                 )
-
-
-#: BehaviorTree.CPP's pre-condition attributes in the order it checks them: (attribute, the
-#: status, a code of :mod:`pyautonomousagent.bt.status`, the node gets without a tick, the
-#: script's truth value that decides it, whether it is also asked of a RUNNING node, which
-#: is then halted first). Asked of a node that does not resume (not RUNNING), in order.
-PRE_CONDITIONS = (
-    ("_failureIf", FAILURE, True, False),
-    ("_successIf", SUCCESS, True, False),
-    ("_skipIf", SKIPPED, True, False),
-    ("_while", SKIPPED, False, True),
-)
-
-#: Scripting attributes that may make a node SKIPPED (BehaviorTree.CPP's pre-conditions).
-SKIPPING = tuple(key for key, status, *_ in PRE_CONDITIONS if status == SKIPPED)
-
-
-def may_skip(node: Node) -> bool:
-    """Whether ``node`` may return SKIPPED: it has ``_skipIf`` or ``_while``, its record says
-    that it may of itself with its parameters (``skipped_when``: RunOnce's ``then_skip``), or
-    it is of a node type that passes SKIPPED on (its record ``skips``) with a child that may
-    (conservatively: a Sequence is SKIPPED only when all children are)."""
-    if any(key in node.scripts for key in SKIPPING):
-        return True
-    if not node.is_control:
-        return False
-    record = node_type(node.type)
-    params = {**record.defaults(), **node.params}
-    if record.skipped_when is not None and record.skipped_when(params):
-        return True
-    return record.skips and any(may_skip(child) for child in node.children)
-
-
-def _skip_help() -> tuple[str, str]:
-    """What may make a node SKIPPED (the pre-conditions, the node types that may return it of
-    themselves) and the node types that say what a SKIPPED child does, for messages."""
-    records = NODE_TYPES.values()
-    causes = [*SKIPPING, *(r.name for r in records if r.skipped_when is not None)]
-    takers = [r.name for r in records if r.skips and r.status_map is None]
-    return ", ".join(causes), ", ".join(takers) + " or status-mapping decorator"
-
-
-def _check_skipped_children(node: Node) -> None:
-    """TreeError if a child of ``node`` may be SKIPPED and ``node``'s type does not say what
-    a skipped child does (its record's ``skips``), or
-    ``node`` has a pre-condition or ``_onHalted``: BT.CPP leaves a node whose own tick
-    returned SKIPPED RUNNING, which no engine here mirrors."""
-    child = next((c for c in node.children if may_skip(c)), None)
-    if child is None:
-        return
-    if not node_type(node.type).skips:
-        causes, takers = _skip_help()
-        raise TreeError(
-            f"{node.type} {node.name!r} cannot take child {child.name!r}, which may be "
-            f"SKIPPED ({causes}): put it under a {takers}"
-        )
-    held = sorted(set(node.scripts) - {"_onSuccess", "_onFailure", "_post"})
-    if held:
-        raise TreeError(
-            f"{node.type} {node.name!r} may be SKIPPED through child {child.name!r}, so it "
-            f"cannot have {', '.join(held)} (BehaviorTree.CPP then keeps it RUNNING)"
-        )
 
 
 def entries_read(root: Node) -> dict[str, str]:

@@ -13,9 +13,8 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from typing import Any
 
-from pyautonomousagent.bt.nodes import NODE_TYPES
+from pyautonomousagent.bt.nodes import NODE_TYPES, may_skip
 from pyautonomousagent.bt.program import Program
-from pyautonomousagent.bt.spec import may_skip
 
 
 class Source:
@@ -82,7 +81,7 @@ class CodeOps:
     lines (:attr:`lines`, indented by block), a ``let`` kept in a local, a ``pick``, and a
     ``when`` block opened by :meth:`_open` (a block left empty is dropped: a condition has
     no side effect); a static condition must hold. ``skippable``: per child, may it be
-    SKIPPED (``spec.may_skip``)."""
+    SKIPPED (``nodes.may_skip``)."""
 
     def __init__(self, kids: int, params: Mapping[str, Any], skippable: Sequence[bool]) -> None:
         self.kids, self.params, self._skippable = kids, params, tuple(skippable)

@@ -16,8 +16,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType
-from pyautonomousagent.bt.spec import PRE_CONDITIONS, Node
+from pyautonomousagent.bt.nodes import NODE_TYPES, PRE_CONDITIONS, NodeType
+from pyautonomousagent.bt.spec import Node
 
 
 @dataclass(frozen=True)
@@ -87,7 +87,7 @@ UNSUPPORTED: dict[str, str] = {
 }  # fmt: skip
 
 #: BehaviorTree.CPP's scripting attributes, any node may have them (see Node.scripts): the
-#: pre-conditions (:data:`~pyautonomousagent.bt.program.PRE_CONDITIONS`), then the others.
+#: pre-conditions (:data:`~pyautonomousagent.bt.nodes.PRE_CONDITIONS`), then the others.
 SCRIPT_ATTRIBUTES = (
     *(pre[0] for pre in PRE_CONDITIONS),
     "_onSuccess",

@@ -16,9 +16,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from pyautonomousagent.bt.nodes import NODE_TYPES
+from pyautonomousagent.bt.nodes import NODE_TYPES, may_skip
 from pyautonomousagent.bt.program import Program
-from pyautonomousagent.bt.spec import may_skip
 from pyautonomousagent.bt.tree_source import UNROLLED, CodeOps, Source, source_text
 
 

@@ -23,27 +23,25 @@ from py_trees.behaviour import Behaviour
 from py_trees.common import Status
 
 from pyautonomousagent.bt import status as codes
+from pyautonomousagent.bt.nodes import PRE_CONDITIONS as PRE_CONDITION_CODES
 from pyautonomousagent.bt.program import case_values
 from pyautonomousagent.bt.script import parse
 from pyautonomousagent.bt.script_leaves import iterations
-from pyautonomousagent.bt.spec import PRE_CONDITIONS as PRE_CONDITION_CODES
 from pyautonomousagent.bt.spec import parallel_threshold
 
+#: The statuses of :mod:`pyautonomousagent.bt.status` that py_trees lacks (BehaviorTree.CPP's
+#: SKIPPED), as one Enum whose members are named and valued as in ``NAMES``: a py_trees
+#: node's ``status`` where it has one of them (neither RUNNING nor INVALID to py_trees).
+BeyondPyTrees = Enum(  # type: ignore[misc]  # its members come from NAMES
+    "BeyondPyTrees",
+    {name: name for name in codes.NAMES.values() if name not in Status.__members__},
+)
 
-class Skipped(Enum):
-    """BehaviorTree.CPP's SKIPPED, a status py_trees lacks: a py_trees node's ``status``
-    where it was skipped (it is neither RUNNING nor INVALID to py_trees)."""
-
-    SKIPPED = "SKIPPED"
-
-
-#: Status codes (:mod:`pyautonomousagent.bt.status`) as py_trees' statuses, and back.
+#: Status codes (:mod:`pyautonomousagent.bt.status`) as py_trees' statuses, and back: a code
+#: whose name py_trees has maps to that member of ``Status``, any other to ``BeyondPyTrees``.
 TO_PYTREES: dict[int, Any] = {
-    codes.INVALID: Status.INVALID,
-    codes.SUCCESS: Status.SUCCESS,
-    codes.FAILURE: Status.FAILURE,
-    codes.RUNNING: Status.RUNNING,
-    codes.SKIPPED: Skipped.SKIPPED,
+    code: Status[name] if name in Status.__members__ else BeyondPyTrees[name]
+    for code, name in codes.NAMES.items()
 }
 FROM_PYTREES = {v: k for k, v in TO_PYTREES.items()}
 
@@ -307,7 +305,7 @@ class Switch(py_trees.composites.Composite):
         yield self
 
 
-#: :data:`~pyautonomousagent.bt.PRE_CONDITION_CODES` with py_trees' statuses.
+#: :data:`~pyautonomousagent.bt.nodes.PRE_CONDITIONS` with py_trees' statuses.
 PRE_CONDITIONS: tuple[tuple[str, Any, bool, bool], ...] = tuple(
     (key, TO_PYTREES[code], *rest) for key, code, *rest in PRE_CONDITION_CODES
 )

@@ -20,8 +20,8 @@ from py_trees.common import Status
 
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
-from pyautonomousagent.bt.nodes import CONTROL, NODE_TYPES
-from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params, may_skip
+from pyautonomousagent.bt.nodes import CONTROL, NODE_TYPES, may_skip
+from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params
 from pyautonomousagent.bt.status import invalid_status
 from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, TO_PYTREES, with_scripts
 from pyautonomousagent.engines.pytrees_rules import tick_method
