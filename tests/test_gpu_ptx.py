@@ -91,12 +91,16 @@ RECORD = textwrap.dedent(
     """
 )
 
+#: A patrol tree with nodes of six children (halted in a loop: ``tree_source.UNROLLED``).
+WIDE = str(Path(__file__).parent / "data" / "trees" / "wide_patrol.yaml")
+
 #: (scenario, overrides, whether its tree sends messages): every mission the GPU engine
 #: runs. (A run launches every kernel of its generated module whatever the datalink's range,
 #: which the test checks, with the same argument types: one range each is enough.)
 CASES = [
     ("patrol", {"agents": 5, "iterations": 20}, False),
     ("patrol-3d", {"agents": 5, "iterations": 20}, False),
+    ("patrol", {"agents": 5, "iterations": 20, "tree": WIDE}, False),  # halts in a loop
     ("gathering", {"agents": 40, "iterations": 30, "gathering_iteration": 10}, True),
     ("gathering-3d", {"agents": 20, "iterations": 30, "gathering_iteration": 10}, True),
     ("radiation-search", {"agents": 20, "iterations": 40}, True),

@@ -153,3 +153,35 @@ def test_a_node_with_many_children_is_written_as_loops_for_the_batched_engine() 
             assert len(rolled) < len(ops.lines) / 2
             sizes.append(len(rolled))
     assert sizes[: len(sizes) // 2] == sizes[len(sizes) // 2 :]  # the same, whatever the width
+
+
+@pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
+def test_nodes_with_many_children_give_the_batched_engines_statuses_on_compiled() -> None:
+    """Children halted by more than ``UNROLLED`` a time are one loop over (child, end) pairs
+    in the compiled engine's code (so that its code grows linearly with the children: a tree
+    of eight 25-child nodes once grew numba's compile past 8 GB), with the same statuses."""
+    from pyautonomousagent.bt.program import compile_tree
+    from pyautonomousagent.bt.tree_source import UNROLLED, tree_body
+
+    leaves = iter(f"m{k}" for k in range(100))
+
+    def kids(skipping: bool = False) -> tuple[Node, ...]:
+        made = [from_entry(next(leaves)) for _ in range(UNROLLED + 2)]
+        if skipping:
+            made[1] = Node("RunOnce", f"once_{next(leaves)}", (made[1],), {})
+        return tuple(made)
+
+    tree = Node("Sequence", "root", (
+        Node("Fallback", "f", kids(), {"memory": False}),
+        Node("Sequence", "s", kids(True), {"memory": False}),
+        Node("Fallback", "fm", kids(True), {"memory": True}),
+    ), {"memory": False})  # fmt: skip
+    check_structure(tree)
+    body = tree_body(compile_tree(tree), lambda i: [f"st[{i}, a] = 1"], {}, "")
+    assert body.count("for span_") >= 3  # each wide node halts its later children in a loop
+    want, got = _statuses("batched", tree), _statuses("compiled", tree)
+    names = [node.name for node in tree.walk()]
+    for t, (a, b) in enumerate(zip(want, got, strict=True), start=1):
+        differ = np.argwhere(a != b)
+        assert not differ.size, f"tick {t}: node {names[differ[0][0]]}, agent {differ[0][1]}"
+    assert len({int(c) for tick in want for c in tick.ravel()}) == 5  # every status seen

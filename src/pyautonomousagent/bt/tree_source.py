@@ -170,8 +170,14 @@ class SourceOps(CodeOps):
         return Source(f"res_{self.i}")
 
     def halt(self, first: int, last: int | None = None) -> None:
-        for child in self.children[first:last]:
-            self._emit(f"halt(a, st, {child}, {self.program.end[child]})")
+        spans = [(child, self.program.end[child]) for child in self.children[first:last]]
+        if len(spans) > UNROLLED:  # a loop over (child, end) pairs: linear code
+            pairs = ", ".join(f"({child}, {end})" for child, end in spans)
+            self._emit(f"for span_{self.i} in ({pairs},):")
+            self._emit(f"    halt(a, st, span_{self.i}[0], span_{self.i}[1])")
+            return
+        for child, end in spans:
+            self._emit(f"halt(a, st, {child}, {end})")
 
     def lookup(self, table: tuple[int, ...], value: Any) -> Source:
         return Source(f"({', '.join(map(str, table))},)[{source_text(value)}]")

@@ -146,43 +146,53 @@ def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, inde
     return _later_pass(kernels, layout, agents, _control(layout, indent + " " * 4), indent)
 
 
-def block_function(
-    program: Program,
-    kernels: Mapping[int, LeafKernel],
-    layout: Layout,
-    sensors: SensorKernel,
-    parallel: bool,
+def group_function(
+    program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, sensors: SensorKernel
 ) -> str:
-    """``block_serial``/``block_parallel(t0, count, every, row0, chunk, st, cur, pend, kf, ki,
-    arrays..., us, uh, uc, records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
-    max_speed, speed_step, turn_step, sensor state...) -> count``: iterations ``t0 + 1 ..
-    t0 + count`` of Phases 2 (sensors, motion), 3, 4 and 6 for every agent, ``chunk`` agents
-    at a time (no agent hears another: the tree sends no message); the record of iteration
-    ``t`` goes to row ``t // every - row0`` of the record arrays (a block of record rows,
-    :mod:`~pyautonomousagent.record_blocks`). ``us``, ``uh``, ``uc``: the
-    control signals u_v, u_a and (3-D drone) u_w, shape (N,)."""
+    """``block_group(first, last, t0, count, every, row0, st, cur, pend, kf, ki, arrays...,
+    us, uh, uc, records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed,
+    speed_step, turn_step, sensor state...)``: iterations ``t0 + 1 .. t0 + count`` of Phases
+    2 (sensors, motion), 3, 4 and 6 for agents ``first`` to ``last`` (no agent hears another:
+    the tree sends no message); the record of iteration ``t`` goes to row ``t // every -
+    row0`` of the record arrays (a block of record rows,
+    :mod:`~pyautonomousagent.record_blocks`). ``us``, ``uh``, ``uc``: the control signals
+    u_v, u_a and (3-D drone) u_w, shape (N,). One function that both fused variants call
+    (:func:`block_function`): the tree is compiled once, not once per variant (numba's
+    parallel passes over a loop that holds the whole tree took three times the serial
+    compile, and grew faster than the tree)."""
     store = "\n".join(
-        f"                r{j}[row, first:last] = c{j}[first:last]"
-        for j in range(len(layout.names))
+        f"            r{j}[row, first:last] = c{j}[first:last]" for j in range(len(layout.names))
     )
+    return f"""
+@njit(cache=True, nogil=True, error_model="numpy")
+def block_group(first, last, t0, count, every, row0, {fused_arguments(layout, sensors)}):
+    for t in range(t0 + 1, t0 + count + 1):
+        for a in range(U(first), U(last)):
+{_motion(layout, sensors, " " * 12)}
+{tree_body(program, kernels, layout, " " * 12)}
+{_phase4(kernels, layout, "range(U(first), U(last))", " " * 8)}
+        if t % every == 0:  # a contiguous run of each record row, column by column
+            row = t // every - row0
+{store}
+            for a in range(U(first), U(last)):
+                record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)
+"""
+
+
+def block_function(layout: Layout, sensors: SensorKernel, parallel: bool) -> str:
+    """``block_serial``/``block_parallel(t0, count, every, row0, chunk, <block_group's
+    parameters after row0>) -> count``: :func:`group_function`'s ``block_group`` for every
+    group of ``chunk`` agents, the groups shared among the cores in the parallel one."""
+    arguments = fused_arguments(layout, sensors)
     name = "block_parallel" if parallel else "block_serial"
     return f"""
 @njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
-def {name}(t0, count, every, row0, chunk, {fused_arguments(layout, sensors)}):
+def {name}(t0, count, every, row0, chunk, {arguments}):
     n = {layout.array("x")}.shape[0]
     for group in prange((n + chunk - 1) // chunk):
         first = group * chunk
         last = min(n, first + chunk)
-        for t in range(t0 + 1, t0 + count + 1):
-            for a in range(U(first), U(last)):
-{_motion(layout, sensors, " " * 16)}
-{tree_body(program, kernels, layout, " " * 16)}
-{_phase4(kernels, layout, "range(U(first), U(last))", " " * 12)}
-            if t % every == 0:  # a contiguous run of each record row, column by column
-                row = t // every - row0
-{store}
-                for a in range(U(first), U(last)):
-                    record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)
+        block_group(first, last, t0, count, every, row0, {arguments})
     return count
 """
 
@@ -257,13 +267,25 @@ def _groups(body: str, indent: str) -> str:
     return "\n".join(indent + line for line in head.splitlines()) + "\n" + body
 
 
+def tick_group_function(
+    program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, sensors: SensorKernel
+) -> str:
+    """``tick_group(first, last, t, <the fused parameters>)``: Phases 3 and 4 of agents
+    ``first`` to ``last`` at iteration ``t``, the one function both variants of
+    :func:`stepwise_block_function` call (the tree compiled once, as
+    :func:`group_function`)."""
+    agents = "range(U(first), U(last))"
+    return f"""
+@njit(cache=True, nogil=True, error_model="numpy")
+def tick_group(first, last, t, {fused_arguments(layout, sensors)}):
+    for a in {agents}:
+{tree_body(program, kernels, layout, " " * 8)}
+{_phase4(kernels, layout, agents, " " * 4)}
+"""
+
+
 def stepwise_block_function(
-    program: Program,
-    kernels: Mapping[int, LeafKernel],
-    layout: Layout,
-    sensors: SensorKernel,
-    messaging: Messaging | None,
-    parallel: bool,
+    layout: Layout, sensors: SensorKernel, messaging: Messaging | None, parallel: bool
 ) -> str:
     """The fused loop that runs iteration by iteration, Phase by Phase over every agent
     (``chunk`` agents at a time, on every core in the parallel one), for a tree that sends
@@ -283,7 +305,8 @@ def stepwise_block_function(
     iteration whose messages do not reach every agent (``reach``: the datalink's range,
     world units), or include a recorded type: the caller delivers those (the outboxes keep
     them) as it does after the last iteration. The swarm sensor stops it before an
-    iteration it has no room for."""
+    iteration it has no room for. Phases 3 and 4 of a group of agents are a call of
+    :func:`tick_group_function`'s ``tick_group``."""
     store = "\n".join(
         f"                r{j}[row, first:last] = c{j}[first:last]"
         for j in range(len(layout.names))
@@ -291,9 +314,7 @@ def stepwise_block_function(
     agents = "range(U(first), U(last))"
     sense_and_move = f"""            for a in {agents}:
 {_motion(layout, sensors, " " * 16)}"""
-    tick_and_control = f"""            for a in {agents}:
-{tree_body(program, kernels, layout, " " * 16)}
-{_phase4(kernels, layout, agents, " " * 12)}"""
+    tick_and_control = f"            tick_group(first, last, t, {fused_arguments(layout, sensors)})"
     record = f"""{store}
                 for a in {agents}:
                     record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"""
@@ -386,9 +407,11 @@ def module_source(
     lines.append(tick_function(program, kernels, layout))
     if sensors is None or (layout.outboxes and messaging is None):
         return "\n".join(lines) + "\n"  # no fused loop
-    for p in (False, True):
-        if layout.outboxes or sensors.swarm is not None:
-            lines.append(stepwise_block_function(program, kernels, layout, sensors, messaging, p))
-        else:
-            lines.append(block_function(program, kernels, layout, sensors, p))
+    if layout.outboxes or sensors.swarm is not None:
+        lines.append(tick_group_function(program, kernels, layout, sensors))
+        for p in (False, True):
+            lines.append(stepwise_block_function(layout, sensors, messaging, p))
+    else:
+        lines.append(group_function(program, kernels, layout, sensors))
+        lines += [block_function(layout, sensors, p) for p in (False, True)]
     return "\n".join(lines) + "\n"
