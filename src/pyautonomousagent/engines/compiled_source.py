@@ -146,44 +146,80 @@ def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, inde
     return _later_pass(kernels, layout, agents, _control(layout, indent + " " * 4), indent)
 
 
+#: A tree of more nodes than this is written once, in a group function that both fused
+#: variants call (:func:`group_function`, :func:`tick_group_function`); a smaller one inside
+#: each. numba's parallel passes over a loop that holds the tree grow faster than the tree:
+#: patrol's 16 nodes took 49 s to compile in the parallel variant and 17 s in the serial
+#: one, a tree of 42 nodes more than 300 s and 37 s. Called from the parallel loop, the
+#: group function runs 20-40 % slower per agent (patrol, 1000 drones).
+INLINE_NODES = 32
+
+
+def grouped(program: Program) -> bool:
+    """Whether the fused variants call one group function for ``program``'s tree."""
+    return len(program.nodes) > INLINE_NODES
+
+
+def _group_body(
+    program: Program,
+    kernels: Mapping[int, LeafKernel],
+    layout: Layout,
+    sensors: SensorKernel,
+    indent: str,
+) -> str:
+    """Iterations ``t0 + 1 .. t0 + count`` of Phases 2 (sensors, motion), 3, 4 and 6 for the
+    agents ``first`` to ``last``, indented by ``indent``; the record of iteration ``t`` in row
+    ``t // every - row0`` of the record arrays (a block of record rows,
+    :mod:`~pyautonomousagent.record_blocks`)."""
+    store = "\n".join(
+        f"        r{j}[row, first:last] = c{j}[first:last]" for j in range(len(layout.names))
+    )
+    body = f"""for t in range(t0 + 1, t0 + count + 1):
+    for a in range(U(first), U(last)):
+{_motion(layout, sensors, " " * 8)}
+{tree_body(program, kernels, layout, " " * 8)}
+{_phase4(kernels, layout, "range(U(first), U(last))", " " * 4)}
+    if t % every == 0:  # a contiguous run of each record row, column by column
+        row = t // every - row0
+{store}
+        for a in range(U(first), U(last)):
+            record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"""
+    return "\n".join(indent + line if line.strip() else line for line in body.splitlines())
+
+
 def group_function(
     program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, sensors: SensorKernel
 ) -> str:
-    """``block_group(first, last, t0, count, every, row0, st, cur, pend, kf, ki, arrays...,
-    us, uh, uc, records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed,
-    speed_step, turn_step, sensor state...)``: iterations ``t0 + 1 .. t0 + count`` of Phases
-    2 (sensors, motion), 3, 4 and 6 for agents ``first`` to ``last`` (no agent hears another:
-    the tree sends no message); the record of iteration ``t`` goes to row ``t // every -
-    row0`` of the record arrays (a block of record rows,
-    :mod:`~pyautonomousagent.record_blocks`). ``us``, ``uh``, ``uc``: the control signals
-    u_v, u_a and (3-D drone) u_w, shape (N,). One function that both fused variants call
-    (:func:`block_function`): the tree is compiled once, not once per variant (numba's
-    parallel passes over a loop that holds the whole tree took three times the serial
-    compile, and grew faster than the tree)."""
-    store = "\n".join(
-        f"            r{j}[row, first:last] = c{j}[first:last]" for j in range(len(layout.names))
-    )
+    """``block_group(first, last, t0, count, every, row0, <the fused parameters>)``: the body
+    of both fused variants (:func:`_group_body`) for a tree of more than
+    :data:`INLINE_NODES` nodes, compiled once."""
     return f"""
 @njit(cache=True, nogil=True, error_model="numpy")
 def block_group(first, last, t0, count, every, row0, {fused_arguments(layout, sensors)}):
-    for t in range(t0 + 1, t0 + count + 1):
-        for a in range(U(first), U(last)):
-{_motion(layout, sensors, " " * 12)}
-{tree_body(program, kernels, layout, " " * 12)}
-{_phase4(kernels, layout, "range(U(first), U(last))", " " * 8)}
-        if t % every == 0:  # a contiguous run of each record row, column by column
-            row = t // every - row0
-{store}
-            for a in range(U(first), U(last)):
-                record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)
+{_group_body(program, kernels, layout, sensors, " " * 4)}
 """
 
 
-def block_function(layout: Layout, sensors: SensorKernel, parallel: bool) -> str:
-    """``block_serial``/``block_parallel(t0, count, every, row0, chunk, <block_group's
-    parameters after row0>) -> count``: :func:`group_function`'s ``block_group`` for every
-    group of ``chunk`` agents, the groups shared among the cores in the parallel one."""
+def block_function(
+    program: Program,
+    kernels: Mapping[int, LeafKernel],
+    layout: Layout,
+    sensors: SensorKernel,
+    parallel: bool,
+) -> str:
+    """``block_serial``/``block_parallel(t0, count, every, row0, chunk, st, cur, pend, kf, ki,
+    arrays..., us, uh, uc, records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
+    max_speed, speed_step, turn_step, sensor state...) -> count``: iterations ``t0 + 1 ..
+    t0 + count`` of Phases 2 (sensors, motion), 3, 4 and 6 for every agent, ``chunk`` agents
+    at a time, the groups shared among the cores in the parallel one (no agent hears
+    another: the tree sends no message): :func:`_group_body`, written in place or, for a
+    large tree (:func:`grouped`), a call of ``block_group``. ``us``, ``uh``, ``uc``: the
+    control signals u_v, u_a and (3-D drone) u_w, shape (N,)."""
     arguments = fused_arguments(layout, sensors)
+    if grouped(program):
+        body = f"        block_group(first, last, t0, count, every, row0, {arguments})"
+    else:
+        body = _group_body(program, kernels, layout, sensors, " " * 8)
     name = "block_parallel" if parallel else "block_serial"
     return f"""
 @njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
@@ -192,7 +228,7 @@ def {name}(t0, count, every, row0, chunk, {arguments}):
     for group in prange((n + chunk - 1) // chunk):
         first = group * chunk
         last = min(n, first + chunk)
-        block_group(first, last, t0, count, every, row0, {arguments})
+{body}
     return count
 """
 
@@ -267,25 +303,36 @@ def _groups(body: str, indent: str) -> str:
     return "\n".join(indent + line for line in head.splitlines()) + "\n" + body
 
 
+def _tick_and_control(
+    program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, indent: str
+) -> str:
+    """Phases 3 and 4 of the agents ``first`` to ``last`` at iteration ``t``."""
+    agents = "range(U(first), U(last))"
+    return f"""{indent}for a in {agents}:
+{tree_body(program, kernels, layout, indent + " " * 4)}
+{_phase4(kernels, layout, agents, indent)}"""
+
+
 def tick_group_function(
     program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, sensors: SensorKernel
 ) -> str:
-    """``tick_group(first, last, t, <the fused parameters>)``: Phases 3 and 4 of agents
-    ``first`` to ``last`` at iteration ``t``, the one function both variants of
-    :func:`stepwise_block_function` call (the tree compiled once, as
-    :func:`group_function`)."""
-    agents = "range(U(first), U(last))"
+    """``tick_group(first, last, t, <the fused parameters>)``: :func:`_tick_and_control`,
+    which both variants of :func:`stepwise_block_function` call for a tree of more than
+    :data:`INLINE_NODES` nodes, compiled once."""
     return f"""
 @njit(cache=True, nogil=True, error_model="numpy")
 def tick_group(first, last, t, {fused_arguments(layout, sensors)}):
-    for a in {agents}:
-{tree_body(program, kernels, layout, " " * 8)}
-{_phase4(kernels, layout, agents, " " * 4)}
+{_tick_and_control(program, kernels, layout, " " * 4)}
 """
 
 
 def stepwise_block_function(
-    layout: Layout, sensors: SensorKernel, messaging: Messaging | None, parallel: bool
+    program: Program,
+    kernels: Mapping[int, LeafKernel],
+    layout: Layout,
+    sensors: SensorKernel,
+    messaging: Messaging | None,
+    parallel: bool,
 ) -> str:
     """The fused loop that runs iteration by iteration, Phase by Phase over every agent
     (``chunk`` agents at a time, on every core in the parallel one), for a tree that sends
@@ -305,8 +352,9 @@ def stepwise_block_function(
     iteration whose messages do not reach every agent (``reach``: the datalink's range,
     world units), or include a recorded type: the caller delivers those (the outboxes keep
     them) as it does after the last iteration. The swarm sensor stops it before an
-    iteration it has no room for. Phases 3 and 4 of a group of agents are a call of
-    :func:`tick_group_function`'s ``tick_group``."""
+    iteration it has no room for. Phases 3 and 4 of a group of agents
+    (:func:`_tick_and_control`) are written in place or, for a large tree (:func:`grouped`),
+    a call of ``tick_group``."""
     store = "\n".join(
         f"                r{j}[row, first:last] = c{j}[first:last]"
         for j in range(len(layout.names))
@@ -314,7 +362,12 @@ def stepwise_block_function(
     agents = "range(U(first), U(last))"
     sense_and_move = f"""            for a in {agents}:
 {_motion(layout, sensors, " " * 16)}"""
-    tick_and_control = f"            tick_group(first, last, t, {fused_arguments(layout, sensors)})"
+    if grouped(program):
+        tick_and_control = (
+            f"            tick_group(first, last, t, {fused_arguments(layout, sensors)})"
+        )
+    else:
+        tick_and_control = _tick_and_control(program, kernels, layout, " " * 12)
     record = f"""{store}
                 for a in {agents}:
                     record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"""
@@ -407,11 +460,13 @@ def module_source(
     lines.append(tick_function(program, kernels, layout))
     if sensors is None or (layout.outboxes and messaging is None):
         return "\n".join(lines) + "\n"  # no fused loop
-    if layout.outboxes or sensors.swarm is not None:
-        lines.append(tick_group_function(program, kernels, layout, sensors))
-        for p in (False, True):
-            lines.append(stepwise_block_function(layout, sensors, messaging, p))
-    else:
-        lines.append(group_function(program, kernels, layout, sensors))
-        lines += [block_function(layout, sensors, p) for p in (False, True)]
+    stepwise = bool(layout.outboxes) or sensors.swarm is not None
+    if grouped(program):
+        group = tick_group_function if stepwise else group_function
+        lines.append(group(program, kernels, layout, sensors))
+    for p in (False, True):
+        if stepwise:
+            lines.append(stepwise_block_function(program, kernels, layout, sensors, messaging, p))
+        else:
+            lines.append(block_function(program, kernels, layout, sensors, p))
     return "\n".join(lines) + "\n"
