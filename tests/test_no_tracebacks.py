@@ -193,3 +193,16 @@ def test_malformed_arguments_of_save_run(folder: Any, tmp_path: Path, monkeypatc
     for sim in (None, "gathering", 3.5):
         with pytest.raises(RunError):
             save_run(sim, folder)
+
+
+def test_running_out_of_memory_is_one_line(monkeypatch, capsys) -> None:
+    """A MemoryError where the run is made (a huge swarm; numba compiling a very large tree
+    once took more than 8 GB) ends ``pyaa run`` with one line naming what to try."""
+
+    def exhausted(*args: Any, **kwargs: Any) -> None:
+        raise MemoryError
+
+    monkeypatch.setattr(cli, "run", exhausted)
+    assert cli.main(["run", "gathering"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "out of memory" in err and "--engine batched" in err

@@ -1390,6 +1390,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         reason = error.strerror or type(error).__name__
         print(f"pyaa: error: {clip(where + reason)}; check the path", file=sys.stderr)
         return 2
+    except MemoryError:  # e.g. a huge swarm, or numba compiling a very large tree
+        print("pyaa: error: out of memory; try fewer agents or iterations, --record-every, "
+              "or --engine batched", file=sys.stderr)  # fmt: skip
+        return 1
     except KeyboardInterrupt:
         print("pyaa: interrupted", file=sys.stderr)
         return 130
