@@ -78,6 +78,14 @@ def _statuses(engine: str, tree: Node) -> list[np.ndarray]:
     return out
 
 
+def _assert_same_statuses(tree: Node, want: list[np.ndarray], got: list[np.ndarray]) -> None:
+    """Every node's status equal after every tick; else the first tick, node and agent."""
+    names = [node.name for node in tree.walk()]
+    for t, (a, b) in enumerate(zip(want, got, strict=True), start=1):
+        differ = np.argwhere(a != b)
+        assert not differ.size, f"tick {t}: node {names[differ[0][0]]}, agent {differ[0][1]}"
+
+
 ENGINE_NAMES = [
     "pytrees",
     pytest.param(
@@ -93,10 +101,7 @@ def test_every_rule_gives_the_batched_engines_statuses(engine: str) -> None:
     check_structure(tree)
     want = _statuses("batched", tree)
     got = _statuses(engine, tree)
-    names = [node.name for node in tree.walk()]
-    for t, (a, b) in enumerate(zip(want, got, strict=True), start=1):
-        differ = np.argwhere(a != b)
-        assert not differ.size, f"tick {t}: node {names[differ[0][0]]}, agent {differ[0][1]}"
+    _assert_same_statuses(tree, want, got)
     assert len({int(c) for tick in want for c in tick.ravel()}) == 5  # every status seen
 
 
@@ -129,10 +134,7 @@ def test_nodes_with_many_children_give_the_py_trees_engines_statuses_on_batched(
     tree = _wide_tree(ROLLED + 9)  # the batched engine writes their children's blocks as loops
     check_structure(tree)
     want, got = _statuses("batched", tree), _statuses("pytrees", tree)
-    names = [node.name for node in tree.walk()]
-    for t, (a, b) in enumerate(zip(want, got, strict=True), start=1):
-        differ = np.argwhere(a != b)
-        assert not differ.size, f"tick {t}: node {names[differ[0][0]]}, agent {differ[0][1]}"
+    _assert_same_statuses(tree, want, got)
     assert len({int(c) for tick in want for c in tick.ravel()}) == 5  # every status seen
 
 
@@ -180,8 +182,5 @@ def test_nodes_with_many_children_give_the_batched_engines_statuses_on_compiled(
     body = tree_body(compile_tree(tree), lambda i: [f"st[{i}, a] = 1"], {}, "")
     assert body.count("for span_") >= 3  # each wide node halts its later children in a loop
     want, got = _statuses("batched", tree), _statuses("compiled", tree)
-    names = [node.name for node in tree.walk()]
-    for t, (a, b) in enumerate(zip(want, got, strict=True), start=1):
-        differ = np.argwhere(a != b)
-        assert not differ.size, f"tick {t}: node {names[differ[0][0]]}, agent {differ[0][1]}"
+    _assert_same_statuses(tree, want, got)
     assert len({int(c) for tick in want for c in tick.ravel()}) == 5  # every status seen
