@@ -147,12 +147,13 @@ def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, inde
 
 
 #: A tree of more nodes than this is written once, in a group function that both fused
-#: variants call (:func:`group_function`, :func:`tick_group_function`); a smaller one inside
-#: each. numba's parallel passes over a loop that holds the tree grow faster than the tree:
-#: patrol's 16 nodes took 49 s to compile in the parallel variant and 17 s in the serial
-#: one, a tree of 42 nodes more than 300 s and 37 s. Called from the parallel loop, the
-#: group function runs 20-40 % slower per agent (patrol, 1000 drones).
-INLINE_NODES = 32
+#: variants call (:func:`group_function`, :func:`tick_group_function`); a smaller one (every
+#: mission's: 7-19 nodes) inside each. numba's parallel passes over a loop that holds the
+#: tree grow faster than the tree: written inside, the serial and the parallel variant took
+#: 17 s and 49 s to compile for patrol's 16 nodes, 22 s and 72 s for 26 nodes, 37 s and more
+#: than 300 s for 42; grouped, 29 s and 16 s for 26 nodes. Called from the parallel loop,
+#: the group function runs 20-40 % slower per agent (patrol, 1000 drones).
+INLINE_NODES = 20
 
 
 def grouped(program: Program) -> bool:
