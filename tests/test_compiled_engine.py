@@ -122,16 +122,16 @@ def test_auto_picks_compiled_where_it_can_and_batched_elsewhere() -> None:
 
 @needs_numba
 def test_a_tree_over_the_node_limit_goes_to_the_batched_engine() -> None:
-    """Its generated source would grow with the square of the root's children (seconds at
-    1000): auto takes the batched engine, and the compiled engine refuses it in one line."""
+    """Its compile would take minutes (``MAX_COMPILED_NODES``): auto takes the batched
+    engine, and the compiled engine refuses it in one line."""
     for children, fits in ((MAX_COMPILED_NODES - 1, True), (MAX_COMPILED_NODES, False)):
         hovers = tuple(Node("Action_Hover_S", f"hover{i}") for i in range(children))
         tree = Node("Fallback", "root", hovers, {"memory": False})
         assert (compilable(tree) == "") is fits, children
-    assert "more than the 256 it compiles" in compilable(tree)
+    assert f"more than the {MAX_COMPILED_NODES} it compiles" in compilable(tree)
     assert choose_engine(tree) == "batched"
     scenario = load("patrol").with_overrides(agents=3, iterations=5)
-    with pytest.raises(TreeError, match="257 nodes"):
+    with pytest.raises(TreeError, match=f"{MAX_COMPILED_NODES + 1} nodes"):
         Simulation.create(scenario, tree=tree, engine="compiled")
     assert Simulation.create(scenario, tree=tree).engine.name == "batched"
 

@@ -61,11 +61,12 @@ if TYPE_CHECKING:
     from pyautonomousagent.simulation.engine_api import LoopView
 
 
-#: Most nodes of a tree the compiled engine takes. Its generated source grows linearly with
-#: the nodes, but numba's compile of it faster: patrol's 16 nodes take about a minute, a tree
-#: of 210 (eight 25-child nodes) took 611 s on a loaded machine for its serial function; the
-#: paper's trees have under 30 nodes.
-MAX_COMPILED_NODES = 256
+#: Most nodes of a tree the compiled engine takes (the missions' trees have 7-19). Its
+#: generated source grows linearly with the nodes, numba's compile of it faster: the serial
+#: variant of a grouped tree (``compiled_source.INLINE_NODES``) took 29 s at 26 nodes, 40 s
+#: at 42 and 113 s at 106 (a busy machine); the serial function of a tree of 210 nodes (eight
+#: 25-child nodes) took 611 s on a machine running tests beside it.
+MAX_COMPILED_NODES = 128
 
 
 def compilable(tree: Node) -> str:
