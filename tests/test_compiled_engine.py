@@ -162,8 +162,9 @@ def test_auto_compiles_only_runs_that_pay_for_the_compiling(
     monkeypatch.setenv("PYAA_CACHE_DIR", str(tmp_path))  # nothing compiled yet
     patrol = scenario_tree(load("patrol"))
     assert choose_engine(patrol, 1000, 4000) == "batched"  # 0.9 s on the batched engine
-    assert choose_engine(patrol, 10**6, 400, record_every=400) == "compiled"  # 26 s
-    assert choose_engine(patrol, 4, 200_000) == "compiled"  # 30 s: NumPy's cost per call
+    assert choose_engine(patrol, 10**6, 400, record_every=400) == "batched"  # 26 s
+    assert choose_engine(patrol, 10**6, 2000, record_every=2000) == "compiled"  # 130 s
+    assert choose_engine(patrol, 4, 1_000_000) == "compiled"  # 150 s: NumPy's cost per call
     assert 0.5 < batched_seconds(1000, 4000) < 2.0 and batched_seconds(4, 8000) < 1.5
     small = Simulation.create(load("patrol").with_overrides(agents=10, iterations=5))
     assert small.engine.name == "batched"

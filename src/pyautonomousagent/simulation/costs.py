@@ -15,10 +15,11 @@ from dataclasses import dataclass
 
 from pyautonomousagent.record_blocks import RECORD_BLOCK_BYTES
 
-#: Seconds of batched loop from which "auto" compiles: compiling a tree takes 5-30 s the
-#: first time (then well under 1 s from numba's cache), which a loop this long pays back.
-#: It is the cost :func:`run_costs` gives a compile not in the cache yet.
-AUTO_COMPILE_SECONDS = 15.0
+#: Seconds of batched loop from which "auto" compiles: compiling a tree takes about a minute
+#: the first time (both fused variants, on 2 cores: patrol's 66 s, gathering's 76 s; then
+#: well under 1 s from numba's cache), which a loop this long pays back. It is the cost
+#: :func:`run_costs` gives a compile not in the cache yet.
+AUTO_COMPILE_SECONDS = 70.0
 #: The batched engine's loop cost on 2 cores: NumPy's fixed cost per iteration (about 250
 #: calls; gathering, 4 drones: 170 us) and the cost per agent-iteration (patrol, 10^6 drones:
 #: 65 ns), in seconds (docs/performance.md).
