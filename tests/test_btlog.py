@@ -15,11 +15,18 @@ import numpy as np
 import pytest
 
 from pyautonomousagent.bt.spec import leaf, reactive_fallback, sequence
-from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SKIPPED, SUCCESS
+from pyautonomousagent.bt.status import (
+    BTCPP_CODES,
+    FAILURE,
+    INVALID,
+    NAMES,
+    RUNNING,
+    SKIPPED,
+    SUCCESS,
+)
 from pyautonomousagent.render.btlog import (
     MAGIC,
     RECORD,
-    TO_BTCPP,
     USEC_PER_ITERATION,
     read_btlog,
     transitions,
@@ -106,7 +113,7 @@ def test_our_log_decodes_to_the_recorded_transitions(ours):
     iterations, trace = recorder.iterations[: recorder.count], recorder.trace(0)
     assert np.array_equal(log.transitions, transitions(iterations, trace))
     # Replaying the transitions gives back every recorded status.
-    from_btcpp = {theirs: ours for ours, theirs in TO_BTCPP.items()}
+    from_btcpp = {theirs: ours for ours, theirs in BTCPP_CODES.items()}
     state = np.full(trace.shape[1], INVALID)
     for row, iteration in enumerate(iterations):
         due = log.transitions[log.transitions["usec"] == iteration * USEC_PER_ITERATION]
@@ -162,8 +169,8 @@ def test_write_btlog_refuses_another_ending(tmp_path, ours):
 
 def test_every_status_has_its_behaviortree_cpp_code():
     # A skipped node (a _skipIf, a RunOnce that ran) is logged as BT.CPP's SKIPPED, 4.
-    assert set(TO_BTCPP) == set(NAMES)
-    assert sorted(TO_BTCPP.values()) == list(range(len(NAMES)))
+    assert set(BTCPP_CODES) == set(NAMES)
+    assert sorted(BTCPP_CODES.values()) == list(range(len(NAMES)))
     trace = np.array([[SUCCESS, INVALID], [SKIPPED, RUNNING], [SKIPPED, FAILURE]], np.int8)
     log = transitions(np.array([0, 1, 2]), trace, usec_per_iteration=10)
     assert log["usec"].tolist() == [0, 10, 10, 20]

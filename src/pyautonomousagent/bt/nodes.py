@@ -218,10 +218,20 @@ def sequence_rule(n: Ops) -> None:
                 if not memory:
                     n.halt(k + 1)
                 n.finish(result)
-            if skips:
-                with n.when(result == SUCCESS if n.skippable(k) else True):
-                    n.set_memory(0, slot=1)
-    n.finish(n.pick(n.memory(1) == 1, SKIPPED, SUCCESS) if skips else SUCCESS)
+            _note_not_skipped(n, skips, k, result, SUCCESS)
+    _finish_unless_all_skipped(n, skips, SUCCESS)
+
+
+def _note_not_skipped(n: Ops, skips: bool, k: int, result: Any, proceed: int) -> None:
+    """With ``skips``, memory slot 1 := 0 once child ``k`` was not skipped (``proceed``)."""
+    if skips:
+        with n.when(result == proceed if n.skippable(k) else True):
+            n.set_memory(0, slot=1)
+
+
+def _finish_unless_all_skipped(n: Ops, skips: bool, status: int) -> None:
+    """Finish with ``status``, or SKIPPED where every child was (:func:`_note_not_skipped`)."""
+    n.finish(n.pick(n.memory(1) == 1, SKIPPED, status) if skips else status)
 
 
 def _neither(n: Ops, k: int, result: Any, proceed: int) -> Any:
@@ -262,11 +272,9 @@ def fallback_rule(n: Ops) -> None:
                 with n.when(previous != k):
                     n.halt(k + 1)
                 n.finish(result)
-            if skips:
-                with n.when(result == FAILURE if n.skippable(k) else True):
-                    n.set_memory(0, slot=1)
+            _note_not_skipped(n, skips, k, result, FAILURE)
     n.set_memory(n.kids - 1)
-    n.finish(n.pick(n.memory(1) == 1, SKIPPED, FAILURE) if skips else FAILURE)
+    _finish_unless_all_skipped(n, skips, FAILURE)
 
 
 # -- py_trees composites, written with BT.CPP's tags -------------------------------------------
@@ -631,7 +639,7 @@ def try_catch_rule(n: Ops) -> None:
     with n.when(n.memory() != catch):
         n.halt(0)
         n.set_memory(0)
-        n.finish(n.pick(n.memory(1) == 1, SKIPPED, SUCCESS) if skips else SUCCESS)
+        _finish_unless_all_skipped(n, skips, SUCCESS)
     result = n.tick(catch)
     with n.when(result != RUNNING):
         n.halt(0)

@@ -38,8 +38,6 @@ PROTOCOL = 1
 """The protocol byte after the magic."""
 RECORD = 9
 """Bytes per transition record."""
-TO_BTCPP = BTCPP_CODES
-"""Our status code -> BehaviorTree.CPP 4's ``NodeStatus`` code, for every code."""
 USEC_PER_ITERATION = 100_000
 """Default log time of one iteration: 0.1 s, so Groot2 replays 10 iterations a second."""
 
@@ -91,8 +89,8 @@ def transitions(
     Returns:
         structured array (``usec`` uint64, ``uid`` uint16, ``status`` uint8), BT.CPP codes.
     """
-    codes = np.zeros(max(TO_BTCPP) + 1, dtype=np.uint8)
-    for ours, theirs in TO_BTCPP.items():
+    codes = np.zeros(max(BTCPP_CODES) + 1, dtype=np.uint8)
+    for ours, theirs in BTCPP_CODES.items():
         codes[ours] = theirs
     previous = np.vstack([np.full((1, statuses.shape[1]), INVALID, statuses.dtype), statuses[:-1]])
     rows, nodes = np.nonzero(statuses != previous)  # row-major: by record, then node
