@@ -90,8 +90,7 @@ def transitions(
         structured array (``usec`` uint64, ``uid`` uint16, ``status`` uint8), BT.CPP codes.
     """
     codes = np.zeros(max(BTCPP_CODES) + 1, dtype=np.uint8)
-    for ours, theirs in BTCPP_CODES.items():
-        codes[ours] = theirs
+    codes[list(BTCPP_CODES)] = list(BTCPP_CODES.values())
     previous = np.vstack([np.full((1, statuses.shape[1]), INVALID, statuses.dtype), statuses[:-1]])
     rows, nodes = np.nonzero(statuses != previous)  # row-major: by record, then node
     out = np.zeros(rows.size, dtype=[("usec", "<u8"), ("uid", "<u2"), ("status", "u1")])

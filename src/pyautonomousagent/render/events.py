@@ -9,7 +9,7 @@ a place on the map (the agent's position, or the message's ``x, y`` data) and a 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
@@ -47,15 +47,7 @@ class PlacedEvent:
         def number(v: float) -> float | None:
             return None if np.isnan(v) else round(v, 4)
 
-        return {
-            "iteration": self.iteration,
-            "kind": self.kind,
-            "text": self.text,
-            "x": number(self.x),
-            "y": number(self.y),
-            "agent": self.agent,
-            "colour": self.colour,
-        }
+        return {**asdict(self), "x": number(self.x), "y": number(self.y)}
 
 
 def placed_events(events: Iterable[Mapping[str, Any]], recorder: Recorder) -> list[PlacedEvent]:

@@ -30,6 +30,7 @@ iteration after it are always kept.
 from __future__ import annotations
 
 import base64
+import html
 import json
 import math
 import time
@@ -118,6 +119,7 @@ def replay_data(
         behaviour = recorder.behaviour[rows][:, traced].astype(np.float64)
         values = np.concatenate([values.astype(np.float64), behaviour[..., None]], axis=2)
         columns.append("behaviour")
+    docs = {c: recorder.docs.get(c, ("", "")) for c in columns}
     return {
         "title": title,
         "world": [float(world[0]), float(world[1])],
@@ -131,8 +133,8 @@ def replay_data(
         "statuses": _b64(recorder.traces[rows].transpose(0, 2, 1).astype(np.int8)),
         "columns": columns,
         "groups": {**recorder.groups, "behaviour": ["behaviour"]},
-        "units": {c: _short_unit(recorder.docs.get(c, ("", ""))[0]) for c in columns},
-        "descriptions": {c: recorder.docs.get(c, ("", ""))[1] for c in columns},
+        "units": {c: UNITS.get(unit, unit) for c, (unit, _) in docs.items()},
+        "descriptions": {c: doc for c, (_, doc) in docs.items()},
         "values": _b64(np.ascontiguousarray(values, dtype=np.float64)),
         "marks": [asdict(m) for m in marks],
         "changing_marks": changing_marks(frame_marks, rows) if frame_marks else [],
@@ -158,23 +160,17 @@ def changing_marks(
     return [{**asdict(mark), "frames": frames} for mark, frames in shown.items()]
 
 
-def _short_unit(unit: str) -> str:
-    """ "world unit / iteration" -> "u/it" (the animation panel's short units)."""
-    return UNITS.get(unit, unit)
-
-
 def _positions(recorder: Recorder, rows: np.ndarray) -> dict[str, Any]:
     """x, y, heading of every agent at ``rows`` as uint16 triplets (frames, N, 3), base64,
     with each quantity's offset and step: ``value = offset + code * step``."""
     out: dict[str, Any] = {"offset": [], "step": []}
     codes = []
     for key in ("x", "y", "heading"):
-        v = recorder.columns[key][rows].astype(np.float64)
+        v = recorder.columns[key][rows]
         low, high = (0.0, 360.0) if key == "heading" else (float(v.min()), float(v.max()))
-        step = (high - low) / 65535 or 1.0
-        codes.append(np.clip(np.rint((v - low) / step), 0, 65535).astype("<u2"))
+        codes.append(_quantised(v, low, high))
         out["offset"].append(low)
-        out["step"].append(step)
+        out["step"].append((high - low) / 65535 or 1.0)
     out["data"] = _b64(np.stack(codes, axis=2))
     return out
 
@@ -187,10 +183,15 @@ def _altitudes(recorder: Recorder, rows: np.ndarray) -> dict[str, Any] | None:
     if scale is None:
         return None
     low, high = scale
-    step = (high - low) / 65535
-    values = recorder.columns[ALTITUDE][rows].astype(np.float64)
-    codes = np.clip(np.rint((values - low) / step), 0, 65535).astype("<u2")
-    return {"offset": low, "step": step, "top": high, "data": _b64(codes)}
+    codes = _quantised(recorder.columns[ALTITUDE][rows], low, high)
+    return {"offset": low, "step": (high - low) / 65535, "top": high, "data": _b64(codes)}
+
+
+def _quantised(values: np.ndarray, low: float, high: float) -> np.ndarray:
+    """``values`` as uint16 codes of steps ``(high - low) / 65535`` (1 where that is 0) from
+    ``low``, clipped to 0..65535; same shape."""
+    step = (high - low) / 65535 or 1.0
+    return np.clip(np.rint((values.astype(np.float64) - low) / step), 0, 65535).astype("<u2")
 
 
 def _b64(array: np.ndarray) -> str:
@@ -204,11 +205,8 @@ def render_page(data: Mapping[str, Any]) -> str:
     text = json.dumps(data, separators=(",", ":"), allow_nan=False)
     # "</" would end the script element early; JSON allows "<\/" for "</".
     text = text.replace("</", "<\\/")
-    return template.replace("/*__DATA__*/", text, 1).replace("__TITLE__", _escape(data["title"]))
-
-
-def _escape(text: str) -> str:
-    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    title = html.escape(data["title"], quote=False)
+    return template.replace("/*__DATA__*/", text, 1).replace("__TITLE__", title)
 
 
 def write_replay(
