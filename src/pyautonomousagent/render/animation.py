@@ -85,14 +85,8 @@ PANEL_MARGIN = 8
 
 @dataclass(frozen=True)
 class AnimationStats:
-    """What :func:`write_animation` wrote.
-
-    Attributes:
-        frames: number of frames in the video.
-        seconds: wall time of drawing and encoding, in seconds.
-        path: the video file.
-        bytes: the file's size in bytes.
-    """
+    """What :func:`write_animation` wrote: its frames, the wall seconds of drawing and
+    encoding, the video file and its size in bytes."""
 
     frames: int
     seconds: float
@@ -167,7 +161,6 @@ class FramePainter:
             self._diagonals = ((1, 1), (1, -1), (-1, 1), (-1, -1))
         self.mission = scenario.create_mission()
         self.marks = list(self.mission.marks() if marks is None else marks)
-        self.changing = _MarkLayer(self.mission, recorder)
         self.events = placed_events(events, recorder)
         last = int(recorder.iterations[recorder.count - 1])
         self.event_window = max(1, round(EVENT_SHOWN * last))
@@ -183,15 +176,9 @@ class FramePainter:
             (left / width, bottom / FIGSIZE[1], w / width, h / FIGSIZE[1]), anchor="W"
         )
         _draw_world(self.axes, scenario.world, self.marks)
-        self.figure.text(
-            left / width,
-            TITLE_Y / FIGSIZE[1],
-            f"pyAutonomousAgent: {scenario.name}",
-            fontsize=11,
-            ha="left",
-            va="baseline",
-        )
-        self.changing.attach(self.axes)
+        self.changing = _MarkLayer(self.mission, recorder, self.axes)
+        title = f"pyAutonomousAgent: {scenario.name}"  # left-aligned on its baseline
+        self.figure.text(left / width, TITLE_Y / FIGSIZE[1], title, fontsize=11)
         self._add_moving_artists(len(recorder.names))
         self._add_legend(width)
         self._add_panel_labels()
@@ -477,15 +464,15 @@ def altitude_range(recorder: Recorder) -> tuple[float, float] | None:
 
 def _agent_index(recorder: Recorder, agent: int | str) -> int:
     """An agent given by index or name, checked; ValueError naming the agents otherwise."""
+    names = recorder.names
     if isinstance(agent, str):
-        if agent not in recorder.names:
-            names = recorder.names
+        if agent not in names:
             raise ValueError(
                 f"follow: no agent named {agent!r}; agents are {names[0]}..{names[-1]}"
             )
-        return recorder.names.index(agent)
-    if not 0 <= agent < len(recorder.names):
-        raise ValueError(f"follow: agent index {agent} is outside 0..{len(recorder.names) - 1}")
+        return names.index(agent)
+    if not 0 <= agent < len(names):
+        raise ValueError(f"follow: agent index {agent} is outside 0..{len(names) - 1}")
     return agent
 
 
@@ -498,21 +485,16 @@ class _MarkLayer:
     """The mission's changing marks (:meth:`Mission.frame_marks`), drawn on every frame as one
     polygon collection under the agents (circles as 24-gons; points are not drawn)."""
 
-    def __init__(self, mission: Any, recorder: Recorder) -> None:
+    def __init__(self, mission: Any, recorder: Recorder, axes: Any) -> None:
+        from matplotlib.collections import PolyCollection
+
         self.mission, self.recorder = mission, recorder
         last = mission.frame_marks(recorder, recorder.count - 1)
         self.legend_marks = list({m.legend: m for m in last if m.legend}.values())
-        self.active = bool(last)
         self.collection: Any = None
-
-    def attach(self, axes: Any) -> None:
-        """Add the (animated) collection to ``axes`` when the mission has changing marks."""
-        if not self.active:
-            return
-        from matplotlib.collections import PolyCollection
-
-        self.collection = PolyCollection([], animated=True, zorder=1.5, linewidths=0)
-        axes.add_collection(self.collection, autolim=False)
+        if last:  # the mission has changing marks: an animated collection on ``axes``
+            self.collection = PolyCollection([], animated=True, zorder=1.5, linewidths=0)
+            axes.add_collection(self.collection, autolim=False)
 
     def draw(self, axes: Any, row: int) -> None:
         """Draw record ``row``'s changing marks."""

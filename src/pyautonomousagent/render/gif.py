@@ -86,12 +86,8 @@ def _unpack(codes: np.ndarray) -> np.ndarray:
 
 
 class GifStream:
-    """Writes an animated, looping GIF one frame at a time, keeping no frames in memory.
-
-    The first frame's colours become the global colour table (:class:`Palette`); every
-    frame is mapped to it. Each frame after the first is stored as the smallest rectangle
-    that differs from the previous frame, its unchanged pixels transparent, drawn over the
-    previous frame (disposal "do not dispose").
+    """Writes an animated, looping GIF one frame at a time, keeping no frames in memory (the
+    module docstring says how).
 
     Args:
         file: a binary file open for writing.

@@ -1,30 +1,15 @@
 """``replay.html``: one self-contained page that replays a recorded run in any browser, offline.
 
-The page shows the world map (agents, trails, the mission's marks, events as they happen), the
-behaviour tree with each node coloured by the selected agent's status at the selected
-iteration, that agent's state and blackboard, the event log, and a timeline (play, pause,
-step, speed, scrubbing). A click on an agent selects it.
-
-Everything is in the file: the page (``replay_template.html``, no external script, style or
-font) and the run's data as JSON inside a ``<script type="application/json">``, with the
-large arrays base64-encoded:
-
-- ``positions``: uint16 triplets (x, y, heading) per frame and agent, scaled into the
-  ranges given beside them (about 1/65535 of the range: 0.0015 units in a 100-unit world);
-- ``statuses``: int8 node statuses per frame, traced agent and node (codes of
-  :mod:`pyautonomousagent.bt.status`);
-- ``values``: float64 state, blackboard and model values per frame, traced agent and column
-  (exact), with the active behaviour as a node index;
-- ``altitude``: where the run records column ``z`` (the 3-D drone), uint16 altitudes per
-  frame and agent, scaled like the positions; the page colours each agent by it and adds it
-  to its label (None otherwise);
-- ``changing_marks``: the mission's marks that change during the run
-  (:meth:`Mission.frame_marks`, e.g. vacuum's cleaned area), each once with the frame
-  intervals where it shows.
-
-The size is kept in check by decimation: at most ``max_frames`` frames, and at most
-:data:`MAX_AGENT_FRAMES` agent positions in all; the frames of each event's iteration and the
-iteration after it are always kept.
+The page (``replay_template.html``, no external script, style or font: the map, the tree
+coloured by the selected agent's statuses, its state and blackboard, the event log, a
+timeline) and the run's data, JSON inside a ``<script type="application/json">``, are one
+file. docs/data.md describes the data: the large arrays base64-encoded, ``positions``
+(frames, N, 3) and ``altitude`` (frames, N; where column ``z`` is recorded, else None) as
+uint16 steps of 1/65535 of their range, ``statuses`` int8 (frames, traced, nodes),
+``values`` float64 (frames, traced, columns), and the changing marks each once with the
+frame intervals where it shows. Decimation keeps the size in check: at most ``max_frames``
+frames and :data:`MAX_AGENT_FRAMES` agent positions, always with the frames of each event's
+iteration and the next.
 """
 
 from __future__ import annotations
@@ -59,14 +44,12 @@ TEMPLATE = "replay_template.html"
 
 @dataclass(frozen=True)
 class ReplayStats:
-    """What :func:`write_replay` wrote: the file, its size, frames, agents, traced agents and
-    the wall seconds it took."""
+    """What :func:`write_replay` wrote: the file, its size in bytes, its frames and the wall
+    seconds it took."""
 
     path: Path
     bytes: int
     frames: int
-    agents: int
-    traced: int
     seconds: float
 
 
@@ -224,11 +207,5 @@ def write_replay(
     data = replay_data(recorder, world, title, marks, events, max_frames, frame_marks)
     path = Path(path)
     path.write_text(render_page(data), encoding="utf-8")
-    return ReplayStats(
-        path,
-        path.stat().st_size,
-        len(data["iterations"]),
-        len(data["names"]),
-        len(data["traced"]),
-        time.perf_counter() - start,
-    )
+    frames = len(data["iterations"])
+    return ReplayStats(path, path.stat().st_size, frames, time.perf_counter() - start)
