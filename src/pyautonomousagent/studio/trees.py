@@ -81,27 +81,25 @@ def palette(scenario: Scenario) -> dict[str, Any]:
         }
         for t in tags()
     ]
-    leaves = []
-    for cls in fitting_leaves(scenario):
-        ports = [
-            {
-                "name": port.name,
-                "hint": port.hint(),
-                "doc": port.doc,
-                "default": port.default,
-                "value": _plain(values.get(port.default)),
-            }
-            for port in cls.ports
-        ]
-        leaves.append(
-            {
-                "type": cls.type_name,
-                "name": snake_case(cls.type_name),
-                "doc": _first_line(cls.__doc__),
-                "general": is_general(cls),
-                "ports": ports,
-            }
-        )
+    leaves = [
+        {
+            "type": cls.type_name,
+            "name": snake_case(cls.type_name),
+            "doc": _first_line(cls.__doc__),
+            "general": is_general(cls),
+            "ports": [
+                {
+                    "name": port.name,
+                    "hint": port.hint(),
+                    "doc": port.doc,
+                    "default": port.default,
+                    "value": _plain(values.get(port.default)),
+                }
+                for port in cls.ports
+            ],
+        }
+        for cls in fitting_leaves(scenario)
+    ]
     return {"controls": controls, "leaves": leaves}
 
 
@@ -185,15 +183,8 @@ def check_blocks(root: Block | None, scenario: Scenario) -> Checked:
         return Checked(None, None, "the tree is empty: drag a node into the Tree block", -1)
     try:
         document = to_document(root)
-    except InputError as error:
+    except (InputError, TreeError) as error:  # a BlockError names its block
         return Checked(None, None, str(error), getattr(error, "block", -1))
-    except TreeError as error:
-        return Checked(None, None, str(error), -1)
-    return check_document(document, scenario)
-
-
-def check_document(document: Document, scenario: Scenario) -> Checked:
-    """Build ``document`` and check that its leaves fit ``scenario``."""
     raws = document.trees[document.main].walk()
     tree = None
     try:
