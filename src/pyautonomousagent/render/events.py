@@ -1,9 +1,7 @@
 """A run's events (``sim.events``, ``run.json``) as things to draw: when, where, what.
 
-Events are plain dicts written by the loop: ``{"iteration", "event": "alert", "agent",
-"message"}`` for an agent's alert, ``{"iteration", "event": "message", "type", "sender",
-"receivers", "data"}`` for a recorded datalink message. :func:`placed_events` gives each one
-a place on the map (the agent's position, or the message's ``x, y`` data) and a short text.
+Events are the plain dicts of docs/data.md; :func:`placed_events` gives each one a place on
+the map (the agent's position, or a message's ``x, y`` data) and a short text.
 """
 
 from __future__ import annotations

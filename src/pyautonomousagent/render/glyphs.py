@@ -68,14 +68,6 @@ class GlyphAtlas:
         """The width of ``text`` in pixels."""
         return len(text) * self.cell[1]
 
-    def mask(self, text: str) -> np.ndarray:
-        """Coverage of ``text`` as one line, shape (cell height, width(text)), float32."""
-        codes = self._codes[
-            np.minimum(np.frombuffer(text.encode("ascii", "replace"), np.uint8), 127)
-        ]
-        tiles = self.masks[codes]  # (len, h, w)
-        return tiles.transpose(1, 0, 2).reshape(self.cell[0], -1)
-
     def draw(
         self,
         pixels: np.ndarray,
@@ -95,7 +87,8 @@ class GlyphAtlas:
         """
         if not text:
             return
-        mask = self.mask(text)
+        codes = self._codes[np.frombuffer(text.encode("ascii", "replace"), np.uint8)]  # < 128
+        mask = self.masks[codes].transpose(1, 0, 2).reshape(self.cell[0], -1)  # (h, width(text))
         top = int(round(y)) - (self.baseline if anchor == "baseline" else 0)
         left = int(round(x))
         height, width = pixels.shape[:2]
