@@ -26,13 +26,13 @@ import time
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from pyautonomousagent.bt.status import FAILURE, INVALID, RUNNING, SUCCESS
+from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
 from pyautonomousagent.progress import Progress
-from pyautonomousagent.recording import Recorder
+from pyautonomousagent.recording import Recorder, node_list
 from pyautonomousagent.render.events import PlacedEvent, placed_events
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.render.panel import PanelLine, panel_lines
@@ -71,7 +71,7 @@ STATUS_COLOURS = {
     RUNNING: "#ff9f1c",
     INVALID: "#d9d9d9",
 }
-"""Inset colour per node status."""
+"""Inset colour per node status, in the order of the inset's legend."""
 EVENT_SHOWN = 0.04
 """An event stays on the map for this fraction of the run's iterations (at least 1)."""
 PANEL_NOTES = (
@@ -85,14 +85,8 @@ PANEL_MARGIN = 8
 
 @dataclass(frozen=True)
 class AnimationStats:
-    """What :func:`write_animation` wrote.
-
-    Attributes:
-        frames: number of frames in the video.
-        seconds: wall time of drawing and encoding, in seconds.
-        path: the video file.
-        bytes: the file's size in bytes.
-    """
+    """What :func:`write_animation` wrote: its frames, the wall seconds of drawing and
+    encoding, the video file and its size in bytes."""
 
     frames: int
     seconds: float
@@ -167,7 +161,6 @@ class FramePainter:
             self._diagonals = ((1, 1), (1, -1), (-1, 1), (-1, -1))
         self.mission = scenario.create_mission()
         self.marks = list(self.mission.marks() if marks is None else marks)
-        self.changing = _MarkLayer(self.mission, recorder)
         self.events = placed_events(events, recorder)
         last = int(recorder.iterations[recorder.count - 1])
         self.event_window = max(1, round(EVENT_SHOWN * last))
@@ -183,15 +176,9 @@ class FramePainter:
             (left / width, bottom / FIGSIZE[1], w / width, h / FIGSIZE[1]), anchor="W"
         )
         _draw_world(self.axes, scenario.world, self.marks)
-        self.figure.text(
-            left / width,
-            TITLE_Y / FIGSIZE[1],
-            f"pyAutonomousAgent: {scenario.name}",
-            fontsize=11,
-            ha="left",
-            va="baseline",
-        )
-        self.changing.attach(self.axes)
+        self.changing = _MarkLayer(self.mission, recorder, self.axes)
+        title = f"pyAutonomousAgent: {scenario.name}"  # left-aligned on its baseline
+        self.figure.text(left / width, TITLE_Y / FIGSIZE[1], title, fontsize=11)
         self._add_moving_artists(len(recorder.names))
         self._add_legend(width)
         self._add_panel_labels()
@@ -252,33 +239,17 @@ class FramePainter:
                 continue
             seen.add(mark.legend)
             if mark.shape == "point":
-                handles.append(entry(mark.legend, marker=_marker(mark.symbol), color=mark.colour))
+                style = {"marker": _marker(mark.symbol), "color": mark.colour}
             else:
                 face = mark.colour if mark.fill else "none"
-                shape = "o" if mark.shape == "circle" else "s"
-                handles.append(
-                    entry(
-                        mark.legend,
-                        marker=shape,
-                        markersize=9,
-                        markerfacecolor=face,
-                        markeredgecolor=mark.colour,
-                    )
-                )
+                style = {"marker": "o" if mark.shape == "circle" else "s", "markersize": 9}
+                style.update(markerfacecolor=face, markeredgecolor=mark.colour)
+            handles.append(entry(mark.legend, **style))
         handles.append(entry("agent (number = drone N)", marker="o", color=DRONE_COLOUR))
         handles.append(entry("heading", marker="o", markersize=4, color=HEADING_COLOUR))
-        handles.append(
-            entry(
-                "followed agent",
-                marker="o",
-                markersize=11,
-                markerfacecolor="none",
-                markeredgecolor=FOLLOW_COLOUR,
-                markeredgewidth=2,
-            )
-        )
-        for kind in dict.fromkeys(e.kind for e in self.events):
-            colour = next(e.colour for e in self.events if e.kind == kind)
+        ring = {"markerfacecolor": "none", "markeredgecolor": FOLLOW_COLOUR, "markeredgewidth": 2}
+        handles.append(entry("followed agent", marker="o", markersize=11, **ring))
+        for kind, colour in {e.kind: e.colour for e in self.events}.items():  # one colour a kind
             handles.append(entry(f"event: {kind}", marker="D", color=colour))
         self.figure.legend(
             handles=handles,
@@ -321,21 +292,17 @@ class FramePainter:
             "family": "monospace",
             "fontsize": 9,
             "va": "top",
-            "ha": "left",
             "linespacing": self.line_height / (9 * self.figure.dpi / 72),
         }
-        height = self.figure.bbox.height
-        self.figure.text(
-            self.panel_left / self.figure.bbox.width,
-            1 - (self.panel_top - 2) / height,
-            text,
-            **style,
-        )
+        self._text(self.panel_left, self.panel_top - 2, text, **style)
         notes_top = self.panel_top + self.line_height * (len(self.lines) + 1)
         style.update(fontsize=8, color="#555555")
-        self.figure.text(
-            self.panel_left / self.figure.bbox.width, 1 - notes_top / height, notes, **style
-        )
+        self._text(self.panel_left, notes_top, notes, **style)
+
+    def _text(self, left: float, top: float, text: str, **style: Any) -> None:
+        """Static text, left-aligned at ``(left, top)``: pixels from the figure's top-left."""
+        box = self.figure.bbox
+        self.figure.text(left / box.width, 1 - top / box.height, text, ha="left", **style)
 
     def _add_inset(self, left_inches: float) -> None:
         """The tree's node names (static) beside the status boxes drawn per frame."""
@@ -345,50 +312,29 @@ class FramePainter:
         self.inset_row = max(
             9, min(14, round((FIGSIZE[1] * dpi - self.inset_top - 60) / max(1, len(nodes))))
         )
-        depth = _depths(nodes)
-        width, height = self.figure.bbox.width, self.figure.bbox.height
-        self.figure.text(
-            self.inset_left / width,
-            1 - (self.inset_top - 16) / height,
-            f"Tree of {self.recorder.names[self.follow]}",
-            fontsize=9,
-            va="bottom",
-            ha="left",
-            weight="bold",
+        depth = [cast(int, node["depth"]) for node in node_list(nodes)]
+        title = f"Tree of {self.recorder.names[self.follow]}"
+        self._text(
+            self.inset_left, self.inset_top - 16, title, fontsize=9, va="bottom", weight="bold"
         )
+        small = {"fontsize": 6.5, "va": "center"}
         self.inset_boxes = []
         for j, node in enumerate(nodes):
             x = self.inset_left + 10 * depth[j]
             y = self.inset_top + j * self.inset_row
             self.inset_boxes.append((x, y))
-            self.figure.text(
-                (x + 12) / width,
-                1 - (y + self.inset_row / 2) / height,
-                node.name[:40],
-                fontsize=6.5,
-                family="monospace",
-                va="center",
-                ha="left",
-            )
+            self._text(x + 12, y + self.inset_row / 2, node.name[:40], family="monospace", **small)
         y = self.inset_top + len(nodes) * self.inset_row + 8
-        for k, (_code, label) in enumerate(
-            [
-                (SUCCESS, "SUCCESS"),
-                (FAILURE, "FAILURE"),
-                (RUNNING, "RUNNING"),
-                (INVALID, "not ticked"),
-            ]
-        ):
+        self._legend_codes = list(STATUS_COLOURS)
+        for k, code in enumerate(self._legend_codes):
             x = self.inset_left + 62 * k
             self.inset_boxes.append((x, y))
-            self.figure.text(
-                (x + 12) / width, 1 - (y + 4) / height, label, fontsize=6.5, va="center", ha="left"
-            )
-        self._legend_codes = [SUCCESS, FAILURE, RUNNING, INVALID]
+            label = "not ticked" if code == INVALID else NAMES[code]
+            self._text(x + 12, y + 4, label, **small)
         self._status_rgb = {code: np.array(_rgb(c), np.uint8) for code, c in STATUS_COLOURS.items()}
 
-    def _update(self, row: int) -> np.ndarray:
-        """Move the artists to record ``row``; the active events, as a boolean mask."""
+    def _update(self, row: int) -> list[PlacedEvent]:
+        """Move the artists to record ``row``; the events shown at it (recent ones)."""
         columns, r = self.recorder.columns, self.radius
         x, y = columns["x"][row], columns["y"][row]
         heading = np.radians(columns["heading"][row])
@@ -398,11 +344,9 @@ class FramePainter:
         self.dots.set_offsets(np.column_stack([x + r * np.sin(heading), y + r * np.cos(heading)]))
         self.ring.set_offsets([[x[self.follow], y[self.follow]]])
         iteration = int(self.recorder.iterations[row])
-        active = np.array(
-            [e.iteration <= iteration < e.iteration + self.event_window for e in self.events],
-            dtype=bool,
-        )
-        shown = [e for e, a in zip(self.events, active, strict=True) if a and not np.isnan(e.x)]
+        window = self.event_window
+        active = [e for e in self.events if e.iteration <= iteration < e.iteration + window]
+        shown = [e for e in active if not np.isnan(e.x)]
         self.event_marks.set_offsets(np.array([[e.x, e.y] for e in shown]).reshape(-1, 2))
         self.event_marks.set_facecolor([e.colour for e in shown] or "none")
         return active
@@ -426,7 +370,7 @@ class FramePainter:
             pixels = pixels.copy()
         self._draw_labels(pixels, row)
         self._draw_panel(pixels, row)
-        self._draw_banner(pixels, [e for e, a in zip(self.events, active, strict=True) if a])
+        self._draw_banner(pixels, active)
         if self.trace is not None:
             self._draw_inset(pixels, row)
         return pixels
@@ -520,52 +464,37 @@ def altitude_range(recorder: Recorder) -> tuple[float, float] | None:
 
 def _agent_index(recorder: Recorder, agent: int | str) -> int:
     """An agent given by index or name, checked; ValueError naming the agents otherwise."""
+    names = recorder.names
     if isinstance(agent, str):
-        if agent not in recorder.names:
-            names = recorder.names
+        if agent not in names:
             raise ValueError(
                 f"follow: no agent named {agent!r}; agents are {names[0]}..{names[-1]}"
             )
-        return recorder.names.index(agent)
-    if not 0 <= agent < len(recorder.names):
-        raise ValueError(f"follow: agent index {agent} is outside 0..{len(recorder.names) - 1}")
+        return names.index(agent)
+    if not 0 <= agent < len(names):
+        raise ValueError(f"follow: agent index {agent} is outside 0..{len(names) - 1}")
     return agent
-
-
-def _depths(nodes: Sequence[Any]) -> list[int]:
-    """Each node's depth, nodes in tick order (``Node.walk()``)."""
-    depth = [0] * len(nodes)
-    index = {id(n): i for i, n in enumerate(nodes)}
-    for i, node in enumerate(nodes):
-        for child in node.children:
-            depth[index[id(child)]] = depth[i] + 1
-    return depth
 
 
 def _marker(symbol: str) -> str:
     """A Mark's point symbol as a Matplotlib marker."""
-    return {"x": "x", "o": "o", "+": "+", "*": "*", "^": "^", "s": "s"}.get(symbol, "x")
+    return symbol if symbol in ("x", "o", "+", "*", "^", "s") else "x"
 
 
 class _MarkLayer:
     """The mission's changing marks (:meth:`Mission.frame_marks`), drawn on every frame as one
     polygon collection under the agents (circles as 24-gons; points are not drawn)."""
 
-    def __init__(self, mission: Any, recorder: Recorder) -> None:
+    def __init__(self, mission: Any, recorder: Recorder, axes: Any) -> None:
+        from matplotlib.collections import PolyCollection
+
         self.mission, self.recorder = mission, recorder
         last = mission.frame_marks(recorder, recorder.count - 1)
         self.legend_marks = list({m.legend: m for m in last if m.legend}.values())
-        self.active = bool(last)
         self.collection: Any = None
-
-    def attach(self, axes: Any) -> None:
-        """Add the (animated) collection to ``axes`` when the mission has changing marks."""
-        if not self.active:
-            return
-        from matplotlib.collections import PolyCollection
-
-        self.collection = PolyCollection([], animated=True, zorder=1.5, linewidths=0)
-        axes.add_collection(self.collection, autolim=False)
+        if last:  # the mission has changing marks: an animated collection on ``axes``
+            self.collection = PolyCollection([], animated=True, zorder=1.5, linewidths=0)
+            axes.add_collection(self.collection, autolim=False)
 
     def draw(self, axes: Any, row: int) -> None:
         """Draw record ``row``'s changing marks."""
@@ -599,23 +528,13 @@ def _draw_world(axes: Any, world: tuple[float, float], marks: Sequence[Mark]) ->
     axes.set_ylabel("y [world units]")
     pad = DRONE_RADIUS * max(world)
     for mark in marks:
-        face = mark.colour if mark.fill else "none"
+        style: dict[str, Any] = {"edgecolor": mark.colour, "zorder": 1}
+        style["facecolor"] = mark.colour if mark.fill else "none"
         if mark.shape == "circle":
-            axes.add_patch(
-                Circle((mark.x, mark.y), mark.size, facecolor=face, edgecolor=mark.colour, zorder=1)
-            )
+            axes.add_patch(Circle((mark.x, mark.y), mark.size, **style))
             at = (mark.x - mark.size - 0.5 * pad, mark.y, "right", "center")
         elif mark.shape == "rect":
-            axes.add_patch(
-                Rectangle(
-                    (mark.x, mark.y),
-                    mark.width,
-                    mark.height,
-                    facecolor=face,
-                    edgecolor=mark.colour,
-                    zorder=1,
-                )
-            )
+            axes.add_patch(Rectangle((mark.x, mark.y), mark.width, mark.height, **style))
             at = (mark.x, mark.y + mark.height + 0.3 * pad, "left", "bottom")
         else:
             axes.plot(

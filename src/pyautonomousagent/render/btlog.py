@@ -1,17 +1,11 @@
 """One agent's recorded node statuses as a Groot2 log: BehaviorTree.CPP's ``.btlog``
 (the format its ``FileLogger2`` writes and Groot2's log replay opens).
 
-The layout, all integers little-endian, as BehaviorTree.CPP 4 writes it:
-
-1. the 18 bytes ``BTCPP4-FileLogger2`` and one protocol byte, 1;
-2. the tree XML's length (int32), then the XML: the tree as BehaviorTree.CPP 4 XML with
-   ``_fullpath=""`` on the ``BehaviorTree`` and a ``_uid`` on every node, numbered 1, 2, ...
-   in tick order (depth first, as BehaviorTree.CPP numbers the nodes it creates), and the
-   ``TreeNodesModel``;
-3. the start time (int64, microseconds since the Unix epoch);
-4. one 9-byte record per status transition: microseconds since the start (6 bytes), the
-   node's ``_uid`` (uint16), its new status (uint8: 0 IDLE, 1 RUNNING, 2 SUCCESS,
-   3 FAILURE, 4 SKIPPED).
+docs/data.md gives the layout, all integers little-endian: :data:`MAGIC` and the protocol
+byte; the tree XML's length (int32) and the XML (:func:`tree_xml`); the start time (int64,
+microseconds since the Unix epoch); one :data:`RECORD`-byte record per status transition:
+microseconds since the start (6 bytes), the node's ``_uid`` (uint16), its new status (uint8,
+``BTCPP_CODES``).
 
 A recorded run gives each node's status after every recorded tick; the log holds, at each
 recorded iteration, the nodes whose status differs from the previous record (INVALID, "not
@@ -90,8 +84,7 @@ def transitions(
         structured array (``usec`` uint64, ``uid`` uint16, ``status`` uint8), BT.CPP codes.
     """
     codes = np.zeros(max(BTCPP_CODES) + 1, dtype=np.uint8)
-    for ours, theirs in BTCPP_CODES.items():
-        codes[ours] = theirs
+    codes[list(BTCPP_CODES)] = list(BTCPP_CODES.values())
     previous = np.vstack([np.full((1, statuses.shape[1]), INVALID, statuses.dtype), statuses[:-1]])
     rows, nodes = np.nonzero(statuses != previous)  # row-major: by record, then node
     out = np.zeros(rows.size, dtype=[("usec", "<u8"), ("uid", "<u2"), ("status", "u1")])

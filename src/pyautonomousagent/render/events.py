@@ -1,15 +1,13 @@
 """A run's events (``sim.events``, ``run.json``) as things to draw: when, where, what.
 
-Events are plain dicts written by the loop: ``{"iteration", "event": "alert", "agent",
-"message"}`` for an agent's alert, ``{"iteration", "event": "message", "type", "sender",
-"receivers", "data"}`` for a recorded datalink message. :func:`placed_events` gives each one
-a place on the map (the agent's position, or the message's ``x, y`` data) and a short text.
+Events are the plain dicts of docs/data.md; :func:`placed_events` gives each one a place on
+the map (the agent's position, or a message's ``x, y`` data) and a short text.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
@@ -47,15 +45,7 @@ class PlacedEvent:
         def number(v: float) -> float | None:
             return None if np.isnan(v) else round(v, 4)
 
-        return {
-            "iteration": self.iteration,
-            "kind": self.kind,
-            "text": self.text,
-            "x": number(self.x),
-            "y": number(self.y),
-            "agent": self.agent,
-            "colour": self.colour,
-        }
+        return {**asdict(self), "x": number(self.x), "y": number(self.y)}
 
 
 def placed_events(events: Iterable[Mapping[str, Any]], recorder: Recorder) -> list[PlacedEvent]:

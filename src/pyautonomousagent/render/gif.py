@@ -86,12 +86,8 @@ def _unpack(codes: np.ndarray) -> np.ndarray:
 
 
 class GifStream:
-    """Writes an animated, looping GIF one frame at a time, keeping no frames in memory.
-
-    The first frame's colours become the global colour table (:class:`Palette`); every
-    frame is mapped to it. Each frame after the first is stored as the smallest rectangle
-    that differs from the previous frame, its unchanged pixels transparent, drawn over the
-    previous frame (disposal "do not dispose").
+    """Writes an animated, looping GIF one frame at a time, keeping no frames in memory (the
+    module docstring says how).
 
     Args:
         file: a binary file open for writing.
@@ -116,25 +112,19 @@ class GifStream:
         if self.palette is None:
             self.palette = Palette(pixels)
         indices = self.palette.indices(colour_codes(pixels))
-        previous = self.previous
-        self.previous = indices
+        previous, self.previous = self.previous, indices
         if previous is None:
-            header, _ = GifImagePlugin.getheader(self._image(indices), info={"loop": 0})
+            image, offset, extra = self._image(indices), (0, 0), {}
+            header, _ = GifImagePlugin.getheader(image, info={"loop": 0})
             self.file.write(b"".join(header))
-            chunks = GifImagePlugin.getdata(
-                self._image(indices), duration=self.delay_ms, disposal=1
-            )
         else:
             left, top, right, bottom = _changed_box(previous, indices)
             crop = indices[top:bottom, left:right].copy()
             crop[previous[top:bottom, left:right] == crop] = TRANSPARENT
-            chunks = GifImagePlugin.getdata(
-                self._image(crop),
-                offset=(left, top),
-                duration=self.delay_ms,
-                disposal=1,
-                transparency=TRANSPARENT,
-            )
+            image, offset, extra = self._image(crop), (left, top), {"transparency": TRANSPARENT}
+        chunks = GifImagePlugin.getdata(
+            image, offset=offset, duration=self.delay_ms, disposal=1, **extra
+        )
         self.file.write(b"".join(chunks))
         self.frames += 1
 
@@ -152,15 +142,9 @@ class GifStream:
         self.file.write(b";")
 
 
-def _changed_box(previous: np.ndarray | None, current: np.ndarray) -> tuple[int, int, int, int]:
-    """The (left, top, right, bottom) pixel box where ``current`` differs from ``previous``.
-
-    The whole frame when there is no previous frame; one pixel when nothing changed (a GIF
-    frame cannot be empty).
-    """
-    height, width = current.shape
-    if previous is None:
-        return 0, 0, width, height
+def _changed_box(previous: np.ndarray, current: np.ndarray) -> tuple[int, int, int, int]:
+    """The (left, top, right, bottom) pixel box where ``current`` differs from ``previous``;
+    one pixel when nothing changed (a GIF frame cannot be empty)."""
     changed = previous != current
     rows, cols = np.flatnonzero(changed.any(axis=1)), np.flatnonzero(changed.any(axis=0))
     if rows.size == 0:

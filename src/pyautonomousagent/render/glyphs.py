@@ -9,6 +9,8 @@ side by side, blended into the pixels with NumPy.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 CHARSET = "".join(chr(c) for c in range(32, 127))
@@ -21,7 +23,6 @@ class GlyphAtlas:
     Args:
         fontsize: points.
         dpi: pixels per inch of the frames drawn into.
-        family: a Matplotlib font family (monospace, so that cells line up).
 
     Attributes:
         cell: (height, width) of a character cell in pixels.
@@ -29,12 +30,12 @@ class GlyphAtlas:
         masks: coverage per character, shape (len(CHARSET), height, width), float32 in [0, 1].
     """
 
-    def __init__(self, fontsize: float, dpi: float, family: str = "monospace") -> None:
+    def __init__(self, fontsize: float, dpi: float) -> None:
         from matplotlib.backends.backend_agg import FigureCanvasAgg
         from matplotlib.figure import Figure
         from matplotlib.font_manager import FontProperties
 
-        prop = FontProperties(family=family, size=fontsize)
+        prop = FontProperties(family="monospace", size=fontsize)  # so that cells line up
         figure = Figure(figsize=(1, 1), dpi=dpi)
         canvas = FigureCanvasAgg(figure)
         renderer = canvas.get_renderer()
@@ -45,16 +46,14 @@ class GlyphAtlas:
         self.baseline = int(np.ceil(ascent[1] - ascent[2])) + 1
         count = len(CHARSET)
         figure.set_size_inches(cell_w * count / dpi, cell_h / dpi)
+        style: dict[str, Any] = {
+            "fontproperties": prop,
+            "va": "baseline",
+            "ha": "left",
+            "color": "black",
+        }
         for i, char in enumerate(CHARSET):
-            figure.text(
-                (i * cell_w + 0.0) / (cell_w * count),
-                1 - self.baseline / cell_h,
-                char,
-                fontproperties=prop,
-                va="baseline",
-                ha="left",
-                color="black",
-            )
+            figure.text(i / count, 1 - self.baseline / cell_h, char, **style)
         canvas.draw()
         gray = np.asarray(canvas.buffer_rgba())[..., 0].astype(np.float32)
         strip = 1.0 - gray / 255.0  # (cell_h, cell_w * count)
@@ -69,14 +68,6 @@ class GlyphAtlas:
         """The width of ``text`` in pixels."""
         return len(text) * self.cell[1]
 
-    def mask(self, text: str) -> np.ndarray:
-        """Coverage of ``text`` as one line, shape (cell height, width(text)), float32."""
-        codes = self._codes[
-            np.minimum(np.frombuffer(text.encode("ascii", "replace"), np.uint8), 127)
-        ]
-        tiles = self.masks[codes]  # (len, h, w)
-        return tiles.transpose(1, 0, 2).reshape(self.cell[0], -1)
-
     def draw(
         self,
         pixels: np.ndarray,
@@ -85,28 +76,27 @@ class GlyphAtlas:
         y: float,
         colour: tuple[int, int, int],
         anchor: str = "baseline",
-    ) -> tuple[int, int, int, int]:
-        """Blend ``text`` in ``colour`` into ``pixels`` (H, W, 3|4 uint8, modified in place).
+    ) -> None:
+        """Blend ``text`` in ``colour`` into ``pixels`` (H, W, 3|4 uint8, modified in place),
+        clipped to the frame.
 
         Args:
             x: the left edge, pixels from the left.
             y: pixels from the top: of the baseline (``anchor="baseline"``) or of the cell's
                 top (``anchor="top"``).
-        Returns:
-            the (left, top, right, bottom) pixel box of the cell line, clipped to the frame.
         """
         if not text:
-            return (0, 0, 0, 0)
-        mask = self.mask(text)
+            return
+        codes = self._codes[np.frombuffer(text.encode("ascii", "replace"), np.uint8)]  # < 128
+        mask = self.masks[codes].transpose(1, 0, 2).reshape(self.cell[0], -1)  # (h, width(text))
         top = int(round(y)) - (self.baseline if anchor == "baseline" else 0)
         left = int(round(x))
         height, width = pixels.shape[:2]
         t, b = max(top, 0), min(top + mask.shape[0], height)
         lft, r = max(left, 0), min(left + mask.shape[1], width)
         if t >= b or lft >= r:
-            return (0, 0, 0, 0)
+            return
         cover = mask[t - top : b - top, lft - left : r - left, None]
         region = pixels[t:b, lft:r, :3].astype(np.float32)
         region += (np.asarray(colour, dtype=np.float32) - region) * cover
         pixels[t:b, lft:r, :3] = np.rint(region).astype(np.uint8)
-        return (lft, t, r, b)

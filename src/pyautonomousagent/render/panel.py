@@ -110,21 +110,17 @@ def _value_lines(
                 done.update(point)
                 stem = key[2:] if len(key) > 1 else "position"
                 label = _label(stem.removesuffix("_position") or "position", docs.get(xk))
-                lines.append(_point_line(label, [columns[k][:, agent] for k in point], count))
+                lines.append(_values_line(label, [columns[k][:, agent] for k in point], count))
                 continue
-        values = columns[key][:, agent]
-        lines.append(PanelLine(_label(key, docs.get(key)), _reader(values),
-                               _widest(values[:count])))  # fmt: skip
+        lines.append(_values_line(_label(key, docs.get(key)), [columns[key][:, agent]], count))
     return lines
 
 
-def _reader(values: np.ndarray) -> Callable[[int], str]:
-    """The text of ``values[row]`` (one agent's column, shape (records,))."""
-    return lambda row: _number(values[row])
-
-
-def _point_line(label: str, axes: list[np.ndarray], count: int) -> PanelLine:
-    """``(x, y)`` or ``(x, y, z)`` of the columns ``axes`` (records,) each."""
+def _values_line(label: str, axes: list[np.ndarray], count: int) -> PanelLine:
+    """One value, or a point ``(x, y)`` or ``(x, y, z)``, of the columns ``axes`` (records,)
+    each."""
+    if len(axes) == 1:
+        return PanelLine(label, lambda row: _number(axes[0][row]), _widest(axes[0][:count]))
 
     def point(row: int) -> str:
         return "(" + ", ".join(_number(a[row]) for a in axes) + ")"

@@ -1,35 +1,21 @@
 """``replay.html``: one self-contained page that replays a recorded run in any browser, offline.
 
-The page shows the world map (agents, trails, the mission's marks, events as they happen), the
-behaviour tree with each node coloured by the selected agent's status at the selected
-iteration, that agent's state and blackboard, the event log, and a timeline (play, pause,
-step, speed, scrubbing). A click on an agent selects it.
-
-Everything is in the file: the page (``replay_template.html``, no external script, style or
-font) and the run's data as JSON inside a ``<script type="application/json">``, with the
-large arrays base64-encoded:
-
-- ``positions``: uint16 triplets (x, y, heading) per frame and agent, scaled into the
-  ranges given beside them (about 1/65535 of the range: 0.0015 units in a 100-unit world);
-- ``statuses``: int8 node statuses per frame, traced agent and node (codes of
-  :mod:`pyautonomousagent.bt.status`);
-- ``values``: float64 state, blackboard and model values per frame, traced agent and column
-  (exact), with the active behaviour as a node index;
-- ``altitude``: where the run records column ``z`` (the 3-D drone), uint16 altitudes per
-  frame and agent, scaled like the positions; the page colours each agent by it and adds it
-  to its label (None otherwise);
-- ``changing_marks``: the mission's marks that change during the run
-  (:meth:`Mission.frame_marks`, e.g. vacuum's cleaned area), each once with the frame
-  intervals where it shows.
-
-The size is kept in check by decimation: at most ``max_frames`` frames, and at most
-:data:`MAX_AGENT_FRAMES` agent positions in all; the frames of each event's iteration and the
-iteration after it are always kept.
+The page (``replay_template.html``, no external script, style or font: the map, the tree
+coloured by the selected agent's statuses, its state and blackboard, the event log, a
+timeline) and the run's data, JSON inside a ``<script type="application/json">``, are one
+file. docs/data.md describes the data: the large arrays base64-encoded, ``positions``
+(frames, N, 3) and ``altitude`` (frames, N; where column ``z`` is recorded, else None) as
+uint16 steps of 1/65535 of their range, ``statuses`` int8 (frames, traced, nodes),
+``values`` float64 (frames, traced, columns), and the changing marks each once with the
+frame intervals where it shows. Decimation keeps the size in check: at most ``max_frames``
+frames and :data:`MAX_AGENT_FRAMES` agent positions, always with the frames of each event's
+iteration and the next.
 """
 
 from __future__ import annotations
 
 import base64
+import html
 import json
 import math
 import time
@@ -58,14 +44,12 @@ TEMPLATE = "replay_template.html"
 
 @dataclass(frozen=True)
 class ReplayStats:
-    """What :func:`write_replay` wrote: the file, its size, frames, agents, traced agents and
-    the wall seconds it took."""
+    """What :func:`write_replay` wrote: the file, its size in bytes, its frames and the wall
+    seconds it took."""
 
     path: Path
     bytes: int
     frames: int
-    agents: int
-    traced: int
     seconds: float
 
 
@@ -118,6 +102,7 @@ def replay_data(
         behaviour = recorder.behaviour[rows][:, traced].astype(np.float64)
         values = np.concatenate([values.astype(np.float64), behaviour[..., None]], axis=2)
         columns.append("behaviour")
+    docs = {c: recorder.docs.get(c, ("", "")) for c in columns}
     return {
         "title": title,
         "world": [float(world[0]), float(world[1])],
@@ -131,8 +116,8 @@ def replay_data(
         "statuses": _b64(recorder.traces[rows].transpose(0, 2, 1).astype(np.int8)),
         "columns": columns,
         "groups": {**recorder.groups, "behaviour": ["behaviour"]},
-        "units": {c: _short_unit(recorder.docs.get(c, ("", ""))[0]) for c in columns},
-        "descriptions": {c: recorder.docs.get(c, ("", ""))[1] for c in columns},
+        "units": {c: UNITS.get(unit, unit) for c, (unit, _) in docs.items()},
+        "descriptions": {c: doc for c, (_, doc) in docs.items()},
         "values": _b64(np.ascontiguousarray(values, dtype=np.float64)),
         "marks": [asdict(m) for m in marks],
         "changing_marks": changing_marks(frame_marks, rows) if frame_marks else [],
@@ -158,23 +143,17 @@ def changing_marks(
     return [{**asdict(mark), "frames": frames} for mark, frames in shown.items()]
 
 
-def _short_unit(unit: str) -> str:
-    """ "world unit / iteration" -> "u/it" (the animation panel's short units)."""
-    return UNITS.get(unit, unit)
-
-
 def _positions(recorder: Recorder, rows: np.ndarray) -> dict[str, Any]:
     """x, y, heading of every agent at ``rows`` as uint16 triplets (frames, N, 3), base64,
     with each quantity's offset and step: ``value = offset + code * step``."""
     out: dict[str, Any] = {"offset": [], "step": []}
     codes = []
     for key in ("x", "y", "heading"):
-        v = recorder.columns[key][rows].astype(np.float64)
+        v = recorder.columns[key][rows]
         low, high = (0.0, 360.0) if key == "heading" else (float(v.min()), float(v.max()))
-        step = (high - low) / 65535 or 1.0
-        codes.append(np.clip(np.rint((v - low) / step), 0, 65535).astype("<u2"))
+        codes.append(_quantised(v, low, high))
         out["offset"].append(low)
-        out["step"].append(step)
+        out["step"].append((high - low) / 65535 or 1.0)
     out["data"] = _b64(np.stack(codes, axis=2))
     return out
 
@@ -187,10 +166,15 @@ def _altitudes(recorder: Recorder, rows: np.ndarray) -> dict[str, Any] | None:
     if scale is None:
         return None
     low, high = scale
-    step = (high - low) / 65535
-    values = recorder.columns[ALTITUDE][rows].astype(np.float64)
-    codes = np.clip(np.rint((values - low) / step), 0, 65535).astype("<u2")
-    return {"offset": low, "step": step, "top": high, "data": _b64(codes)}
+    codes = _quantised(recorder.columns[ALTITUDE][rows], low, high)
+    return {"offset": low, "step": (high - low) / 65535, "top": high, "data": _b64(codes)}
+
+
+def _quantised(values: np.ndarray, low: float, high: float) -> np.ndarray:
+    """``values`` as uint16 codes of steps ``(high - low) / 65535`` (1 where that is 0) from
+    ``low``, clipped to 0..65535; same shape."""
+    step = (high - low) / 65535 or 1.0
+    return np.clip(np.rint((values.astype(np.float64) - low) / step), 0, 65535).astype("<u2")
 
 
 def _b64(array: np.ndarray) -> str:
@@ -204,11 +188,8 @@ def render_page(data: Mapping[str, Any]) -> str:
     text = json.dumps(data, separators=(",", ":"), allow_nan=False)
     # "</" would end the script element early; JSON allows "<\/" for "</".
     text = text.replace("</", "<\\/")
-    return template.replace("/*__DATA__*/", text, 1).replace("__TITLE__", _escape(data["title"]))
-
-
-def _escape(text: str) -> str:
-    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    title = html.escape(data["title"], quote=False)
+    return template.replace("/*__DATA__*/", text, 1).replace("__TITLE__", title)
 
 
 def write_replay(
@@ -226,11 +207,5 @@ def write_replay(
     data = replay_data(recorder, world, title, marks, events, max_frames, frame_marks)
     path = Path(path)
     path.write_text(render_page(data), encoding="utf-8")
-    return ReplayStats(
-        path,
-        path.stat().st_size,
-        len(data["iterations"]),
-        len(data["names"]),
-        len(data["traced"]),
-        time.perf_counter() - start,
-    )
+    frames = len(data["iterations"])
+    return ReplayStats(path, path.stat().st_size, frames, time.perf_counter() - start)

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
@@ -22,14 +22,6 @@ VIDEO_FORMATS = ("gif", "mp4")
 
 class VideoError(RuntimeError):
     """A video format that cannot be written here, with the fix in the message."""
-
-
-class FrameStream(Protocol):
-    """What :func:`open_stream` yields."""
-
-    frames: int
-
-    def add(self, pixels: np.ndarray) -> None: ...
 
 
 class Mp4Stream:
@@ -76,7 +68,9 @@ class Mp4Stream:
 
 
 @contextmanager
-def open_stream(video: str, path: Path, size: tuple[int, int], fps: float) -> Iterator[FrameStream]:
+def open_stream(
+    video: str, path: Path, size: tuple[int, int], fps: float
+) -> Iterator[GifStream | Mp4Stream]:
     """A frame stream writing ``path`` as ``video`` ("gif" or "mp4") at ``fps`` frames a second.
 
     GIF delays are whole hundredths: ``100 / fps`` rounded, at least 2.

@@ -8,9 +8,7 @@ or from Python (a notebook)::
     studio = Studio("gathering")
     studio.start()                 # serves in a thread; studio.url is the address
 
-docs/studio.md describes it; :mod:`~pyautonomousagent.studio.server` the routes,
-:mod:`~pyautonomousagent.studio.session` the run, :mod:`~pyautonomousagent.studio.trees` how
-blocks go through the tree-file loader.
+docs/studio.md describes it; :mod:`~pyautonomousagent.studio.server` lists the routes.
 """
 
 from __future__ import annotations

@@ -2,10 +2,8 @@
 recent ones placed on the map as the GIF places them, each message with the receivers in
 its range.
 
-Only the public run API is read: ``sim.events`` (alerts, collisions, recorded messages, as
-plain dicts in the order they happened), ``sim.handlers`` (the mission's message types),
-the swarm's columns and the recorder's positions. :class:`EventFeed` reads each event once,
-however often the page asks for a frame.
+Only the public run API is read (``sim.events``, ``sim.handlers``, the swarm's columns, the
+recorder's positions); :class:`EventFeed` reads each event once.
 """
 
 from __future__ import annotations
@@ -56,21 +54,17 @@ class EventFeed:
         self.reach = float(vars(sim.scenario.parameters).get("datalink_range", math.inf))
         self.index = sim.world.agent_index  # name -> row, without a dict of N names
 
-    def update(self) -> None:
-        """Read the events that happened since the last call."""
-        new = self.sim.events[self.seen :]
-        self.seen += len(new)
-        for event in new:
-            kind = str(event.get("event", "event"))
-            self.counts[kind] = self.counts.get(kind, 0) + 1
-            self.recent.append(self._drawn(event))
-
     def frame(self) -> dict[str, Any]:
         """``measures``: per kind reported, the events so far (e.g. ``{"alerts": 2}``);
         ``events``: those of the last :attr:`window` iterations, oldest first, each with
         its kind, text, colour, place (x, y: world units, None if it has none) and, for a
         message, its sender's position (``from``) and the receivers in range (``to``)."""
-        self.update()
+        new = self.sim.events[self.seen :]  # those since the last frame
+        self.seen += len(new)
+        for event in new:
+            kind = str(event.get("event", "event"))
+            self.counts[kind] = self.counts.get(kind, 0) + 1
+            self.recent.append(self._drawn(event))
         now = int(self.sim.world.iteration)
         return {
             "measures": {MEASURES.get(k, f"{k}s"): n for k, n in self.counts.items()},

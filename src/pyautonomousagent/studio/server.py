@@ -1,11 +1,7 @@
 """The studio's web server: Python's own ``http.server``, JSON over HTTP, on 127.0.0.1.
 
-The stack is the standard library (no web framework to install or keep up to date): the
-page keeps one ``/api/frame`` request in flight while it plays, answered once the run has
-moved past the frame it has (``after``), so frames are dropped, never queued. A player thread
-advances the run at the chosen speed, :data:`PLAYER_RATE` times a second, while Play is on.
-The page, the bundle (Blockly, built by ``npm run build``) and Blockly's media are served
-from the package; nothing comes from elsewhere.
+docs/studio.md says why this stack and how frames are paced (:class:`Player`). The page,
+the bundle (``npm run build``) and Blockly's media are served from the package.
 
 Routes (JSON in and out; errors are ``{"error": MESSAGE}`` with status 400)::
 
@@ -231,21 +227,17 @@ class Studio:
         if isinstance(speed, int | float) and not isinstance(speed, bool) and 1 <= speed <= 1e6:
             self.player.speed = float(speed)
         action = data.get("action")
+        if action not in ("play", "pause", "step", "reset"):
+            raise InputError(f"unknown action {action!r}: play, pause, step or reset")
         if action == "play":
             self.session.runnable()  # an invalid tree cannot run
             self.session.current()  # nor a run whose tree or parameters changed
-            self.player.set_playing(True)
-        elif action == "pause":
-            self.player.set_playing(False)
-        elif action == "step":
-            self.player.set_playing(False)
+        self.player.set_playing(action == "play")
+        if action == "step":
             steps = data.get("steps", 1)
             self.session.advance(steps if isinstance(steps, int) and steps > 0 else 1)
         elif action == "reset":
-            self.player.set_playing(False)
             self.session.reset()
-        else:
-            raise InputError(f"unknown action {action!r}: play, pause, step or reset")
         return {"playing": self.player.playing}
 
 
@@ -259,12 +251,7 @@ def scenario_blocks(session: Session) -> dict[str, Any]:
 
 def _handler(studio: Studio) -> type[BaseHTTPRequestHandler]:
     """The request handler class bound to ``studio`` (no global state)."""
-
-    class Handler(_Handler):
-        pass
-
-    Handler.studio = studio
-    return Handler
+    return type("Handler", (_Handler,), {"studio": studio})
 
 
 class _Handler(BaseHTTPRequestHandler):
@@ -278,7 +265,7 @@ class _Handler(BaseHTTPRequestHandler):
         url = urlparse(self.path)
         query = parse_qs(url.query)
         if url.path == "/":
-            self._file(Path(str(resources.files("pyautonomousagent.studio"))) / "page.html")
+            self._file(static_folder().parent / "page.html")
         elif url.path.startswith("/static/"):
             self._static(url.path[len("/static/") :])
         elif url.path == "/api/info":
@@ -357,10 +344,15 @@ class _Handler(BaseHTTPRequestHandler):
 
     def _send(self, status: HTTPStatus, data: Any) -> None:
         payload = json.dumps(data, allow_nan=False, separators=(",", ":")).encode()
+        self._reply(status, "application/json", payload, cache=False)
+
+    def _reply(self, status: HTTPStatus, kind: str, payload: bytes, cache: bool = True) -> None:
+        """Send ``payload`` of MIME type ``kind``; ``cache=False``: the browser keeps no copy."""
         self.send_response(status)
-        self.send_header("Content-Type", "application/json")
+        self.send_header("Content-Type", kind)
         self.send_header("Content-Length", str(len(payload)))
-        self.send_header("Cache-Control", "no-store")
+        if not cache:
+            self.send_header("Cache-Control", "no-store")
         self.end_headers()
         self.wfile.write(payload)
 
@@ -373,13 +365,8 @@ class _Handler(BaseHTTPRequestHandler):
         self._file(path)
 
     def _file(self, path: Path) -> None:
-        data = path.read_bytes()
         kind = mimetypes.guess_type(path.name)[0] or "application/octet-stream"
-        self.send_response(HTTPStatus.OK)
-        self.send_header("Content-Type", kind)
-        self.send_header("Content-Length", str(len(data)))
-        self.end_headers()
-        self.wfile.write(data)
+        self._reply(HTTPStatus.OK, kind, path.read_bytes())
 
 
 def _json(body: bytes) -> Any:
@@ -390,9 +377,9 @@ def _json(body: bytes) -> Any:
 
     try:
         data = json.loads(body or b"{}", parse_constant=refuse)
-    except (ValueError, UnicodeDecodeError) as error:
-        if isinstance(error, InputError):
-            raise
+    except InputError:
+        raise
+    except ValueError as error:  # a UnicodeDecodeError too
         raise InputError(f"the request is not JSON ({error})") from None
     if not isinstance(data, dict):
         raise InputError("the request is a JSON object")

@@ -1,11 +1,7 @@
 """One studio session: a scenario, the tree being edited, its settings and the live run.
 
-Everything here uses the public API only: :meth:`Simulation.create` from the scenario with
-the settings and the tree, :meth:`Simulation.run` for a few iterations at a time, the swarm's
-columns for the drawing, and the recorder's traces (``recorder.trace``, ``recorder.behaviour``)
-for the node statuses. A run is saved with :mod:`pyautonomousagent.runs` as ``pyaa run`` saves
-it, from the tree written as an XML file, so the saved run is the run of
-``pyaa run SCENARIO --tree FILE.xml --seed S``.
+Only the public API is used (docs/studio.md). A run is saved as ``pyaa run`` saves it, from
+the tree written as an XML file: the run of ``pyaa run SCENARIO --tree FILE.xml --seed S``.
 """
 
 from __future__ import annotations
@@ -273,13 +269,10 @@ def read_settings(data: Any, types: dict[str, type]) -> Settings:
 
 def _value(key: str, value: Any, kind: type) -> Any:
     """``value`` as a parameter of type ``kind``, or a ScenarioError naming ``key``."""
-    if kind is str:
-        if not isinstance(value, str):
-            raise ScenarioError(f"{key} must be text, got {shown(value)}")
-        return value
-    if kind is bool:
-        if not isinstance(value, bool):
-            raise ScenarioError(f"{key} must be true or false, got {shown(value)}")
+    if kind in (str, bool):
+        if not isinstance(value, kind):
+            what = "text" if kind is str else "true or false"
+            raise ScenarioError(f"{key} must be {what}, got {shown(value)}")
         return value
     number = _number(value, key)
     if kind is int:
@@ -377,8 +370,7 @@ def active_counts(sim: Simulation, nodes: list[dict[str, Any]]) -> list[int]:
     if behaviour is None or recorder.count == 0 or not nodes:
         return [0] * len(nodes)
     leaves = np.asarray(behaviour[recorder.count - 1])
-    counts = np.bincount(leaves[leaves >= 0].astype(np.intp), minlength=len(nodes))
-    total = counts.astype(np.int64)
+    total = np.bincount(leaves[leaves >= 0].astype(np.intp), minlength=len(nodes))
     for i in range(len(nodes) - 1, 0, -1):  # children come after their parent
         parent = int(nodes[i]["parent"])
         if parent >= 0:

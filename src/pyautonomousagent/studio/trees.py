@@ -81,27 +81,25 @@ def palette(scenario: Scenario) -> dict[str, Any]:
         }
         for t in tags()
     ]
-    leaves = []
-    for cls in fitting_leaves(scenario):
-        ports = [
-            {
-                "name": port.name,
-                "hint": port.hint(),
-                "doc": port.doc,
-                "default": port.default,
-                "value": _plain(values.get(port.default)),
-            }
-            for port in cls.ports
-        ]
-        leaves.append(
-            {
-                "type": cls.type_name,
-                "name": snake_case(cls.type_name),
-                "doc": _first_line(cls.__doc__),
-                "general": is_general(cls),
-                "ports": ports,
-            }
-        )
+    leaves = [
+        {
+            "type": cls.type_name,
+            "name": snake_case(cls.type_name),
+            "doc": _first_line(cls.__doc__),
+            "general": is_general(cls),
+            "ports": [
+                {
+                    "name": port.name,
+                    "hint": port.hint(),
+                    "doc": port.doc,
+                    "default": port.default,
+                    "value": _plain(values.get(port.default)),
+                }
+                for port in cls.ports
+            ],
+        }
+        for cls in fitting_leaves(scenario)
+    ]
     return {"controls": controls, "leaves": leaves}
 
 
@@ -152,33 +150,28 @@ class BlockError(InputError):
 
 
 def _raw(block: Any, count: list[int]) -> RawNode:
-    """A RawNode of one block (checked to be plain data of the right shape)."""
-    try:
-        return _raw_node(block, count)
-    except BlockError:
-        raise
-    except InputError as error:
-        raise BlockError(str(error), count[0] - 1) from None
-
-
-def _raw_node(block: Any, count: list[int]) -> RawNode:
+    """A RawNode of one block (checked to be plain data of the right shape); ``count``: the
+    blocks so far, depth first (a BlockError names the block by it)."""
     count[0] += 1
+    index = count[0] - 1
     if count[0] > MAX_BLOCKS:
-        raise InputError(f"a tree of blocks has at most {MAX_BLOCKS} blocks")
+        raise BlockError(f"a tree of blocks has at most {MAX_BLOCKS} blocks", index)
     if not isinstance(block, dict) or not WORD.fullmatch(str(block.get("type"))):
-        raise InputError("each block needs a type: a node tag or a leaf type")
+        raise BlockError("each block needs a type: a node tag or a leaf type", index)
     ports = block.get("ports") or {}
     children = block.get("children") or []
     name = block.get("name")
     if not isinstance(ports, dict) or not isinstance(children, list):
-        raise InputError("a block's ports are a mapping and its children a list")
+        raise BlockError("a block's ports are a mapping and its children a list", index)
     if name is not None and not isinstance(name, str):
-        raise InputError("a block's name is text")
+        raise BlockError("a block's name is text", index)
     name = name.strip() if name else None
     if name and not NODE_NAME.fullmatch(name):
-        raise InputError(f"a node's name is one line of at most 100 characters, got {name[:40]!r}")
+        raise BlockError(
+            f"a node's name is one line of at most 100 characters, got {name[:40]!r}", index
+        )
     if not all(WORD.fullmatch(str(k)) for k in ports):
-        raise InputError("a port's name is a word of letters, digits and _")
+        raise BlockError("a port's name is a word of letters, digits and _", index)
     text = {str(k): str(v) for k, v in ports.items() if str(v).strip() != ""}
     kids = [_raw(child, count) for child in children]
     return RawNode(block["type"], 0, name or None, text, kids)
@@ -190,43 +183,29 @@ def check_blocks(root: Block | None, scenario: Scenario) -> Checked:
         return Checked(None, None, "the tree is empty: drag a node into the Tree block", -1)
     try:
         document = to_document(root)
-    except InputError as error:
+    except (InputError, TreeError) as error:  # a BlockError names its block
         return Checked(None, None, str(error), getattr(error, "block", -1))
-    except TreeError as error:
-        return Checked(None, None, str(error), -1)
-    return check_document(document, scenario)
-
-
-def check_document(document: Document, scenario: Scenario) -> Checked:
-    """Build ``document`` and check that its leaves fit ``scenario``."""
     raws = document.trees[document.main].walk()
+    tree = None
     try:
         tree = build(document)
         check_tree(tree, scenario)
     except TreeError as error:
-        return Checked(None, None, str(error), _block_of(error, raws, document))
+        return Checked(None, None, str(error), _block_of(error, raws, tree))
     return Checked(tree, document)
 
 
-def _block_of(error: TreeError, raws: list[RawNode], document: Document) -> int:
-    """The block a loader message concerns: by its line, else by a node name it quotes."""
+def _block_of(error: TreeError, raws: list[RawNode], tree: Node | None) -> int:
+    """The block a loader message concerns: by its line, else by a node name it quotes
+    (``tree``: the built tree, None if it did not build)."""
     line = getattr(error, "line", 0)
     for i, raw in enumerate(raws):
         if line and raw.line == line:
             return i
-    names = [node.name for node in build_names(document)]
-    for i, name in enumerate(names):
-        if name and f"'{name}'" in str(error):
+    for i, node in enumerate(tree.walk() if tree is not None else ()):
+        if node.name and f"'{node.name}'" in str(error):
             return i
     return -1
-
-
-def build_names(document: Document) -> list[Node]:
-    """The nodes of the built tree, depth first ([] if it does not build)."""
-    try:
-        return list(build(document).walk())
-    except TreeError:
-        return []
 
 
 def tree_text(document: Document, fmt: str, scenario: Scenario) -> str:
