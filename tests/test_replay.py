@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import base64
 import json
+import os
 import re
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -158,3 +161,31 @@ def test_vacuum_replay_shows_the_cleaned_area_as_it_grows():
     assert counts[0] == 0 and counts[-1] > 10
     assert counts == sorted(counts)  # the cleaned area only grows
     assert len(data["changing_marks"]) == counts[-1]  # each cell once: one interval
+
+
+CHANGING_MARKS = """
+import hashlib, json
+from pyautonomousagent.render.replay import replay_data
+from pyautonomousagent.scenarios import load
+from pyautonomousagent.simulation import Simulation
+sim = Simulation.create(load("vacuum").with_overrides(iterations=150), seed=2).run(progress=False)
+mission, rec = sim.scenario.create_mission(), sim.recorder
+marks = lambda r: mission.frame_marks(rec, r)
+data = replay_data(rec, sim.scenario.world, "vacuum", frame_marks=marks)
+print(hashlib.sha256(json.dumps(data["changing_marks"]).encode()).hexdigest())
+"""
+
+
+def test_the_changing_marks_are_in_the_same_order_in_every_process():
+    """Python salts its string hashes per process (``PYTHONHASHSEED``): the replay's marks must
+    not come out in a set's order, or one run would give a different replay.html each time."""
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    digests = set()
+    for seed in ("1", "2", "3"):
+        env = {**os.environ, "PYTHONHASHSEED": seed, "PYTHONPATH": src}
+        done = subprocess.run(
+            [sys.executable, "-c", CHANGING_MARKS], env=env, capture_output=True, text=True
+        )
+        assert done.returncode == 0, done.stderr[-2000:]
+        digests.add(done.stdout.strip())
+    assert len(digests) == 1, digests

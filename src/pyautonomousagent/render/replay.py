@@ -130,14 +130,16 @@ def changing_marks(
 ) -> list[dict[str, Any]]:
     """Each mark that ``frame_marks`` gives at some of ``rows``, once, with the frames where it
     is shown: ``frames`` = [[first, last], ...] (frame indices, inclusive), so a mark that
-    stays (a cleaned cell) costs one interval, not one copy per frame."""
+    stays (a cleaned cell) costs one interval, not one copy per frame. Marks are listed in the
+    order they first appear (and, within a frame, ``frame_marks``'s order), so the same run
+    gives the same file in every process."""
     shown: dict[Mark, list[list[int]]] = {}
-    previous: set[Mark] = set()
+    previous: dict[Mark, None] = {}
     for frame, row in enumerate(rows.tolist()):
-        now = set(frame_marks(int(row)))
-        for mark in now - previous:
-            shown.setdefault(mark, []).append([frame, frame])
+        now = dict.fromkeys(frame_marks(int(row)))
         for mark in now:
+            if mark not in previous:
+                shown.setdefault(mark, []).append([frame, frame])
             shown[mark][-1][1] = frame
         previous = now
     return [{**asdict(mark), "frames": frames} for mark, frames in shown.items()]
