@@ -7,7 +7,7 @@ Suffix ``_S``: synchronous (SUCCESS/FAILURE); suffix ``_A``: asynchronous (may b
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 from pyautonomousagent.arrays import bearing, choose, maximum, minimum
 from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
@@ -163,110 +163,127 @@ class ActionNavigateToDestinationA(Leaf):
         return LeafKernel(k.navigate, ("requested_speed",), (self.speed,), later=heading)
 
 
-def _set_destination(agents: AgentView, x: Any, y: Any) -> int:
-    agents.blackboard.x_current_destination_position = x
-    agents.blackboard.y_current_destination_position = y
+class CopyDestination(Leaf):
+    """Base of the leaves "destination := a blackboard position" (2-D and 3-D); SUCCESS."""
+
+    #: The keys (x, y[, z]) of the destination and of the position copied to it.
+    destination: ClassVar[tuple[str, ...]] = DESTINATION
+    source: ClassVar[tuple[str, ...]]
+    #: The kernel (``copy_destination`` or its 3-D form), in a tuple: a function held by
+    #: a class would be bound as a method.
+    copy: ClassVar[tuple[Any]] = (k.copy_destination,)
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        return _set_destination(agents, self.destination, *(getattr(bb, s) for s in self.source))
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(self.copy[0], _destination_from(self.destination, self.source))
+
+
+def _set_destination(agents: AgentView, keys: tuple[str, ...], *position: Any) -> int:
+    """Destination (blackboard ``keys``: x, y[, z]) := ``position``; SUCCESS."""
+    for key, value in zip(keys, position, strict=True):
+        setattr(agents.blackboard, key, value)
     return SUCCESS
 
 
-def _destination_from(source: tuple[str, str]) -> dict[str, str]:
-    """``kernels.copy_destination``'s arrays, parameter -> column: destination := ``source``
-    (two blackboard keys, x and y)."""
-    return {"to_x": DESTINATION[0], "to_y": DESTINATION[1], "from_x": source[0],
-            "from_y": source[1]}  # fmt: skip
+def _destination_from(destination: tuple[str, ...], source: tuple[str, ...]) -> dict[str, str]:
+    """``kernels.copy_destination``'s (or its 3-D form's) arrays, parameter -> key:
+    ``to_x, to_y[, to_z]`` the ``destination``, then ``from_x, ...`` the ``source``."""
+    axes = "xyz"[: len(source)]
+    return {**{f"to_{axis}": key for axis, key in zip(axes, destination, strict=True)},
+            **{f"from_{axis}": key for axis, key in zip(axes, source, strict=True)}}  # fmt: skip
 
 
 @register_leaf
-class ActionSetDestinationEqualToSurveillanceS(Leaf):
+class ActionSetDestinationEqualToSurveillanceS(CopyDestination):
     """Destination := the surveillance position; SUCCESS."""
 
     type_name = "Action_Set_Destination_Equal_To_Surveillance_S"
     keys = DESTINATION + SURVEILLANCE
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        bb = agents.blackboard
-        return _set_destination(agents, bb.x_surveillance_position, bb.y_surveillance_position)
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.copy_destination, _destination_from(SURVEILLANCE))
+    source = SURVEILLANCE
 
 
 @register_leaf
-class ActionSetDestinationEqualToRefuelingS(Leaf):
+class ActionSetDestinationEqualToRefuelingS(CopyDestination):
     """Destination := the refuelling slot; SUCCESS."""
 
     type_name = "Action_Set_Destination_Equal_To_Refueling_S"
     keys = DESTINATION + REFUELING
+    source = REFUELING
+
+
+class PatrolPosition(Leaf):
+    """Base of the leaves that make patrol position 1 or 2 current and the destination (2-D
+    and 3-D: :attr:`axes`); SUCCESS. :attr:`other`: 1 switches to the other position, 0
+    keeps the current one."""
+
+    axes: ClassVar[str] = "xy"
+    other: ClassVar[int]
+    #: The kernel (``patrol_position`` or its 3-D form) and its arrays, parameter -> key.
+    patrol: ClassVar[tuple[Any, dict[str, str]]] = (k.patrol_position, PATROL_ARRAYS)
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         bb = agents.blackboard
-        return _set_destination(agents, bb.x_refueling_position, bb.y_refueling_position)
+        index = bb.index_current_surveillance_position
+        index = 3 - index if self.other else index
+        first = index == 1
+        position = [
+            choose(first, getattr(bb, f"{axis}_surveillance_position_1"),
+                   getattr(bb, f"{axis}_surveillance_position_2"))
+            for axis in self.axes
+        ]  # fmt: skip
+        bb.index_current_surveillance_position = index
+        for axis, value in zip(self.axes, position, strict=True):
+            setattr(bb, f"{axis}_surveillance_position", value)
+        keys = tuple(f"{axis}_current_destination_position" for axis in self.axes)
+        return _set_destination(agents, keys, *position)
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.copy_destination, _destination_from(REFUELING))
-
-
-def _go_to_patrol_position(agents: AgentView, index: Any) -> int:
-    """Make patrol position ``index`` (1 or 2) current and the destination."""
-    bb = agents.blackboard
-    first = index == 1
-    x = choose(first, bb.x_surveillance_position_1, bb.x_surveillance_position_2)
-    y = choose(first, bb.y_surveillance_position_1, bb.y_surveillance_position_2)
-    bb.index_current_surveillance_position = index
-    bb.x_surveillance_position = x
-    bb.y_surveillance_position = y
-    return _set_destination(agents, x, y)
+        return LeafKernel(self.patrol[0], self.patrol[1], (self.other,))
 
 
 @register_leaf
-class ActionSetDestinationEqualToOtherSurveillanceS(Leaf):
+class ActionSetDestinationEqualToOtherSurveillanceS(PatrolPosition):
     """Switch to the other patrol surveillance position and make it the destination; SUCCESS."""
 
     type_name = "Action_Set_Destination_Equal_To_Other_Surveillance_S"
     keys = DESTINATION + SURVEILLANCE + PATROL
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        return _go_to_patrol_position(
-            agents, 3 - agents.blackboard.index_current_surveillance_position
-        )
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.patrol_position, PATROL_ARRAYS, (1,))
+    other = 1
 
 
 @register_leaf
-class ActionSetDestinationEqualToCurrentSurveillanceS(Leaf):
+class ActionSetDestinationEqualToCurrentSurveillanceS(PatrolPosition):
     """Destination := the current patrol surveillance position; SUCCESS."""
 
     type_name = "Action_Set_Destination_Equal_To_Current_Surveillance_S"
     keys = DESTINATION + SURVEILLANCE + PATROL
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        return _go_to_patrol_position(agents, agents.blackboard.index_current_surveillance_position)
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.patrol_position, PATROL_ARRAYS, (0,))
+    other = 0
 
 
 @register_leaf
 class ActionTransmitGatheringMessageS(Leaf):
-    """Send everyone a "gathering" message carrying this agent's surveillance position; SUCCESS."""
+    """Send everyone a "gathering" message carrying this agent's surveillance position; SUCCESS.
+
+    The 3-D leaf subclasses it: :attr:`keys` are the point's (x, y[, z]: the payload's
+    fields), :attr:`transmit` holds the kernel."""
 
     type_name = "Action_Transmit_Gathering_Message_S"
-    keys = SURVEILLANCE
+    keys: ClassVar[tuple[str, ...]] = SURVEILLANCE
+    transmit: ClassVar[tuple[Any]] = (k.transmit_point,)
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         bb = agents.blackboard
-        data = {"x": bb.x_surveillance_position, "y": bb.y_surveillance_position}
+        data = {key[0]: getattr(bb, key) for key in self.keys}
         self.broadcast(agents, world, GATHERING, data)
         return SUCCESS
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(
-            k.transmit_point,
-            {"x": "x", "y": "y", **SURVEILLANCE_POINT},
-            sends=Sends(GATHERING, ("x", "y")),
-        )
+        point = {f"p{key[0]}": key for key in self.keys}
+        fields = tuple(key[0] for key in self.keys)
+        return LeafKernel(self.transmit[0], {"x": "x", "y": "y", **point},
+                          sends=Sends(GATHERING, fields))  # fmt: skip
 
 
 @register_leaf
