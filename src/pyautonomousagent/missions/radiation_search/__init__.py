@@ -45,7 +45,6 @@ from pyautonomousagent.mission import (
     MessageType,
     Mission,
     Param,
-    Point,
     Reader,
     ScenarioView,
     SimulationView,
@@ -90,11 +89,6 @@ def read_source(reader: Reader, data: Any, path: str) -> Source:
     )
 
 
-def read_positions(reader: Reader, data: Any, path: str) -> tuple[Point, ...]:
-    """A list of at least one [x, y]."""
-    return reader.points(data, path)
-
-
 def radiation_level(x: np.ndarray, y: np.ndarray, source: Source) -> np.ndarray:
     """The level read at (x, y), shape (N,): ``100 (1 - d / range)`` percent within the range
     of the source (d: distance to it), 0 outside."""
@@ -125,7 +119,7 @@ class RadiationSearchMission(Mission):
     world_objects: ClassVar[tuple[WorldObject, ...]] = (
         WorldObject("radiation_source", read_source,
                     doc="the source {x, y, range}: level 100 (1 - d / range) % within range"),
-        WorldObject("start_positions", read_positions,
+        WorldObject("start_positions", Reader.points,
                     doc="start positions [x, y], used in turn by drones 1, 2, ... (cycled)"),
     )  # fmt: skip
     columns: ClassVar[dict[str, Any]] = {"radiation": np.float64}  # percent, [0, 100]

@@ -15,6 +15,7 @@ from pyautonomousagent.bt import RUNNING, SUCCESS, Leaf, Port, register_leaf, su
 from pyautonomousagent.kernels import ITERATION, Later, LeafKernel, Sends
 from pyautonomousagent.kernels import bearing as bearing_of_one
 from pyautonomousagent.mission import AgentView, World
+from pyautonomousagent.missions.drones.leaves import ConditionRadiationDetected
 from pyautonomousagent.missions.radiation_search import kernels as k
 from pyautonomousagent.randomness import seed_halves
 
@@ -31,15 +32,10 @@ SPEED = Port("speed", float, "search_speed", 0.0, "world units per iteration")
 
 
 @register_leaf
-class ConditionRadiationAboveThreshold(Leaf):
+class ConditionRadiationAboveThreshold(ConditionRadiationDetected):
     """SUCCESS if the radiation sensor reads more than ``threshold`` percent."""
 
     type_name = "Condition_Radiation_Above_Threshold"
-    ports = (Port("threshold", float, "radiation_threshold", 0.0, "percent"),)
-    threshold: float
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        return success_if(agents.radiation > self.threshold)
 
     def kernel(self, world: World) -> LeafKernel:
         return LeafKernel(k.above, ("radiation",), (self.threshold,))

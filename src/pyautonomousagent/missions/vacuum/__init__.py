@@ -50,7 +50,6 @@ from pyautonomousagent.mission import (
     Mark,
     Mission,
     Param,
-    Point,
     Reader,
     Recorder,
     ScenarioView,
@@ -93,11 +92,6 @@ MAX_CELLS = 4_000_000
 """The largest cleaned-area grid a scenario may ask for (cells)."""
 
 
-def read_positions(reader: Reader, data: Any, path: str) -> tuple[Point, ...]:
-    """A list of at least one [x, y]."""
-    return reader.points(data, path)
-
-
 def obstacle_mark(obstacle: Rectangle | Circle) -> Mark:
     """An obstacle as a filled grey mark."""
     style: dict[str, Any] = {"colour": OBSTACLE_COLOUR, "fill": True, "legend": "obstacle"}
@@ -136,7 +130,7 @@ class VacuumMission(Mission):
         WorldObject("obstacles", read_obstacles, (),
                     "obstacles: {shape: rect, x, y, width, height} (lower-left corner) or "
                     "{shape: circle, x, y, radius}, world units, inside the room"),
-        WorldObject("start_positions", read_positions,
+        WorldObject("start_positions", Reader.points,
                     doc="start positions [x, y], used in turn by robots 1, 2, ... (cycled)"),
     )  # fmt: skip
     columns: ClassVar[dict[str, Any]] = {
