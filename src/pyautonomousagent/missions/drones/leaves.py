@@ -37,8 +37,6 @@ REQUESTED = ("requested_heading", "requested_speed")
 #: The position and the destination as the kernels' ``x, y, to_x, to_y`` (parameter -> column:
 #: ``kernels.destination_reached``, ``pyautonomousagent.kernels.bearing``).
 TOWARD_DESTINATION = {"x": "x", "y": "y", "to_x": DESTINATION[0], "to_y": DESTINATION[1]}
-#: The surveillance position as the kernels' point ``px, py`` (parameter -> key).
-SURVEILLANCE_POINT = {"px": SURVEILLANCE[0], "py": SURVEILLANCE[1]}
 #: The arrays of ``kernels.patrol_position``, parameter -> column.
 PATROL_ARRAYS = dict(
     zip(("index", "to_x", "to_y", "sx", "sy", "x1", "y1", "x2", "y2"),
@@ -147,20 +145,24 @@ class ActionNavigateToDestinationA(Leaf):
 
     type_name = "Action_Navigate_To_Destination_A"
     ports = (SPEED,)
-    keys = DESTINATION
+    keys: ClassVar[tuple[str, ...]] = DESTINATION
     speed: float
+    #: The blackboard keys (x, y) of the point flown to, and the kernel in a tuple (a
+    #: function held by a class would be bound as a method); subclasses set others.
+    target: ClassVar[tuple[str, ...]] = DESTINATION
+    fly: ClassVar[tuple[Any]] = (k.navigate,)
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         bb = agents.blackboard
-        agents.requested_heading = bearing(
-            agents.x, agents.y, bb.x_current_destination_position, bb.y_current_destination_position
-        )
+        to_x, to_y = (getattr(bb, key) for key in self.target)
+        agents.requested_heading = bearing(agents.x, agents.y, to_x, to_y)
         agents.requested_speed = self.speed
         return RUNNING
 
     def kernel(self, world: World) -> LeafKernel:
-        heading = Later(bearing_of_one, TOWARD_DESTINATION, "requested_heading")
-        return LeafKernel(k.navigate, ("requested_speed",), (self.speed,), later=heading)
+        toward = {"x": "x", "y": "y", "to_x": self.target[0], "to_y": self.target[1]}
+        heading = Later(bearing_of_one, toward, "requested_heading")
+        return LeafKernel(self.fly[0], ("requested_speed",), (self.speed,), later=heading)
 
 
 class CopyDestination(Leaf):

@@ -44,12 +44,11 @@ PATROL_3D = (
     PATROL[1], PATROL[2], "z_surveillance_position_1",
     PATROL[3], PATROL[4], "z_surveillance_position_2",
 )  # fmt: skip
-#: The destination as the kernels' ``to_x, to_y, to_z`` (parameter -> key).
-TO_DESTINATION_3D = dict(zip(("to_x", "to_y", "to_z"), DESTINATION_3D, strict=True))
-#: The surveillance position as the kernels' point ``px, py, pz`` (parameter -> key).
-SURVEILLANCE_POINT_3D = dict(zip(("px", "py", "pz"), SURVEILLANCE_3D, strict=True))
 #: The position and the destination as ``kernels.destination_reached_3d``'s arrays.
-TOWARD_DESTINATION_3D = {"x": "x", "y": "y", "z": "z", **TO_DESTINATION_3D}
+TOWARD_DESTINATION_3D = {
+    "x": "x", "y": "y", "z": "z",
+    **dict(zip(("to_x", "to_y", "to_z"), DESTINATION_3D, strict=True)),
+}  # fmt: skip
 #: The arrays of ``kernels.patrol_position_3d``, parameter -> key.
 PATROL_ARRAYS_3D = dict(
     zip(("index", "to_x", "to_y", "to_z", "sx", "sy", "sz", "x1", "y1", "z1", "x2", "y2", "z2"),

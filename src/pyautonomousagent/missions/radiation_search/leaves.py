@@ -12,10 +12,12 @@ from typing import Any
 
 from pyautonomousagent.arrays import bearing, choose
 from pyautonomousagent.bt import RUNNING, SUCCESS, Leaf, Port, register_leaf, success_if
-from pyautonomousagent.kernels import ITERATION, Later, LeafKernel, Sends
-from pyautonomousagent.kernels import bearing as bearing_of_one
+from pyautonomousagent.kernels import ITERATION, LeafKernel, Sends
 from pyautonomousagent.mission import AgentView, World
-from pyautonomousagent.missions.drones.leaves import ConditionRadiationDetected
+from pyautonomousagent.missions.drones.leaves import (
+    ActionNavigateToDestinationA,
+    ConditionRadiationDetected,
+)
 from pyautonomousagent.missions.radiation_search import kernels as k
 from pyautonomousagent.randomness import seed_halves
 
@@ -95,25 +97,14 @@ class ActionReportSourceS(Leaf):
 
 
 @register_leaf
-class ActionFlyToReportedPositionA(Leaf):
+class ActionFlyToReportedPositionA(ActionNavigateToDestinationA):
     """Request the heading toward the reported position at ``speed``; RUNNING."""
 
     type_name = "Action_Fly_To_Reported_Position_A"
     ports = (SPEED,)
     keys = REPORTED
-    speed: float
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        bb = agents.blackboard
-        agents.requested_heading = bearing(
-            agents.x, agents.y, bb.x_reported_position, bb.y_reported_position
-        )
-        agents.requested_speed = self.speed
-        return RUNNING
-
-    def kernel(self, world: World) -> LeafKernel:
-        heading = Later(bearing_of_one, TOWARD_REPORTED, "requested_heading")
-        return LeafKernel(k.fly, ("requested_speed",), (self.speed,), later=heading)
+    target = REPORTED[1:]
+    fly = (k.fly,)
 
 
 @register_leaf
