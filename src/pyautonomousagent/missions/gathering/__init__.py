@@ -98,10 +98,3 @@ class GatheringMission(DroneMission):
         """Slots R1.., surveillance positions S1.."""
         points = self.scenario.objects.surveillance_positions
         return [*super().marks(), *self.surveillance_marks(points)]
-
-    def gathering_point(self) -> Any:
-        """The sender's surveillance position (where everyone gathers), or None."""
-        names = [f"{self.agent_prefix}{i + 1}" for i in range(self.scenario.agents)]
-        index = names.index(self.params.gathering_sender)
-        points = self.scenario.objects.surveillance_positions
-        return points[index % len(points)]
