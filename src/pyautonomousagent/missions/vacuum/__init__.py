@@ -18,17 +18,9 @@ that cleans the cells in robot order once an iteration), so the compiled engine 
 iterations fused (``kernels.py``), and so does the GPU engine (``device.py``: the grid's
 steps on the device, the lowest robot row winning a cell by an atomic minimum):
 
-- world objects (``world:``): ``obstacles``, a list of ``{shape: rect, x, y, width,
-  height}`` (lower-left corner) and ``{shape: circle, x, y, radius}``, each wholly inside
-  the room (:func:`~pyautonomousagent.missions.vacuum.room.check_inside`); ``start_positions``,
-  [x, y] per robot (cycled);
-- parameters: ``robot_speed``, ``collision_distance``, ``sonar_range``, ``avoid_min_angle``,
-  ``avoid_max_angle``, ``cell_size`` (see :attr:`VacuumMission.parameters`); the avoid
-  leaf's ``step`` port defaults to the motion model's ``turn_step``;
-- state columns: ``sonar`` (world units, the reading of Phase 2), ``vacuuming`` (1 when the
-  brush ran in this iteration's tick) and ``cleaned_cells`` (cells this robot cleaned first,
-  cumulative: their sum over the robots is the cleaned area in cells, never decreasing);
-- blackboard: ``cruise_heading`` (degrees);
+- world objects, parameters, state columns and the blackboard key: as
+  :class:`VacuumMission` declares them (the avoid leaf's ``step`` port defaults to the
+  motion model's ``turn_step``);
 - Phase 2 (:meth:`VacuumMission.sense`): the cells under robots whose brush ran are cleaned
   (:attr:`VacuumMission.grid`, :meth:`VacuumMission.coverage`), the sonar is read, and a robot
   whose next step (the drone2d equations) would leave the room or touch an obstacle does not
