@@ -34,9 +34,6 @@ PATROL = (
 )
 #: The control references a navigating leaf writes.
 REQUESTED = ("requested_heading", "requested_speed")
-#: The position and the destination as the kernels' ``x, y, to_x, to_y`` (parameter -> column:
-#: ``kernels.destination_reached``, ``pyautonomousagent.kernels.bearing``).
-TOWARD_DESTINATION = {"x": "x", "y": "y", "to_x": DESTINATION[0], "to_y": DESTINATION[1]}
 #: The arrays of ``kernels.patrol_position``, parameter -> column.
 PATROL_ARRAYS = dict(
     zip(("index", "to_x", "to_y", "sx", "sy", "x1", "y1", "x2", "y2"),
@@ -47,26 +44,36 @@ STATE = ("x", "y", "speed", "heading", "damage", "energy")
 SPEED = Port("speed", float, "reference_speed", 0.0, "cruise speed requested, units per iteration")
 
 
+def toward(target: tuple[str, ...]) -> dict[str, str]:
+    """The position and the point ``target`` (its x, y keys) as the kernels' ``x, y, to_x,
+    to_y`` (parameter -> column: ``kernels.destination_reached``, ``kernels.bearing``)."""
+    return {"x": "x", "y": "y", "to_x": target[0], "to_y": target[1]}
+
+
 @register_leaf
 class ConditionDestinationReached(Leaf):
     """SUCCESS if the agent is within ``distance`` of its current destination."""
 
     type_name = "Condition_Destination_Reached"
     ports = (Port("distance", float, "destination_tolerance", 0.0, "world units"),)
-    keys = DESTINATION
+    keys: ClassVar[tuple[str, ...]] = DESTINATION
     distance: float
+    #: The blackboard keys (x, y) of the point, and the kernel in a tuple (a function held
+    #: by a class would be bound as a method); subclasses set others.
+    target: ClassVar[tuple[str, ...]] = DESTINATION
+    reached: ClassVar[tuple[Any]] = (k.destination_reached,)
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         bb = agents.blackboard
-        dx = agents.x - bb.x_current_destination_position
-        dy = agents.y - bb.y_current_destination_position
+        dx = agents.x - getattr(bb, self.target[0])
+        dy = agents.y - getattr(bb, self.target[1])
         dx *= dx  # in place on arrays: two temporaries of N, not five
         dy *= dy
         dx += dy
         return success_if(dx <= self.distance * self.distance)
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.destination_reached, TOWARD_DESTINATION, (self.distance,))
+        return LeafKernel(self.reached[0], toward(self.target), (self.distance,))
 
 
 @register_leaf
@@ -160,8 +167,7 @@ class ActionNavigateToDestinationA(Leaf):
         return RUNNING
 
     def kernel(self, world: World) -> LeafKernel:
-        toward = {"x": "x", "y": "y", "to_x": self.target[0], "to_y": self.target[1]}
-        heading = Later(bearing_of_one, toward, "requested_heading")
+        heading = Later(bearing_of_one, toward(self.target), "requested_heading")
         return LeafKernel(self.fly[0], ("requested_speed",), (self.speed,), later=heading)
 
 

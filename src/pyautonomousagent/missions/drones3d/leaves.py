@@ -26,10 +26,10 @@ from pyautonomousagent.missions.drones.leaves import (
     REFUELING,
     SPEED,
     SURVEILLANCE,
-    TOWARD_DESTINATION,
     ActionTransmitGatheringMessageS,
     CopyDestination,
     PatrolPosition,
+    toward,
 )
 from pyautonomousagent.missions.drones3d import kernels as k
 from pyautonomousagent.state import AgentView
@@ -120,7 +120,7 @@ class ActionNavigateToDestination3DA(Leaf):
         return RUNNING
 
     def kernel(self, world: World) -> LeafKernel:
-        heading = Later(bearing_of_one, TOWARD_DESTINATION, "requested_heading")
+        heading = Later(bearing_of_one, toward(DESTINATION), "requested_heading")
         names = {**TOWARD_DESTINATION_3D, "speed": "requested_speed",
                  "altitude": "requested_altitude"}  # fmt: skip
         constants = (self.speed, self.distance, self.slope)

@@ -16,6 +16,7 @@ from pyautonomousagent.kernels import ITERATION, LeafKernel, Sends
 from pyautonomousagent.mission import AgentView, World
 from pyautonomousagent.missions.drones.leaves import (
     ActionNavigateToDestinationA,
+    ConditionDestinationReached,
     ConditionRadiationDetected,
 )
 from pyautonomousagent.missions.radiation_search import kernels as k
@@ -27,9 +28,6 @@ REPORTED = ("source_reported", "x_reported_position", "y_reported_position")
 """Blackboard keys: whether the drone knows a reported position (0/1), and where it is."""
 REPORTED_ARRAYS = dict(zip(("reported", "to_x", "to_y"), REPORTED, strict=True))
 """The same as the kernels' parameters ``reported, to_x, to_y`` take them (parameter -> key)."""
-TOWARD_REPORTED = {"x": "x", "y": "y", "to_x": REPORTED[1], "to_y": REPORTED[2]}
-"""The position and the reported one as the kernels' ``x, y, to_x, to_y``
-(``kernels.at_reported_position``, ``pyautonomousagent.kernels.bearing``)."""
 SPEED = Port("speed", float, "search_speed", 0.0, "world units per iteration")
 
 
@@ -58,22 +56,14 @@ class ConditionSourceReported(Leaf):
 
 
 @register_leaf
-class ConditionAtReportedPosition(Leaf):
+class ConditionAtReportedPosition(ConditionDestinationReached):
     """SUCCESS if the drone is within ``distance`` of the reported position."""
 
     type_name = "Condition_At_Reported_Position"
     ports = (Port("distance", float, "source_tolerance", 0.0, "world units"),)
     keys = REPORTED
-    distance: float
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        bb = agents.blackboard
-        dx = agents.x - bb.x_reported_position
-        dy = agents.y - bb.y_reported_position
-        return success_if(dx * dx + dy * dy <= self.distance * self.distance)
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.at_reported_position, TOWARD_REPORTED, (self.distance,))
+    target = REPORTED[1:]
+    reached = (k.at_reported_position,)
 
 
 @register_leaf
