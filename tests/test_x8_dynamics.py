@@ -44,7 +44,6 @@ def test_parameters_read_from_the_files():
     assert (act.elevon_min, act.elevon_max) == (math.radians(-30), math.radians(35))
     assert act.elevon_rate_max == 3.4907
     assert (act.omega_0, act.zeta, act.throttle_tau) == (100, 1.71, 0.2)
-    assert act.aileron_limits == pytest.approx((math.radians(-32.5), math.radians(32.5)))
 
 
 def random_states(rng: np.random.Generator, n: int) -> list[dict]:

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import logging
 import math
-from dataclasses import astuple, dataclass
+from dataclasses import astuple, dataclass, fields
 
 import numpy as np
 
@@ -98,36 +98,18 @@ class X8Settings:
     max_ground_pitch: float = 12.0
 
     def mode_settings(self) -> modes.ModeSettings:
-        """The take-off and landing phases' settings, angles in radians."""
-        rad = math.radians
+        """The take-off and landing phases' settings (the fields of the same names), angles
+        in radians."""
+        values = {f.name: getattr(self, f.name) for f in fields(modes.ModeSettings)}
+        angles = {"flare_pitch", "flare_gain", "max_flare_pitch", "rotation_pitch",
+                  "max_ground_pitch"}  # fmt: skip
         return modes.ModeSettings(
-            altitude=self.altitude,
-            flare_height=self.flare_height,
-            flare_time=self.flare_time,
-            touchdown_sink=self.touchdown_sink,
-            flare_pitch=rad(self.flare_pitch),
-            flare_gain=rad(self.flare_gain),
-            max_flare_pitch=rad(self.max_flare_pitch),
-            rotation_speed=self.rotation_speed,
-            rotation_pitch=rad(self.rotation_pitch),
-            climb_out_margin=self.climb_out_margin,
-            friction_rolling=self.friction_rolling,
-            friction_braking=self.friction_braking,
-            max_ground_pitch=rad(self.max_ground_pitch),
+            **{name: math.radians(v) if name in angles else v for name, v in values.items()}
         )
 
     def gains(self) -> GuidanceGains:
-        """The guidance PIDs' gains and limits."""
-        return GuidanceGains(
-            self.course_kp,
-            self.course_ki,
-            self.course_kd,
-            self.max_roll,
-            self.altitude_kp,
-            self.altitude_ki,
-            self.altitude_kd,
-            self.max_pitch,
-        )
+        """The guidance PIDs' gains and limits (the fields of the same names)."""
+        return GuidanceGains(**{f.name: getattr(self, f.name) for f in fields(GuidanceGains)})
 
 
 @dataclass

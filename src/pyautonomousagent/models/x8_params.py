@@ -161,12 +161,6 @@ class Actuators:
     throttle_max: float
     throttle_tau: float
 
-    @property
-    def aileron_limits(self) -> tuple[float, float]:
-        """Aileron range reachable with one elevon at each limit (rad), symmetric."""
-        half = (self.elevon_max - self.elevon_min) / 2.0
-        return -half, half
-
 
 @dataclass(frozen=True)
 class X8Parameters:

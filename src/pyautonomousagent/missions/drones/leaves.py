@@ -7,7 +7,7 @@ Suffix ``_S``: synchronous (SUCCESS/FAILURE); suffix ``_A``: asynchronous (may b
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 from pyautonomousagent.arrays import bearing, choose, maximum, minimum
 from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
@@ -34,11 +34,6 @@ PATROL = (
 )
 #: The control references a navigating leaf writes.
 REQUESTED = ("requested_heading", "requested_speed")
-#: The position and the destination as the kernels' ``x, y, to_x, to_y`` (parameter -> column:
-#: ``kernels.destination_reached``, ``pyautonomousagent.kernels.bearing``).
-TOWARD_DESTINATION = {"x": "x", "y": "y", "to_x": DESTINATION[0], "to_y": DESTINATION[1]}
-#: The surveillance position as the kernels' point ``px, py`` (parameter -> key).
-SURVEILLANCE_POINT = {"px": SURVEILLANCE[0], "py": SURVEILLANCE[1]}
 #: The arrays of ``kernels.patrol_position``, parameter -> column.
 PATROL_ARRAYS = dict(
     zip(("index", "to_x", "to_y", "sx", "sy", "x1", "y1", "x2", "y2"),
@@ -49,26 +44,36 @@ STATE = ("x", "y", "speed", "heading", "damage", "energy")
 SPEED = Port("speed", float, "reference_speed", 0.0, "cruise speed requested, units per iteration")
 
 
+def toward(target: tuple[str, ...]) -> dict[str, str]:
+    """The position and the point ``target`` (its x, y keys) as the kernels' ``x, y, to_x,
+    to_y`` (parameter -> column: ``kernels.destination_reached``, ``kernels.bearing``)."""
+    return {"x": "x", "y": "y", "to_x": target[0], "to_y": target[1]}
+
+
 @register_leaf
 class ConditionDestinationReached(Leaf):
     """SUCCESS if the agent is within ``distance`` of its current destination."""
 
     type_name = "Condition_Destination_Reached"
     ports = (Port("distance", float, "destination_tolerance", 0.0, "world units"),)
-    keys = DESTINATION
+    keys: ClassVar[tuple[str, ...]] = DESTINATION
     distance: float
+    #: The blackboard keys (x, y) of the point, and the kernel in a tuple (a function held
+    #: by a class would be bound as a method); subclasses set others.
+    target: ClassVar[tuple[str, ...]] = DESTINATION
+    reached: ClassVar[tuple[Any]] = (k.destination_reached,)
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         bb = agents.blackboard
-        dx = agents.x - bb.x_current_destination_position
-        dy = agents.y - bb.y_current_destination_position
+        dx = agents.x - getattr(bb, self.target[0])
+        dy = agents.y - getattr(bb, self.target[1])
         dx *= dx  # in place on arrays: two temporaries of N, not five
         dy *= dy
         dx += dy
         return success_if(dx <= self.distance * self.distance)
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.destination_reached, TOWARD_DESTINATION, (self.distance,))
+        return LeafKernel(self.reached[0], toward(self.target), (self.distance,))
 
 
 @register_leaf
@@ -147,126 +152,146 @@ class ActionNavigateToDestinationA(Leaf):
 
     type_name = "Action_Navigate_To_Destination_A"
     ports = (SPEED,)
-    keys = DESTINATION
+    keys: ClassVar[tuple[str, ...]] = DESTINATION
     speed: float
+    #: The blackboard keys (x, y) of the point flown to, and the kernel in a tuple (a
+    #: function held by a class would be bound as a method); subclasses set others.
+    target: ClassVar[tuple[str, ...]] = DESTINATION
+    fly: ClassVar[tuple[Any]] = (k.navigate,)
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         bb = agents.blackboard
-        agents.requested_heading = bearing(
-            agents.x, agents.y, bb.x_current_destination_position, bb.y_current_destination_position
-        )
+        to_x, to_y = (getattr(bb, key) for key in self.target)
+        agents.requested_heading = bearing(agents.x, agents.y, to_x, to_y)
         agents.requested_speed = self.speed
         return RUNNING
 
     def kernel(self, world: World) -> LeafKernel:
-        heading = Later(bearing_of_one, TOWARD_DESTINATION, "requested_heading")
-        return LeafKernel(k.navigate, ("requested_speed",), (self.speed,), later=heading)
+        heading = Later(bearing_of_one, toward(self.target), "requested_heading")
+        return LeafKernel(self.fly[0], ("requested_speed",), (self.speed,), later=heading)
 
 
-def _set_destination(agents: AgentView, x: Any, y: Any) -> int:
-    agents.blackboard.x_current_destination_position = x
-    agents.blackboard.y_current_destination_position = y
+class CopyDestination(Leaf):
+    """Base of the leaves "destination := a blackboard position" (2-D and 3-D); SUCCESS."""
+
+    #: The keys (x, y[, z]) of the destination and of the position copied to it.
+    destination: ClassVar[tuple[str, ...]] = DESTINATION
+    source: ClassVar[tuple[str, ...]]
+    #: The kernel (``copy_destination`` or its 3-D form), in a tuple: a function held by
+    #: a class would be bound as a method.
+    copy: ClassVar[tuple[Any]] = (k.copy_destination,)
+
+    def evaluate(self, agents: AgentView, world: World) -> Any:
+        bb = agents.blackboard
+        return _set_destination(agents, self.destination, *(getattr(bb, s) for s in self.source))
+
+    def kernel(self, world: World) -> LeafKernel:
+        return LeafKernel(self.copy[0], _destination_from(self.destination, self.source))
+
+
+def _set_destination(agents: AgentView, keys: tuple[str, ...], *position: Any) -> int:
+    """Destination (blackboard ``keys``: x, y[, z]) := ``position``; SUCCESS."""
+    for key, value in zip(keys, position, strict=True):
+        setattr(agents.blackboard, key, value)
     return SUCCESS
 
 
-def _destination_from(source: tuple[str, str]) -> dict[str, str]:
-    """``kernels.copy_destination``'s arrays, parameter -> column: destination := ``source``
-    (two blackboard keys, x and y)."""
-    return {"to_x": DESTINATION[0], "to_y": DESTINATION[1], "from_x": source[0],
-            "from_y": source[1]}  # fmt: skip
+def _destination_from(destination: tuple[str, ...], source: tuple[str, ...]) -> dict[str, str]:
+    """``kernels.copy_destination``'s (or its 3-D form's) arrays, parameter -> key:
+    ``to_x, to_y[, to_z]`` the ``destination``, then ``from_x, ...`` the ``source``."""
+    axes = "xyz"[: len(source)]
+    return {**{f"to_{axis}": key for axis, key in zip(axes, destination, strict=True)},
+            **{f"from_{axis}": key for axis, key in zip(axes, source, strict=True)}}  # fmt: skip
 
 
 @register_leaf
-class ActionSetDestinationEqualToSurveillanceS(Leaf):
+class ActionSetDestinationEqualToSurveillanceS(CopyDestination):
     """Destination := the surveillance position; SUCCESS."""
 
     type_name = "Action_Set_Destination_Equal_To_Surveillance_S"
     keys = DESTINATION + SURVEILLANCE
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        bb = agents.blackboard
-        return _set_destination(agents, bb.x_surveillance_position, bb.y_surveillance_position)
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.copy_destination, _destination_from(SURVEILLANCE))
+    source = SURVEILLANCE
 
 
 @register_leaf
-class ActionSetDestinationEqualToRefuelingS(Leaf):
+class ActionSetDestinationEqualToRefuelingS(CopyDestination):
     """Destination := the refuelling slot; SUCCESS."""
 
     type_name = "Action_Set_Destination_Equal_To_Refueling_S"
     keys = DESTINATION + REFUELING
+    source = REFUELING
+
+
+class PatrolPosition(Leaf):
+    """Base of the leaves that make patrol position 1 or 2 current and the destination (2-D
+    and 3-D: :attr:`axes`); SUCCESS. :attr:`other`: 1 switches to the other position, 0
+    keeps the current one."""
+
+    axes: ClassVar[str] = "xy"
+    other: ClassVar[int]
+    #: The kernel (``patrol_position`` or its 3-D form) and its arrays, parameter -> key.
+    patrol: ClassVar[tuple[Any, dict[str, str]]] = (k.patrol_position, PATROL_ARRAYS)
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         bb = agents.blackboard
-        return _set_destination(agents, bb.x_refueling_position, bb.y_refueling_position)
+        index = bb.index_current_surveillance_position
+        index = 3 - index if self.other else index
+        first = index == 1
+        position = [
+            choose(first, getattr(bb, f"{axis}_surveillance_position_1"),
+                   getattr(bb, f"{axis}_surveillance_position_2"))
+            for axis in self.axes
+        ]  # fmt: skip
+        bb.index_current_surveillance_position = index
+        for axis, value in zip(self.axes, position, strict=True):
+            setattr(bb, f"{axis}_surveillance_position", value)
+        keys = tuple(f"{axis}_current_destination_position" for axis in self.axes)
+        return _set_destination(agents, keys, *position)
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.copy_destination, _destination_from(REFUELING))
-
-
-def _go_to_patrol_position(agents: AgentView, index: Any) -> int:
-    """Make patrol position ``index`` (1 or 2) current and the destination."""
-    bb = agents.blackboard
-    first = index == 1
-    x = choose(first, bb.x_surveillance_position_1, bb.x_surveillance_position_2)
-    y = choose(first, bb.y_surveillance_position_1, bb.y_surveillance_position_2)
-    bb.index_current_surveillance_position = index
-    bb.x_surveillance_position = x
-    bb.y_surveillance_position = y
-    return _set_destination(agents, x, y)
+        return LeafKernel(self.patrol[0], self.patrol[1], (self.other,))
 
 
 @register_leaf
-class ActionSetDestinationEqualToOtherSurveillanceS(Leaf):
+class ActionSetDestinationEqualToOtherSurveillanceS(PatrolPosition):
     """Switch to the other patrol surveillance position and make it the destination; SUCCESS."""
 
     type_name = "Action_Set_Destination_Equal_To_Other_Surveillance_S"
     keys = DESTINATION + SURVEILLANCE + PATROL
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        return _go_to_patrol_position(
-            agents, 3 - agents.blackboard.index_current_surveillance_position
-        )
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.patrol_position, PATROL_ARRAYS, (1,))
+    other = 1
 
 
 @register_leaf
-class ActionSetDestinationEqualToCurrentSurveillanceS(Leaf):
+class ActionSetDestinationEqualToCurrentSurveillanceS(PatrolPosition):
     """Destination := the current patrol surveillance position; SUCCESS."""
 
     type_name = "Action_Set_Destination_Equal_To_Current_Surveillance_S"
     keys = DESTINATION + SURVEILLANCE + PATROL
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        return _go_to_patrol_position(agents, agents.blackboard.index_current_surveillance_position)
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.patrol_position, PATROL_ARRAYS, (0,))
+    other = 0
 
 
 @register_leaf
 class ActionTransmitGatheringMessageS(Leaf):
-    """Send everyone a "gathering" message carrying this agent's surveillance position; SUCCESS."""
+    """Send everyone a "gathering" message carrying this agent's surveillance position; SUCCESS.
+
+    The 3-D leaf subclasses it: :attr:`keys` are the point's (x, y[, z]: the payload's
+    fields), :attr:`transmit` holds the kernel."""
 
     type_name = "Action_Transmit_Gathering_Message_S"
-    keys = SURVEILLANCE
+    keys: ClassVar[tuple[str, ...]] = SURVEILLANCE
+    transmit: ClassVar[tuple[Any]] = (k.transmit_point,)
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         bb = agents.blackboard
-        data = {"x": bb.x_surveillance_position, "y": bb.y_surveillance_position}
+        data = {key[0]: getattr(bb, key) for key in self.keys}
         self.broadcast(agents, world, GATHERING, data)
         return SUCCESS
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(
-            k.transmit_point,
-            {"x": "x", "y": "y", **SURVEILLANCE_POINT},
-            sends=Sends(GATHERING, ("x", "y")),
-        )
+        point = {f"p{key[0]}": key for key in self.keys}
+        fields = tuple(key[0] for key in self.keys)
+        return LeafKernel(self.transmit[0], {"x": "x", "y": "y", **point},
+                          sends=Sends(GATHERING, fields))  # fmt: skip
 
 
 @register_leaf

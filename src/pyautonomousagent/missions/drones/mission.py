@@ -60,11 +60,6 @@ def read_radiation_sources(reader: Reader, data: Any, path: str) -> tuple[Radiat
     return tuple(sources)
 
 
-def read_points(reader: Reader, data: Any, path: str) -> tuple[Point, ...]:
-    """A list of at least one [x, y]."""
-    return reader.points(data, path)
-
-
 def cycled(points: tuple[Point, ...], n: int) -> np.ndarray:
     """Points given to agents 1..n in turn, shape (n, 2)."""
     return np.asarray([points[i % len(points)] for i in range(n)], dtype=np.float64)
@@ -83,6 +78,9 @@ class DroneMission(Mission):
     """
 
     agent_prefix = "drone"
+    #: The blackboard keys of the surveillance position and the destination (x, y[, z]).
+    surveillance: ClassVar[tuple[str, ...]] = SURVEILLANCE
+    destination: ClassVar[tuple[str, ...]] = DESTINATION
     parameters: ClassVar[tuple[Param, ...]] = (
         Param("reference_speed", 0.1, "world units per iteration (m/s for the X8)",
               "cruise speed the navigation leaves request", minimum=0.0),
@@ -104,7 +102,7 @@ class DroneMission(Mission):
               minimum=0.0, maximum=100.0),
     )  # fmt: skip
     world_objects: ClassVar[tuple[WorldObject, ...]] = (
-        WorldObject("refueling_positions", read_points,
+        WorldObject("refueling_positions", Reader.points,
                     doc="refuelling slots [x, y], used in turn by drones 1, 2, ... (cycled)"),
         WorldObject("radiation_sources", read_radiation_sources, (),
                     "radiation sources {x, y, range, active}: level 100 (1 - d / range) %"),
@@ -141,11 +139,12 @@ class DroneMission(Mission):
         bb["x_refueling_position"][:], bb["y_refueling_position"][:] = refuel[:, 0], refuel[:, 1]
 
     def set_surveillance(self, swarm: Swarm, points: np.ndarray) -> None:
-        """Each drone's surveillance position, and its first destination, shape (N, 2)."""
+        """Each drone's surveillance position, and its first destination, shape (N, axes):
+        the keys :attr:`surveillance` and :attr:`destination`, x, y (and z in 3-D)."""
         bb = swarm.blackboard
-        bb["x_surveillance_position"][:], bb["y_surveillance_position"][:] = points.T
-        bb["x_current_destination_position"][:] = points[:, 0]
-        bb["y_current_destination_position"][:] = points[:, 1]
+        for axis, keys in enumerate(zip(self.surveillance, self.destination, strict=True)):
+            for key in keys:
+                bb[key][:] = points[:, axis]
 
     def sense(self, sim: SimulationView) -> np.ndarray:
         """Energy drains; a drone with energy reads radiation and takes damage from it.

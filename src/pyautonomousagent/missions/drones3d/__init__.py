@@ -14,10 +14,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from pyautonomousagent.datalink import Delivery
-from pyautonomousagent.kernels import HandlerKernel, Receive, SensorKernel
-from pyautonomousagent.missions.drones.leaves import GATHERING
-from pyautonomousagent.missions.drones.mission import TARGET_COLOUR, DroneMission, cycled
+from pyautonomousagent.kernels import SensorKernel
+from pyautonomousagent.missions.drones.mission import TARGET_COLOUR, DroneMission
 from pyautonomousagent.missions.drones.sensors import drain_energy
 from pyautonomousagent.missions.drones3d.kernels import (
     adopt_point_3d,
@@ -29,23 +27,14 @@ from pyautonomousagent.missions.drones3d.leaves import (
     PATROL_3D,
     REFUELING_3D,
     SURVEILLANCE_3D,
-    SURVEILLANCE_POINT_3D,
 )
 from pyautonomousagent.missions.gathering import GatheringMission
 from pyautonomousagent.missions.patrol import PatrolMission
 from pyautonomousagent.models.drone3d import COLUMNS_3D, MEANINGS_3D
 from pyautonomousagent.render.marks import Mark
-from pyautonomousagent.simulation import (
-    MessageType,
-    Param,
-    SimulationView,
-    WorldObject,
-    register_mission,
-)
+from pyautonomousagent.simulation import Param, SimulationView, WorldObject, register_mission
 from pyautonomousagent.simulation.params import Reader
 from pyautonomousagent.simulation.scenario_view import ScenarioView
-from pyautonomousagent.state import Swarm
-from pyautonomousagent.world import World
 
 #: A point with an altitude: (x, y, z), world units.
 Point3D = tuple[float, float, float]
@@ -97,61 +86,66 @@ def read_points_3d(
     return tuple(read_point_3d(reader, p, f"{path}[{i}]") for i, p in enumerate(data))
 
 
-def check_3d(scenario: ScenarioView, reader: Reader, key: str) -> None:
-    """The scenario flies the 3-D drone, and the points of ``world.<key>`` lie below its
-    ceiling (``max_altitude``)."""
-    if scenario.model != "drone3d":
-        raise reader.fail("model", "drone3d (a 3-D mission flies the 3-D drone)", scenario.model)
-    ceiling = scenario.parameters.max_altitude
-    for i, point in enumerate(getattr(scenario.objects, key)):
-        if point[2] > ceiling:
-            raise reader.fail(
-                f"world.{key}[{i}][2]", f"an altitude <= max_altitude ({ceiling:g})", point[2]
-            )
+class Drone3DMission(DroneMission):
+    """What the 3-D missions add to their 2-D namesakes (which come after this class in
+    their bases): altitudes in the blackboard, the climb's energy, the checks of the 3-D
+    drone and of the altitudes of the points ``world.<points>``."""
 
+    points: ClassVar[str]
+    surveillance = SURVEILLANCE_3D
+    destination = DESTINATION_3D
+    columns: ClassVar[dict[str, Any]] = COLUMNS
 
-def sense_climb(mission: DroneMission, sim: SimulationView) -> None:
-    """Phase 2, before the drones' sensors: climbing costs ``climb_energy_use`` percent per
-    world unit climbed this iteration (the climb rate about to be flown)."""
-    s = sim.swarm.columns
-    climbed = np.maximum(s["climb_rate"], 0.0)
-    s["energy"][:] = drain_energy(s["energy"], mission.params.climb_energy_use * climbed)
+    @classmethod
+    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
+        """The 2-D mission's checks; the 3-D drone; altitudes below the ceiling."""
+        super().check(scenario, reader)
+        if scenario.model != "drone3d":
+            raise reader.fail("model", "drone3d (a 3-D mission flies the 3-D drone)",
+                              scenario.model)  # fmt: skip
+        ceiling = scenario.parameters.max_altitude
+        for i, point in enumerate(getattr(scenario.objects, cls.points)):
+            if point[2] > ceiling:
+                where = f"world.{cls.points}[{i}][2]"
+                raise reader.fail(where, f"an altitude <= max_altitude ({ceiling:g})", point[2])
 
+    def blackboard(self) -> dict[str, Any]:
+        """The 2-D mission's keys (Table 3's) with altitudes."""
+        keys = super().blackboard()
+        keys.update({k: np.float64 for k in DESTINATION_3D + SURVEILLANCE_3D + REFUELING_3D})
+        return keys
 
-def compiled_sensors_3d(mission: DroneMission, sim: SimulationView) -> SensorKernel | None:
-    """``sense_climb`` and the drones' sensors for one drone (``kernels.drain_energy_3d``)
-    while no radiation source is active; None otherwise."""
-    if any(source.active for source in sim.world.objects.radiation_sources):
-        return None
-    p = mission.params
-    return SensorKernel(
-        drain_energy_3d, ("energy", "climb_rate"), (p.energy_use, p.climb_energy_use),
-        mission._stopped,
-    )  # fmt: skip
+    def sense(self, sim: SimulationView) -> np.ndarray:
+        """Phase 2: climbing costs ``climb_energy_use`` percent per world unit climbed this
+        iteration (the climb rate about to be flown); then the drones' sensors."""
+        s = sim.swarm.columns
+        climbed = np.maximum(s["climb_rate"], 0.0)
+        s["energy"][:] = drain_energy(s["energy"], self.params.climb_energy_use * climbed)
+        return super().sense(sim)
 
+    def compiled_sensors(self, sim: SimulationView) -> SensorKernel | None:
+        """:meth:`sense` for one drone (``kernels.drain_energy_3d``) while no radiation
+        source is active; None otherwise."""
+        if any(source.active for source in sim.world.objects.radiation_sources):
+            return None
+        p = self.params
+        return SensorKernel(
+            drain_energy_3d, ("energy", "climb_rate"), (p.energy_use, p.climb_energy_use),
+            self._stopped,
+        )  # fmt: skip
 
-def set_surveillance_3d(swarm: Swarm, points: np.ndarray) -> None:
-    """Each drone's surveillance position and first destination, shape (N, 3)."""
-    bb = swarm.blackboard
-    for axis, (surveillance, destination) in enumerate(
-        zip(SURVEILLANCE_3D, DESTINATION_3D, strict=True)
-    ):
-        bb[surveillance][:] = points[:, axis]
-        bb[destination][:] = points[:, axis]
-
-
-def surveillance_marks_3d(points: Any) -> list[Mark]:
-    """Surveillance positions S1.. as "x" markers labelled with their altitude."""
-    distinct = list(dict.fromkeys((float(x), float(y), float(z)) for x, y, z in points))
-    return [
-        Mark("point", x, y, f"S{i} z={z:g}", colour=TARGET_COLOUR, symbol="x",
-             legend="surveillance position (altitude)")
-        for i, (x, y, z) in enumerate(distinct, start=1)
-    ]  # fmt: skip
+    def surveillance_marks(self, points: Any) -> list[Mark]:
+        """Surveillance positions S1.. as "x" markers labelled with their altitude."""
+        distinct = list(dict.fromkeys((float(x), float(y), float(z)) for x, y, z in points))
+        return [
+            Mark("point", x, y, f"S{i} z={z:g}", colour=TARGET_COLOUR, symbol="x",
+                 legend="surveillance position (altitude)")
+            for i, (x, y, z) in enumerate(distinct, start=1)
+        ]  # fmt: skip
 
 
 @register_mission
-class Gathering3DMission(GatheringMission):
+class Gathering3DMission(Drone3DMission, GatheringMission):
     """Fig. 6's mission in 3-D: surveillance positions with altitudes, refuelling on the
     ground, the gathering order carrying the altitude."""
 
@@ -163,66 +157,13 @@ class Gathering3DMission(GatheringMission):
         WorldObject("surveillance_positions", read_points_3d,
                     doc="surveillance positions [x, y, z], used in turn by drones 1, 2, ..."),
     )  # fmt: skip
-    columns: ClassVar[dict[str, Any]] = COLUMNS
     meanings: ClassVar[dict[str, tuple[str, str]]] = {**GatheringMission.meanings, **MEANINGS}
-
-    @classmethod
-    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
-        """The gathering's checks; the 3-D drone; altitudes below the ceiling."""
-        super().check(scenario, reader)
-        check_3d(scenario, reader, "surveillance_positions")
-
-    def blackboard(self) -> dict[str, Any]:
-        """Table 3 with altitudes."""
-        keys = super().blackboard()
-        keys.update({k: np.float64 for k in DESTINATION_3D + SURVEILLANCE_3D + REFUELING_3D})
-        return keys
-
-    def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
-        """On the refuelling slots, on the ground; the first destination is the own
-        surveillance position."""
-        DroneMission.place(self, swarm, world, rng)
-        set_surveillance_3d(swarm, cycled(self.scenario.objects.surveillance_positions, swarm.size))
-
-    def sense(self, sim: SimulationView) -> np.ndarray:
-        """The climb's energy, then the drones' sensors."""
-        sense_climb(self, sim)
-        return super().sense(sim)
-
-    def compiled_sensors(self, sim: SimulationView) -> SensorKernel | None:
-        """:meth:`sense` for one drone, for the compiled engine's fused loop."""
-        return compiled_sensors_3d(self, sim)
-
-    def message_types(self) -> list[MessageType]:
-        """Sharing data, and "gathering" (recorded) with the altitude."""
-        kinds = [kind for kind in super().message_types() if kind.name != GATHERING]
-        return [
-            *kinds,
-            MessageType(GATHERING, self.adopt_gathering_position, recorded=True,
-                        doc="x, y, z: the position to gather on",
-                        kernel=HandlerKernel(adopt_point_everyone_3d, ("x", "y", "z"),
-                                             SURVEILLANCE_POINT_3D,
-                                             receive=Receive(adopt_point_3d))),
-        ]  # fmt: skip
-
-    def adopt_gathering_position(self, sim: SimulationView, delivery: Delivery) -> None:
-        """The receiver's surveillance position becomes the message's x, y, z (the last one,
-        in canonical order, if several arrived)."""
-        bb = sim.swarm.blackboard
-        receivers, rows = delivery.pairs(sim.swarm.size)
-        last = receivers.size - 1 - np.unique(receivers[::-1], return_index=True)[1]
-        data = delivery.messages.data
-        for key, field in zip(SURVEILLANCE_3D, ("x", "y", "z"), strict=True):
-            bb[key][receivers[last]] = data[field][rows[last]]
-
-    def marks(self) -> list[Mark]:
-        """Slots R1.. (on the ground), surveillance positions S1.. with their altitude."""
-        points = self.scenario.objects.surveillance_positions
-        return [*DroneMission.marks(self), *surveillance_marks_3d(points)]
+    points = "surveillance_positions"
+    adopt_kernels = (adopt_point_everyone_3d, adopt_point_3d)
 
 
 @register_mission
-class Patrol3DMission(PatrolMission):
+class Patrol3DMission(Drone3DMission, PatrolMission):
     """Fig. 12's mission in 3-D: two patrol positions at their altitudes, refuelling on the
     ground."""
 
@@ -234,47 +175,17 @@ class Patrol3DMission(PatrolMission):
         WorldObject("patrol_positions", lambda r, d, p: read_points_3d(r, d, p, 2, 2),
                     doc="the two positions [x, y, z] patrolled by every drone"),
     )  # fmt: skip
-    columns: ClassVar[dict[str, Any]] = COLUMNS
     meanings: ClassVar[dict[str, tuple[str, str]]] = {
         **PatrolMission.meanings,
         **MEANINGS,
         "z_surveillance_position_1": ("world unit", "blackboard: patrol position 1, altitude"),
         "z_surveillance_position_2": ("world unit", "blackboard: patrol position 2, altitude"),
     }
-
-    @classmethod
-    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
-        """The patrol's checks; the 3-D drone; altitudes below the ceiling."""
-        super().check(scenario, reader)
-        check_3d(scenario, reader, "patrol_positions")
+    points = "patrol_positions"
+    patrol = PATROL_3D
 
     def blackboard(self) -> dict[str, Any]:
         """The patrol's keys with altitudes."""
         keys = super().blackboard()
-        keys.update({k: np.float64 for k in DESTINATION_3D + SURVEILLANCE_3D + REFUELING_3D})
         keys.update({k: np.float64 for k in PATROL_3D[1:]})
         return keys
-
-    def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
-        """On the refuelling slots, on the ground; the first patrol position first."""
-        DroneMission.place(self, swarm, world, rng)
-        first, second = self.scenario.objects.patrol_positions
-        bb = swarm.blackboard
-        for key, value in zip(PATROL_3D[1:], (*first, *second), strict=True):
-            bb[key][:] = value
-        bb["index_current_surveillance_position"][:] = 1
-        set_surveillance_3d(swarm, np.tile(np.asarray(first, dtype=np.float64), (swarm.size, 1)))
-
-    def sense(self, sim: SimulationView) -> np.ndarray:
-        """The climb's energy, then the drones' sensors."""
-        sense_climb(self, sim)
-        return super().sense(sim)
-
-    def compiled_sensors(self, sim: SimulationView) -> SensorKernel | None:
-        """:meth:`sense` for one drone, for the compiled engine's fused loop."""
-        return compiled_sensors_3d(self, sim)
-
-    def marks(self) -> list[Mark]:
-        """Slots R1.. (on the ground), the two patrol positions with their altitude."""
-        points = self.scenario.objects.patrol_positions
-        return [*DroneMission.marks(self), *surveillance_marks_3d(points)]

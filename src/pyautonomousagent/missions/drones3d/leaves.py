@@ -18,16 +18,18 @@ import numpy as np
 from pyautonomousagent.arrays import bearing, choose, maximum, minimum
 from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
 from pyautonomousagent.bt.status import RUNNING, SUCCESS, status_if, success_if
-from pyautonomousagent.kernels import Later, LeafKernel, Sends
+from pyautonomousagent.kernels import Later, LeafKernel
 from pyautonomousagent.kernels import bearing as bearing_of_one
 from pyautonomousagent.missions.drones.leaves import (
     DESTINATION,
-    GATHERING,
     PATROL,
     REFUELING,
     SPEED,
     SURVEILLANCE,
-    TOWARD_DESTINATION,
+    ActionTransmitGatheringMessageS,
+    CopyDestination,
+    PatrolPosition,
+    toward,
 )
 from pyautonomousagent.missions.drones3d import kernels as k
 from pyautonomousagent.state import AgentView
@@ -42,12 +44,11 @@ PATROL_3D = (
     PATROL[1], PATROL[2], "z_surveillance_position_1",
     PATROL[3], PATROL[4], "z_surveillance_position_2",
 )  # fmt: skip
-#: The destination as the kernels' ``to_x, to_y, to_z`` (parameter -> key).
-TO_DESTINATION_3D = dict(zip(("to_x", "to_y", "to_z"), DESTINATION_3D, strict=True))
-#: The surveillance position as the kernels' point ``px, py, pz`` (parameter -> key).
-SURVEILLANCE_POINT_3D = dict(zip(("px", "py", "pz"), SURVEILLANCE_3D, strict=True))
 #: The position and the destination as ``kernels.destination_reached_3d``'s arrays.
-TOWARD_DESTINATION_3D = {"x": "x", "y": "y", "z": "z", **TO_DESTINATION_3D}
+TOWARD_DESTINATION_3D = {
+    "x": "x", "y": "y", "z": "z",
+    **dict(zip(("to_x", "to_y", "to_z"), DESTINATION_3D, strict=True)),
+}  # fmt: skip
 #: The arrays of ``kernels.patrol_position_3d``, parameter -> key.
 PATROL_ARRAYS_3D = dict(
     zip(("index", "to_x", "to_y", "to_z", "sx", "sy", "sz", "x1", "y1", "z1", "x2", "y2", "z2"),
@@ -119,7 +120,7 @@ class ActionNavigateToDestination3DA(Leaf):
         return RUNNING
 
     def kernel(self, world: World) -> LeafKernel:
-        heading = Later(bearing_of_one, TOWARD_DESTINATION, "requested_heading")
+        heading = Later(bearing_of_one, toward(DESTINATION), "requested_heading")
         names = {**TOWARD_DESTINATION_3D, "speed": "requested_speed",
                  "altitude": "requested_altitude"}  # fmt: skip
         constants = (self.speed, self.distance, self.slope)
@@ -160,118 +161,56 @@ class ActionLand3DA(Leaf):
         return LeafKernel(k.land, names)
 
 
-def _set_destination(agents: AgentView, x: Any, y: Any, z: Any) -> int:
-    bb = agents.blackboard
-    bb.x_current_destination_position = x
-    bb.y_current_destination_position = y
-    bb.z_current_destination_position = z
-    return SUCCESS
-
-
-def _destination_from(source: tuple[str, ...]) -> dict[str, str]:
-    """``kernels.copy_destination_3d``'s arrays, parameter -> key: destination := ``source``
-    (three blackboard keys, x, y and z)."""
-    return {**TO_DESTINATION_3D, **dict(zip(("from_x", "from_y", "from_z"), source, strict=True))}
-
-
 @register_leaf
-class ActionSetDestinationEqualToSurveillance3DS(Leaf):
+class ActionSetDestinationEqualToSurveillance3DS(CopyDestination):
     """Destination := the surveillance position, with its altitude; SUCCESS."""
 
     type_name = "Action_Set_Destination_Equal_To_Surveillance_3D_S"
     keys = DESTINATION_3D + SURVEILLANCE_3D
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        bb = agents.blackboard
-        return _set_destination(
-            agents, bb.x_surveillance_position, bb.y_surveillance_position,
-            bb.z_surveillance_position,
-        )  # fmt: skip
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.copy_destination_3d, _destination_from(SURVEILLANCE_3D))
+    destination = DESTINATION_3D
+    source = SURVEILLANCE_3D
+    copy = (k.copy_destination_3d,)
 
 
 @register_leaf
-class ActionSetDestinationEqualToRefueling3DS(Leaf):
+class ActionSetDestinationEqualToRefueling3DS(CopyDestination):
     """Destination := the refuelling slot, on the ground; SUCCESS."""
 
     type_name = "Action_Set_Destination_Equal_To_Refueling_3D_S"
     keys = DESTINATION_3D + REFUELING_3D
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        bb = agents.blackboard
-        return _set_destination(
-            agents, bb.x_refueling_position, bb.y_refueling_position, bb.z_refueling_position
-        )
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.copy_destination_3d, _destination_from(REFUELING_3D))
-
-
-def _go_to_patrol_position(agents: AgentView, index: Any) -> int:
-    """Make patrol position ``index`` (1 or 2) current and the destination."""
-    bb = agents.blackboard
-    first = index == 1
-    x = choose(first, bb.x_surveillance_position_1, bb.x_surveillance_position_2)
-    y = choose(first, bb.y_surveillance_position_1, bb.y_surveillance_position_2)
-    z = choose(first, bb.z_surveillance_position_1, bb.z_surveillance_position_2)
-    bb.index_current_surveillance_position = index
-    bb.x_surveillance_position = x
-    bb.y_surveillance_position = y
-    bb.z_surveillance_position = z
-    return _set_destination(agents, x, y, z)
+    destination = DESTINATION_3D
+    source = REFUELING_3D
+    copy = (k.copy_destination_3d,)
 
 
 @register_leaf
-class ActionSetDestinationEqualToOtherSurveillance3DS(Leaf):
+class ActionSetDestinationEqualToOtherSurveillance3DS(PatrolPosition):
     """Switch to the other patrol position and make it (with its altitude) the destination;
     SUCCESS."""
 
     type_name = "Action_Set_Destination_Equal_To_Other_Surveillance_3D_S"
     keys = DESTINATION_3D + SURVEILLANCE_3D + PATROL_3D
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        return _go_to_patrol_position(
-            agents, 3 - agents.blackboard.index_current_surveillance_position
-        )
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.patrol_position_3d, PATROL_ARRAYS_3D, (1,))
+    axes = "xyz"
+    other = 1
+    patrol = (k.patrol_position_3d, PATROL_ARRAYS_3D)
 
 
 @register_leaf
-class ActionSetDestinationEqualToCurrentSurveillance3DS(Leaf):
+class ActionSetDestinationEqualToCurrentSurveillance3DS(PatrolPosition):
     """Destination := the current patrol position, with its altitude; SUCCESS."""
 
     type_name = "Action_Set_Destination_Equal_To_Current_Surveillance_3D_S"
     keys = DESTINATION_3D + SURVEILLANCE_3D + PATROL_3D
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        return _go_to_patrol_position(agents, agents.blackboard.index_current_surveillance_position)
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.patrol_position_3d, PATROL_ARRAYS_3D, (0,))
+    axes = "xyz"
+    other = 0
+    patrol = (k.patrol_position_3d, PATROL_ARRAYS_3D)
 
 
 @register_leaf
-class ActionTransmitGatheringMessage3DS(Leaf):
+class ActionTransmitGatheringMessage3DS(ActionTransmitGatheringMessageS):
     """Send everyone a "gathering" message carrying this agent's surveillance position with
     its altitude (x, y, z); SUCCESS."""
 
     type_name = "Action_Transmit_Gathering_Message_3D_S"
     keys = SURVEILLANCE_3D
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        bb = agents.blackboard
-        data = {"x": bb.x_surveillance_position, "y": bb.y_surveillance_position,
-                "z": bb.z_surveillance_position}  # fmt: skip
-        self.broadcast(agents, world, GATHERING, data)
-        return SUCCESS
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(
-            k.transmit_point_3d,
-            {"x": "x", "y": "y", **SURVEILLANCE_POINT_3D},
-            sends=Sends(GATHERING, ("x", "y", "z")),
-        )  # fmt: skip
+    transmit = (k.transmit_point_3d,)

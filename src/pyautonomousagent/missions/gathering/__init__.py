@@ -10,8 +10,8 @@ import numpy as np
 from pyautonomousagent.datalink import Delivery
 from pyautonomousagent.kernels import HandlerKernel, Receive
 from pyautonomousagent.missions.drones.kernels import adopt_point, adopt_point_everyone
-from pyautonomousagent.missions.drones.leaves import GATHERING, SURVEILLANCE_POINT
-from pyautonomousagent.missions.drones.mission import DroneMission, cycled, read_points
+from pyautonomousagent.missions.drones.leaves import GATHERING
+from pyautonomousagent.missions.drones.mission import DroneMission, cycled
 from pyautonomousagent.missions.gathering import measures  # noqa: F401  (registers them)
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation import (
@@ -42,9 +42,12 @@ class GatheringMission(DroneMission):
     )  # fmt: skip
     world_objects: ClassVar[tuple[WorldObject, ...]] = (
         *DroneMission.world_objects,
-        WorldObject("surveillance_positions", read_points,
+        WorldObject("surveillance_positions", Reader.points,
                     doc="surveillance positions [x, y], used in turn by drones 1, 2, ..."),
     )  # fmt: skip
+    #: The "gathering" handler's kernels, for everyone and for one receiver (3-D: their
+    #: forms with the altitude), in a tuple: a function held by a class would be bound.
+    adopt_kernels: ClassVar[tuple[Any, Any]] = (adopt_point_everyone, adopt_point)
 
     @classmethod
     def check(cls, scenario: ScenarioView, reader: Reader) -> None:
@@ -69,13 +72,16 @@ class GatheringMission(DroneMission):
         )
 
     def message_types(self) -> list[MessageType]:
-        """Sharing data, and "gathering" (recorded): the receiver adopts the position."""
+        """Sharing data, and "gathering" (recorded): the receiver adopts the position (the
+        fields x, y and, in 3-D, z)."""
+        fields = tuple(key[0] for key in self.surveillance)
+        point = {f"p{field}": key for field, key in zip(fields, self.surveillance, strict=True)}
+        everyone, one = self.adopt_kernels
         return [
             *super().message_types(),
             MessageType(GATHERING, self.adopt_gathering_position, recorded=True,
-                        doc="x, y: the position to gather on",
-                        kernel=HandlerKernel(adopt_point_everyone, ("x", "y"), SURVEILLANCE_POINT,
-                                             receive=Receive(adopt_point))),
+                        doc=f"{', '.join(fields)}: the position to gather on",
+                        kernel=HandlerKernel(everyone, fields, point, receive=Receive(one))),
         ]  # fmt: skip
 
     def adopt_gathering_position(self, sim: SimulationView, delivery: Delivery) -> None:
@@ -85,17 +91,10 @@ class GatheringMission(DroneMission):
         receivers, rows = delivery.pairs(sim.swarm.size)
         last = receivers.size - 1 - np.unique(receivers[::-1], return_index=True)[1]
         data = delivery.messages.data
-        bb["x_surveillance_position"][receivers[last]] = data["x"][rows[last]]
-        bb["y_surveillance_position"][receivers[last]] = data["y"][rows[last]]
+        for key in self.surveillance:
+            bb[key][receivers[last]] = data[key[0]][rows[last]]
 
     def marks(self) -> list[Mark]:
         """Slots R1.., surveillance positions S1.."""
         points = self.scenario.objects.surveillance_positions
         return [*super().marks(), *self.surveillance_marks(points)]
-
-    def gathering_point(self) -> Any:
-        """The sender's surveillance position (where everyone gathers), or None."""
-        names = [f"{self.agent_prefix}{i + 1}" for i in range(self.scenario.agents)]
-        index = names.index(self.params.gathering_sender)
-        points = self.scenario.objects.surveillance_positions
-        return points[index % len(points)]

@@ -11,16 +11,11 @@ from pyautonomousagent.missions.drones.leaves import PATROL
 from pyautonomousagent.missions.drones.mission import DroneMission
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation import WorldObject, register_mission
-from pyautonomousagent.simulation.params import Point, Reader
+from pyautonomousagent.simulation.params import Reader
 from pyautonomousagent.simulation.scenario import check_point_in_world
 from pyautonomousagent.simulation.scenario_view import ScenarioView
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
-
-
-def read_patrol_positions(reader: Reader, data: Any, path: str) -> tuple[Point, ...]:
-    """Exactly two [x, y]."""
-    return reader.points(data, path, 2, 2)
 
 
 @register_mission
@@ -31,9 +26,11 @@ class PatrolMission(DroneMission):
     description = "drones patrol between two surveillance positions and refuel"
     world_objects: ClassVar[tuple[WorldObject, ...]] = (
         *DroneMission.world_objects,
-        WorldObject("patrol_positions", read_patrol_positions,
+        WorldObject("patrol_positions", lambda r, d, p: r.points(d, p, 2, 2),
                     doc="the two positions patrolled by every drone; the first is the first"),
     )  # fmt: skip
+    #: The patrol's blackboard keys: the index, then positions 1 and 2 (x, y[, z] each).
+    patrol: ClassVar[tuple[str, ...]] = PATROL
 
     meanings: ClassVar[dict[str, tuple[str, str]]] = {
         **DroneMission.meanings,
@@ -64,12 +61,12 @@ class PatrolMission(DroneMission):
     def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
         """On the refuelling slots; the first patrol position is the first destination."""
         super().place(swarm, world, rng)
-        (x1, y1), (x2, y2) = self.scenario.objects.patrol_positions
+        first, second = self.scenario.objects.patrol_positions
         bb = swarm.blackboard
-        bb["x_surveillance_position_1"][:], bb["y_surveillance_position_1"][:] = x1, y1
-        bb["x_surveillance_position_2"][:], bb["y_surveillance_position_2"][:] = x2, y2
+        for key, value in zip(self.patrol[1:], (*first, *second), strict=True):
+            bb[key][:] = value
         bb["index_current_surveillance_position"][:] = 1
-        self.set_surveillance(swarm, np.tile([x1, y1], (swarm.size, 1)))
+        self.set_surveillance(swarm, np.tile(np.asarray(first, dtype=np.float64), (swarm.size, 1)))
 
     def marks(self) -> list[Mark]:
         """Slots R1.., the two patrol positions S1, S2."""

@@ -10,24 +10,15 @@ drone that receives ``found`` (:meth:`RadiationSearchMission.store_reported_posi
 next Phase 2) stores the position on its blackboard and flies there; drones already knowing
 a position keep theirs. The tree is ``radiation-search.xml``.
 
-Written only with the public API (:mod:`pyautonomousagent.mission`,
-:mod:`pyautonomousagent.bt`, :mod:`pyautonomousagent.arrays`), and, for the compiled engine,
-its documented kernel API (:mod:`pyautonomousagent.kernels`, ``randomness.uniform_of_one``
-and ``jit.njit``, as the drone missions use them): every leaf has a ``kernel``, the sensor a
-``compiled_sensors`` form and ``found`` a ``HandlerKernel`` (``kernels.py``), so the compiled
-engine runs whole iterations fused (it stops after an iteration that sends ``found``, a
-recorded type, for Python to deliver it and record the events).
-
-- world objects (``world:``): ``radiation_source`` ``{x, y, range}`` (level
-  ``100 (1 - d / range)`` percent at distance d < range, else 0) and ``start_positions``,
-  [x, y] per drone (cycled);
-- parameters: ``search_speed``, ``radiation_threshold``, ``wander_period``, ``edge_margin``,
-  ``source_tolerance`` (see :attr:`RadiationSearchMission.parameters`);
-- state column: ``radiation`` (percent, the sensor's reading of Phase 2);
-- blackboard: ``source_reported`` (0/1), ``x_reported_position``, ``y_reported_position``;
-- message type: ``found`` (``x``, ``y``; recorded);
-- marks: the source (its range as an orange circle, a star at its centre) and the start
-  positions.
+Written with the public API (:mod:`pyautonomousagent.mission`, :mod:`pyautonomousagent.bt`,
+:mod:`pyautonomousagent.arrays`), two of the paper's drones' leaves
+(:mod:`pyautonomousagent.missions.drones`), and, for the compiled engine, the
+documented kernel API (:mod:`pyautonomousagent.kernels`, ``randomness.uniform_of_one`` and
+``jit.njit``): every leaf has a ``kernel``, the sensor a ``compiled_sensors`` form and
+``found`` a ``HandlerKernel`` (``kernels.py``), so the compiled engine runs whole iterations
+fused (it stops after an iteration that sends ``found``, a recorded type, for Python to
+deliver it and record the events). Its world objects, parameters, columns, blackboard keys
+and marks are described where :class:`RadiationSearchMission` declares them.
 """
 
 from __future__ import annotations
@@ -45,7 +36,6 @@ from pyautonomousagent.mission import (
     MessageType,
     Mission,
     Param,
-    Point,
     Reader,
     ScenarioView,
     SimulationView,
@@ -55,6 +45,7 @@ from pyautonomousagent.mission import (
     check_point_in_world,
     register_mission,
 )
+from pyautonomousagent.missions.drones.mission import cycled
 from pyautonomousagent.missions.radiation_search import leaves
 from pyautonomousagent.missions.radiation_search.kernels import (
     radiation_reading,
@@ -90,11 +81,6 @@ def read_source(reader: Reader, data: Any, path: str) -> Source:
     )
 
 
-def read_positions(reader: Reader, data: Any, path: str) -> tuple[Point, ...]:
-    """A list of at least one [x, y]."""
-    return reader.points(data, path)
-
-
 def radiation_level(x: np.ndarray, y: np.ndarray, source: Source) -> np.ndarray:
     """The level read at (x, y), shape (N,): ``100 (1 - d / range)`` percent within the range
     of the source (d: distance to it), 0 outside."""
@@ -125,7 +111,7 @@ class RadiationSearchMission(Mission):
     world_objects: ClassVar[tuple[WorldObject, ...]] = (
         WorldObject("radiation_source", read_source,
                     doc="the source {x, y, range}: level 100 (1 - d / range) % within range"),
-        WorldObject("start_positions", read_positions,
+        WorldObject("start_positions", Reader.points,
                     doc="start positions [x, y], used in turn by drones 1, 2, ... (cycled)"),
     )  # fmt: skip
     columns: ClassVar[dict[str, Any]] = {"radiation": np.float64}  # percent, [0, 100]
@@ -155,8 +141,7 @@ class RadiationSearchMission(Mission):
     def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
         """Drones on their start positions, at rest, knowing no source, with a first radiation
         reading."""
-        points = self.scenario.objects.start_positions
-        start = np.asarray([points[i % len(points)] for i in range(swarm.size)], dtype=np.float64)
+        start = cycled(self.scenario.objects.start_positions, swarm.size)
         s = swarm.columns
         s["x"][:], s["y"][:] = start[:, 0], start[:, 1]
         s["radiation"][:] = radiation_level(s["x"], s["y"], self.scenario.objects.radiation_source)

@@ -12,9 +12,13 @@ from typing import Any
 
 from pyautonomousagent.arrays import bearing, choose
 from pyautonomousagent.bt import RUNNING, SUCCESS, Leaf, Port, register_leaf, success_if
-from pyautonomousagent.kernels import ITERATION, Later, LeafKernel, Sends
-from pyautonomousagent.kernels import bearing as bearing_of_one
+from pyautonomousagent.kernels import ITERATION, LeafKernel, Sends
 from pyautonomousagent.mission import AgentView, World
+from pyautonomousagent.missions.drones.leaves import (
+    ActionNavigateToDestinationA,
+    ConditionDestinationReached,
+    ConditionRadiationDetected,
+)
 from pyautonomousagent.missions.radiation_search import kernels as k
 from pyautonomousagent.randomness import seed_halves
 
@@ -24,22 +28,14 @@ REPORTED = ("source_reported", "x_reported_position", "y_reported_position")
 """Blackboard keys: whether the drone knows a reported position (0/1), and where it is."""
 REPORTED_ARRAYS = dict(zip(("reported", "to_x", "to_y"), REPORTED, strict=True))
 """The same as the kernels' parameters ``reported, to_x, to_y`` take them (parameter -> key)."""
-TOWARD_REPORTED = {"x": "x", "y": "y", "to_x": REPORTED[1], "to_y": REPORTED[2]}
-"""The position and the reported one as the kernels' ``x, y, to_x, to_y``
-(``kernels.at_reported_position``, ``pyautonomousagent.kernels.bearing``)."""
 SPEED = Port("speed", float, "search_speed", 0.0, "world units per iteration")
 
 
 @register_leaf
-class ConditionRadiationAboveThreshold(Leaf):
+class ConditionRadiationAboveThreshold(ConditionRadiationDetected):
     """SUCCESS if the radiation sensor reads more than ``threshold`` percent."""
 
     type_name = "Condition_Radiation_Above_Threshold"
-    ports = (Port("threshold", float, "radiation_threshold", 0.0, "percent"),)
-    threshold: float
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        return success_if(agents.radiation > self.threshold)
 
     def kernel(self, world: World) -> LeafKernel:
         return LeafKernel(k.above, ("radiation",), (self.threshold,))
@@ -60,22 +56,14 @@ class ConditionSourceReported(Leaf):
 
 
 @register_leaf
-class ConditionAtReportedPosition(Leaf):
+class ConditionAtReportedPosition(ConditionDestinationReached):
     """SUCCESS if the drone is within ``distance`` of the reported position."""
 
     type_name = "Condition_At_Reported_Position"
     ports = (Port("distance", float, "source_tolerance", 0.0, "world units"),)
     keys = REPORTED
-    distance: float
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        bb = agents.blackboard
-        dx = agents.x - bb.x_reported_position
-        dy = agents.y - bb.y_reported_position
-        return success_if(dx * dx + dy * dy <= self.distance * self.distance)
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.at_reported_position, TOWARD_REPORTED, (self.distance,))
+    target = REPORTED[1:]
+    reached = (k.at_reported_position,)
 
 
 @register_leaf
@@ -99,25 +87,14 @@ class ActionReportSourceS(Leaf):
 
 
 @register_leaf
-class ActionFlyToReportedPositionA(Leaf):
+class ActionFlyToReportedPositionA(ActionNavigateToDestinationA):
     """Request the heading toward the reported position at ``speed``; RUNNING."""
 
     type_name = "Action_Fly_To_Reported_Position_A"
     ports = (SPEED,)
     keys = REPORTED
-    speed: float
-
-    def evaluate(self, agents: AgentView, world: World) -> Any:
-        bb = agents.blackboard
-        agents.requested_heading = bearing(
-            agents.x, agents.y, bb.x_reported_position, bb.y_reported_position
-        )
-        agents.requested_speed = self.speed
-        return RUNNING
-
-    def kernel(self, world: World) -> LeafKernel:
-        heading = Later(bearing_of_one, TOWARD_REPORTED, "requested_heading")
-        return LeafKernel(k.fly, ("requested_speed",), (self.speed,), later=heading)
+    target = REPORTED[1:]
+    fly = (k.fly,)
 
 
 @register_leaf

@@ -18,17 +18,9 @@ that cleans the cells in robot order once an iteration), so the compiled engine 
 iterations fused (``kernels.py``), and so does the GPU engine (``device.py``: the grid's
 steps on the device, the lowest robot row winning a cell by an atomic minimum):
 
-- world objects (``world:``): ``obstacles``, a list of ``{shape: rect, x, y, width,
-  height}`` (lower-left corner) and ``{shape: circle, x, y, radius}``, each wholly inside
-  the room (:func:`~pyautonomousagent.missions.vacuum.room.check_inside`); ``start_positions``,
-  [x, y] per robot (cycled);
-- parameters: ``robot_speed``, ``collision_distance``, ``sonar_range``, ``avoid_min_angle``,
-  ``avoid_max_angle``, ``cell_size`` (see :attr:`VacuumMission.parameters`); the avoid
-  leaf's ``step`` port defaults to the motion model's ``turn_step``;
-- state columns: ``sonar`` (world units, the reading of Phase 2), ``vacuuming`` (1 when the
-  brush ran in this iteration's tick) and ``cleaned_cells`` (cells this robot cleaned first,
-  cumulative: their sum over the robots is the cleaned area in cells, never decreasing);
-- blackboard: ``cruise_heading`` (degrees);
+- world objects, parameters, state columns and the blackboard key: as
+  :class:`VacuumMission` declares them (the avoid leaf's ``step`` port defaults to the
+  motion model's ``turn_step``);
 - Phase 2 (:meth:`VacuumMission.sense`): the cells under robots whose brush ran are cleaned
   (:attr:`VacuumMission.grid`, :meth:`VacuumMission.coverage`), the sonar is read, and a robot
   whose next step (the drone2d equations) would leave the room or touch an obstacle does not
@@ -50,7 +42,6 @@ from pyautonomousagent.mission import (
     Mark,
     Mission,
     Param,
-    Point,
     Reader,
     Recorder,
     ScenarioView,
@@ -93,11 +84,6 @@ MAX_CELLS = 4_000_000
 """The largest cleaned-area grid a scenario may ask for (cells)."""
 
 
-def read_positions(reader: Reader, data: Any, path: str) -> tuple[Point, ...]:
-    """A list of at least one [x, y]."""
-    return reader.points(data, path)
-
-
 def obstacle_mark(obstacle: Rectangle | Circle) -> Mark:
     """An obstacle as a filled grey mark."""
     style: dict[str, Any] = {"colour": OBSTACLE_COLOUR, "fill": True, "legend": "obstacle"}
@@ -136,7 +122,7 @@ class VacuumMission(Mission):
         WorldObject("obstacles", read_obstacles, (),
                     "obstacles: {shape: rect, x, y, width, height} (lower-left corner) or "
                     "{shape: circle, x, y, radius}, world units, inside the room"),
-        WorldObject("start_positions", read_positions,
+        WorldObject("start_positions", Reader.points,
                     doc="start positions [x, y], used in turn by robots 1, 2, ... (cycled)"),
     )  # fmt: skip
     columns: ClassVar[dict[str, Any]] = {
