@@ -65,11 +65,17 @@ def loop_count(value: Any, children: int) -> str:
     return ""
 
 
+def parallel_threshold(value: int, children: int) -> int:
+    """A count of children as BehaviorTree.CPP resolves it: ``k >= 1`` is k children, ``-1``
+    all of them, ``-2`` all but one, ... (checked by :func:`child_count`)."""
+    return value if value > 0 else children + value + 1
+
+
 def child_count(value: Any, children: int) -> str:
     """A count of children as BT.CPP reads it: k >= 1, or -1 (all), -2 (all but one), ..."""
     if isinstance(value, bool) or not isinstance(value, int) or value == 0:
         return f"must be a whole number other than 0, got {value!r}"
-    resolved = value if value > 0 else children + value + 1
+    resolved = parallel_threshold(value, children)
     if not 1 <= resolved <= children:
         return f"={value} asks for {resolved} of {children} child(ren)"
     return ""

@@ -28,11 +28,11 @@ import numpy as np
 from pyautonomousagent.allocator import reuse_freed_memory
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
-from pyautonomousagent.bt.nodes import NODE_TYPES, PRE_CONDITIONS
+from pyautonomousagent.bt.nodes import NODE_TYPES, PRE_CONDITIONS, parallel_threshold
 from pyautonomousagent.bt.program import case_values, compile_tree
 from pyautonomousagent.bt.script import Script, parse
 from pyautonomousagent.bt.script_leaves import iterations
-from pyautonomousagent.bt.spec import Node, TreeError, check_entries, parallel_threshold
+from pyautonomousagent.bt.spec import Node, TreeError, check_entries
 from pyautonomousagent.bt.status import (
     FAILURE,
     INVALID,

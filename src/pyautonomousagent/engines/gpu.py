@@ -287,9 +287,8 @@ class GpuEngine(LoopEngine):
             steps = len(swarm.device) if swarm is not None else 0
             self._swarm_kernels = [load_kernel(source, f"swarm_{j}") for j in range(steps)]
         else:
-            source = self._message_kernels(layout, fused.sensors, fused.messaging)
+            self._message_kernels(layout, fused.sensors, fused.messaging)
         self._kernel_constants = layout.constants.arrays()  # the CPU tick's may differ
-        self.kernel_source = source
         iterations = sim.scenario.iterations
         self._groups = RecordGroups(sim.recorder, self.layout.names, iterations, self.timings,
                                      on_device=not simulating())  # fmt: skip
@@ -302,9 +301,9 @@ class GpuEngine(LoopEngine):
             raise RuntimeError("engine gpu: the kernel's PTX has fused multiply-adds")
         self.timings.update(dict.fromkeys(TIMINGS, 0.0), compile=time.perf_counter() - start)
 
-    def _message_kernels(self, layout: Layout, sensors: SensorKernel, messaging: Messaging) -> str:
+    def _message_kernels(self, layout: Layout, sensors: SensorKernel, messaging: Messaging) -> None:
         """Generate and load the kernels of a tree that sends messages
-        (:mod:`~pyautonomousagent.engines.gpu_messages`); the source."""
+        (:mod:`~pyautonomousagent.engines.gpu_messages`)."""
         from pyautonomousagent.engines.gpu_messages import DeviceMessages
 
         source = message_module_source(
@@ -315,7 +314,6 @@ class GpuEngine(LoopEngine):
         common = [name for line in fused_parameters(layout, sensors) for name in line]
         xy = (common.index(layout.array("x")), common.index(layout.array("y")))
         self._messages = DeviceMessages(kernels, messaging, common, xy, self.swarm.size)
-        return source
 
     @staticmethod
     def _takes(delivery: Delivery, messaging: Messaging | None) -> bool:

@@ -23,7 +23,7 @@ from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, mak
 from pyautonomousagent.bt.nodes import CONTROL, NODE_TYPES, may_skip
 from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params
 from pyautonomousagent.bt.status import invalid_status
-from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, TO_PYTREES, with_scripts
+from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, TO_PYTREES, halt_all, with_scripts
 from pyautonomousagent.engines.pytrees_rules import tick_method
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
@@ -104,16 +104,6 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
             self.leaf.halt(self.agent, self.world)
 
 
-def _halt(behaviours: list[py_trees.behaviour.Behaviour]) -> None:
-    """Stop (INVALID) each of ``behaviours`` that is not INVALID already."""
-    for behaviour in behaviours:
-        if behaviour.status != Status.INVALID:
-            behaviour.stop(Status.INVALID)
-
-
-BehaviourFactory = Callable[..., AgentBehaviour]
-
-
 def register_behaviour(type_name: str) -> Callable[[type[AgentBehaviour]], type[AgentBehaviour]]:
     """Class decorator: use an :class:`AgentBehaviour` subclass as leaf type ``type_name``.
 
@@ -178,7 +168,7 @@ class _Ruled(py_trees.behaviour.Behaviour):
         without its debug lines, whose text it builds on every call)."""
         if new_status == Status.INVALID:
             setattr(self, "current_child", None)  # noqa: B010 - a composite's, py_trees' type
-            _halt(self.children)
+            halt_all(self.children)
         self.terminate(new_status)
         self.status = new_status
 

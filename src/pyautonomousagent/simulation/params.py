@@ -55,16 +55,6 @@ class Param:
         """float, int, str or bool: the type of the default."""
         return type(self.default)
 
-    def describe(self) -> str:
-        """``40 percent, in [0, 100]: energy at or below which ...`` for listings."""
-        bounds = ""
-        if self.minimum is not None or self.maximum is not None:
-            low = "-inf" if self.minimum is None else f"{self.minimum:g}"
-            high = "inf" if self.maximum is None else f"{self.maximum:g}"
-            bounds = f", in [{low}, {high}]"
-        unit = f" {self.unit}" if self.unit else ""
-        return f"{self.default!r}{unit}{bounds}: {self.doc}"
-
 
 class Values(SimpleNamespace):
     """Read-only named values (``values.energy_use``); ``vars(values)`` is a plain dict."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -50,14 +50,6 @@ if TYPE_CHECKING:
     from pyautonomousagent.kernels import SensorKernel
 
 log = logging.getLogger("pyautonomousagent")
-
-
-def _walk(node: Node) -> Iterator[Node]:
-    stack = [node]
-    while stack:
-        current = stack.pop()
-        yield current
-        stack.extend(current.children)
 
 
 def _checked(
@@ -106,7 +98,7 @@ def _check_fits(
 ) -> None:
     """Refuse, before anything is allocated, a run whose records cannot fit in memory."""
     columns = recorded_columns(mission, tree)
-    nodes = sum(1 for _ in _walk(tree))
+    nodes = sum(1 for _ in tree.walk())
     per_agent = 100 + nodes * (2000 if engine == "pytrees" else 16)
     check_memory(scenario.agents, scenario.iterations, record_every, columns, per_agent)
 
