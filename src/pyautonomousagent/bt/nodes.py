@@ -181,12 +181,12 @@ def _tag(tag: str, symbol: str, doc: str, **fixed: Any) -> tuple[FileTag, ...]:
     return (FileTag(tag, fixed, symbol, doc),)
 
 
-def _decorator(name: str, tag: str, symbol: str, doc: str, **kwargs: Any) -> NodeType:
+def _decorator(name: str, symbol: str, doc: str, **kwargs: Any) -> NodeType:
     status_map = kwargs.get("status_map")
     if status_map is not None:
         rule = mapped_rule(status_map)
         kwargs.update(rule=rule, yields=status_map.get("RUNNING") is None, skips=True)
-    return add(NodeType(name, DECORATOR, 1, 1, tags=_tag(tag, symbol, doc), **kwargs))
+    return add(NodeType(name, DECORATOR, 1, 1, tags=_tag(name, symbol, doc), **kwargs))
 
 
 def _control(name: str, least: int, most: int | None, symbol: str, doc: str, **kw: Any) -> None:
@@ -320,13 +320,11 @@ def mapped_rule(status_map: Mapping[str, str]) -> Rule:
 # -- status-mapping decorators ----------------------------------------------------------------
 _decorator(
     "Inverter",
-    "Inverter",
     "≠",
     "swaps SUCCESS and FAILURE",
     status_map={"SUCCESS": "FAILURE", "FAILURE": "SUCCESS"},
 )
 _decorator(
-    "ForceSuccess",
     "ForceSuccess",
     "✓",
     "SUCCESS when the child finishes; RUNNING while it runs",
@@ -334,13 +332,11 @@ _decorator(
 )
 _decorator(
     "ForceFailure",
-    "ForceFailure",
     "✗",
     "FAILURE when the child finishes; RUNNING while it runs",
     status_map={"SUCCESS": "FAILURE"},
 )
 _decorator(
-    "KeepRunningUntilFailure",
     "KeepRunningUntilFailure",
     "∞",
     "RUNNING when the child succeeds (or is skipped); FAILURE when it fails",
@@ -353,7 +349,7 @@ for _name, _map in {
     "PassThrough": {},
 }.items():
     _change = ", ".join(f"{a} becomes {b}" for a, b in _map.items()) or "returns the child's"
-    _decorator(_name, _name, "", f"py_trees: child {_change}", builtin=False, status_map=_map)
+    _decorator(_name, "", f"py_trees: child {_change}", builtin=False, status_map=_map)
 
 
 # -- BehaviorTree.CPP's own semantics (one tick = one tickExactlyOnce(), docs/tree-files.md) --
@@ -511,13 +507,11 @@ _control(
 )
 _decorator(
     "Repeat",
-    "Repeat",
     "↻",
     "after a success ticks the child again, num_cycles times (-1: for ever)",
     params=(Param("num_cycles", int, None, loop_count),),
 )
 _decorator(
-    "RetryUntilSuccessful",
     "RetryUntilSuccessful",
     "↺",
     "after a failure ticks the child again, num_attempts tries (-1: for ever)",
@@ -543,7 +537,6 @@ def msec(value: Any, children: int) -> str:
 
 _decorator(
     "Precondition",
-    "Precondition",
     "pre",
     "ticks the child if the script `if` holds (asked until the child runs), else `else`",
     params=(
@@ -553,13 +546,11 @@ _decorator(
 )
 _decorator(
     "Delay",
-    "Delay",
     "delay",
     "RUNNING for delay_msec of simulated time, then ticks the child",
     params=(Param("delay_msec", int, None, msec),),
 )
 _decorator(
-    "Timeout",
     "Timeout",
     "timeout",
     "halts the child and fails when it runs longer than msec of simulated time",
@@ -581,7 +572,6 @@ def run_once_rule(n: Ops) -> None:
 
 
 _decorator(
-    "RunOnce",
     "RunOnce",
     "once",
     "ticks the child until it finishes once; then SKIPPED (then_skip=false: that status)",
@@ -677,14 +667,12 @@ _control(
 # -- py_trees nodes BehaviorTree.CPP lacks ----------------------------------------------------
 _decorator(
     "PyTreesRepeat",
-    "PyTreesRepeat",
     "",
     "py_trees Repeat: RUNNING until the child succeeded num_success times, one per tick",
     builtin=False,
     params=(Param("num_success", int, None, whole_at_least_one),),
 )
 _decorator(
-    "PyTreesRetry",
     "PyTreesRetry",
     "",
     "py_trees Retry: a failure is RUNNING until the num_failures-th, one per tick",

@@ -56,7 +56,7 @@ class AgentBehaviour(py_trees.behaviour.Behaviour):
         yield from super().tick()
 
 
-class LeafBehaviour(py_trees.behaviour.Behaviour):
+class LeafBehaviour(AgentBehaviour):
     """A library leaf (engine-independent :class:`Leaf`) run for one agent by py_trees.
 
     It counts its ticks in ``update()``, which py_trees calls once per tick, sparing the
@@ -67,12 +67,8 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
     """
 
     def __init__(self, name: str, leaf: Leaf, agent: AgentView, world: World) -> None:
-        super().__init__(name)
+        super().__init__(name, agent, world)
         self.leaf = leaf
-        self.agent = agent
-        self.world = world
-        self._ticks = agent.swarm.blackboard["number_ticks"]
-        self._row = agent.index
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         """py_trees' ``Behaviour.tick`` for a leaf: update, take the status, yield itself.
