@@ -34,6 +34,7 @@ from pyautonomousagent.loop.source import (
     import_lines,
     kernel_imports,
     motion_functions,
+    swarm_state_names,
 )
 
 #: Agents ticked together over a run of iterations in the fused loop: their records of one
@@ -354,8 +355,8 @@ def stepwise_block_function(
     if messaging is not None:
         recorded = [k for k, flag in enumerate(messaging.recorded) if flag]
         deliver_here = " or ".join(f"counts[{k}] > 0" for k in recorded) or "False"
-        state = f", {messaging.state}" if messaging.state else ""
-        extra = f",\n           reach, order, counts, lowest, {messaging.inboxes}{state}"
+        names = ["reach", "order", "counts", "lowest", *messaging.inbox_names]
+        extra = ",\n           " + ", ".join(names + messaging.state_names)
         handle = "\n" + _handle(messaging, layout)
         collect = f"""
 {_collect(messaging, layout)}
@@ -364,8 +365,8 @@ def stepwise_block_function(
                 return done
             if {deliver_here}:
                 return done"""
-    if sensors.swarm is not None and sensors.swarm.state:
-        extra += ",\n           " + ", ".join(f"ws{j}" for j in range(len(sensors.swarm.state)))
+    if swarm_state_names(sensors.swarm):
+        extra += ",\n           " + ", ".join(swarm_state_names(sensors.swarm))
     kind = "messages" if messaging is not None else "swarm"
     name = f"block_{kind}_{'parallel' if parallel else 'serial'}"
     arguments = fused_arguments(layout, sensors) + extra
