@@ -72,11 +72,6 @@ def tree_body(
     return clear + body
 
 
-def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:
-    state = [f"ss{j}" for j in range(len(sensors.state))]
-    return call("S", ["a"], layout, sensors.names, state, "sensors", sensors.constants)
-
-
 def _swarm_apply(sensors: SensorKernel, layout: Layout) -> str:
     """After agent ``a``'s sensors, what the swarm sensor found for it (a line of its own);
     "" without a swarm sensor."""
@@ -120,7 +115,9 @@ def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
     """Phase 2 for agent ``a``: the sensors, the motion model's step
     (:func:`~pyautonomousagent.loop.source.motion_functions`; one that cannot move stops),
     ``stopped_at`` keeping the first iteration it could not."""
-    lines = f"""moving = {_sensor_call(sensors, layout)}{_swarm_apply(sensors, layout)}
+    state = [f"ss{j}" for j in range(len(sensors.state))]
+    sense = call("S", ["a"], layout, sensors.names, state, "sensors", sensors.constants)
+    lines = f"""moving = {sense}{_swarm_apply(sensors, layout)}
 {_model_calls(motion_functions(layout)[0], layout, "")}
 if not moving and stopped_at[a] < 0:
     stopped_at[a] = t"""

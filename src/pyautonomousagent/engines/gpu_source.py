@@ -177,13 +177,9 @@ def message_arguments(layout: Layout, messaging: Messaging) -> str:
     names += [
         f"rs{k}_{j}" for k in range(len(messaging.types)) for j in range(receive_size(messaging, k))
     ]
-    names += [f"{a}{k}" for k in _near_types(messaging) for a in ("gg", "gs", "go")]
+    near = [k for k, handler in enumerate(messaging.handlers) if handler.receive is not None]
+    names += [f"{a}{k}" for k in near for a in ("gg", "gs", "go")]  # each has a cell grid
     return ", ".join(names)
-
-
-def _near_types(messaging: Messaging) -> list[int]:
-    """The message types with a per-receiver form (handled near: each has a cell grid)."""
-    return [k for k, handler in enumerate(messaging.handlers) if handler.receive is not None]
 
 
 def receive_size(messaging: Messaging, k: int) -> int:

@@ -119,8 +119,11 @@ def build_behaviour(
 ) -> py_trees.behaviour.Behaviour:
     """The py_trees tree of one agent for a (checked) tree description."""
     children = [build_behaviour(c, agent, world, defaults) for c in node.children]
-    if node.is_control:
-        behaviour = _control_behaviour(node, children)
+    if node.is_control:  # a type with a rule and no entry of PYTREES_NODES: its rule's class
+        if node.type in PYTREES_NODES or NODE_TYPES[node.type].rule is None:
+            behaviour = PYTREES_NODES[node.type](node.name, children, control_params(node))
+        else:
+            behaviour = _rule_behaviour(node, children)
         if hasattr(behaviour, "bind"):  # nodes that read the blackboard or the clock
             behaviour.bind(agent, world, defaults)
     elif node.type in BEHAVIOUR_TYPES:
@@ -128,15 +131,6 @@ def build_behaviour(
     else:
         behaviour = LeafBehaviour(node.name, make_leaf(node, defaults), agent, world)
     return with_scripts(behaviour, node.scripts, agent) if node.scripts else behaviour
-
-
-def _control_behaviour(
-    node: Node, children: list[py_trees.behaviour.Behaviour]
-) -> py_trees.behaviour.Behaviour:
-    """The py_trees composite or decorator for a control node."""
-    if node.type in PYTREES_NODES or NODE_TYPES[node.type].rule is None:
-        return PYTREES_NODES[node.type](node.name, children, control_params(node))
-    return _rule_behaviour(node, children)
 
 
 def _parallel(
