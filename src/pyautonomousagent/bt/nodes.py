@@ -51,18 +51,17 @@ class BlackboardRef:
 Check = Callable[[Any, int], str]
 
 
-def whole_at_least_one(value: Any, children: int) -> str:
-    """A whole number >= 1."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        return f"must be a whole number >= 1, got {value!r}"
-    return ""
+def whole(least: int, unit: str = "", no_limit: bool = False) -> Check:
+    """A whole number (of ``unit``) >= ``least``; with ``no_limit`` also -1 (no limit)."""
+    must = f"must be a whole number{unit} >= {least}" + (" or -1" if no_limit else "")
 
+    def check(value: Any, children: int) -> str:
+        number = isinstance(value, int) and not isinstance(value, bool)
+        if number and (value >= least or (no_limit and value == -1)):
+            return ""
+        return f"{must}, got {value!r}"
 
-def loop_count(value: Any, children: int) -> str:
-    """A whole number >= 1, or -1 for no limit."""
-    if isinstance(value, bool) or not isinstance(value, int) or (value < 1 and value != -1):
-        return f"must be a whole number >= 1 or -1, got {value!r}"
-    return ""
+    return check
 
 
 def parallel_threshold(value: int, children: int) -> int:
@@ -509,13 +508,13 @@ _decorator(
     "Repeat",
     "↻",
     "after a success ticks the child again, num_cycles times (-1: for ever)",
-    params=(Param("num_cycles", int, None, loop_count),),
+    params=(Param("num_cycles", int, None, whole(1, no_limit=True)),),
 )
 _decorator(
     "RetryUntilSuccessful",
     "↺",
     "after a failure ticks the child again, num_attempts tries (-1: for ever)",
-    params=(Param("num_attempts", int, None, loop_count),),
+    params=(Param("num_attempts", int, None, whole(1, no_limit=True)),),
 )
 
 
@@ -528,11 +527,7 @@ def script_text(value: Any, children: int) -> str:
     return ""
 
 
-def msec(value: Any, children: int) -> str:
-    """Milliseconds of simulated time: a whole number >= 0."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-        return f"must be a whole number of milliseconds >= 0, got {value!r}"
-    return ""
+msec = whole(0, " of milliseconds")  # simulated time
 
 
 _decorator(
@@ -670,14 +665,14 @@ _decorator(
     "",
     "py_trees Repeat: RUNNING until the child succeeded num_success times, one per tick",
     builtin=False,
-    params=(Param("num_success", int, None, whole_at_least_one),),
+    params=(Param("num_success", int, None, whole(1)),),
 )
 _decorator(
     "PyTreesRetry",
     "",
     "py_trees Retry: a failure is RUNNING until the num_failures-th, one per tick",
     builtin=False,
-    params=(Param("num_failures", int, None, whole_at_least_one),),
+    params=(Param("num_failures", int, None, whole(1)),),
 )
 add(NodeType("PyTreesParallel", CONTROL, 0, None, (
     Param("policy", str, "SuccessOnAll", one_of("SuccessOnAll", "SuccessOnOne")),
