@@ -140,7 +140,7 @@ def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, inde
 
 
 #: A tree of more nodes than this is written once, in a group function that both fused
-#: variants call (:func:`group_function`, :func:`tick_group_function`); a smaller one (every
+#: variants call (:func:`group_function`); a smaller one (every
 #: mission's: 7-19 nodes) inside each. numba's parallel passes over a loop that holds the
 #: tree grow faster than the tree: written inside, the serial and the parallel variant took
 #: 17 s and 49 s to compile for patrol's 16 nodes, 22 s and 72 s for 26 nodes, 37 s and more
@@ -186,15 +186,27 @@ def _record_group(layout: Layout, indent: str) -> str:
 
 
 def group_function(
-    program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, sensors: SensorKernel
+    program: Program,
+    kernels: Mapping[int, LeafKernel],
+    layout: Layout,
+    sensors: SensorKernel,
+    stepwise: bool,
 ) -> str:
-    """``block_group(first, last, t0, count, every, row0, <the fused parameters>)``: the body
-    of both fused variants (:func:`_group_body`) for a tree of more than
-    :data:`INLINE_NODES` nodes, compiled once."""
+    """What both fused variants call for a tree of more than :data:`INLINE_NODES` nodes,
+    compiled once: ``block_group(first, last, t0, count, every, row0, <the fused
+    parameters>)``, their body (:func:`_group_body`), or with ``stepwise`` ``tick_group(first,
+    last, t, <the fused parameters>)``, the :func:`_tick_and_control` of
+    :func:`stepwise_block_function`."""
+    if stepwise:
+        head = "tick_group(first, last, t"
+        body = _tick_and_control(program, kernels, layout, " " * 4)
+    else:
+        head = "block_group(first, last, t0, count, every, row0"
+        body = _group_body(program, kernels, layout, sensors, " " * 4)
     return f"""
 @njit(cache=True, nogil=True, error_model="numpy")
-def block_group(first, last, t0, count, every, row0, {fused_arguments(layout, sensors)}):
-{_group_body(program, kernels, layout, sensors, " " * 4)}
+def {head}, {fused_arguments(layout, sensors)}):
+{body}
 """
 
 
@@ -305,19 +317,6 @@ def _tick_and_control(
     return f"""{indent}for a in {agents}:
 {tree_body(program, kernels, layout, indent + " " * 4)}
 {_phase4(kernels, layout, agents, indent)}"""
-
-
-def tick_group_function(
-    program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, sensors: SensorKernel
-) -> str:
-    """``tick_group(first, last, t, <the fused parameters>)``: :func:`_tick_and_control`,
-    which both variants of :func:`stepwise_block_function` call for a tree of more than
-    :data:`INLINE_NODES` nodes, compiled once."""
-    return f"""
-@njit(cache=True, nogil=True, error_model="numpy")
-def tick_group(first, last, t, {fused_arguments(layout, sensors)}):
-{_tick_and_control(program, kernels, layout, " " * 4)}
-"""
 
 
 def stepwise_block_function(
@@ -433,8 +432,7 @@ def module_source(
         return "\n".join(lines) + "\n"  # no fused loop
     stepwise = bool(layout.outboxes) or sensors.swarm is not None
     if grouped(program):
-        group = tick_group_function if stepwise else group_function
-        lines.append(group(program, kernels, layout, sensors))
+        lines.append(group_function(program, kernels, layout, sensors, stepwise))
     for p in (False, True):
         if stepwise:
             lines.append(stepwise_block_function(program, kernels, layout, sensors, messaging, p))

@@ -334,11 +334,6 @@ class GpuEngine(LoopEngine):
             "numba": numba.__version__,
         }
 
-    def ready(self, sim: LoopView) -> bool:
-        """False: "auto" picks the GPU engine by the run's size (:func:`auto_takes_gpu`),
-        not by what numba's cache holds (as the compiled engine's ``ready``)."""
-        return False
-
     def runs(self, sim: LoopView) -> bool:
         """Whether the kernels can run ``sim``'s iterations from its start (else
         :meth:`prepare` refuses it): a mission with compiled sensors and compiled handlers
