@@ -1,24 +1,13 @@
 """The GPU engine's kernel source: the compiled engine's fused loop, one CUDA thread an agent.
 
-The kernel is written with the compiled engine's per-agent code, handed over by the GPU
+The kernels are written with the compiled engine's per-agent code, handed over by the GPU
 engine's host (:class:`~pyautonomousagent.loop.source.Stages`; this module imports no other
-engine): the same Phase 2 (sensors, motion), tree body, Phase 4 and recording code, for
-agent ``a = cuda.grid(1)`` instead of a loop over a chunk of agents; the leaves' and
-sensors' njit kernels are called as they are (numba-cuda compiles ``@jit`` functions called
-from a kernel for the device). There is no second copy of a node or a leaf.
-
-``block_gpu(t0, count, every, row0, st, cur, pend, kf, ki, arrays..., us, uh, uc,
-records..., traces, traced_at, behaviour, leaf_rows, stopped_at, max_speed, speed_step,
-turn_step, sensor state...)`` runs iterations ``t0 + 1 .. t0 + count`` for every agent; a
-record of iteration ``t`` goes to row ``t // every - row0`` of the record arrays (a group of
-rows on the device, copied back by the engine). That is the kernel of a tree that sends no
-messages (the patrol); with a sensor of the whole swarm (e.g. a grid all agents share),
-``block_gpu`` also takes the sensor's state (``ws0, ...``) and runs one iteration a launch,
-after :func:`swarm_kernels` (the sensor's device steps, ``SwarmSensorKernel.device``). A
-tree that sends messages gets :func:`message_kernels` instead: one kernel per phase and
-message type, each for one iteration, the same generator's pieces plus the mission's
-compiled handlers (``HandlerKernel.function`` and its per-receiver ``Receive.function``),
-launched by :mod:`~pyautonomousagent.engines.gpu_messages`.
+engine), for agent ``a = cuda.grid(1)`` instead of a loop over a chunk of agents; the
+leaves', sensors' and handlers' njit kernels are called as they are (numba-cuda compiles
+them for the device). There is no second copy of a node or a leaf. A tree that sends no
+messages gets ``block_gpu`` (:func:`kernel_function`; with a sensor of the whole swarm one
+iteration a launch, after :func:`swarm_kernels`), one that sends messages one kernel per
+phase and message type (:func:`message_kernels`). docs/architecture.md, "The GPU engine".
 """
 
 from __future__ import annotations
