@@ -188,7 +188,9 @@ def _decorator(name: str, symbol: str, doc: str, **kwargs: Any) -> NodeType:
     return add(NodeType(name, DECORATOR, 1, 1, tags=_tag(name, symbol, doc), **kwargs))
 
 
-def _control(name: str, least: int, most: int | None, symbol: str, doc: str, **kw: Any) -> None:
+def _control(
+    name: str, symbol: str, doc: str, least: int = 1, most: int | None = None, **kw: Any
+) -> None:
     add(NodeType(name, CONTROL, least, most, tags=_tag(name, symbol, doc), **kw))
 
 
@@ -443,8 +445,6 @@ def while_do_else_rule(n: Ops) -> None:
 
 _control(
     "SequenceWithMemory",
-    1,
-    None,
     "→*",
     "like Sequence, but after a failure resumes at the failed child",
     rule=sequence_with_memory_rule,
@@ -452,8 +452,6 @@ _control(
 )
 _control(
     "AsyncSequence",
-    1,
-    None,
     "→a",
     "like Sequence, but yields (RUNNING) after a child that succeeded at once",
     rule=async_rule(SUCCESS),
@@ -461,8 +459,6 @@ _control(
 )
 _control(
     "AsyncFallback",
-    1,
-    None,
     "?a",
     "like Fallback, but yields (RUNNING) after a child that failed at once",
     rule=async_rule(FAILURE),
@@ -470,25 +466,23 @@ _control(
 )
 _control(
     "IfThenElse",
-    2,
-    3,
     "if",
     "child 1 decides: SUCCESS ticks child 2, FAILURE child 3 (or fails)",
+    least=2,
+    most=3,
     rule=if_then_else_rule,
     memory=1,
 )
 _control(
     "WhileDoElse",
-    2,
-    3,
     "while",
     "like IfThenElse, but asks child 1 again on every tick",
+    least=2,
+    most=3,
     rule=while_do_else_rule,
 )
 _control(
     "Parallel",
-    1,
-    None,
     "⇉",
     "ticks unfinished children; decides by success_count / failure_count",
     params=(
@@ -498,8 +492,6 @@ _control(
 )
 _control(
     "ParallelAll",
-    1,
-    None,
     "⇉all",
     "ticks unfinished children until all finished; fails at max_failures failures",
     params=(Param("max_failures", int, 1, child_count),),
@@ -646,11 +638,10 @@ def _no_catch_on_halt(value: Any, children: int) -> str:
 
 _control(
     "TryCatch",
-    2,
-    None,
     "try",
     "BT.CPP 4.9: children but the last in sequence; if one fails, the last (catch) runs, "
     "then FAILURE",
+    least=2,
     params=(Param("catch_on_halt", bool, False, _no_catch_on_halt),),
     builtin=False,  # not in BT.CPP 4.8, the version held against: files declare it
     rule=try_catch_rule,

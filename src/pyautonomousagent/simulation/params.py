@@ -69,10 +69,6 @@ class Values(SimpleNamespace):
         hint = f"; did you mean {close[0]!r}?" if close else ""
         raise AttributeError(f"no parameter {key!r}{hint}")
 
-    def as_dict(self) -> dict[str, Any]:
-        """The values as a new plain dict."""
-        return dict(vars(self))
-
 
 def defaults(params: Iterable[Param]) -> Values:
     """The parameters' default values."""
