@@ -104,6 +104,12 @@ def parallel(
     return Node("PyTreesParallel", name, tuple(children), params)
 
 
+def sequence_with_memory(name: str, *children: Node) -> Node:
+    """BehaviorTree.CPP's SequenceWithMemory ("→*"): after a failure it resumes at the
+    failed child instead of restarting."""
+    return Node("SequenceWithMemory", name, tuple(children))
+
+
 def decorator(type_name: str, name: str, child: Node, **params: Any) -> Node:
     """A decorator of type ``type_name`` (e.g. ``"Repeat"``, ``num_cycles=3``)."""
     return Node(type_name, name, (child,), dict(params))

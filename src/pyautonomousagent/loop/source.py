@@ -1,7 +1,8 @@
 """Pieces of generated source that the compiled engine's fused functions and the GPU
-engine's kernels both write: the kernels' import names, the deferred ``Later`` steps, the
-swarm sensor's arguments, the fused functions' parameters, and the record of the per-agent
-stages (sensors and motion, the tree, control) that the host engine writes (:class:`Stages`).
+engine's kernels both write: the kernels' imports and calls (handlers' too), the deferred
+``Later`` steps, the swarm sensor's arguments, the fused functions' parameters, and the
+record of the per-agent stages (sensors and motion, the tree, control) that the host engine
+writes (:class:`Stages`).
 """
 
 from __future__ import annotations
