@@ -19,7 +19,7 @@ import py_trees
 from py_trees.common import Status
 
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
-from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
+from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, Leaf, check_leaves, make_leaf
 from pyautonomousagent.bt.nodes import CONTROL, NODE_TYPES, may_skip
 from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params
 from pyautonomousagent.bt.status import invalid_status
@@ -108,7 +108,7 @@ def register_behaviour(type_name: str) -> Callable[[type[AgentBehaviour]], type[
 
     def register(cls: type[AgentBehaviour]) -> type[AgentBehaviour]:
         BEHAVIOUR_TYPES.register(type_name, cls)
-        declare_leaf_type(type_name)
+        ENGINE_LEAF_TYPES.add(type_name)  # tree files may use it
         return cls
 
     return register
