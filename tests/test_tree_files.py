@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from pyautonomousagent import Simulation, load
 from pyautonomousagent.bt.build import build
 from pyautonomousagent.bt.document import TreeFileError
-from pyautonomousagent.bt.draw import _all, layout, to_dot
+from pyautonomousagent.bt.draw import _levels, layout, to_dot
 from pyautonomousagent.bt.files import (
     from_text_format,
     load_tree,
@@ -220,7 +220,7 @@ def test_save_tree_picks_the_format_from_the_ending(tmp_path):
 
 def test_layout_keeps_boxes_apart_and_parents_above_children():
     root, width, height = layout(gathering_tree())
-    boxes = _all(root)
+    boxes = [b for b, _ in _levels(root, 0)]
     assert len(boxes) == len(list(gathering_tree().walk())) == 18
     for b in boxes:
         assert b.x - b.width / 2 > 0 and b.x + b.width / 2 < width and b.y + b.height < height

@@ -78,7 +78,7 @@ def layout(root: Node) -> tuple[Box, float, float]:
         heights[depth] = max(heights[depth], b.height)
     tops = [GAP + sum(heights[:d]) + LEVEL * d for d in range(len(heights))]
     _place(box, GAP, 0, tops)
-    boxes = _all(box)
+    boxes = [b for b, _ in _levels(box, 0)]
     width = max(b.x + b.width / 2 for b in boxes) + GAP
     height = max(b.y + b.height for b in boxes) + GAP
     return box, width, height
@@ -115,10 +115,6 @@ def _place(box: Box, left: float, depth: int, tops: list[float]) -> None:
     box.x = (box.children[0].x + box.children[-1].x) / 2
 
 
-def _all(box: Box) -> list[Box]:
-    return [box, *(b for child in box.children for b in _all(child))]
-
-
 def draw_tree(root: Node, path: str | Path, title: str = "") -> Path:
     """Draw ``root`` into ``path`` (PNG or SVG, by its ending) with matplotlib; returns it."""
     from matplotlib.figure import Figure
@@ -136,7 +132,7 @@ def draw_tree(root: Node, path: str | Path, title: str = "") -> Path:
     if title:
         ax.text(GAP, 0.2, title, fontsize=FONT + 3, weight="bold", va="center")
     ax.text(GAP, height + top + 0.12, note, fontsize=FONT, va="center", color="#333")
-    for b in _all(box):
+    for b, _ in _levels(box, 0):
         for child in b.children:
             ax.plot([b.x, child.x], [top + b.y + b.height, top + child.y], color="#555", lw=0.8)
         style = "round,pad=0,rounding_size=0.12" if kind(b.node) == "Condition" else "square,pad=0"

@@ -248,14 +248,9 @@ class BlackboardPorts(Leaf):
 
 LEAF_TYPES: Registry[type[Leaf]] = Registry("leaf type")
 
-#: Leaf type names known to an engine only (hand-written py_trees behaviours): tree files
-#: may use them, with their ports passed through as written.
+#: Leaf type names known to an engine only (hand-written py_trees behaviours, added by
+#: ``register_behaviour``): tree files may use them, with their ports passed through as written.
 ENGINE_LEAF_TYPES: set[str] = set()
-
-
-def declare_leaf_type(type_name: str) -> None:
-    """Let tree files use ``type_name``, a leaf an engine provides (see ``register_behaviour``)."""
-    ENGINE_LEAF_TYPES.add(type_name)
 
 
 def register_leaf(cls: type[Leaf]) -> type[Leaf]:

@@ -51,25 +51,30 @@ class BlackboardRef:
 Check = Callable[[Any, int], str]
 
 
-def whole_at_least_one(value: Any, children: int) -> str:
-    """A whole number >= 1."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        return f"must be a whole number >= 1, got {value!r}"
-    return ""
+def whole(least: int, unit: str = "", no_limit: bool = False) -> Check:
+    """A whole number (of ``unit``) >= ``least``; with ``no_limit`` also -1 (no limit)."""
+    must = f"must be a whole number{unit} >= {least}" + (" or -1" if no_limit else "")
+
+    def check(value: Any, children: int) -> str:
+        number = isinstance(value, int) and not isinstance(value, bool)
+        if number and (value >= least or (no_limit and value == -1)):
+            return ""
+        return f"{must}, got {value!r}"
+
+    return check
 
 
-def loop_count(value: Any, children: int) -> str:
-    """A whole number >= 1, or -1 for no limit."""
-    if isinstance(value, bool) or not isinstance(value, int) or (value < 1 and value != -1):
-        return f"must be a whole number >= 1 or -1, got {value!r}"
-    return ""
+def parallel_threshold(value: int, children: int) -> int:
+    """A count of children as BehaviorTree.CPP resolves it: ``k >= 1`` is k children, ``-1``
+    all of them, ``-2`` all but one, ... (checked by :func:`child_count`)."""
+    return value if value > 0 else children + value + 1
 
 
 def child_count(value: Any, children: int) -> str:
     """A count of children as BT.CPP reads it: k >= 1, or -1 (all), -2 (all but one), ..."""
     if isinstance(value, bool) or not isinstance(value, int) or value == 0:
         return f"must be a whole number other than 0, got {value!r}"
-    resolved = value if value > 0 else children + value + 1
+    resolved = parallel_threshold(value, children)
     if not 1 <= resolved <= children:
         return f"={value} asks for {resolved} of {children} child(ren)"
     return ""
@@ -175,15 +180,17 @@ def _tag(tag: str, symbol: str, doc: str, **fixed: Any) -> tuple[FileTag, ...]:
     return (FileTag(tag, fixed, symbol, doc),)
 
 
-def _decorator(name: str, tag: str, symbol: str, doc: str, **kwargs: Any) -> NodeType:
+def _decorator(name: str, symbol: str, doc: str, **kwargs: Any) -> NodeType:
     status_map = kwargs.get("status_map")
     if status_map is not None:
         rule = mapped_rule(status_map)
         kwargs.update(rule=rule, yields=status_map.get("RUNNING") is None, skips=True)
-    return add(NodeType(name, DECORATOR, 1, 1, tags=_tag(tag, symbol, doc), **kwargs))
+    return add(NodeType(name, DECORATOR, 1, 1, tags=_tag(name, symbol, doc), **kwargs))
 
 
-def _control(name: str, least: int, most: int | None, symbol: str, doc: str, **kw: Any) -> None:
+def _control(
+    name: str, symbol: str, doc: str, least: int = 1, most: int | None = None, **kw: Any
+) -> None:
     add(NodeType(name, CONTROL, least, most, tags=_tag(name, symbol, doc), **kw))
 
 
@@ -314,13 +321,11 @@ def mapped_rule(status_map: Mapping[str, str]) -> Rule:
 # -- status-mapping decorators ----------------------------------------------------------------
 _decorator(
     "Inverter",
-    "Inverter",
     "≠",
     "swaps SUCCESS and FAILURE",
     status_map={"SUCCESS": "FAILURE", "FAILURE": "SUCCESS"},
 )
 _decorator(
-    "ForceSuccess",
     "ForceSuccess",
     "✓",
     "SUCCESS when the child finishes; RUNNING while it runs",
@@ -328,13 +333,11 @@ _decorator(
 )
 _decorator(
     "ForceFailure",
-    "ForceFailure",
     "✗",
     "FAILURE when the child finishes; RUNNING while it runs",
     status_map={"SUCCESS": "FAILURE"},
 )
 _decorator(
-    "KeepRunningUntilFailure",
     "KeepRunningUntilFailure",
     "∞",
     "RUNNING when the child succeeds (or is skipped); FAILURE when it fails",
@@ -347,7 +350,7 @@ for _name, _map in {
     "PassThrough": {},
 }.items():
     _change = ", ".join(f"{a} becomes {b}" for a, b in _map.items()) or "returns the child's"
-    _decorator(_name, _name, "", f"py_trees: child {_change}", builtin=False, status_map=_map)
+    _decorator(_name, "", f"py_trees: child {_change}", builtin=False, status_map=_map)
 
 
 # -- BehaviorTree.CPP's own semantics (one tick = one tickExactlyOnce(), docs/tree-files.md) --
@@ -442,8 +445,6 @@ def while_do_else_rule(n: Ops) -> None:
 
 _control(
     "SequenceWithMemory",
-    1,
-    None,
     "→*",
     "like Sequence, but after a failure resumes at the failed child",
     rule=sequence_with_memory_rule,
@@ -451,8 +452,6 @@ _control(
 )
 _control(
     "AsyncSequence",
-    1,
-    None,
     "→a",
     "like Sequence, but yields (RUNNING) after a child that succeeded at once",
     rule=async_rule(SUCCESS),
@@ -460,8 +459,6 @@ _control(
 )
 _control(
     "AsyncFallback",
-    1,
-    None,
     "?a",
     "like Fallback, but yields (RUNNING) after a child that failed at once",
     rule=async_rule(FAILURE),
@@ -469,25 +466,23 @@ _control(
 )
 _control(
     "IfThenElse",
-    2,
-    3,
     "if",
     "child 1 decides: SUCCESS ticks child 2, FAILURE child 3 (or fails)",
+    least=2,
+    most=3,
     rule=if_then_else_rule,
     memory=1,
 )
 _control(
     "WhileDoElse",
-    2,
-    3,
     "while",
     "like IfThenElse, but asks child 1 again on every tick",
+    least=2,
+    most=3,
     rule=while_do_else_rule,
 )
 _control(
     "Parallel",
-    1,
-    None,
     "⇉",
     "ticks unfinished children; decides by success_count / failure_count",
     params=(
@@ -497,25 +492,21 @@ _control(
 )
 _control(
     "ParallelAll",
-    1,
-    None,
     "⇉all",
     "ticks unfinished children until all finished; fails at max_failures failures",
     params=(Param("max_failures", int, 1, child_count),),
 )
 _decorator(
     "Repeat",
-    "Repeat",
     "↻",
     "after a success ticks the child again, num_cycles times (-1: for ever)",
-    params=(Param("num_cycles", int, None, loop_count),),
+    params=(Param("num_cycles", int, None, whole(1, no_limit=True)),),
 )
 _decorator(
     "RetryUntilSuccessful",
-    "RetryUntilSuccessful",
     "↺",
     "after a failure ticks the child again, num_attempts tries (-1: for ever)",
-    params=(Param("num_attempts", int, None, loop_count),),
+    params=(Param("num_attempts", int, None, whole(1, no_limit=True)),),
 )
 
 
@@ -528,15 +519,10 @@ def script_text(value: Any, children: int) -> str:
     return ""
 
 
-def msec(value: Any, children: int) -> str:
-    """Milliseconds of simulated time: a whole number >= 0."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-        return f"must be a whole number of milliseconds >= 0, got {value!r}"
-    return ""
+msec = whole(0, " of milliseconds")  # simulated time
 
 
 _decorator(
-    "Precondition",
     "Precondition",
     "pre",
     "ticks the child if the script `if` holds (asked until the child runs), else `else`",
@@ -547,13 +533,11 @@ _decorator(
 )
 _decorator(
     "Delay",
-    "Delay",
     "delay",
     "RUNNING for delay_msec of simulated time, then ticks the child",
     params=(Param("delay_msec", int, None, msec),),
 )
 _decorator(
-    "Timeout",
     "Timeout",
     "timeout",
     "halts the child and fails when it runs longer than msec of simulated time",
@@ -575,7 +559,6 @@ def run_once_rule(n: Ops) -> None:
 
 
 _decorator(
-    "RunOnce",
     "RunOnce",
     "once",
     "ticks the child until it finishes once; then SKIPPED (then_skip=false: that status)",
@@ -655,11 +638,10 @@ def _no_catch_on_halt(value: Any, children: int) -> str:
 
 _control(
     "TryCatch",
-    2,
-    None,
     "try",
     "BT.CPP 4.9: children but the last in sequence; if one fails, the last (catch) runs, "
     "then FAILURE",
+    least=2,
     params=(Param("catch_on_halt", bool, False, _no_catch_on_halt),),
     builtin=False,  # not in BT.CPP 4.8, the version held against: files declare it
     rule=try_catch_rule,
@@ -671,19 +653,17 @@ _control(
 # -- py_trees nodes BehaviorTree.CPP lacks ----------------------------------------------------
 _decorator(
     "PyTreesRepeat",
-    "PyTreesRepeat",
     "",
     "py_trees Repeat: RUNNING until the child succeeded num_success times, one per tick",
     builtin=False,
-    params=(Param("num_success", int, None, whole_at_least_one),),
+    params=(Param("num_success", int, None, whole(1)),),
 )
 _decorator(
-    "PyTreesRetry",
     "PyTreesRetry",
     "",
     "py_trees Retry: a failure is RUNNING until the num_failures-th, one per tick",
     builtin=False,
-    params=(Param("num_failures", int, None, whole_at_least_one),),
+    params=(Param("num_failures", int, None, whole(1)),),
 )
 add(NodeType("PyTreesParallel", CONTROL, 0, None, (
     Param("policy", str, "SuccessOnAll", one_of("SuccessOnAll", "SuccessOnOne")),

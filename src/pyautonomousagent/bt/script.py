@@ -380,18 +380,14 @@ class Script:
     def reads(self) -> set[str]:
         """The keys the script reads."""
         found: set[str] = set()
-
-        def visit(node: Ast) -> None:
+        stack = list(self.statements)
+        while stack:
+            node = stack.pop()
             if node[0] == "key":
                 found.add(node[1])
             elif node[0] == "assign" and node[1] not in (":=", "="):
                 found.add(node[2])
-            for part in node[1:]:
-                if isinstance(part, tuple):
-                    visit(part)
-
-        for statement in self.statements:
-            visit(statement)
+            stack.extend(part for part in node[1:] if isinstance(part, tuple))
         return found
 
 

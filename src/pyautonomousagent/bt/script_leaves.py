@@ -91,13 +91,6 @@ def _literal_text(value: Any) -> str:
     return str(value)
 
 
-def _script(text: str, name: str, where: str) -> Script:
-    try:
-        return parse(text)
-    except ScriptError as error:
-        raise LeafError(f"{where}: port {name!r}: {error}") from None
-
-
 class _ScriptLeaf(_PortsByName):
     names = ("code",)
     hints = {"code": "a script, e.g. laps := laps + 1"}
@@ -105,7 +98,10 @@ class _ScriptLeaf(_PortsByName):
 
     @classmethod
     def check(cls, name: str, text: str, where: str) -> None:
-        _script(text, name, where)
+        try:
+            parse(text)
+        except ScriptError as error:
+            raise LeafError(f"{where}: port {name!r}: {error}") from None
 
     @classmethod
     def _make(cls, ports: dict[str, str], defaults: Mapping[str, Any]) -> Leaf:

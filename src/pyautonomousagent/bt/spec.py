@@ -22,8 +22,6 @@ from typing import Any
 from pyautonomousagent.bt.nodes import NODE_TYPES, NodeType, skip_problem
 from pyautonomousagent.bt.nodes import BlackboardRef as BlackboardRef
 
-PARALLEL_POLICIES = ("SuccessOnAll", "SuccessOnOne")
-
 
 class TreeError(ValueError):
     """A tree description that cannot be built, with a message naming the node."""
@@ -207,14 +205,3 @@ def control_params(node: Node) -> dict[str, Any]:
             raise TreeError(f"{where}: policy SuccessOnOne cannot synchronise")
         values["synchronise"] = False
     return values
-
-
-def parallel_threshold(value: Any, children: int, where: str = "count") -> int:
-    """A Parallel count resolved as BehaviorTree.CPP does: ``k >= 1`` is k children,
-    ``-1`` is all of them, ``-2`` all but one, ...; TreeError unless 1 <= result <= children."""
-    if isinstance(value, bool) or not isinstance(value, int) or value == 0:
-        raise TreeError(f"{where} must be a whole number other than 0, got {value!r}")
-    resolved = value if value > 0 else children + value + 1
-    if not 1 <= resolved <= children:
-        raise TreeError(f"{where}={value} asks for {resolved} of {children} child(ren)")
-    return resolved

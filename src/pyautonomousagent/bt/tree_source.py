@@ -17,6 +17,11 @@ from pyautonomousagent.bt.nodes import NODE_TYPES, may_skip
 from pyautonomousagent.bt.program import Program
 
 
+def _operator(op: str, flip: bool = False) -> Callable[[Source, Any], Source]:
+    """The method of operator ``op`` (its reflected form with ``flip``): :meth:`Source._op`."""
+    return lambda self, other: self._op(op, other, flip)
+
+
 class Source:
     """A value of the generated code: its source text; comparisons and ``&``/``|`` make the
     text of the combined value."""
@@ -31,36 +36,11 @@ class Source:
         left, right = (other, self) if flip else (self, other)
         return Source(f"({source_text(left)} {op} {source_text(right)})")
 
-    def __eq__(self, other: Any) -> Source:  # type: ignore[override]
-        return self._op("==", other)
-
-    def __ne__(self, other: Any) -> Source:  # type: ignore[override]
-        return self._op("!=", other)
-
-    def __lt__(self, other: Any) -> Source:
-        return self._op("<", other)
-
-    def __le__(self, other: Any) -> Source:
-        return self._op("<=", other)
-
-    def __gt__(self, other: Any) -> Source:
-        return self._op(">", other)
-
-    def __ge__(self, other: Any) -> Source:
-        return self._op(">=", other)
-
-    def __and__(self, other: Any) -> Source:
-        return self._op("and", other)
-
-    def __rand__(self, other: Any) -> Source:
-        return self._op("and", other, flip=True)
-
-    def __or__(self, other: Any) -> Source:
-        return self._op("or", other)
-
-    def __ror__(self, other: Any) -> Source:
-        return self._op("or", other, flip=True)
-
+    __eq__ = _operator("==")  # type: ignore[assignment]
+    __ne__ = _operator("!=")  # type: ignore[assignment]
+    __lt__, __le__, __gt__, __ge__ = (_operator(op) for op in ("<", "<=", ">", ">="))
+    __and__, __rand__ = _operator("and"), _operator("and", flip=True)
+    __or__, __ror__ = _operator("or"), _operator("or", flip=True)
     __hash__ = None  # type: ignore[assignment]
 
 

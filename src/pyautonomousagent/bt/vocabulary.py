@@ -16,7 +16,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from pyautonomousagent.bt.nodes import NODE_TYPES, PRE_CONDITIONS, NodeType
+from pyautonomousagent.bt.nodes import NODE_TYPES, PRE_CONDITIONS
 from pyautonomousagent.bt.spec import Node
 
 
@@ -48,8 +48,7 @@ class Tag:
 def tags() -> list[Tag]:
     """Every file tag of every registered control node type."""
     out = []
-    for record in NODE_TYPES.items():
-        node_type: NodeType = record[1]
+    for node_type in NODE_TYPES.values():
         params = {p.name: (p.type, p.default is None) for p in node_type.params if p.in_files}
         for t in node_type.tags:
             out.append(

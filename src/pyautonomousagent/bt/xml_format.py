@@ -124,9 +124,10 @@ def read_xml(text: str, file: str) -> Document:
     trees: dict[str, RawNode] = {}
     lines: dict[str, int] = {}
     ports: dict[str, dict[str, Any]] = {}
+    count = sum(element.tag == "BehaviorTree" for element in root.children)
     for element in root.children:
         if element.tag == "BehaviorTree":
-            _read_tree(element, file, len(_trees_in(root)), trees, lines)
+            _read_tree(element, file, count, trees, lines)
         elif element.tag == "TreeNodesModel":
             ports.update(_subtree_ports(element))
         elif element.tag == "include":
@@ -145,10 +146,6 @@ def read_xml(text: str, file: str) -> Document:
             )
     main = _main_tree(root, trees, file)
     return Document(file, main, trees, lines, ports)
-
-
-def _trees_in(root: _Element) -> list[_Element]:
-    return [e for e in root.children if e.tag == "BehaviorTree"]
 
 
 def _read_tree(

@@ -25,7 +25,6 @@ from pyautonomousagent.bt.vocabulary import REFUSED_ATTRIBUTES, SCRIPT_ATTRIBUTE
 from pyautonomousagent.inputs import Loader, YamlLimitError, clip, yaml_error_line
 
 TOP_KEYS = ["main_tree_to_execute", "tree", "trees", "subtree_ports"]
-NODE_KEYS = ("type", "name", "children", "ID", "_autoremap", "_description")
 DOCS = "docs/tree-files.md"
 
 

@@ -28,11 +28,11 @@ import numpy as np
 from pyautonomousagent.allocator import reuse_freed_memory
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
-from pyautonomousagent.bt.nodes import NODE_TYPES, PRE_CONDITIONS
+from pyautonomousagent.bt.nodes import NODE_TYPES, PRE_CONDITIONS, parallel_threshold
 from pyautonomousagent.bt.program import case_values, compile_tree
 from pyautonomousagent.bt.script import Script, parse
 from pyautonomousagent.bt.script_leaves import iterations
-from pyautonomousagent.bt.spec import Node, TreeError, check_entries, parallel_threshold
+from pyautonomousagent.bt.spec import Node, TreeError, check_entries
 from pyautonomousagent.bt.status import (
     FAILURE,
     INVALID,
@@ -198,11 +198,10 @@ class BatchedEngine:
         out[rows] = np.broadcast_to(script.truth(self.swarm.agents(rows).blackboard), rows.shape)
         return out
 
-    def _halt_children(self, i: int, first: int, mask: np.ndarray) -> None:
-        """Halt the children of node ``i`` from position ``first`` on, for ``mask``."""
-        kids = self.program.children[i]
-        if first < len(kids) and _some(mask):
-            for child in kids[first:]:
+    def _halt_children(self, i: int, mask: np.ndarray) -> None:
+        """Halt the children of node ``i`` for ``mask``."""
+        if _some(mask):
+            for child in self.program.children[i]:
                 self._halt(child, mask)
 
     def _leaf(self, i: int, mask: np.ndarray) -> None:
@@ -245,7 +244,7 @@ class BatchedEngine:
     def _parallel(self, i: int, mask: np.ndarray) -> None:
         kids, params = self.program.children[i], self.program.params[i]
         status = self.status[i]
-        self._halt_children(i, 0, mask & (status != RUNNING))
+        self._halt_children(i, mask & (status != RUNNING))
         if not kids:
             np.copyto(status, SUCCESS, where=mask)
             return
@@ -280,13 +279,7 @@ class BatchedEngine:
             np.add(counter, 1, out=counter, where=failure)
             again = counter < self.program.params[i]["num_failures"]
             new = np.where(failure, np.where(again, RUNNING, FAILURE), result)
-        self._settle(i, child, mask, result, new)
-
-    def _settle(
-        self, i: int, child: int, mask: np.ndarray, result: np.ndarray, new: np.ndarray
-    ) -> None:
-        """A decorator's new status; a child left RUNNING under a finished decorator halts."""
-        self._halt(child, mask & (new != RUNNING) & (result == RUNNING))
+        self._halt(child, mask & (new != RUNNING) & (result == RUNNING))  # left RUNNING
         np.copyto(self.status[i], new, where=mask)
 
     # BehaviorTree.CPP's control nodes (see engines/btcpp.py for the same rules on py_trees).
@@ -324,7 +317,7 @@ class BatchedEngine:
         need_success = parallel_threshold(params["success_count"], len(kids))
         need_failure = parallel_threshold(params["failure_count"], len(kids))
         fresh = mask & (status != RUNNING)
-        self._halt_children(i, 0, fresh)
+        self._halt_children(i, fresh)
         done[kids] &= ~fresh
         alive = mask.copy()
         for child in kids:
@@ -362,7 +355,7 @@ class BatchedEngine:
         failures = (self.status[kids] == FAILURE).sum(axis=0)
         verdict = np.where(failures >= need_failure, FAILURE, SUCCESS)
         np.copyto(status, np.where(finished, verdict, RUNNING), where=mask)
-        self._halt_children(i, 0, finished)
+        self._halt_children(i, finished)
         done[kids] &= ~finished
 
     def _precondition(self, i: int, mask: np.ndarray) -> None:
@@ -431,7 +424,7 @@ class BatchedEngine:
                 finished = going & (result != RUNNING)
                 np.copyto(running, k + 1, where=going & (result == RUNNING))
                 np.copyto(running, 0, where=finished)
-                self._halt_children(i, 0, finished)
+                self._halt_children(i, finished)
 
 
 #: Node type -> the method that ticks it, called with (engine, node index, mask): one entry

@@ -5,8 +5,8 @@ ticked, what is returned, what is remembered) in py_trees' terms: a halted node 
 ``INVALID`` (BT.CPP's ``IDLE``) and a finished node keeps its last status for display.
 The batched engine implements the same rules on arrays; docs/tree-files.md has the table.
 
-- :class:`RetryUntilSuccessful` / :class:`Repeat`: tick the child again *within the same
-  tick* after a failure (resp. success), up to ``num_attempts`` (resp. ``num_cycles``) times.
+- :class:`Loop` (``RetryUntilSuccessful`` / ``Repeat``): tick the child again *within the
+  same tick* after a failure (resp. success), up to ``num_attempts`` (resp. ``num_cycles``).
 - :class:`Parallel`: ticks the children that have not finished yet, left to right, and
   returns as soon as ``success_count`` children succeeded or success became impossible
   (``failure_count`` failures); running children are then halted.
@@ -24,10 +24,10 @@ from py_trees.common import Status
 
 from pyautonomousagent.bt import status as codes
 from pyautonomousagent.bt.nodes import PRE_CONDITIONS as PRE_CONDITION_CODES
+from pyautonomousagent.bt.nodes import parallel_threshold
 from pyautonomousagent.bt.program import case_values
 from pyautonomousagent.bt.script import parse
 from pyautonomousagent.bt.script_leaves import iterations
-from pyautonomousagent.bt.spec import parallel_threshold
 
 #: The statuses of :mod:`pyautonomousagent.bt.status` that py_trees lacks (BehaviorTree.CPP's
 #: SKIPPED), as one Enum whose members are named and valued as in ``NAMES``: a py_trees
@@ -46,8 +46,11 @@ TO_PYTREES: dict[int, Any] = {
 FROM_PYTREES = {v: k for k, v in TO_PYTREES.items()}
 
 
-class _Loop(py_trees.decorators.Decorator):
-    """A decorator that ticks its child again within one tick while ``again`` says so."""
+class Loop(py_trees.decorators.Decorator):
+    """BT.CPP ``Repeat`` (``again`` SUCCESS: until the child has succeeded ``limit`` times,
+    FAILURE at its first failure) and ``RetryUntilSuccessful`` (``again`` FAILURE: up to
+    ``limit`` tries, FAILURE when they all failed): the child is ticked again within one
+    tick while it returns ``again`` (``limit`` -1: for ever)."""
 
     def __init__(self, name: str, child: Behaviour, limit: int, again: Status) -> None:
         super().__init__(name=name, child=child)
@@ -84,20 +87,11 @@ class _Loop(py_trees.decorators.Decorator):
         return self.decorated.status
 
 
-class RetryUntilSuccessful(_Loop):
-    """BT.CPP ``RetryUntilSuccessful``: after a failure, tick the child again at once, up to
-    ``num_attempts`` tries in all; FAILURE when they all failed."""
-
-    def __init__(self, name: str, child: Behaviour, num_attempts: int) -> None:
-        super().__init__(name, child, num_attempts, Status.FAILURE)
-
-
-class Repeat(_Loop):
-    """BT.CPP ``Repeat``: after a success, tick the child again at once, until it has
-    succeeded ``num_cycles`` times (SUCCESS); FAILURE at its first failure."""
-
-    def __init__(self, name: str, child: Behaviour, num_cycles: int) -> None:
-        super().__init__(name, child, num_cycles, Status.SUCCESS)
+def halt_all(children: Sequence[Behaviour]) -> None:
+    """BT.CPP's ``resetChildren()``: every child not INVALID is halted (set INVALID)."""
+    for child in children:
+        if child.status != Status.INVALID:
+            child.stop(Status.INVALID)
 
 
 class Parallel(py_trees.composites.Composite):
@@ -121,9 +115,7 @@ class Parallel(py_trees.composites.Composite):
     def tick(self) -> Iterator[Behaviour]:
         """Tick the unfinished children; decide after each one, as BT.CPP does."""
         if self.status != Status.RUNNING:
-            for child in self.children:
-                if child.status != Status.INVALID:
-                    child.stop(Status.INVALID)
+            halt_all(self.children)
             self.done = set()
             self.initialise()
         for k, child in enumerate(self.children):
@@ -158,13 +150,6 @@ class Parallel(py_trees.composites.Composite):
         self.stop(verdict)
 
 
-def _halt_all(children: Sequence[Behaviour]) -> None:
-    """BT.CPP's ``resetChildren()``: every child not INVALID is halted (set INVALID)."""
-    for child in children:
-        if child.status != Status.INVALID:
-            child.stop(Status.INVALID)
-
-
 class ParallelAll(py_trees.composites.Composite):
     """BT.CPP ``ParallelAll``: ticks the unfinished children until all have finished; then
     FAILURE if at least ``max_failures`` of them failed (-1: all, -2: all but one, ...)."""
@@ -189,7 +174,7 @@ class ParallelAll(py_trees.composites.Composite):
         else:
             failures = sum(1 for c in self.children if c.status == Status.FAILURE)
             self.status = Status.FAILURE if failures >= self.need_failure else Status.SUCCESS
-            _halt_all(self.children)
+            halt_all(self.children)
             self.done = set()
         yield self
 
@@ -293,14 +278,14 @@ class Switch(py_trees.composites.Composite):
         value = getattr(self.board, self.key)
         match = next((k for k, c in enumerate(self.cases) if value == c), len(self.cases))
         if self.running not in (-1, match):
-            _halt_all(self.children[self.running : self.running + 1])
+            halt_all(self.children[self.running : self.running + 1])
         child = self.children[match]
         yield from child.tick()
         self.status = child.status
         if child.status == Status.RUNNING:
             self.running = match
         else:
-            _halt_all(self.children)
+            halt_all(self.children)
             self.running = -1
         yield self
 
@@ -358,9 +343,9 @@ def with_scripts(behaviour: Behaviour, scripts: Mapping[str, str], agent: Any) -
 #: Node type -> py_trees behaviour, called with (name, children, parameters).
 BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Behaviour]] = {
     "Parallel": lambda name, kids, p: Parallel(name, kids, p["success_count"], p["failure_count"]),
-    "Repeat": lambda name, kids, p: Repeat(name, kids[0], p["num_cycles"]),
-    "RetryUntilSuccessful": lambda name, kids, p: RetryUntilSuccessful(
-        name, kids[0], p["num_attempts"]
+    "Repeat": lambda name, kids, p: Loop(name, kids[0], p["num_cycles"], Status.SUCCESS),
+    "RetryUntilSuccessful": lambda name, kids, p: Loop(
+        name, kids[0], p["num_attempts"], Status.FAILURE
     ),
     "ParallelAll": lambda name, kids, p: ParallelAll(name, kids, p["max_failures"]),
     "Precondition": lambda name, kids, p: Precondition(name, kids[0], p["if"], p["else"]),

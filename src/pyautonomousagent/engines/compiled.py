@@ -36,12 +36,12 @@ from pyautonomousagent import jit
 from pyautonomousagent.bt.leaf import Leaf, leaf_type
 from pyautonomousagent.bt.program import compile_tree
 from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError
+from pyautonomousagent.bt.tree_source import has_source
 from pyautonomousagent.engines.compiled_source import (
     CHUNK,
     _control,
     _motion,
     module_source,
-    supported,
     tree_body,
 )
 from pyautonomousagent.loop.arguments import ordered, parameters
@@ -79,7 +79,7 @@ def compilable(tree: Node) -> str:
     nodes = sum(1 for _ in tree.walk())
     if nodes > MAX_COMPILED_NODES:
         return f"the tree has {nodes} nodes, more than the {MAX_COMPILED_NODES} it compiles"
-    if not supported(compile_tree(tree)):
+    if not has_source(compile_tree(tree)):
         return "a control node has no compiled form (or has scripts)"
     for node in tree.leaves():
         try:

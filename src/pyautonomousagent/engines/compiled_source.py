@@ -28,8 +28,13 @@ from pyautonomousagent.loop.source import (
     _later_pass,
     _swarm_args,
     alias,
+    call,
     fused_arguments,
+    handler_call,
+    import_lines,
+    kernel_imports,
     motion_functions,
+    swarm_state_names,
 )
 
 #: Agents ticked together over a run of iterations in the fused loop: their records of one
@@ -37,17 +42,10 @@ from pyautonomousagent.loop.source import (
 CHUNK = 256
 
 
-def supported(program: Program) -> bool:
-    """Whether every control node of ``program`` has a compiled form: a rule
-    (:attr:`~pyautonomousagent.bt.nodes.NodeType.rule`) and no scripting attribute."""
-    return source.has_source(program)
-
-
 def _call(kernel: LeafKernel, layout: Layout, node: int) -> str:
-    args = ["a", *(layout.array(name) for name in kernel.names)]
-    args += [f"o{node}"] if kernel.sends is not None else []
-    args += layout.constants.refs(f"leaf {node}", kernel.constants)
-    return f"{alias(kernel.function)}({', '.join(args)})"
+    outbox = [f"o{node}"] if kernel.sends is not None else []
+    return call(alias(kernel.function), ["a"], layout, kernel.names, outbox, f"leaf {node}",
+                kernel.constants)  # fmt: skip
 
 
 def _leaf_lines(i: int, kernels: Mapping[int, LeafKernel], layout: Layout, ticks: str) -> list[str]:
@@ -72,13 +70,6 @@ def tree_body(
         program, lambda i: _leaf_lines(i, kernels, layout, ticks), layout.memory_rows, indent
     )
     return clear + body
-
-
-def _sensor_call(sensors: SensorKernel, layout: Layout) -> str:
-    args = ["a", *(layout.array(name) for name in sensors.names)]
-    args += [f"ss{j}" for j in range(len(sensors.state))]
-    args += layout.constants.refs("sensors", sensors.constants)
-    return f"S({', '.join(args)})"
 
 
 def _swarm_apply(sensors: SensorKernel, layout: Layout) -> str:
@@ -124,7 +115,9 @@ def _motion(layout: Layout, sensors: SensorKernel, indent: str) -> str:
     """Phase 2 for agent ``a``: the sensors, the motion model's step
     (:func:`~pyautonomousagent.loop.source.motion_functions`; one that cannot move stops),
     ``stopped_at`` keeping the first iteration it could not."""
-    lines = f"""moving = {_sensor_call(sensors, layout)}{_swarm_apply(sensors, layout)}
+    state = [f"ss{j}" for j in range(len(sensors.state))]
+    sense = call("S", ["a"], layout, sensors.names, state, "sensors", sensors.constants)
+    lines = f"""moving = {sense}{_swarm_apply(sensors, layout)}
 {_model_calls(motion_functions(layout)[0], layout, "")}
 if not moving and stopped_at[a] < 0:
     stopped_at[a] = t"""
@@ -147,7 +140,7 @@ def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, inde
 
 
 #: A tree of more nodes than this is written once, in a group function that both fused
-#: variants call (:func:`group_function`, :func:`tick_group_function`); a smaller one (every
+#: variants call (:func:`group_function`); a smaller one (every
 #: mission's: 7-19 nodes) inside each. numba's parallel passes over a loop that holds the
 #: tree grow faster than the tree: written inside, the serial and the parallel variant took
 #: 17 s and 49 s to compile for patrol's 16 nodes, 22 s and 72 s for 26 nodes, 37 s and more
@@ -172,9 +165,6 @@ def _group_body(
     agents ``first`` to ``last``, indented by ``indent``; the record of iteration ``t`` in row
     ``t // every - row0`` of the record arrays (a block of record rows,
     :mod:`~pyautonomousagent.record_blocks`)."""
-    store = "\n".join(
-        f"        r{j}[row, first:last] = c{j}[first:last]" for j in range(len(layout.names))
-    )
     body = f"""for t in range(t0 + 1, t0 + count + 1):
     for a in range(U(first), U(last)):
 {_motion(layout, sensors, " " * 8)}
@@ -182,22 +172,41 @@ def _group_body(
 {_phase4(kernels, layout, "range(U(first), U(last))", " " * 4)}
     if t % every == 0:  # a contiguous run of each record row, column by column
         row = t // every - row0
-{store}
-        for a in range(U(first), U(last)):
-            record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"""
+{_record_group(layout, " " * 8)}"""
     return "\n".join(indent + line if line.strip() else line for line in body.splitlines())
 
 
+def _record_group(layout: Layout, indent: str) -> str:
+    """Phase 6 of the agents ``first`` to ``last`` into record row ``row``, at ``indent``:
+    the columns, then the node statuses."""
+    statuses = "    record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"
+    lines = [f"r{j}[row, first:last] = c{j}[first:last]" for j in range(len(layout.names))]
+    lines += ["for a in range(U(first), U(last)):", statuses]
+    return "\n".join(indent + line for line in lines)
+
+
 def group_function(
-    program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, sensors: SensorKernel
+    program: Program,
+    kernels: Mapping[int, LeafKernel],
+    layout: Layout,
+    sensors: SensorKernel,
+    stepwise: bool,
 ) -> str:
-    """``block_group(first, last, t0, count, every, row0, <the fused parameters>)``: the body
-    of both fused variants (:func:`_group_body`) for a tree of more than
-    :data:`INLINE_NODES` nodes, compiled once."""
+    """What both fused variants call for a tree of more than :data:`INLINE_NODES` nodes,
+    compiled once: ``block_group(first, last, t0, count, every, row0, <the fused
+    parameters>)``, their body (:func:`_group_body`), or with ``stepwise`` ``tick_group(first,
+    last, t, <the fused parameters>)``, the :func:`_tick_and_control` of
+    :func:`stepwise_block_function`."""
+    if stepwise:
+        head = "tick_group(first, last, t"
+        body = _tick_and_control(program, kernels, layout, " " * 4)
+    else:
+        head = "block_group(first, last, t0, count, every, row0"
+        body = _group_body(program, kernels, layout, sensors, " " * 4)
     return f"""
 @njit(cache=True, nogil=True, error_model="numpy")
-def block_group(first, last, t0, count, every, row0, {fused_arguments(layout, sensors)}):
-{_group_body(program, kernels, layout, sensors, " " * 4)}
+def {head}, {fused_arguments(layout, sensors)}):
+{body}
 """
 
 
@@ -237,13 +246,18 @@ def {name}(t0, count, every, row0, chunk, {arguments}):
 def _handle(messaging: Messaging, layout: Layout) -> str:
     """Phase 2's handlers: each type delivered last iteration, in the inbox's ``order``."""
     lines = ["for j in range(order.shape[0]):", "    k = order[j]"]
-    for k, handler in enumerate(messaging.handlers):
-        args = [f"t, ib_s{k}, ib_d{k}, counts[{k}]"]
-        args += [layout.array(name) for name in handler.names]
-        args += [f"hs{k}_{j}" for j in range(len(handler.state))]
-        args += layout.constants.refs(f"handler {k}", handler.constants)
-        lines += [f"    if k == {k}:", f"        H{k}({', '.join(args)})"]
+    for k in range(len(messaging.handlers)):
+        handle = handler_call(messaging, layout, k, f"ib_s{k}", f"ib_d{k}", f"counts[{k}]")
+        lines += [f"    if k == {k}:", f"        {handle}"]
     return "\n".join(" " * 8 + line for line in lines)
+
+
+#: The bounding box of the positions seen so far grown by ``(px, py)`` (``bad``: a NaN).
+_GROW_BOX = """bad = bad or px != px or py != py
+low_x = min(low_x, px)
+high_x = max(high_x, px)
+low_y = min(low_y, py)
+high_y = max(high_y, py)""".splitlines()
 
 
 def _collect(messaging: Messaging, layout: Layout) -> str:
@@ -262,11 +276,7 @@ def _collect(messaging: Messaging, layout: Layout) -> str:
         "for a in range(U(0), U(n)):",
         f"    px = {x}[a]",
         f"    py = {y}[a]",
-        "    bad = bad or px != px or py != py",
-        "    low_x = min(low_x, px)",
-        "    high_x = max(high_x, px)",
-        "    low_y = min(low_y, py)",
-        "    high_y = max(high_y, py)",
+        *("    " + line for line in _GROW_BOX),
     ]
     for i, (k, rows) in messaging.senders.items():
         copy = "\n".join(f"    ib_d{k}[{f}, m] = o{i}[{row}, a]" for f, row in enumerate(rows))
@@ -278,13 +288,8 @@ def _collect(messaging: Messaging, layout: Layout) -> str:
     if lowest[{k}] < 0 or lowest[{k}] > {i}:
         lowest[{k}] = {i}
     px = o{i}[1, a]
-    py = o{i}[2, a]
-    bad = bad or px != px or py != py
-    low_x = min(low_x, px)
-    high_x = max(high_x, px)
-    low_y = min(low_y, py)
-    high_y = max(high_y, py)"""
-        lines += ["    " + line for line in block.splitlines()]
+    py = o{i}[2, a]"""
+        lines += ["    " + line for line in [*block.splitlines(), *("    " + g for g in _GROW_BOX)]]
     lines += ["for j in range(order.shape[0]):", "    order[j] = -1", "j = 0"]
     for i, (k, _) in messaging.senders.items():
         lines += [
@@ -314,19 +319,6 @@ def _tick_and_control(
 {_phase4(kernels, layout, agents, indent)}"""
 
 
-def tick_group_function(
-    program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, sensors: SensorKernel
-) -> str:
-    """``tick_group(first, last, t, <the fused parameters>)``: :func:`_tick_and_control`,
-    which both variants of :func:`stepwise_block_function` call for a tree of more than
-    :data:`INLINE_NODES` nodes, compiled once."""
-    return f"""
-@njit(cache=True, nogil=True, error_model="numpy")
-def tick_group(first, last, t, {fused_arguments(layout, sensors)}):
-{_tick_and_control(program, kernels, layout, " " * 4)}
-"""
-
-
 def stepwise_block_function(
     program: Program,
     kernels: Mapping[int, LeafKernel],
@@ -335,33 +327,18 @@ def stepwise_block_function(
     messaging: Messaging | None,
     parallel: bool,
 ) -> str:
-    """The fused loop that runs iteration by iteration, Phase by Phase over every agent
-    (``chunk`` agents at a time, on every core in the parallel one), for a tree that sends
-    messages (given ``messaging``) or sensors that sense the whole swarm
-    (``sensors.swarm``, called once an iteration, before the agents' sensors):
-
-    ``block_messages_serial``/``block_messages_parallel`` (with messaging) or
-    ``block_swarm_serial``/``block_swarm_parallel`` (without) ``(t0, count, every, row0, chunk, st,
-    cur, pend, kf, ki, arrays..., outboxes..., us, uh, uc, records..., traces, traced_at,
-    behaviour, leaf_rows, stopped_at, max_speed, speed_step, turn_step, sensor state...[,
-    reach, order, counts, lowest, inboxes..., handler state...][, swarm state...]) ->
-    iterations done``:
-    up to ``count`` whole iterations, the record of iteration ``t`` in row ``t // every -
-    row0``. With messaging, the messages are handled compiled: the
-    inboxes hold the messages to handle in the first iteration (``order``: the types
-    delivered, in delivery order, -1 after them; ``counts`` per type); it stops after an
-    iteration whose messages do not reach every agent (``reach``: the datalink's range,
-    world units), or include a recorded type: the caller delivers those (the outboxes keep
-    them) as it does after the last iteration. The swarm sensor stops it before an
-    iteration it has no room for. Phases 3 and 4 of a group of agents
-    (:func:`_tick_and_control`) are written in place or, for a large tree (:func:`grouped`),
-    a call of ``tick_group``."""
-    store = "\n".join(
-        f"                r{j}[row, first:last] = c{j}[first:last]"
-        for j in range(len(layout.names))
-    )
-    agents = "range(U(first), U(last))"
-    sense_and_move = f"""            for a in {agents}:
+    """``block_messages_serial``/``_parallel`` (given ``messaging``: a tree that sends
+    messages) or ``block_swarm_serial``/``_parallel`` (sensors that sense the whole swarm,
+    ``sensors.swarm``, called once an iteration before the agents' sensors) ``(t0, count,
+    every, row0, chunk, <the fused parameters>[, reach, order, counts, lowest, inboxes...,
+    handler state...][, swarm state...]) -> iterations done``: up to ``count`` whole
+    iterations, Phase by Phase over every agent (``chunk`` at a time), the record of
+    iteration ``t`` in row ``t // every - row0``. The inboxes hold the messages handled in
+    the first iteration (``order``: the types delivered, -1 after them; ``counts`` per type);
+    it stops after an iteration whose messages do not all reach every agent (``reach``: the
+    datalink's range, world units) or include a recorded type (the caller delivers those),
+    and before one the swarm sensor has no room for."""
+    sense_and_move = f"""            for a in range(U(first), U(last)):
 {_motion(layout, sensors, " " * 16)}"""
     if grouped(program):
         tick_and_control = (
@@ -369,15 +346,13 @@ def stepwise_block_function(
         )
     else:
         tick_and_control = _tick_and_control(program, kernels, layout, " " * 12)
-    record = f"""{store}
-                for a in {agents}:
-                    record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"""
+    record = _record_group(layout, " " * 16)
     extra, handle, collect = "", "", ""
     if messaging is not None:
         recorded = [k for k, flag in enumerate(messaging.recorded) if flag]
         deliver_here = " or ".join(f"counts[{k}] > 0" for k in recorded) or "False"
-        state = f", {messaging.state}" if messaging.state else ""
-        extra = f",\n           reach, order, counts, lowest, {messaging.inboxes}{state}"
+        names = ["reach", "order", "counts", "lowest", *messaging.inbox_names]
+        extra = ",\n           " + ", ".join(names + messaging.state_names)
         handle = "\n" + _handle(messaging, layout)
         collect = f"""
 {_collect(messaging, layout)}
@@ -386,8 +361,8 @@ def stepwise_block_function(
                 return done
             if {deliver_here}:
                 return done"""
-    if sensors.swarm is not None and sensors.swarm.state:
-        extra += ",\n           " + ", ".join(f"ws{j}" for j in range(len(sensors.swarm.state)))
+    if swarm_state_names(sensors.swarm):
+        extra += ",\n           " + ", ".join(swarm_state_names(sensors.swarm))
     kind = "messages" if messaging is not None else "swarm"
     name = f"block_{kind}_{'parallel' if parallel else 'serial'}"
     arguments = fused_arguments(layout, sensors) + extra
@@ -445,26 +420,19 @@ def module_source(
     sends messages (given ``messaging``), ``block_swarm_serial`` and ``block_swarm_parallel``
     where it sends none and ``sensors`` sense the whole swarm, else ``block_serial`` and
     ``block_parallel``."""
-    lines = [HEADER]
-    used: dict[str, Any] = {alias(k.function): k.function for k in kernels.values()}
-    used |= {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
-    used |= {alias(f): f for group in motion_functions(layout) for f in group}
+    used = kernel_imports(kernels, layout)
     if sensors is not None:
         used["S"] = sensors.function
     if sensors is not None and sensors.swarm is not None:
         used["W"], used["WA"] = sensors.swarm.detect, sensors.swarm.apply
     for k, handler in enumerate(messaging.handlers if messaging is not None else ()):
         used[f"H{k}"] = handler.function
-    for name, function in sorted(used.items()):
-        py = getattr(function, "py_func", function)
-        lines.append(f"from {py.__module__} import {py.__qualname__} as {name}")
-    lines.append(tick_function(program, kernels, layout))
+    lines = [HEADER, *import_lines(used), tick_function(program, kernels, layout)]
     if sensors is None or (layout.outboxes and messaging is None):
         return "\n".join(lines) + "\n"  # no fused loop
     stepwise = bool(layout.outboxes) or sensors.swarm is not None
     if grouped(program):
-        group = tick_group_function if stepwise else group_function
-        lines.append(group(program, kernels, layout, sensors))
+        lines.append(group_function(program, kernels, layout, sensors, stepwise))
     for p in (False, True):
         if stepwise:
             lines.append(stepwise_block_function(program, kernels, layout, sensors, messaging, p))

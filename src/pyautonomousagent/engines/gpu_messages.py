@@ -2,34 +2,15 @@
 
 The generated kernels (:func:`~pyautonomousagent.engines.gpu_source.message_kernels`) run
 one thread an agent; this module launches them iteration by iteration and keeps the
-messages on the device between iterations:
-
-1. ``sense_move``: Phase 2's sensors and motion.
-2. Last iteration's deliveries, type by type in delivery order. One that reached everyone
-   (the datalink's bounding-box test) runs, in the first way that fits:
-
-   - by sender (a ``by_sender`` handler, :class:`~pyautonomousagent.kernels.HandlerKernel`):
-     one thread per run of a sender's messages (adjacent in the inbox, which is by sender),
-     the compiled handler on that run's slice, in order (``handle_sender_<k>``);
-   - per receiver (a handler with a per-receiver form,
-     :class:`~pyautonomousagent.kernels.Receive`, and at most :data:`EACH_MOST` messages):
-     one thread per receiver, the form on every message it did not send, in message order
-     (``handle_each_<k>``);
-   - else the compiled handler in one thread (``handle_all_<k>``).
-
-   One that reached only some runs its per-receiver form in one thread per receiver, over
-   the messages in range in message order (``handle_near_<k>``: the batched engine's
-   delivery order, pairs by message then receiver, as each receiver sees it), found on the
-   type's cell grid (:class:`~pyautonomousagent.engines.gpu_grid.DeviceGrid`: each receiver
-   tests only the messages of its own and the neighbouring cells, not all M).
-3. ``tick``: Phases 3, 4 and 6.
-4. Phase 5: per type, each agent's sent flags (``flag_<k>``), their exclusive prefix sum
-   (:func:`~pyautonomousagent.engines.gpu_reduce.exclusive_scan`) and the messages
-   scattered to their places (``scatter_<k>``): the inbox in canonical order (by sender,
-   then sending node). :func:`~pyautonomousagent.engines.gpu_reduce.bounding_box`
-   reduces the agents' and each type's senders' positions to the datalink's bounding box;
-   the host reads the counts and boxes (a few numbers) and plans the next iteration's
-   handling; a delivery that reached only some is grouped by cell on the device then.
+messages on the device between iterations: ``sense_move`` (Phase 2); last iteration's
+deliveries type by type, one that reached everyone by sender (``handle_sender_<k>``), per
+receiver (``handle_each_<k>``, at most :data:`EACH_MOST` messages) or in one thread
+(``handle_all_<k>``), one that reached only some per receiver over the messages in range
+found on the type's cell grid (``handle_near_<k>``,
+:class:`~pyautonomousagent.engines.gpu_grid.DeviceGrid`); ``tick`` (Phases 3, 4 and 6);
+then Phase 5: per type the sent flags (``flag_<k>``), their prefix sum and the scatter
+into the inbox in canonical order (``scatter_<k>``), and the bounding box the host reads
+to plan the next iteration. docs/architecture.md, "The GPU engine", has the details.
 
 The loop stops after an iteration that sent a recorded message type (the CPU delivers it
 and records its events, as the compiled engine does), or whose positions hold a NaN, or

@@ -1,35 +1,17 @@
 """The GPU engine's records: groups of record rows copied back while the next iterations run.
 
-Each call of :meth:`~pyautonomousagent.engines.gpu.GpuEngine.loop` launches its kernel on
-:attr:`RecordGroups.stream` and has it write the records of its iterations into one
-:class:`Slot`: a group of rows on the device (the recorded columns, shape (rows, N) each; the
-traced agents' node statuses, (rows, nodes, K) int8; the active behaviour, (rows, N) int16)
-and the iteration at which each agent first stopped, (N,) int64. Right after the launch,
-:meth:`RecordGroups.launched` has a second stream, :attr:`RecordGroups.copies`, wait for the
-kernel (a CUDA event) and copy those rows into the slot's pinned host buffers, and returns
-at once: the host goes on to launch the next call's kernel into the other slot
-(:data:`SLOTS` of them, used in turn), so that copy runs while the next iterations do.
-
-The host waits for the device only where it must:
-
-- when a slot is needed again while its group is still in flight (:meth:`RecordGroups.slot`):
-  it waits for that group's copy (so, for its kernel) and hands it over;
-- at :meth:`RecordGroups.settle` (the end of ``Simulation.run`` and ``step``, and before an
-  iteration stepped on the CPU): every group in flight is handed over.
-
-Handing a group over (in order of iterations) stores its rows in the recorder
-(:meth:`~pyautonomousagent.recording.Recorder.store_group`: compact columns stay compact),
-then has the simulation do the fused loop's bookkeeping (``account_fused``): the sensors' alerts
-of the agents that stopped, in order of iteration, the recorder's iterations and count, and
-its listeners, which hand finished records to the Parquet writer's thread
-(:class:`~pyautonomousagent.streaming.StatesStream`): so the kernel never waits on the disk.
-``sim.world.iteration``, the simulation's clock, counts the iterations launched, and the
-recorder's count lags it by the groups in flight.
-
-A group holds at most :data:`GROUP_BYTES` on the device (and as much pinned on the host):
-:meth:`RecordGroups.fit` shortens a call to the iterations whose records fit (as the compiled
-engine's :class:`~pyautonomousagent.record_blocks.RecordBlock` does), so the host's memory
-beyond the recorder's records is bounded whatever the run's length.
+Each call of :meth:`~pyautonomousagent.engines.gpu.GpuEngine.loop` has its kernel write the
+records of its iterations into one :class:`Slot` (a group of rows on the device: the
+recorded columns, shape (rows, N) each; the traces, (rows, nodes, K) int8; the active
+behaviour, (rows, N) int16; the iteration each agent first stopped at, (N,) int64), whose
+copy into pinned host buffers :meth:`RecordGroups.launched` queues on a second stream, so
+that it runs while the next call's kernel writes the other slot (:data:`SLOTS`, in turn).
+The host waits only when a slot is needed again while its group is in flight
+(:meth:`RecordGroups.slot`) and at :meth:`RecordGroups.settle`; handing a group over stores
+its rows in the recorder and has the simulation do the fused loop's bookkeeping
+(``account_fused``). ``sim.world.iteration`` counts the iterations launched; the recorder's
+count lags it by the groups in flight. A group holds at most :data:`GROUP_BYTES`
+(:meth:`RecordGroups.fit` shortens a call to fit). docs/architecture.md, "The GPU engine".
 """
 
 from __future__ import annotations

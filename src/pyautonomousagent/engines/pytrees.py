@@ -19,11 +19,11 @@ import py_trees
 from py_trees.common import Status
 
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
-from pyautonomousagent.bt.leaf import Leaf, check_leaves, declare_leaf_type, make_leaf
+from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, Leaf, check_leaves, make_leaf
 from pyautonomousagent.bt.nodes import CONTROL, NODE_TYPES, may_skip
 from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params
 from pyautonomousagent.bt.status import invalid_status
-from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, TO_PYTREES, with_scripts
+from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, TO_PYTREES, halt_all, with_scripts
 from pyautonomousagent.engines.pytrees_rules import tick_method
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
@@ -56,7 +56,7 @@ class AgentBehaviour(py_trees.behaviour.Behaviour):
         yield from super().tick()
 
 
-class LeafBehaviour(py_trees.behaviour.Behaviour):
+class LeafBehaviour(AgentBehaviour):
     """A library leaf (engine-independent :class:`Leaf`) run for one agent by py_trees.
 
     It counts its ticks in ``update()``, which py_trees calls once per tick, sparing the
@@ -67,12 +67,8 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
     """
 
     def __init__(self, name: str, leaf: Leaf, agent: AgentView, world: World) -> None:
-        super().__init__(name)
+        super().__init__(name, agent, world)
         self.leaf = leaf
-        self.agent = agent
-        self.world = world
-        self._ticks = agent.swarm.blackboard["number_ticks"]
-        self._row = agent.index
 
     def tick(self) -> Iterator[py_trees.behaviour.Behaviour]:
         """py_trees' ``Behaviour.tick`` for a leaf: update, take the status, yield itself.
@@ -104,16 +100,6 @@ class LeafBehaviour(py_trees.behaviour.Behaviour):
             self.leaf.halt(self.agent, self.world)
 
 
-def _halt(behaviours: list[py_trees.behaviour.Behaviour]) -> None:
-    """Stop (INVALID) each of ``behaviours`` that is not INVALID already."""
-    for behaviour in behaviours:
-        if behaviour.status != Status.INVALID:
-            behaviour.stop(Status.INVALID)
-
-
-BehaviourFactory = Callable[..., AgentBehaviour]
-
-
 def register_behaviour(type_name: str) -> Callable[[type[AgentBehaviour]], type[AgentBehaviour]]:
     """Class decorator: use an :class:`AgentBehaviour` subclass as leaf type ``type_name``.
 
@@ -122,7 +108,7 @@ def register_behaviour(type_name: str) -> Callable[[type[AgentBehaviour]], type[
 
     def register(cls: type[AgentBehaviour]) -> type[AgentBehaviour]:
         BEHAVIOUR_TYPES.register(type_name, cls)
-        declare_leaf_type(type_name)
+        ENGINE_LEAF_TYPES.add(type_name)  # tree files may use it
         return cls
 
     return register
@@ -133,8 +119,11 @@ def build_behaviour(
 ) -> py_trees.behaviour.Behaviour:
     """The py_trees tree of one agent for a (checked) tree description."""
     children = [build_behaviour(c, agent, world, defaults) for c in node.children]
-    if node.is_control:
-        behaviour = _control_behaviour(node, children)
+    if node.is_control:  # a type with a rule and no entry of PYTREES_NODES: its rule's class
+        if node.type in PYTREES_NODES or NODE_TYPES[node.type].rule is None:
+            behaviour = PYTREES_NODES[node.type](node.name, children, control_params(node))
+        else:
+            behaviour = _rule_behaviour(node, children)
         if hasattr(behaviour, "bind"):  # nodes that read the blackboard or the clock
             behaviour.bind(agent, world, defaults)
     elif node.type in BEHAVIOUR_TYPES:
@@ -142,15 +131,6 @@ def build_behaviour(
     else:
         behaviour = LeafBehaviour(node.name, make_leaf(node, defaults), agent, world)
     return with_scripts(behaviour, node.scripts, agent) if node.scripts else behaviour
-
-
-def _control_behaviour(
-    node: Node, children: list[py_trees.behaviour.Behaviour]
-) -> py_trees.behaviour.Behaviour:
-    """The py_trees composite or decorator for a control node."""
-    if node.type in PYTREES_NODES or NODE_TYPES[node.type].rule is None:
-        return PYTREES_NODES[node.type](node.name, children, control_params(node))
-    return _rule_behaviour(node, children)
 
 
 def _parallel(
@@ -178,7 +158,7 @@ class _Ruled(py_trees.behaviour.Behaviour):
         without its debug lines, whose text it builds on every call)."""
         if new_status == Status.INVALID:
             setattr(self, "current_child", None)  # noqa: B010 - a composite's, py_trees' type
-            _halt(self.children)
+            halt_all(self.children)
         self.terminate(new_status)
         self.status = new_status
 

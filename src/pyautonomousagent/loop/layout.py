@@ -80,12 +80,7 @@ class Layout:
     @property
     def array_names(self) -> list[str]:
         """The arrays' parameter names: ``c0, c1, ...``, then the outboxes ``o<node>``."""
-        return [f"c{j}" for j in range(len(self.names))] + self.outbox_names
-
-    @property
-    def outbox_names(self) -> list[str]:
-        """The outboxes of the sending leaves, in node order."""
-        return [f"o{i}" for i in self.outboxes]
+        return [f"c{j}" for j in range(len(self.names))] + [f"o{i}" for i in self.outboxes]
 
     @property
     def record_names(self) -> list[str]:
@@ -128,19 +123,9 @@ class Messaging:
     senders: Mapping[int, tuple[int, tuple[int, ...]]]
 
     @property
-    def inboxes(self) -> str:
-        """The inbox arguments ``ib_s0, ib_d0, ...`` (senders, data per type)."""
-        return ", ".join(self.inbox_names)
-
-    @property
     def inbox_names(self) -> list[str]:
         """The inbox parameter names ``ib_s0, ib_d0, ib_s1, ...`` (senders, data per type)."""
         return [name for k in range(len(self.types)) for name in (f"ib_s{k}", f"ib_d{k}")]
-
-    @property
-    def state(self) -> str:
-        """The handlers' state arguments ``hs<type>_<j>``."""
-        return ", ".join(self.state_names)
 
     @property
     def state_names(self) -> list[str]:

@@ -1,18 +1,19 @@
 """Pieces of generated source that the compiled engine's fused functions and the GPU
-engine's kernels both write: the kernels' import names, the deferred ``Later`` steps, the
-swarm sensor's arguments, the fused functions' parameters, and the record of the per-agent
-stages (sensors and motion, the tree, control) that the host engine writes (:class:`Stages`).
+engine's kernels both write: the kernels' imports and calls (handlers' too), the deferred
+``Later`` steps, the swarm sensor's arguments, the fused functions' parameters, and the
+record of the per-agent stages (sensors and motion, the tree, control) that the host engine
+writes (:class:`Stages`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from pyautonomousagent.bt.program import Program
 from pyautonomousagent.kernels import Later, LeafKernel, SensorKernel, SwarmSensorKernel
-from pyautonomousagent.loop.layout import Layout
+from pyautonomousagent.loop.layout import Layout, Messaging
 from pyautonomousagent.models import drone2d, drone3d
 
 
@@ -47,6 +48,43 @@ def alias(function: Any) -> str:
     """The name a kernel function is imported under: its module and name, made one word."""
     py = getattr(function, "py_func", function)
     return "K_" + f"{py.__module__}.{py.__qualname__}".replace(".", "_")
+
+
+def kernel_imports(kernels: Mapping[int, LeafKernel], layout: Layout) -> dict[str, Any]:
+    """Name -> function of the leaves' kernels (and their ``Later`` steps') and the motion
+    model's (:func:`motion_functions`), each under its :func:`alias`."""
+    used: dict[str, Any] = {alias(f): f for group in motion_functions(layout) for f in group}
+    used |= {alias(k.function): k.function for k in kernels.values()}
+    return used | {alias(k.later.function): k.later.function for k in kernels.values() if k.later}
+
+
+def import_lines(used: Mapping[str, Any]) -> list[str]:
+    """``from module import function as name`` for each of ``used``, by name."""
+    lines = []
+    for name, function in sorted(used.items()):
+        py = getattr(function, "py_func", function)
+        lines.append(f"from {py.__module__} import {py.__qualname__} as {name}")
+    return lines
+
+
+def call(
+    function: str, first: Iterable[str], layout: Layout, names: Iterable[str],
+    state: Iterable[str], site: str, constants: Sequence[Any],
+) -> str:  # fmt: skip
+    """The call of a kernel ``function``: ``first``, the arrays of ``names``, ``state``, then
+    the constants of call site ``site`` (:meth:`Constants.refs`)."""
+    args = [*first, *(layout.array(name) for name in names), *state]
+    return f"{function}({', '.join(args + layout.constants.refs(site, constants))})"
+
+
+def handler_call(messaging: Messaging, layout: Layout, k: int, senders: str, data: str,
+                 count: str) -> str:  # fmt: skip
+    """The call of message type ``k``'s handler ``H<k>`` on the messages ``senders``, ``data``
+    (source expressions: an inbox or a slice of it), ``count`` of them."""
+    handler = messaging.handlers[k]
+    state = [f"hs{k}_{j}" for j in range(len(handler.state))]
+    return call(f"H{k}", ["t", senders, data, count], layout, handler.names, state,
+                f"handler {k}", handler.constants)  # fmt: skip
 
 
 def _later(later: Later, layout: Layout) -> str:

@@ -29,9 +29,6 @@ import numpy as np
 from pyautonomousagent.bt.blackboard import tree_blackboard_keys
 from pyautonomousagent.bt.leaf import LEAF_TYPES, Leaf, make_leaf
 from pyautonomousagent.bt.spec import Node, TreeError, leaf
-from pyautonomousagent.datalink import Datalink
-from pyautonomousagent.names import agent_index
-from pyautonomousagent.randomness import CounterRandom
 from pyautonomousagent.simulation import phases
 from pyautonomousagent.simulation.params import ScenarioError, Values
 from pyautonomousagent.simulation.scenario import Scenario
@@ -101,15 +98,8 @@ class Probe:
         tree writes), key -> dtype."""
         small = _small(scenario)
         mission = small.create_mission()
-        world = World(
-            width=small.world[0],
-            height=small.world[1],
-            datalink=Datalink(small.parameters.datalink_range),
-            objects=small.objects,
-            random=CounterRandom(0),
-        )
+        world = phases.create_world(small, 0)
         swarm = phases.create_agents(mission, world, np.random.default_rng(0), dict(keys or {}))
-        world.agent_index = agent_index(swarm.names)
         world.objects = _ProbeObjects(**vars(small.objects))
         view = {"__slots__": (), "__getattr__": _view_getattr, "__setattr__": _view_setattr}
         swarm.view_type = type("ProbeView", (swarm.view_type,), view)

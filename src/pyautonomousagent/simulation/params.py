@@ -55,16 +55,6 @@ class Param:
         """float, int, str or bool: the type of the default."""
         return type(self.default)
 
-    def describe(self) -> str:
-        """``40 percent, in [0, 100]: energy at or below which ...`` for listings."""
-        bounds = ""
-        if self.minimum is not None or self.maximum is not None:
-            low = "-inf" if self.minimum is None else f"{self.minimum:g}"
-            high = "inf" if self.maximum is None else f"{self.maximum:g}"
-            bounds = f", in [{low}, {high}]"
-        unit = f" {self.unit}" if self.unit else ""
-        return f"{self.default!r}{unit}{bounds}: {self.doc}"
-
 
 class Values(SimpleNamespace):
     """Read-only named values (``values.energy_use``); ``vars(values)`` is a plain dict."""
@@ -78,10 +68,6 @@ class Values(SimpleNamespace):
         close = difflib.get_close_matches(key, list(vars(self)), n=1)
         hint = f"; did you mean {close[0]!r}?" if close else ""
         raise AttributeError(f"no parameter {key!r}{hint}")
-
-    def as_dict(self) -> dict[str, Any]:
-        """The values as a new plain dict."""
-        return dict(vars(self))
 
 
 def defaults(params: Iterable[Param]) -> Values:

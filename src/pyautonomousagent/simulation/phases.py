@@ -15,8 +15,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from pyautonomousagent.datalink import message_events
-from pyautonomousagent.names import AgentNames
+from pyautonomousagent.datalink import Datalink, message_events
+from pyautonomousagent.names import AgentNames, agent_index
+from pyautonomousagent.randomness import CounterRandom
 from pyautonomousagent.simulation.mission import Mission
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
@@ -24,14 +25,27 @@ from pyautonomousagent.world import World
 if TYPE_CHECKING:
     from pyautonomousagent.kernels import SensorKernel
     from pyautonomousagent.simulation.engine_api import LoopView
+    from pyautonomousagent.simulation.scenario_view import ScenarioView
 
 log = logging.getLogger("pyautonomousagent")
+
+
+def create_world(scenario: ScenarioView, seed: int) -> World:
+    """The world of a run: its size, datalink, the mission's objects, the leaves' randomness."""
+    return World(
+        width=scenario.world[0],
+        height=scenario.world[1],
+        datalink=Datalink(scenario.parameters.datalink_range),
+        objects=scenario.objects,
+        random=CounterRandom(seed),
+    )
 
 
 def create_agents(
     mission: Mission, world: World, rng: np.random.Generator, extra_keys: dict | None = None
 ) -> Swarm:
-    """Phase 1: N agents with the mission's columns and blackboard, placed by the mission.
+    """Phase 1: N agents with the mission's columns and blackboard, placed by the mission
+    (then the world knows them by name: ``world.agent_index``).
 
     Args:
         mission: the run's mission (its scenario gives N).
@@ -50,6 +64,7 @@ def create_agents(
         s["heading"][:] = float(scenario.initial_heading) % 360.0
     mission.place(swarm, world, rng)
     s["requested_heading"][:] = s["heading"]
+    world.agent_index = agent_index(swarm.names)
     return swarm
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -18,15 +18,13 @@ from pyautonomousagent.bt.blackboard import tree_blackboard_keys
 from pyautonomousagent.bt.files import is_tree_file, load_tree
 from pyautonomousagent.bt.spec import Node
 from pyautonomousagent.bt.trees import tree_by_name
-from pyautonomousagent.datalink import Datalink, Delivery
+from pyautonomousagent.datalink import Delivery
 from pyautonomousagent.engines.batched import BatchedEngine
 from pyautonomousagent.engines.compiled import CompiledEngine, compilable
 from pyautonomousagent.engines.gpu import GpuEngine, auto_takes_gpu, require_gpu
 from pyautonomousagent.engines.pytrees import PyTreesEngine
 from pyautonomousagent.inputs import shown
-from pyautonomousagent.names import agent_index
 from pyautonomousagent.progress import LINE_SECONDS, Progress
-from pyautonomousagent.randomness import CounterRandom
 from pyautonomousagent.recording import (
     Recorder,
     available_memory,
@@ -50,14 +48,6 @@ if TYPE_CHECKING:
     from pyautonomousagent.kernels import SensorKernel
 
 log = logging.getLogger("pyautonomousagent")
-
-
-def _walk(node: Node) -> Iterator[Node]:
-    stack = [node]
-    while stack:
-        current = stack.pop()
-        yield current
-        stack.extend(current.children)
 
 
 def _checked(
@@ -106,20 +96,9 @@ def _check_fits(
 ) -> None:
     """Refuse, before anything is allocated, a run whose records cannot fit in memory."""
     columns = recorded_columns(mission, tree)
-    nodes = sum(1 for _ in _walk(tree))
+    nodes = sum(1 for _ in tree.walk())
     per_agent = 100 + nodes * (2000 if engine == "pytrees" else 16)
     check_memory(scenario.agents, scenario.iterations, record_every, columns, per_agent)
-
-
-def _world(scenario: Scenario, seed: int) -> World:
-    """The world of a run: its size, datalink, the mission's objects, the leaves' randomness."""
-    return World(
-        width=scenario.world[0],
-        height=scenario.world[1],
-        datalink=Datalink(scenario.parameters.datalink_range),
-        objects=scenario.objects,
-        random=CounterRandom(seed),
-    )
 
 
 #: Iterations a :class:`FusedEngine` runs per call of its ``loop`` (the progress bar's step).
@@ -286,9 +265,8 @@ class Simulation:
         declared = tree_blackboard_keys(tree, mission.blackboard())  # scripts' entries
         check_tree(tree, scenario, declared)  # every leaf fits the mission
         rng = np.random.default_rng(seed)
-        world = _world(scenario, seed)
+        world = phases.create_world(scenario, seed)
         swarm = phases.create_agents(mission, world, rng, declared)
-        world.agent_index = agent_index(swarm.names)
         model = build_model(scenario, swarm, engine, seed, implementation)
         decision = ENGINES.get(engine)(tree, swarm, world, vars(scenario.parameters))
         handlers = {kind.name: kind for kind in mission.message_types()}

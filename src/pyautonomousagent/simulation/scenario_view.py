@@ -13,21 +13,8 @@ from pyautonomousagent.simulation.params import Point, Values
 
 
 class ScenarioView(Protocol):
-    """A scenario, read-only: what is simulated, besides the seed and the engine.
-
-    Attributes:
-        name: registry name, e.g. ``"gathering"``.
-        agents: number of agents N.
-        iterations: iterations to simulate.
-        world: (width, height) in world units.
-        objects: the mission's world objects, name -> validated value.
-        initial_heading: degrees clockwise from north, or "random" (drawn from the seed).
-        frame_every: iterations between animation frames.
-        parameters: the core's, the motion model's and the mission's parameters.
-        model: the motion model's name.
-        model_settings: the motion model's own settings section (e.g. ``x8:``), or None.
-        mission_type: the mission class.
-    """
+    """A scenario, read-only: what is simulated, besides the seed and the engine (the
+    attributes are :class:`~pyautonomousagent.simulation.scenario.Scenario`'s)."""
 
     @property
     def name(self) -> str: ...
