@@ -443,11 +443,6 @@ class CellList:
         built = _build(axes, self.width, self.mask, *FRESH)
         self.low, self.extent, self.cells, self.sorted_points, self.order, self.starts = built
 
-    @property
-    def size(self) -> int:
-        """The number of points N."""
-        return int(self.order.size)
-
     def near(self, range_: float, radius: float, none: float = math.inf) -> Near:
         """Every point's nearest neighbour within ``range_`` (distance <= ``range_``; distance
         ``none`` where there is none) and every pair closer than ``radius`` (distance <

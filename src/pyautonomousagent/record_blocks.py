@@ -68,7 +68,7 @@ class RecordBlock:
         in the loop's order, then the active behaviour."""
         columns = self.recorder.columns
         sources = [(key, columns) for key in self.names]
-        codes = self.recorder.behaviour_codes()
+        codes = self.recorder.codes
         return [*sources, ("behaviour", codes)] if codes is not None else sources
 
     def _allocate(self) -> None:
@@ -120,14 +120,6 @@ class RecordBlock:
         (``iterations``, ``count``, listeners) is the caller's."""
         if not rows:
             return
-        columns: dict[str, np.ndarray] = {}
-        behaviour: np.ndarray | None = None
-        for i, (key, _) in enumerate(self._sources()):
-            buffer = self._buffers.get(i)
-            if buffer is None:
-                continue
-            if i < len(self.names):
-                columns[key] = buffer[:rows]
-            else:
-                behaviour = buffer[:rows]
-        self.recorder.store_group(row0, columns, None, behaviour)
+        held = {i: buffer[:rows] for i, buffer in self._buffers.items()}  # by source index
+        columns = {self.names[i]: block for i, block in held.items() if i < len(self.names)}
+        self.recorder.store_group(row0, columns, None, held.get(len(self.names)))

@@ -90,6 +90,8 @@ class Recorder:
         traces: node statuses of the traced agents, shape (records, nodes, K), int8.
         behaviour: active leaf per agent as a node index, shape (records, N), int16; -1 when
             none was ticked; None without a tree.
+        codes: the active behaviours as recorded columns (one, ``"behaviour"``), to write in
+            place where stored in full; None without a tree.
         listeners: called with the number of records after each record is written whole
             (e.g. :class:`~pyautonomousagent.streaming.StatesStream`).
     """
@@ -125,36 +127,30 @@ class Recorder:
         self.nodes: list[Node] = list(tree.walk()) if tree is not None else []
         if check_size(len(self.nodes)):  # a node index is recorded as an int16
             raise TreeError(f"the tree {check_size(len(self.nodes))} in a recorded run")
-        self.leaf_rows = np.array(
-            [i for i, node in enumerate(self.nodes) if not node.is_control], dtype=np.int16
-        )
+        self.leaf_rows = _leaf_rows(self.nodes)
         self.traced = np.asarray(traced if tree is not None else (), dtype=np.intp)
         self.traces = preallocated((records, len(self.nodes), self.traced.size), np.dtype(np.int8))
         codes = {"behaviour": np.dtype(np.int16)}
-        self._codes = RecordedColumns(codes, records, swarm.size, compact) if tree else None
+        self.codes = RecordedColumns(codes, records, swarm.size, compact) if tree else None
         self.count = 0
         self.listeners: list[Callable[[int], None]] = []
 
     @property
     def wants_statuses(self) -> bool:
         """Whether :meth:`record` needs the engine's node statuses (a tree was given)."""
-        return self._codes is not None
+        return self.codes is not None
 
     @property
     def behaviour(self) -> np.ndarray | None:
         """Active leaf per agent as a node index, shape (records, N), int16 (see the class)."""
-        return None if self._codes is None else self._codes["behaviour"]
-
-    @behaviour.setter
-    def behaviour(self, codes: np.ndarray | None) -> None:
-        self._codes = None if codes is None else RecordedColumns.of({"behaviour": codes})
+        return None if self.codes is None else self.codes["behaviour"]
 
     def behaviour_block(self, start: int, stop: int) -> np.ndarray:
         """Records ``start`` to ``stop`` of :attr:`behaviour`, shape (stop - start, N), without
         storing them all (:meth:`RecordedColumns.block`); requires a tree."""
-        if self._codes is None:
+        if self.codes is None:
             raise ValueError("this recorder has no tree, so no active behaviours")
-        return self._codes.block("behaviour", start, stop)
+        return self.codes.block("behaviour", start, stop)
 
     def due(self, iteration: int) -> bool:
         """Whether ``iteration`` is recorded."""
@@ -176,11 +172,11 @@ class Recorder:
         self.iterations[row] = iteration
         sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
         self.columns.store_record(row, sources)
-        if self._codes is not None:
+        if self.codes is not None:
             if statuses is None:
                 raise ValueError("this recorder keeps traces: pass the engine's node statuses")
             self.traces[row] = statuses[:, self.traced]
-            self._codes.store(row, "behaviour", active_leaf(statuses, self.leaf_rows))
+            self.codes.store(row, "behaviour", active_leaf(statuses, self.leaf_rows))
         self.count += 1
         for listener in self.listeners:
             listener(self.count)
@@ -210,16 +206,11 @@ class Recorder:
         self.columns.store_rows(row0, columns)
         if traces is not None:
             self.traces[row0 : row0 + len(traces)] = traces
-        if self._codes is not None:
-            if behaviour is None and self._codes.full("behaviour") is None:
+        if self.codes is not None:
+            if behaviour is None and self.codes.full("behaviour") is None:
                 raise ValueError("this recorder keeps traces: pass the active behaviours")
             if behaviour is not None:
-                self._codes.store_rows(row0, {"behaviour": behaviour})
-
-    def behaviour_codes(self) -> RecordedColumns | None:
-        """The active behaviours as recorded columns (one, ``"behaviour"``), to write in
-        place where stored in full; None without a tree."""
-        return self._codes
+                self.codes.store_rows(row0, {"behaviour": behaviour})
 
     def trace(self, agent: int | str) -> np.ndarray:
         """The node statuses of one traced agent (index or name), shape (records so far, nodes)."""
@@ -233,6 +224,11 @@ class Recorder:
     def column(self, key: str) -> np.ndarray:
         """The recorded values of ``key``, shape (records so far, N)."""
         return self.columns[key][: self.count]
+
+
+def _leaf_rows(nodes: Sequence[Node]) -> np.ndarray:
+    """The node indices of the leaves among ``nodes`` (tick order), ascending, int16."""
+    return np.array([i for i, node in enumerate(nodes) if not node.is_control], dtype=np.int16)
 
 
 def active_leaf(statuses: np.ndarray, leaf_rows: np.ndarray) -> np.ndarray:
@@ -378,16 +374,6 @@ class RecordedColumns(Mapping[str, np.ndarray]):
             full = self._stored(key, row)
         full[row] = values
 
-    def store_block(self, row0: int, key: str, values: np.ndarray) -> None:
-        """Record ``values`` (shape (rows, N)) as records ``row0``.. of column ``key``: at
-        once where it is stored in full, else record by record (:meth:`store`)."""
-        full = self._full.get(key)
-        if full is not None:
-            full[row0 : row0 + len(values)] = values
-            return
-        for r, row in enumerate(values):
-            self.store(row0 + r, key, row)
-
     def store_rows(self, row0: int, blocks: Mapping[str, np.ndarray]) -> None:
         """Record ``blocks[key]`` (shape (rows, N)) as records ``row0``.. of each column
         ``key`` given: at once for a column stored in full, the others record by record and,
@@ -396,7 +382,7 @@ class RecordedColumns(Mapping[str, np.ndarray]):
         rest = [key for key in self.dtypes if key in blocks and key not in self._full]
         for key, values in blocks.items():
             if key not in rest:
-                self.store_block(row0, key, values)
+                self._full[key][row0 : row0 + len(values)] = values
         rows = max((len(blocks[key]) for key in rest), default=0)
         for r in range(rows):
             for key in rest:
@@ -512,11 +498,15 @@ def to_table(recorder: Recorder, start: int = 0, stop: int | None = None) -> pa.
         "iteration": pa.array(np.repeat(recorder.iterations[start:stop], n)),
         "agent": _agent_column(recorder.names, records),
     }
-    for key in recorder.columns:
-        data[key] = pa.array(recorder.columns.block(key, start, stop).reshape(-1))
-    if recorder.wants_statuses:
-        behaviour = _behaviour_column(recorder, start, stop)
-        data = _insert_after(data, "requested_heading", "behaviour", behaviour)
+    keys = list(recorder.columns)
+    if recorder.wants_statuses:  # right after the requested heading (at the end if none)
+        at = keys.index("requested_heading") + 1 if "requested_heading" in keys else len(keys)
+        keys.insert(at, "behaviour")
+    for key in keys:
+        if key == "behaviour":
+            data[key] = _behaviour_column(recorder, start, stop)
+        else:
+            data[key] = pa.array(recorder.columns.block(key, start, stop).reshape(-1))
     groups = {key: group for group, keys in recorder.groups.items() for key in keys}
     return _documented(pa.table(data), docs=recorder.docs, groups=groups)
 
@@ -561,10 +551,8 @@ def recorder_from_tables(
     if not nodes and traces is not None and traces.schema.metadata:
         nodes = json.loads(traces.schema.metadata.get(b"pyautonomousagent.nodes", b"[]"))
     recorder.nodes = _rebuild(nodes)
-    recorder.leaf_rows = np.array(
-        [i for i, node in enumerate(recorder.nodes) if not node.is_control], dtype=np.int16
-    )
-    recorder.behaviour = _behaviour_codes(states, recorder.nodes, records, n)
+    recorder.leaf_rows = _leaf_rows(recorder.nodes)
+    recorder.codes = _behaviour_codes(states, recorder.nodes, records, n)
     names = [str(a) for a in traces.column("agent").to_pylist()] if traces is not None else []
     k = len(dict.fromkeys(names))
     recorder.traced = np.array([recorder.names.index(a) for a in names[:k]], dtype=np.intp)
@@ -593,14 +581,15 @@ def _rebuild(nodes: Sequence[Mapping[str, Any]]) -> list[Node]:
 
 def _behaviour_codes(
     states: pa.Table, nodes: Sequence[Node], records: int, n: int
-) -> np.ndarray | None:
-    """The ``behaviour`` column as node indices (records, N), -1 for none; None if absent."""
+) -> RecordedColumns | None:
+    """The ``behaviour`` column as node indices (records, N), -1 for none (as
+    :attr:`Recorder.codes`); None if absent."""
     if "behaviour" not in states.column_names or not nodes:
         return None
     index = {node.name: i for i, node in enumerate(nodes)}
     names = states.column("behaviour").to_pylist()
     codes = np.array([index.get(v, -1) if v else -1 for v in names], dtype=np.int16)
-    return codes.reshape(records, n)
+    return RecordedColumns.of({"behaviour": codes.reshape(records, n)})
 
 
 def trace_table(recorder: Recorder) -> pa.Table:
@@ -669,15 +658,6 @@ def _behaviour_column(recorder: Recorder, start: int, stop: int) -> pa.Dictionar
     indices = pa.array(codes, mask=codes < 0)
     dictionary = pa.array([node.name for node in recorder.nodes], pa.string())
     return pa.DictionaryArray.from_arrays(indices, dictionary)
-
-
-def _insert_after(
-    data: dict[str, pa.Array], after: str, key: str, value: pa.Array
-) -> dict[str, pa.Array]:
-    """``data`` with ``key`` placed right after ``after`` (at the end if absent)."""
-    items = list(data.items())
-    at = next((i + 1 for i, (k, _) in enumerate(items) if k == after), len(items))
-    return dict([*items[:at], (key, value), *items[at:]])
 
 
 def _documented(

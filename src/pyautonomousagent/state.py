@@ -94,10 +94,6 @@ class Swarm:
         ``indices`` is an int array, a slice or a boolean mask of shape (N,)."""
         return self.view_type(self, np.arange(self.size) if indices is None else indices)
 
-    def index_of(self, name: str) -> int:
-        """The row of the agent called ``name``; ValueError if there is none."""
-        return self.names.index(name)
-
 
 def _plain(value: Any) -> Any:
     """A NumPy scalar as a Python number (one agent); an array unchanged (a group)."""
@@ -310,9 +306,6 @@ def view_type(columns: Iterable[str]) -> type[AgentView]:
     extra = [k for k in columns if not hasattr(AgentView, k)]
     if not extra:
         return AgentView
-    attributes: dict[str, Any] = {"__slots__": ()}
-    for key in extra:
-        column = _Column()
-        column.name = key
-        attributes[key] = column
+    # type() names each descriptor after its key (_Column.__set_name__)
+    attributes: dict[str, Any] = {"__slots__": (), **{k: _Column() for k in extra}}
     return type("AgentView", (AgentView,), attributes)
