@@ -74,6 +74,8 @@ STATUSES = ("complete", "interrupted", "failed")
 #: The folder that default run folders live in.
 RUNS = Path("runs")
 SUMMARY = "run.json"
+#: The packages whose versions ``run.json`` records (with Python's).
+VERSIONED = ("pyautonomousagent", "numpy", "py_trees", "pyarrow", "matplotlib", "pillow")
 
 
 class RunError(InputError):
@@ -408,16 +410,14 @@ def _write_views(sim: Simulation, temp: Path, views: Views, saved: SavedRun) -> 
         write_views(sim.recorder, sim.scenario, sim.events, temp, views)
     except OSError:
         raise
-    except BaseException as error:
+    except (KeyboardInterrupt, Exception) as error:
         for path in set(temp.iterdir()) - before:  # partial views go; the data stays
             path.unlink(missing_ok=True)
         if isinstance(error, KeyboardInterrupt):
             saved.status, saved.note = "interrupted", "Ctrl-C during the animation: no views"
-        elif isinstance(error, Exception):
+        else:
             message = error.args[0] if isinstance(error, KeyError) and error.args else error
             saved.status, saved.note = "failed", f"the views failed: {shown(str(message), 200)}"
-        else:
-            raise
         return
     sim.timings.update(views.timings)
     saved.files.extend(views.written)
@@ -487,11 +487,9 @@ def tree_record(tree: str) -> dict[str, Any]:
 
 def file_record(path: Path) -> dict[str, Any]:
     """A file's name, size (bytes) and SHA-256, as ``run.json`` lists it."""
-    digest = hashlib.sha256()
     with path.open("rb") as file:
-        for block in iter(lambda: file.read(1 << 20), b""):
-            digest.update(block)
-    return {"name": path.name, "bytes": path.stat().st_size, "sha256": digest.hexdigest()}
+        digest = hashlib.file_digest(file, "sha256").hexdigest()
+    return {"name": path.name, "bytes": path.stat().st_size, "sha256": digest}
 
 
 def verify(folder: str | Path) -> dict[str, Any]:
@@ -602,16 +600,7 @@ def claim_existing(folder: str | Path) -> Iterator[Claim]:
         raise RunError(f"{path} is being written by another run ({error.strerror})") from None
 
 
-def versions(
-    packages: Iterable[str] = (
-        "pyautonomousagent",
-        "numpy",
-        "py_trees",
-        "pyarrow",
-        "matplotlib",
-        "pillow",
-    ),
-) -> dict[str, str]:
+def versions(packages: Iterable[str] = VERSIONED) -> dict[str, str]:
     """Python's and the given installed packages' versions (those not installed left out)."""
     found = {"python": platform.python_version()}
     for name in packages:
