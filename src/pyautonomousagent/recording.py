@@ -4,15 +4,10 @@ A :class:`Recorder` keeps one array of shape ``(records, N)`` per recorded colum
 ``records = iterations // every + 1`` (the initial state, then every ``every``-th
 iteration), allocated whole the first time the column's values differ between agents
 (:class:`RecordedColumns`: until then one value per record). Nothing grows record by
-record. :func:`to_table` turns the arrays into a long table (one row per recorded iteration
-and agent) for Parquet, CSV or pandas, with each column's unit and meaning in its Parquet
-field metadata (:data:`COLUMN_DOCS`).
-
-Given the tree, a recorder also keeps the tree's **node statuses** (the engine's
-``node_statuses()``, int8 codes of :mod:`pyautonomousagent.bt.status`) of the traced agents,
-shape ``(records, nodes, traced)``, and every agent's **active behaviour**: the leaf that is
-RUNNING after the tick, or else the last leaf (in tick order) that was ticked, as a node index
-``(records, N)`` int16 (-1 before the first tick). :func:`trace_table` writes the traces.
+record. Given the tree, it also keeps the traced agents' node statuses and every agent's
+active behaviour (:class:`Recorder`). :func:`to_table` and :func:`trace_table` turn the
+arrays into long tables (one row per record and agent) for Parquet, CSV or pandas, with
+each column's unit and meaning in its Parquet field metadata (:data:`COLUMN_DOCS`).
 """
 
 from __future__ import annotations

@@ -167,11 +167,9 @@ def check_target(folder: str | Path, overwrite: bool = False, create: bool = Tru
 
 def _check_ancestors(path: Path) -> None:
     """Raise NotADirectoryError where the nearest existing folder above ``path`` is a file."""
-    for ancestor in path.absolute().parents:
-        if ancestor.exists():
-            if not ancestor.is_dir():
-                raise NotADirectoryError(20, "Not a directory", str(ancestor))
-            return
+    nearest = next((a for a in path.absolute().parents if a.exists()), None)
+    if nearest is not None and not nearest.is_dir():
+        raise NotADirectoryError(20, "Not a directory", str(nearest))
 
 
 @contextlib.contextmanager

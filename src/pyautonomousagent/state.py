@@ -95,14 +95,13 @@ class Swarm:
         return self.view_type(self, np.arange(self.size) if indices is None else indices)
 
 
-def _plain(value: Any) -> Any:
-    """A NumPy scalar as a Python number (one agent); an array unchanged (a group)."""
-    return value.item() if value.ndim == 0 else value
-
-
 def _read(column: np.ndarray, index: Any, masked: bool) -> Any:
-    """The view's values of ``column``: all N of them when the view is a mask."""
-    return column if masked else _plain(column[index])
+    """The view's values of ``column``: all N of them when the view is a mask, a Python
+    number for one agent."""
+    if masked:
+        return column
+    values = column[index]
+    return values.item() if values.ndim == 0 else values
 
 
 def _write(column: np.ndarray, index: Any, masked: bool, value: Any) -> None:
