@@ -21,6 +21,7 @@ receivers are found on a uniform grid of cells one range wide
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
@@ -262,22 +263,17 @@ def _packed(channel: list[Messages | OneMessage]) -> list[Messages]:
     """The channel with each run of one-agent messages of the same type and payload names
     packed into one :class:`Messages` (same rows, same order)."""
     packed: list[Messages] = []
-    run: list[OneMessage] = []
-    for entry in channel:
-        if run and not (
-            isinstance(entry, OneMessage)
-            and entry.type == run[0].type
-            and entry.data.keys() == run[0].data.keys()
-        ):
-            packed.append(_pack(run))
-            run = []
-        if isinstance(entry, OneMessage):
-            run.append(entry)
-        else:
-            packed.append(entry)
-    if run:
-        packed.append(_pack(run))
+    for _, group in itertools.groupby(channel, _run_key):
+        run = list(group)
+        ones = [entry for entry in run if isinstance(entry, OneMessage)]
+        packed += [_pack(ones)] if ones else [entry for entry in run if isinstance(entry, Messages)]
     return packed
+
+
+def _run_key(entry: Messages | OneMessage) -> object:
+    """What the one-agent messages of a run share (their type and payload names); a
+    :class:`Messages` entry is a run of its own."""
+    return (entry.type, entry.data.keys()) if isinstance(entry, OneMessage) else id(entry)
 
 
 def _pack(run: list[OneMessage]) -> Messages:

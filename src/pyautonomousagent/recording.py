@@ -551,12 +551,10 @@ def recorder_from_tables(
     names = [str(a) for a in traces.column("agent").to_pylist()] if traces is not None else []
     k = len(dict.fromkeys(names))
     recorder.traced = np.array([recorder.names.index(a) for a in names[:k]], dtype=np.intp)
-    shape = (records, len(recorder.nodes), k)
-    recorder.traces = np.zeros(shape, dtype=np.int8)
-    if traces is not None and recorder.nodes:
-        for j, node in enumerate(recorder.nodes):
-            column = traces.column(node.name).to_numpy().astype(np.int8)
-            recorder.traces[:, j, :] = column.reshape(records, k)
+    recorder.traces = np.zeros((records, len(recorder.nodes), k), dtype=np.int8)
+    for j, node in enumerate(recorder.nodes):
+        if traces is not None:
+            recorder.traces[:, j, :] = traces.column(node.name).to_numpy().reshape(records, k)
     return recorder
 
 
