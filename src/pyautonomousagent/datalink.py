@@ -300,27 +300,22 @@ def _merge_by_type(channel: list[Messages]) -> list[Messages]:
             one.data = {k: one.data[k] for k in sorted(one.data)}
             merged.append(_canonical(one))
             continue
-        keys = sorted(set().union(*(m.data for m in parts)))
-        offsets = np.cumsum([0] + [len(m.receiver_lists) for m in parts])
-        messages = Messages(
-            kind,
-            np.concatenate([m.senders for m in parts]),
-            np.concatenate([m.order for m in parts]),
-            np.concatenate([m.x for m in parts]),
-            np.concatenate([m.y for m in parts]),
-            {
-                k: np.concatenate([m.data.get(k, np.full(len(m), np.nan)) for m in parts])
-                for k in keys
-            },
-            np.concatenate(
-                [
-                    np.where(m.lists < 0, -1, m.lists + o)
-                    for m, o in zip(parts, offsets[:-1], strict=True)
-                ]
-            ),
-            [r for m in parts for r in m.receiver_lists],
+        senders, order, x, y = (
+            np.concatenate([getattr(m, name) for m in parts])
+            for name in ("senders", "order", "x", "y")
         )
-        merged.append(_canonical(messages))
+        keys = sorted(set().union(*(m.data for m in parts)))
+        data = {
+            k: np.concatenate([m.data.get(k, np.full(len(m), np.nan)) for m in parts]) for k in keys
+        }
+        offsets = np.cumsum([0] + [len(m.receiver_lists) for m in parts])
+        lists = [
+            np.where(m.lists < 0, -1, m.lists + o) for m, o in zip(parts, offsets[:-1], strict=True)
+        ]
+        receivers = [r for m in parts for r in m.receiver_lists]
+        merged.append(
+            _canonical(Messages(kind, senders, order, x, y, data, np.concatenate(lists), receivers))
+        )
     return merged
 
 

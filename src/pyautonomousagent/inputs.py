@@ -215,9 +215,7 @@ def _scalar(loader: yaml.SafeLoader, node: yaml.Node, pattern: str, what: str) -
 def _core_int(loader: yaml.SafeLoader, node: yaml.Node) -> int:
     """An int as YAML 1.2 writes it (``10``, ``0o17``, ``0x1F``), even tagged ``!!int``."""
     text = _scalar(loader, node, f"{_INT}|{_INT_BASED}", "a YAML 1.2 whole number")
-    if text[:2] in ("0o", "0x"):
-        return int(text[2:], 8 if text[1] == "o" else 16)
-    return int(text, 10)
+    return int(text, {"0o": 8, "0x": 16}.get(text[:2], 10))  # int() takes 0o17 in base 8
 
 
 def _core_float(loader: yaml.SafeLoader, node: yaml.Node) -> float:

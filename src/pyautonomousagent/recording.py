@@ -115,9 +115,7 @@ class Recorder:
         self.groups = {
             "state": list(swarm.columns),
             "blackboard": list(swarm.blackboard),
-            "model": [
-                k for k in extra or {} if k not in swarm.columns and k not in swarm.blackboard
-            ],
+            "model": [k for k in dtypes if k not in swarm.columns and k not in swarm.blackboard],
         }
         self.nodes: list[Node] = list(tree.walk()) if tree is not None else []
         if check_size(len(self.nodes)):  # a node index is recorded as an int16
@@ -617,11 +615,8 @@ def trace_table(recorder: Recorder) -> pa.Table:
 def node_list(nodes: Sequence[Node]) -> list[dict[str, object]]:
     """Nodes in tick order as plain dicts: name, type, parent index (-1: the root), depth and
     parameters (ports)."""
-    parent: dict[int, int] = {}
-    depth: dict[int, int] = {}
+    parent, depth = [-1] * len(nodes), [0] * len(nodes)
     for i, node in enumerate(nodes):
-        depth.setdefault(i, 0)
-        parent.setdefault(i, -1)
         child = i + 1
         for sub in node.children:
             parent[child], depth[child] = i, depth[i] + 1
@@ -662,13 +657,12 @@ def _documented(
     or else :data:`COLUMN_DOCS` (unknown columns get empty strings), and its ``group``
     (state, blackboard, model) where ``groups`` gives one."""
     docs = {**COLUMN_DOCS, **(docs or {})}
+    groups = groups or {}
     fields = []
     for field in table.schema:
         unit, text = docs.get(field.name, ("", ""))
-        metadata = {"unit": unit, "description": text}
-        if groups and field.name in groups:
-            metadata["group"] = groups[field.name]
-        fields.append(field.with_metadata(metadata))
+        group = {"group": groups[field.name]} if field.name in groups else {}
+        fields.append(field.with_metadata({"unit": unit, "description": text, **group}))
     return table.cast(pa.schema(fields, metadata=table.schema.metadata))
 
 
@@ -715,10 +709,8 @@ def read_table(path: Path) -> pa.Table:
 
 def _plain_agent(schema: pa.Schema) -> pa.Schema:
     """The schema with dictionary-encoded columns (agent, behaviour) as plain strings (CSV)."""
-    for i, field in enumerate(schema):
-        if pa.types.is_dictionary(field.type):
-            schema = schema.set(i, field.with_type(pa.string()))
-    return schema
+    plain = [f.with_type(pa.string()) if pa.types.is_dictionary(f.type) else f for f in schema]
+    return pa.schema(plain, metadata=schema.metadata)
 
 
 def available_memory() -> int | None:

@@ -4,13 +4,10 @@
     status = simulate(sim)                       # "complete", or "interrupted" on Ctrl-C
     saved = save_run(sim, "runs/gathering", status=status)
 
-A run's files (``states.parquet`` or ``states.csv``, ``traces.*``, the views: ``animation.gif``,
-``replay.html``, Groot2 logs; ``run.json``) are
-written into a temporary folder beside the target (``.NAME.tmp-*``) and put in place whole
-with a rename, so an earlier run is never deleted by a failure and never mixed with a new
-one. ``run.json`` is written last and lists every file with its size and SHA-256, the
-command line, the overrides, the tree file's content and hash, the package version, the
-time and the status:
+A run's files (docs/data.md) are written into a temporary folder beside the target
+(``.NAME.tmp-*``) and put in place whole with a rename, so an earlier run is never deleted by
+a failure and never mixed with a new one. ``run.json``, written last, lists every file with
+its size and SHA-256, and the run's status:
 
 - ``complete``: every iteration was simulated and every file written;
 - ``interrupted``: Ctrl-C stopped the simulation (the data holds the iterations done, a
@@ -24,11 +21,8 @@ that is not empty is never written into, nor is a mount point (it cannot be rena
 interrupted run does not replace an earlier run: it is saved beside it, as
 ``NAME-interrupted-YYYYMMDD-HHMMSS``.
 
-One writer at a time: :func:`claim_run` locks the folder (``.NAME.lock`` beside it) before
-the run starts, and a second writer is refused with a :class:`RunError`. Taking the claim
-also repairs what a killed writer left (:func:`pyautonomousagent.folders.recover`): an
-earlier run it had renamed aside is put back, its temporary folders are deleted, and
-:attr:`Claim.notes` says so.
+One writer at a time: :func:`claim_run` locks the folder before the run starts, and repairs
+what a killed writer left (:mod:`pyautonomousagent.folders`).
 """
 
 from __future__ import annotations
