@@ -203,8 +203,7 @@ class Datalink:
             targets = messages.receiver_lists[messages.lists[row]]
             near = hypot(x[targets] - messages.x[row], y[targets] - messages.y[row]) <= self.range
             parts.append((targets[near], np.full(int(near.sum()), row, dtype=np.int64)))
-        receivers = np.concatenate([p[0] for p in parts])
-        rows = np.concatenate([p[1] for p in parts])
+        receivers, rows = (np.concatenate(found) for found in zip(*parts, strict=True))
         keep = receivers != messages.senders[rows]
         order = np.lexsort((receivers[keep], rows[keep]))
         return Delivery(messages, receivers[keep][order], rows[keep][order])

@@ -603,13 +603,11 @@ def trace_table(recorder: Recorder) -> pa.Table:
         "status code",
         "the node's status after the tick: 0 INVALID (not ticked), 1 SUCCESS, 2 FAILURE, 3 RUNNING",
     )
-    table = _documented(pa.table(data), {node.name: status for node in recorder.nodes})
     metadata = {
-        **(table.schema.metadata or {}),
-        b"pyautonomousagent.nodes": json.dumps(node_list(recorder.nodes)).encode(),
-        b"pyautonomousagent.status_codes": json.dumps(NAMES).encode(),
+        "pyautonomousagent.nodes": json.dumps(node_list(recorder.nodes)),
+        "pyautonomousagent.status_codes": json.dumps(NAMES),
     }
-    return table.replace_schema_metadata(metadata)
+    return _documented(pa.table(data, metadata=metadata), {n.name: status for n in recorder.nodes})
 
 
 def node_list(nodes: Sequence[Node]) -> list[dict[str, object]]:
