@@ -8,10 +8,9 @@ Phase 2 of the next iteration: the mission's handler of each message type
 (:func:`pyautonomousagent.simulation.phases.process_messages`).
 
 One call of :meth:`Datalink.send` may carry the messages of many senders at once (the
-batched engine); the py_trees engine sends one at a time, kept as plain numbers until
-delivery packs them into arrays. Delivery puts the messages of a
-type in a canonical order (by sender, then in the order each sender sent them), so both
-engines deliver the same messages in the same order.
+batched engine) or one (:class:`OneMessage`). Delivery puts the messages of a type in a
+canonical order (by sender, then sending order), so every engine delivers the same
+messages in the same order.
 
 Cost: when every agent lies within range of every other (the usual case of a long-range
 link), a broadcast is recorded once, not once per receiver (O(N) time and memory). Otherwise
@@ -368,21 +367,16 @@ def message_events(
     Agents are given by name (``names[i]`` is agent i); one event per message, in
     canonical order.
     """
-    events = []
-    for delivery in deliveries:
-        messages = delivery.messages
-        if messages.type not in types:
-            continue
-        for row in range(len(messages)):
-            targets = messages.receivers(row)
-            events.append(
-                {
-                    "iteration": iteration,
-                    "event": "message",
-                    "type": messages.type,
-                    "sender": names[int(messages.senders[row])],
-                    "receivers": "all" if targets is None else [names[int(r)] for r in targets],
-                    "data": {k: float(v[row]) for k, v in messages.data.items()},
-                }
-            )
-    return events
+    return [
+        {
+            "iteration": iteration,
+            "event": "message",
+            "type": m.type,
+            "sender": names[int(m.senders[row])],
+            "receivers": "all" if (to := m.receivers(row)) is None else [names[int(r)] for r in to],
+            "data": {k: float(v[row]) for k, v in m.data.items()},
+        }
+        for m in (delivery.messages for delivery in deliveries)
+        if m.type in types
+        for row in range(len(m))
+    ]

@@ -12,6 +12,7 @@ each column's unit and meaning in its Parquet field metadata (:data:`COLUMN_DOCS
 
 from __future__ import annotations
 
+import contextlib
 import json
 import mmap
 import os
@@ -259,17 +260,13 @@ FEW_AGENTS = 16
 
 def _active_leaf_each(statuses: np.ndarray, leaf_rows: np.ndarray) -> np.ndarray:
     """:func:`active_leaf` agent by agent (the same result; for a few agents)."""
-    rows = leaf_rows.tolist()
-    found = []
-    for agent in statuses[leaf_rows].T.tolist():
-        if RUNNING in agent:  # the usual case, found by list methods in C
-            found.append(rows[agent.index(RUNNING)])
-            continue
-        best = -1
-        for row, status in zip(rows, agent, strict=True):
-            if status != INVALID:
-                best = row
-        found.append(best)
+    rows = leaf_rows.tolist()  # ascending: the last leaf ticked has the highest row
+    found = [
+        rows[agent.index(RUNNING)]  # the usual case, found by list methods in C
+        if RUNNING in agent
+        else max((row for row, s in zip(rows, agent, strict=True) if s != INVALID), default=-1)
+        for agent in statuses[leaf_rows].T.tolist()
+    ]
     return np.array(found, dtype=np.int16)
 
 
@@ -318,11 +315,9 @@ class RecordedColumns(Mapping[str, np.ndarray]):
 
     Until a column's values differ between agents in a record, only one value per record
     is kept, shape (records,); the first record in which they differ allocates the whole
-    column (:func:`preallocated`) and fills the earlier records in. A column that is the
-    same for every agent throughout (a shared patrol point) is never stored in full, nor is
-    the initial state of agents that all start alike: recording only the initial state of
-    20 million drones keeps their one varying column, not all of them. Likewise a record of
-    a column equal to the same record of a column stored in full (the requested heading is
+    column (:func:`preallocated`) and fills the earlier records in: a column the same for
+    every agent throughout (a shared patrol point) is never stored in full. A record of a
+    column equal to the same record of a column stored in full (the requested heading is
     the heading at the start) is kept as a reference to it. Values are compared bit by bit,
     so NaNs and -0.0 come back as they were recorded.
 
@@ -714,17 +709,13 @@ def _plain_agent(schema: pa.Schema) -> pa.Schema:
 def available_memory() -> int | None:
     """Bytes of memory available to a new allocation (Linux ``MemAvailable``; elsewhere the
     physical memory), or None if unknown."""
-    try:
-        with open("/proc/meminfo") as meminfo:
-            for line in meminfo:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    try:
+    with contextlib.suppress(OSError, ValueError, IndexError), open("/proc/meminfo") as meminfo:
+        for line in meminfo:
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    with contextlib.suppress(AttributeError, ValueError, OSError):
         return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
-    except (AttributeError, ValueError, OSError):
-        return None
+    return None
 
 
 def check_memory(agents: int, iterations: int, every: int, columns: int, per_agent: int = 0) -> int:

@@ -596,10 +596,8 @@ def versions(packages: Iterable[str] = VERSIONED) -> dict[str, str]:
     """Python's and the given installed packages' versions (those not installed left out)."""
     found = {"python": platform.python_version()}
     for name in packages:
-        try:
+        with contextlib.suppress(metadata.PackageNotFoundError):
             found[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            continue
     return found
 
 
