@@ -23,7 +23,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 
@@ -263,8 +263,8 @@ def _packed(channel: list[Messages | OneMessage]) -> list[Messages]:
     packed: list[Messages] = []
     for _, group in itertools.groupby(channel, _run_key):
         run = list(group)
-        ones = [entry for entry in run if isinstance(entry, OneMessage)]
-        packed += [_pack(ones)] if ones else [entry for entry in run if isinstance(entry, Messages)]
+        first = run[0]
+        packed.append(first if isinstance(first, Messages) else _pack(cast(list[OneMessage], run)))
     return packed
 
 

@@ -260,13 +260,17 @@ FEW_AGENTS = 16
 
 def _active_leaf_each(statuses: np.ndarray, leaf_rows: np.ndarray) -> np.ndarray:
     """:func:`active_leaf` agent by agent (the same result; for a few agents)."""
-    rows = leaf_rows.tolist()  # ascending: the last leaf ticked has the highest row
-    found = [
-        rows[agent.index(RUNNING)]  # the usual case, found by list methods in C
-        if RUNNING in agent
-        else max((row for row, s in zip(rows, agent, strict=True) if s != INVALID), default=-1)
-        for agent in statuses[leaf_rows].T.tolist()
-    ]
+    rows = leaf_rows.tolist()
+    found = []
+    for agent in statuses[leaf_rows].T.tolist():
+        if RUNNING in agent:  # the usual case, found by list methods in C
+            found.append(rows[agent.index(RUNNING)])
+            continue
+        best = -1
+        for row, status in zip(rows, agent, strict=True):
+            if status != INVALID:
+                best = row
+        found.append(best)
     return np.array(found, dtype=np.int16)
 
 
