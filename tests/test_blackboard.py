@@ -41,7 +41,6 @@ def test_agent_view_state_columns_are_rows(swarm_world):
     assert swarm.columns["heading"].tolist() == [0.0, 12.0]
     assert one.name == "drone2"
     assert swarm.agents().name.tolist() == ["drone1", "drone2"]
-    assert swarm.index_of("drone2") == 1
 
 
 def test_unknown_key_raises_attribute_error_naming_it(swarm_world):

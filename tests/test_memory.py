@@ -99,7 +99,7 @@ def test_behaviours_alike_are_not_stored_in_full(monkeypatch):
         load("patrol").with_overrides(agents=20, iterations=3), engine="batched"
     )
     assert sim.recorder.behaviour_block(0, 1).tolist() == [[-1] * 20]
-    assert sim.recorder._codes is not None and sim.recorder._codes.stored == []
+    assert sim.recorder.codes is not None and sim.recorder.codes.stored == []
     sim.run(progress=False)
     assert sim.recorder.behaviour is not None and sim.recorder.behaviour.shape == (4, 20)
 
@@ -130,7 +130,7 @@ def test_a_group_of_records_is_stored_as_record_by_record(monkeypatch):
     group.store_group(1, rows, one.traces[1:9], one.behaviour_block(1, 9))
     group.iterations[:], group.count = one.iterations, one.count
     assert group.columns.stored == one.columns.stored != list(one.columns)
-    assert group._codes is not None and one._codes is not None
-    assert group._codes.stored == one._codes.stored
+    assert group.codes is not None and one.codes is not None
+    assert group.codes.stored == one.codes.stored
     assert to_table(group).equals(to_table(one), check_metadata=True)
     assert np.array_equal(group.traces, one.traces)

@@ -48,16 +48,6 @@ def test_override_restores_the_previous_entry_or_absence() -> None:
     assert "c" not in reg
 
 
-def test_decorator_registers_and_returns_the_object() -> None:
-    reg: Registry[type] = Registry("class")
-
-    @reg.decorator("thing")
-    class Thing:
-        pass
-
-    assert reg.get("thing") is Thing
-
-
 def test_scoped_restores_everything() -> None:
     reg: Registry[int] = Registry("number")
     reg.register("a", 1)

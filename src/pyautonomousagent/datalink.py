@@ -8,10 +8,9 @@ Phase 2 of the next iteration: the mission's handler of each message type
 (:func:`pyautonomousagent.simulation.phases.process_messages`).
 
 One call of :meth:`Datalink.send` may carry the messages of many senders at once (the
-batched engine); the py_trees engine sends one at a time, kept as plain numbers until
-delivery packs them into arrays. Delivery puts the messages of a
-type in a canonical order (by sender, then in the order each sender sent them), so both
-engines deliver the same messages in the same order.
+batched engine) or one (:class:`OneMessage`). Delivery puts the messages of a type in a
+canonical order (by sender, then sending order), so every engine delivers the same
+messages in the same order.
 
 Cost: when every agent lies within range of every other (the usual case of a long-range
 link), a broadcast is recorded once, not once per receiver (O(N) time and memory). Otherwise
@@ -21,9 +20,10 @@ receivers are found on a uniform grid of cells one range wide
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 
@@ -202,8 +202,7 @@ class Datalink:
             targets = messages.receiver_lists[messages.lists[row]]
             near = hypot(x[targets] - messages.x[row], y[targets] - messages.y[row]) <= self.range
             parts.append((targets[near], np.full(int(near.sum()), row, dtype=np.int64)))
-        receivers = np.concatenate([p[0] for p in parts])
-        rows = np.concatenate([p[1] for p in parts])
+        receivers, rows = (np.concatenate(found) for found in zip(*parts, strict=True))
         keep = receivers != messages.senders[rows]
         order = np.lexsort((receivers[keep], rows[keep]))
         return Delivery(messages, receivers[keep][order], rows[keep][order])
@@ -262,22 +261,17 @@ def _packed(channel: list[Messages | OneMessage]) -> list[Messages]:
     """The channel with each run of one-agent messages of the same type and payload names
     packed into one :class:`Messages` (same rows, same order)."""
     packed: list[Messages] = []
-    run: list[OneMessage] = []
-    for entry in channel:
-        if run and not (
-            isinstance(entry, OneMessage)
-            and entry.type == run[0].type
-            and entry.data.keys() == run[0].data.keys()
-        ):
-            packed.append(_pack(run))
-            run = []
-        if isinstance(entry, OneMessage):
-            run.append(entry)
-        else:
-            packed.append(entry)
-    if run:
-        packed.append(_pack(run))
+    for _, group in itertools.groupby(channel, _run_key):
+        run = list(group)
+        first = run[0]
+        packed.append(first if isinstance(first, Messages) else _pack(cast(list[OneMessage], run)))
     return packed
+
+
+def _run_key(entry: Messages | OneMessage) -> object:
+    """What the one-agent messages of a run share (their type and payload names); a
+    :class:`Messages` entry is a run of its own."""
+    return (entry.type, entry.data.keys()) if isinstance(entry, OneMessage) else id(entry)
 
 
 def _pack(run: list[OneMessage]) -> Messages:
@@ -304,27 +298,22 @@ def _merge_by_type(channel: list[Messages]) -> list[Messages]:
             one.data = {k: one.data[k] for k in sorted(one.data)}
             merged.append(_canonical(one))
             continue
-        keys = sorted(set().union(*(m.data for m in parts)))
-        offsets = np.cumsum([0] + [len(m.receiver_lists) for m in parts])
-        messages = Messages(
-            kind,
-            np.concatenate([m.senders for m in parts]),
-            np.concatenate([m.order for m in parts]),
-            np.concatenate([m.x for m in parts]),
-            np.concatenate([m.y for m in parts]),
-            {
-                k: np.concatenate([m.data.get(k, np.full(len(m), np.nan)) for m in parts])
-                for k in keys
-            },
-            np.concatenate(
-                [
-                    np.where(m.lists < 0, -1, m.lists + o)
-                    for m, o in zip(parts, offsets[:-1], strict=True)
-                ]
-            ),
-            [r for m in parts for r in m.receiver_lists],
+        senders, order, x, y = (
+            np.concatenate([getattr(m, name) for m in parts])
+            for name in ("senders", "order", "x", "y")
         )
-        merged.append(_canonical(messages))
+        keys = sorted(set().union(*(m.data for m in parts)))
+        data = {
+            k: np.concatenate([m.data.get(k, np.full(len(m), np.nan)) for m in parts]) for k in keys
+        }
+        offsets = np.cumsum([0] + [len(m.receiver_lists) for m in parts])
+        lists = [
+            np.where(m.lists < 0, -1, m.lists + o) for m, o in zip(parts, offsets[:-1], strict=True)
+        ]
+        receivers = [r for m in parts for r in m.receiver_lists]
+        merged.append(
+            _canonical(Messages(kind, senders, order, x, y, data, np.concatenate(lists), receivers))
+        )
     return merged
 
 
@@ -378,21 +367,16 @@ def message_events(
     Agents are given by name (``names[i]`` is agent i); one event per message, in
     canonical order.
     """
-    events = []
-    for delivery in deliveries:
-        messages = delivery.messages
-        if messages.type not in types:
-            continue
-        for row in range(len(messages)):
-            targets = messages.receivers(row)
-            events.append(
-                {
-                    "iteration": iteration,
-                    "event": "message",
-                    "type": messages.type,
-                    "sender": names[int(messages.senders[row])],
-                    "receivers": "all" if targets is None else [names[int(r)] for r in targets],
-                    "data": {k: float(v[row]) for k, v in messages.data.items()},
-                }
-            )
-    return events
+    return [
+        {
+            "iteration": iteration,
+            "event": "message",
+            "type": m.type,
+            "sender": names[int(m.senders[row])],
+            "receivers": "all" if (to := m.receivers(row)) is None else [names[int(r)] for r in to],
+            "data": {k: float(v[row]) for k, v in m.data.items()},
+        }
+        for m in (delivery.messages for delivery in deliveries)
+        if m.type in types
+        for row in range(len(m))
+    ]

@@ -61,11 +61,9 @@ def hidden_folder(target: Path, kind: str) -> Path:
     parent = target.absolute().parent
     while True:
         path = parent / f".{target.name}.{kind}-{secrets.token_hex(6)}"
-        try:
+        with contextlib.suppress(FileExistsError):  # taken: draw another name
             path.mkdir()
-        except FileExistsError:
-            continue
-        return path
+            return path
 
 
 def hidden_folders(target: Path) -> list[tuple[str, Path]]:
@@ -157,10 +155,9 @@ def _try_lock(fd: int) -> bool:
 
 def _holder(path: Path) -> str:
     """The process id written in a lock file, or ``"?"``."""
-    try:
+    with contextlib.suppress(OSError, UnicodeDecodeError):
         return path.read_text(encoding="utf-8").strip() or "?"
-    except (OSError, UnicodeDecodeError):
-        return "?"
+    return "?"
 
 
 def recover(

@@ -91,9 +91,6 @@ class AgentIndex(Mapping[str, int]):
             raise KeyError(name)
         return row
 
-    def __contains__(self, name: object) -> bool:
-        return self.names.position(name) is not None
-
     def __iter__(self) -> Iterator[str]:
         return iter(self.names)
 

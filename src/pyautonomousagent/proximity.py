@@ -249,62 +249,6 @@ def _forward(
 
 
 @njit
-def _near(
-    points: np.ndarray,
-    cells: np.ndarray,
-    order: np.ndarray,
-    starts: np.ndarray,
-    extent: np.ndarray,
-    mask: int,
-    range2: float,
-    radius2: float,
-    none: float,
-    nearest: np.ndarray,
-    distance: np.ndarray,
-    close: np.ndarray,
-    best2: np.ndarray,
-    best: np.ndarray,
-) -> None:
-    """Each point's nearest other point with squared distance <= ``range2`` (lowest index
-    among equals) and its distance into ``nearest``, ``distance`` (-1 and ``none`` for
-    none), and, per point in bucket order, how many pairs closer than ``radius2`` it is
-    the first of into ``close`` (:func:`_forward`). ``points`` and ``cells`` are in bucket
-    order (``order`` gives the indices). One core: on a machine shared with NumPy's work,
-    threads waiting for the next parallel loop slow the rest more than they save here."""
-    n = points.shape[1]
-    best2[:n] = math.inf  # (scratch, at least (N,) each)
-    best[:n] = -1
-    unused = np.empty((2, 0), dtype=np.int64)
-    _forward(points, cells, order, starts, extent, mask, range2, radius2, best2, best, close,
-             unused, best2, False)  # fmt: skip
-    for s in range(n):
-        i = order[s]
-        nearest[i] = best[s]
-        distance[i] = math.sqrt(best2[s]) if best[s] >= 0 else none
-
-
-@njit
-def _pairs(
-    points: np.ndarray,
-    cells: np.ndarray,
-    order: np.ndarray,
-    starts: np.ndarray,
-    extent: np.ndarray,
-    mask: int,
-    radius2: float,
-    close: np.ndarray,
-    pairs: np.ndarray,
-    pairs2: np.ndarray,
-) -> None:
-    """The pairs closer than ``radius2`` (lower index first) into ``pairs`` (2, P) and
-    their squared distances into ``pairs2``, for the points :func:`_near` counted some for."""
-    unused = np.empty(0)
-    unused_best = np.empty(0, dtype=np.int64)
-    _forward(points, cells, order, starts, extent, mask, 0.0, radius2, unused, unused_best,
-             close, pairs, pairs2, True)  # fmt: skip
-
-
-@njit
 def _near_and_pairs(
     points: np.ndarray,
     cells: np.ndarray,
@@ -318,22 +262,34 @@ def _near_and_pairs(
     work: np.ndarray,
     scratch: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:meth:`CellList.near` on a built grid (squared range and radius): each point's nearest
-    within the range (N,) and its distance (N,), views of ``work`` (int64, at least 3 N) and
-    ``scratch`` (float64, at least 2 N) or new arrays where those are empty, and the pairs
-    closer than the radius, first, second (P,) sorted by first then second, and their
-    distances (P,)."""
+    """:meth:`CellList.near` on a built grid (squared range and radius; ``points`` and
+    ``cells`` in bucket order, ``order`` gives the indices): each point's nearest other
+    point with squared distance <= ``range2`` (lowest index among equals) within the range
+    (N,) and its distance (N,) (-1 and ``none`` for none), views of ``work`` (int64, at
+    least 3 N) and ``scratch`` (float64, at least 2 N) or new arrays where those are empty,
+    and the pairs closer than the radius, first, second (P,) sorted by first then second,
+    and their distances (P,). One core: on a machine shared with NumPy's work, threads
+    waiting for the next parallel loop slow the rest more than they save here."""
     n = order.shape[0]
     nearest, close, best = _part(work, 0, n), _part(work, n, n), _part(work, 2 * n, n)
     distance, best2 = _part(scratch, 0, n), _part(scratch, n, n)
-    _near(points, cells, order, starts, extent, mask, range2, radius2, none, nearest, distance,
-          close, best2, best)  # fmt: skip
+    best2[:n] = math.inf
+    best[:n] = -1
+    unused = np.empty((2, 0), dtype=np.int64)
+    _forward(points, cells, order, starts, extent, mask, range2, radius2, best2, best, close,
+             unused, best2, False)  # fmt: skip
+    for s in range(n):
+        i = order[s]
+        nearest[i] = best[s]
+        distance[i] = math.sqrt(best2[s]) if best[s] >= 0 else none
     total = close.sum()
     pairs = np.empty((2, total), dtype=np.int64)
     pairs2 = np.empty(total)
     if total == 0:
         return nearest, distance, pairs[0], pairs[1], pairs2
-    _pairs(points, cells, order, starts, extent, mask, radius2, close, pairs, pairs2)
+    # the second pass: only the points that found a pair (close[s] > 0) write them
+    _forward(points, cells, order, starts, extent, mask, 0.0, radius2, best2, best, close,
+             pairs, pairs2, True)  # fmt: skip
     by = _pair_order(pairs[0], pairs[1], n)
     return nearest, distance, pairs[0][by], pairs[1][by], np.sqrt(pairs2[by])
 
@@ -486,11 +442,6 @@ class CellList:
         self.width, self.mask = _grid_shape(axes[0].size, self.reach)
         built = _build(axes, self.width, self.mask, *FRESH)
         self.low, self.extent, self.cells, self.sorted_points, self.order, self.starts = built
-
-    @property
-    def size(self) -> int:
-        """The number of points N."""
-        return int(self.order.size)
 
     def near(self, range_: float, radius: float, none: float = math.inf) -> Near:
         """Every point's nearest neighbour within ``range_`` (distance <= ``range_``; distance

@@ -31,10 +31,16 @@ _ONE = np.uint64(1)
 
 
 def _mix(z: Any) -> Any:
-    """SplitMix64's finaliser: a bijection of uint64 that spreads every input bit."""
-    z = (z ^ (z >> np.uint64(30))) * _M1
-    z = (z ^ (z >> np.uint64(27))) * _M2
-    return z ^ (z >> np.uint64(31))
+    """SplitMix64's finaliser: a bijection of uint64 (one, or an array) that spreads every
+    input bit. Every constant is a uint64: numba would make a mixed uint64/int64 operation
+    a float64 one."""
+    z = (z ^ (z >> _S30)) * _M1
+    z = (z ^ (z >> _S27)) * _M2
+    return z ^ (z >> _S31)
+
+
+#: :func:`_mix` of one uint64, for compiled kernels.
+_mix_one = njit(inline="always")(_mix)
 
 
 def stream_key(name: str) -> int:
@@ -82,15 +88,6 @@ class CounterRandom:
         unit = (self.bits(stream, rows, iteration, draw) >> np.uint64(11)) * _TO_UNIT
         values = low + (high - low) * unit
         return float(values[0]) if np.ndim(rows) == 0 else values
-
-
-@njit(inline="always")
-def _mix_one(z: np.uint64) -> np.uint64:
-    """:func:`_mix` of one uint64 (every constant a uint64: numba would make a mixed
-    uint64/int64 operation a float64 one)."""
-    z = (z ^ (z >> _S30)) * _M1
-    z = (z ^ (z >> _S27)) * _M2
-    return z ^ (z >> _S31)
 
 
 @njit(inline="always")

@@ -1,22 +1,11 @@
 """Where a fused loop writes its records: blocks of record rows within a memory budget.
 
-A fused loop (the compiled engine's ``block_*`` functions) runs many iterations in one call
-and writes the record of iteration ``t`` into row ``t // every - row0`` of its record arrays.
-A :class:`RecordBlock` hands it, per recorded column:
-
-- where the recorder stores the column in full, a view of the recorder's own array from
-  record ``row0`` on: written in place, nothing copied;
-- where the recorder keeps it compact (one value per record while every agent has the same
-  bits: :class:`~pyautonomousagent.recording.RecordedColumns`), a buffer of
-  :attr:`RecordBlock.capacity` rows, reused call after call.
-
-After the call, :meth:`RecordBlock.hand_over` stores the buffered rows in the recorder record
-by record, as the batched engine's ``Recorder.record`` does, so every engine's recorder holds
-the same columns in full and the same memory. The buffers hold at most
-:data:`RECORD_BLOCK_BYTES`: :meth:`RecordBlock.fit` shortens a call to the iterations whose
-records fit, so what a fused loop holds beyond the recorder's records is bounded whatever the
-run's length and swarm (at least one record row). The recorder's listeners (e.g. the Parquet
-writer, :class:`~pyautonomousagent.streaming.StatesStream`) hear of the records after each call.
+A fused loop (the compiled engine's ``block_*`` functions) writes the record of iteration
+``t`` into row ``t // every - row0`` of the arrays a :class:`RecordBlock` hands it: a view of
+the recorder's own array for a column stored in full (written in place), else a buffer of
+:attr:`RecordBlock.capacity` rows, reused call after call, whose rows
+:meth:`RecordBlock.hand_over` then stores as ``Recorder.record`` does. The buffers hold at
+most :data:`RECORD_BLOCK_BYTES` (:meth:`RecordBlock.fit`). See docs/architecture.md.
 """
 
 from __future__ import annotations
@@ -68,7 +57,7 @@ class RecordBlock:
         in the loop's order, then the active behaviour."""
         columns = self.recorder.columns
         sources = [(key, columns) for key in self.names]
-        codes = self.recorder.behaviour_codes()
+        codes = self.recorder.codes
         return [*sources, ("behaviour", codes)] if codes is not None else sources
 
     def _allocate(self) -> None:
@@ -120,14 +109,6 @@ class RecordBlock:
         (``iterations``, ``count``, listeners) is the caller's."""
         if not rows:
             return
-        columns: dict[str, np.ndarray] = {}
-        behaviour: np.ndarray | None = None
-        for i, (key, _) in enumerate(self._sources()):
-            buffer = self._buffers.get(i)
-            if buffer is None:
-                continue
-            if i < len(self.names):
-                columns[key] = buffer[:rows]
-            else:
-                behaviour = buffer[:rows]
-        self.recorder.store_group(row0, columns, None, behaviour)
+        held = {i: buffer[:rows] for i, buffer in self._buffers.items()}  # by source index
+        columns = {self.names[i]: block for i, block in held.items() if i < len(self.names)}
+        self.recorder.store_group(row0, columns, None, held.get(len(self.names)))

@@ -4,19 +4,15 @@ A :class:`Recorder` keeps one array of shape ``(records, N)`` per recorded colum
 ``records = iterations // every + 1`` (the initial state, then every ``every``-th
 iteration), allocated whole the first time the column's values differ between agents
 (:class:`RecordedColumns`: until then one value per record). Nothing grows record by
-record. :func:`to_table` turns the arrays into a long table (one row per recorded iteration
-and agent) for Parquet, CSV or pandas, with each column's unit and meaning in its Parquet
-field metadata (:data:`COLUMN_DOCS`).
-
-Given the tree, a recorder also keeps the tree's **node statuses** (the engine's
-``node_statuses()``, int8 codes of :mod:`pyautonomousagent.bt.status`) of the traced agents,
-shape ``(records, nodes, traced)``, and every agent's **active behaviour**: the leaf that is
-RUNNING after the tick, or else the last leaf (in tick order) that was ticked, as a node index
-``(records, N)`` int16 (-1 before the first tick). :func:`trace_table` writes the traces.
+record. Given the tree, it also keeps the traced agents' node statuses and every agent's
+active behaviour (:class:`Recorder`). :func:`to_table` and :func:`trace_table` turn the
+arrays into long tables (one row per record and agent) for Parquet, CSV or pandas, with
+each column's unit and meaning in its Parquet field metadata (:data:`COLUMN_DOCS`).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 import mmap
 import os
@@ -90,6 +86,8 @@ class Recorder:
         traces: node statuses of the traced agents, shape (records, nodes, K), int8.
         behaviour: active leaf per agent as a node index, shape (records, N), int16; -1 when
             none was ticked; None without a tree.
+        codes: the active behaviours as recorded columns (one, ``"behaviour"``), to write in
+            place where stored in full; None without a tree.
         listeners: called with the number of records after each record is written whole
             (e.g. :class:`~pyautonomousagent.streaming.StatesStream`).
     """
@@ -118,43 +116,35 @@ class Recorder:
         self.groups = {
             "state": list(swarm.columns),
             "blackboard": list(swarm.blackboard),
-            "model": [
-                k for k in extra or {} if k not in swarm.columns and k not in swarm.blackboard
-            ],
+            "model": [k for k in dtypes if k not in swarm.columns and k not in swarm.blackboard],
         }
         self.nodes: list[Node] = list(tree.walk()) if tree is not None else []
         if check_size(len(self.nodes)):  # a node index is recorded as an int16
             raise TreeError(f"the tree {check_size(len(self.nodes))} in a recorded run")
-        self.leaf_rows = np.array(
-            [i for i, node in enumerate(self.nodes) if not node.is_control], dtype=np.int16
-        )
+        self.leaf_rows = _leaf_rows(self.nodes)
         self.traced = np.asarray(traced if tree is not None else (), dtype=np.intp)
         self.traces = preallocated((records, len(self.nodes), self.traced.size), np.dtype(np.int8))
         codes = {"behaviour": np.dtype(np.int16)}
-        self._codes = RecordedColumns(codes, records, swarm.size, compact) if tree else None
+        self.codes = RecordedColumns(codes, records, swarm.size, compact) if tree else None
         self.count = 0
         self.listeners: list[Callable[[int], None]] = []
 
     @property
     def wants_statuses(self) -> bool:
         """Whether :meth:`record` needs the engine's node statuses (a tree was given)."""
-        return self._codes is not None
+        return self.codes is not None
 
     @property
     def behaviour(self) -> np.ndarray | None:
         """Active leaf per agent as a node index, shape (records, N), int16 (see the class)."""
-        return None if self._codes is None else self._codes["behaviour"]
-
-    @behaviour.setter
-    def behaviour(self, codes: np.ndarray | None) -> None:
-        self._codes = None if codes is None else RecordedColumns.of({"behaviour": codes})
+        return None if self.codes is None else self.codes["behaviour"]
 
     def behaviour_block(self, start: int, stop: int) -> np.ndarray:
         """Records ``start`` to ``stop`` of :attr:`behaviour`, shape (stop - start, N), without
         storing them all (:meth:`RecordedColumns.block`); requires a tree."""
-        if self._codes is None:
+        if self.codes is None:
             raise ValueError("this recorder has no tree, so no active behaviours")
-        return self._codes.block("behaviour", start, stop)
+        return self.codes.block("behaviour", start, stop)
 
     def due(self, iteration: int) -> bool:
         """Whether ``iteration`` is recorded."""
@@ -176,11 +166,11 @@ class Recorder:
         self.iterations[row] = iteration
         sources = {**swarm.columns, **swarm.blackboard, **(extra or {})}
         self.columns.store_record(row, sources)
-        if self._codes is not None:
+        if self.codes is not None:
             if statuses is None:
                 raise ValueError("this recorder keeps traces: pass the engine's node statuses")
             self.traces[row] = statuses[:, self.traced]
-            self._codes.store(row, "behaviour", active_leaf(statuses, self.leaf_rows))
+            self.codes.store(row, "behaviour", active_leaf(statuses, self.leaf_rows))
         self.count += 1
         for listener in self.listeners:
             listener(self.count)
@@ -210,16 +200,11 @@ class Recorder:
         self.columns.store_rows(row0, columns)
         if traces is not None:
             self.traces[row0 : row0 + len(traces)] = traces
-        if self._codes is not None:
-            if behaviour is None and self._codes.full("behaviour") is None:
+        if self.codes is not None:
+            if behaviour is None and self.codes.full("behaviour") is None:
                 raise ValueError("this recorder keeps traces: pass the active behaviours")
             if behaviour is not None:
-                self._codes.store_rows(row0, {"behaviour": behaviour})
-
-    def behaviour_codes(self) -> RecordedColumns | None:
-        """The active behaviours as recorded columns (one, ``"behaviour"``), to write in
-        place where stored in full; None without a tree."""
-        return self._codes
+                self.codes.store_rows(row0, {"behaviour": behaviour})
 
     def trace(self, agent: int | str) -> np.ndarray:
         """The node statuses of one traced agent (index or name), shape (records so far, nodes)."""
@@ -233,6 +218,11 @@ class Recorder:
     def column(self, key: str) -> np.ndarray:
         """The recorded values of ``key``, shape (records so far, N)."""
         return self.columns[key][: self.count]
+
+
+def _leaf_rows(nodes: Sequence[Node]) -> np.ndarray:
+    """The node indices of the leaves among ``nodes`` (tick order), ascending, int16."""
+    return np.array([i for i, node in enumerate(nodes) if not node.is_control], dtype=np.int16)
 
 
 def active_leaf(statuses: np.ndarray, leaf_rows: np.ndarray) -> np.ndarray:
@@ -329,11 +319,9 @@ class RecordedColumns(Mapping[str, np.ndarray]):
 
     Until a column's values differ between agents in a record, only one value per record
     is kept, shape (records,); the first record in which they differ allocates the whole
-    column (:func:`preallocated`) and fills the earlier records in. A column that is the
-    same for every agent throughout (a shared patrol point) is never stored in full, nor is
-    the initial state of agents that all start alike: recording only the initial state of
-    20 million drones keeps their one varying column, not all of them. Likewise a record of
-    a column equal to the same record of a column stored in full (the requested heading is
+    column (:func:`preallocated`) and fills the earlier records in: a column the same for
+    every agent throughout (a shared patrol point) is never stored in full. A record of a
+    column equal to the same record of a column stored in full (the requested heading is
     the heading at the start) is kept as a reference to it. Values are compared bit by bit,
     so NaNs and -0.0 come back as they were recorded.
 
@@ -378,16 +366,6 @@ class RecordedColumns(Mapping[str, np.ndarray]):
             full = self._stored(key, row)
         full[row] = values
 
-    def store_block(self, row0: int, key: str, values: np.ndarray) -> None:
-        """Record ``values`` (shape (rows, N)) as records ``row0``.. of column ``key``: at
-        once where it is stored in full, else record by record (:meth:`store`)."""
-        full = self._full.get(key)
-        if full is not None:
-            full[row0 : row0 + len(values)] = values
-            return
-        for r, row in enumerate(values):
-            self.store(row0 + r, key, row)
-
     def store_rows(self, row0: int, blocks: Mapping[str, np.ndarray]) -> None:
         """Record ``blocks[key]`` (shape (rows, N)) as records ``row0``.. of each column
         ``key`` given: at once for a column stored in full, the others record by record and,
@@ -396,7 +374,7 @@ class RecordedColumns(Mapping[str, np.ndarray]):
         rest = [key for key in self.dtypes if key in blocks and key not in self._full]
         for key, values in blocks.items():
             if key not in rest:
-                self.store_block(row0, key, values)
+                self._full[key][row0 : row0 + len(values)] = values
         rows = max((len(blocks[key]) for key in rest), default=0)
         for r in range(rows):
             for key in rest:
@@ -512,11 +490,15 @@ def to_table(recorder: Recorder, start: int = 0, stop: int | None = None) -> pa.
         "iteration": pa.array(np.repeat(recorder.iterations[start:stop], n)),
         "agent": _agent_column(recorder.names, records),
     }
-    for key in recorder.columns:
-        data[key] = pa.array(recorder.columns.block(key, start, stop).reshape(-1))
-    if recorder.wants_statuses:
-        behaviour = _behaviour_column(recorder, start, stop)
-        data = _insert_after(data, "requested_heading", "behaviour", behaviour)
+    keys = list(recorder.columns)
+    if recorder.wants_statuses:  # right after the requested heading (at the end if none)
+        at = keys.index("requested_heading") + 1 if "requested_heading" in keys else len(keys)
+        keys.insert(at, "behaviour")
+    for key in keys:
+        if key == "behaviour":
+            data[key] = _behaviour_column(recorder, start, stop)
+        else:
+            data[key] = pa.array(recorder.columns.block(key, start, stop).reshape(-1))
     groups = {key: group for group, keys in recorder.groups.items() for key in keys}
     return _documented(pa.table(data), docs=recorder.docs, groups=groups)
 
@@ -561,19 +543,15 @@ def recorder_from_tables(
     if not nodes and traces is not None and traces.schema.metadata:
         nodes = json.loads(traces.schema.metadata.get(b"pyautonomousagent.nodes", b"[]"))
     recorder.nodes = _rebuild(nodes)
-    recorder.leaf_rows = np.array(
-        [i for i, node in enumerate(recorder.nodes) if not node.is_control], dtype=np.int16
-    )
-    recorder.behaviour = _behaviour_codes(states, recorder.nodes, records, n)
+    recorder.leaf_rows = _leaf_rows(recorder.nodes)
+    recorder.codes = _behaviour_codes(states, recorder.nodes, records, n)
     names = [str(a) for a in traces.column("agent").to_pylist()] if traces is not None else []
     k = len(dict.fromkeys(names))
     recorder.traced = np.array([recorder.names.index(a) for a in names[:k]], dtype=np.intp)
-    shape = (records, len(recorder.nodes), k)
-    recorder.traces = np.zeros(shape, dtype=np.int8)
-    if traces is not None and recorder.nodes:
-        for j, node in enumerate(recorder.nodes):
-            column = traces.column(node.name).to_numpy().astype(np.int8)
-            recorder.traces[:, j, :] = column.reshape(records, k)
+    recorder.traces = np.zeros((records, len(recorder.nodes), k), dtype=np.int8)
+    for j, node in enumerate(recorder.nodes):
+        if traces is not None:
+            recorder.traces[:, j, :] = traces.column(node.name).to_numpy().reshape(records, k)
     return recorder
 
 
@@ -593,14 +571,15 @@ def _rebuild(nodes: Sequence[Mapping[str, Any]]) -> list[Node]:
 
 def _behaviour_codes(
     states: pa.Table, nodes: Sequence[Node], records: int, n: int
-) -> np.ndarray | None:
-    """The ``behaviour`` column as node indices (records, N), -1 for none; None if absent."""
+) -> RecordedColumns | None:
+    """The ``behaviour`` column as node indices (records, N), -1 for none (as
+    :attr:`Recorder.codes`); None if absent."""
     if "behaviour" not in states.column_names or not nodes:
         return None
     index = {node.name: i for i, node in enumerate(nodes)}
     names = states.column("behaviour").to_pylist()
     codes = np.array([index.get(v, -1) if v else -1 for v in names], dtype=np.int16)
-    return codes.reshape(records, n)
+    return RecordedColumns.of({"behaviour": codes.reshape(records, n)})
 
 
 def trace_table(recorder: Recorder) -> pa.Table:
@@ -623,23 +602,18 @@ def trace_table(recorder: Recorder) -> pa.Table:
         "status code",
         "the node's status after the tick: 0 INVALID (not ticked), 1 SUCCESS, 2 FAILURE, 3 RUNNING",
     )
-    table = _documented(pa.table(data), {node.name: status for node in recorder.nodes})
     metadata = {
-        **(table.schema.metadata or {}),
-        b"pyautonomousagent.nodes": json.dumps(node_list(recorder.nodes)).encode(),
-        b"pyautonomousagent.status_codes": json.dumps(NAMES).encode(),
+        "pyautonomousagent.nodes": json.dumps(node_list(recorder.nodes)),
+        "pyautonomousagent.status_codes": json.dumps(NAMES),
     }
-    return table.replace_schema_metadata(metadata)
+    return _documented(pa.table(data, metadata=metadata), {n.name: status for n in recorder.nodes})
 
 
 def node_list(nodes: Sequence[Node]) -> list[dict[str, object]]:
     """Nodes in tick order as plain dicts: name, type, parent index (-1: the root), depth and
     parameters (ports)."""
-    parent: dict[int, int] = {}
-    depth: dict[int, int] = {}
+    parent, depth = [-1] * len(nodes), [0] * len(nodes)
     for i, node in enumerate(nodes):
-        depth.setdefault(i, 0)
-        parent.setdefault(i, -1)
         child = i + 1
         for sub in node.children:
             parent[child], depth[child] = i, depth[i] + 1
@@ -671,15 +645,6 @@ def _behaviour_column(recorder: Recorder, start: int, stop: int) -> pa.Dictionar
     return pa.DictionaryArray.from_arrays(indices, dictionary)
 
 
-def _insert_after(
-    data: dict[str, pa.Array], after: str, key: str, value: pa.Array
-) -> dict[str, pa.Array]:
-    """``data`` with ``key`` placed right after ``after`` (at the end if absent)."""
-    items = list(data.items())
-    at = next((i + 1 for i, (k, _) in enumerate(items) if k == after), len(items))
-    return dict([*items[:at], (key, value), *items[at:]])
-
-
 def _documented(
     table: pa.Table,
     docs: Mapping[str, tuple[str, str]] | None = None,
@@ -689,13 +654,12 @@ def _documented(
     or else :data:`COLUMN_DOCS` (unknown columns get empty strings), and its ``group``
     (state, blackboard, model) where ``groups`` gives one."""
     docs = {**COLUMN_DOCS, **(docs or {})}
+    groups = groups or {}
     fields = []
     for field in table.schema:
         unit, text = docs.get(field.name, ("", ""))
-        metadata = {"unit": unit, "description": text}
-        if groups and field.name in groups:
-            metadata["group"] = groups[field.name]
-        fields.append(field.with_metadata(metadata))
+        group = {"group": groups[field.name]} if field.name in groups else {}
+        fields.append(field.with_metadata({"unit": unit, "description": text, **group}))
     return table.cast(pa.schema(fields, metadata=table.schema.metadata))
 
 
@@ -742,26 +706,20 @@ def read_table(path: Path) -> pa.Table:
 
 def _plain_agent(schema: pa.Schema) -> pa.Schema:
     """The schema with dictionary-encoded columns (agent, behaviour) as plain strings (CSV)."""
-    for i, field in enumerate(schema):
-        if pa.types.is_dictionary(field.type):
-            schema = schema.set(i, field.with_type(pa.string()))
-    return schema
+    plain = [f.with_type(pa.string()) if pa.types.is_dictionary(f.type) else f for f in schema]
+    return pa.schema(plain, metadata=schema.metadata)
 
 
 def available_memory() -> int | None:
     """Bytes of memory available to a new allocation (Linux ``MemAvailable``; elsewhere the
     physical memory), or None if unknown."""
-    try:
-        with open("/proc/meminfo") as meminfo:
-            for line in meminfo:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        pass
-    try:
+    with contextlib.suppress(OSError, ValueError, IndexError), open("/proc/meminfo") as meminfo:
+        for line in meminfo:
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    with contextlib.suppress(AttributeError, ValueError, OSError):
         return int(os.sysconf("SC_PHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
-    except (AttributeError, ValueError, OSError):
-        return None
+    return None
 
 
 def check_memory(agents: int, iterations: int, every: int, columns: int, per_agent: int = 0) -> int:

@@ -10,7 +10,7 @@ entry for the duration of a ``with`` block (what a test registers, it removes).
 from __future__ import annotations
 
 import difflib
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Generic, TypeVar
 
@@ -48,14 +48,6 @@ class Registry(Generic[T]):
             )
         self._entries[name] = entry
         return entry
-
-    def decorator(self, name: str) -> Callable[[T], T]:
-        """``@registry.decorator("name")``: register the decorated object under ``name``."""
-
-        def add(entry: T) -> T:
-            return self.register(name, entry)
-
-        return add
 
     def get(self, name: str) -> T:
         """The entry called ``name``.

@@ -1,14 +1,9 @@
 """A finished run folder read back as untrusted input (``pyaa replay``).
 
 A run folder may have been edited, truncated or copied half-way, so everything in it is
-checked before anything is drawn, and each failure is one :class:`~pyautonomousagent.inputs.
-InputError` line naming the file and the field:
-
-- :func:`read_summary`: ``run.json``, bounded, UTF-8 and valid JSON, a mapping whose
-  ``scenario`` is a mapping, ``events`` a list of events and ``trace.nodes`` a tree in tick
-  order (:func:`check_nodes`);
-- :func:`read_recorder`: the states (and traces) table, Parquet or CSV, with the columns a
-  replay draws, and the recorder they make.
+checked (:func:`read_summary`, :func:`read_recorder`) before anything is drawn, and each
+failure is one :class:`~pyautonomousagent.inputs.InputError` line naming the file and the
+field.
 """
 
 from __future__ import annotations
@@ -31,7 +26,9 @@ FIX = "give a folder that pyaa run wrote, or run it again"
 
 
 def read_summary(folder: Path) -> dict[str, Any]:
-    """``folder``'s run.json, checked (see the module docstring).
+    """``folder``'s run.json, checked: bounded, UTF-8 and valid JSON, a mapping whose
+    ``scenario`` is a mapping, ``events`` a list of events and ``trace.nodes`` a tree in tick
+    order (:func:`check_nodes`).
 
     Raises:
         InputError: no run.json, or one that is unreadable or not what pyaa run writes.

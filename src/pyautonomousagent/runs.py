@@ -4,13 +4,10 @@
     status = simulate(sim)                       # "complete", or "interrupted" on Ctrl-C
     saved = save_run(sim, "runs/gathering", status=status)
 
-A run's files (``states.parquet`` or ``states.csv``, ``traces.*``, the views: ``animation.gif``,
-``replay.html``, Groot2 logs; ``run.json``) are
-written into a temporary folder beside the target (``.NAME.tmp-*``) and put in place whole
-with a rename, so an earlier run is never deleted by a failure and never mixed with a new
-one. ``run.json`` is written last and lists every file with its size and SHA-256, the
-command line, the overrides, the tree file's content and hash, the package version, the
-time and the status:
+A run's files (docs/data.md) are written into a temporary folder beside the target
+(``.NAME.tmp-*``) and put in place whole with a rename, so an earlier run is never deleted by
+a failure and never mixed with a new one. ``run.json``, written last, lists every file with
+its size and SHA-256, and the run's status:
 
 - ``complete``: every iteration was simulated and every file written;
 - ``interrupted``: Ctrl-C stopped the simulation (the data holds the iterations done, a
@@ -24,11 +21,8 @@ that is not empty is never written into, nor is a mount point (it cannot be rena
 interrupted run does not replace an earlier run: it is saved beside it, as
 ``NAME-interrupted-YYYYMMDD-HHMMSS``.
 
-One writer at a time: :func:`claim_run` locks the folder (``.NAME.lock`` beside it) before
-the run starts, and a second writer is refused with a :class:`RunError`. Taking the claim
-also repairs what a killed writer left (:func:`pyautonomousagent.folders.recover`): an
-earlier run it had renamed aside is put back, its temporary folders are deleted, and
-:attr:`Claim.notes` says so.
+One writer at a time: :func:`claim_run` locks the folder before the run starts, and repairs
+what a killed writer left (:mod:`pyautonomousagent.folders`).
 """
 
 from __future__ import annotations
@@ -74,6 +68,8 @@ STATUSES = ("complete", "interrupted", "failed")
 #: The folder that default run folders live in.
 RUNS = Path("runs")
 SUMMARY = "run.json"
+#: The packages whose versions ``run.json`` records (with Python's).
+VERSIONED = ("pyautonomousagent", "numpy", "py_trees", "pyarrow", "matplotlib", "pillow")
 
 
 class RunError(InputError):
@@ -165,11 +161,9 @@ def check_target(folder: str | Path, overwrite: bool = False, create: bool = Tru
 
 def _check_ancestors(path: Path) -> None:
     """Raise NotADirectoryError where the nearest existing folder above ``path`` is a file."""
-    for ancestor in path.absolute().parents:
-        if ancestor.exists():
-            if not ancestor.is_dir():
-                raise NotADirectoryError(20, "Not a directory", str(ancestor))
-            return
+    nearest = next((a for a in path.absolute().parents if a.exists()), None)
+    if nearest is not None and not nearest.is_dir():
+        raise NotADirectoryError(20, "Not a directory", str(nearest))
 
 
 @contextlib.contextmanager
@@ -408,16 +402,14 @@ def _write_views(sim: Simulation, temp: Path, views: Views, saved: SavedRun) -> 
         write_views(sim.recorder, sim.scenario, sim.events, temp, views)
     except OSError:
         raise
-    except BaseException as error:
+    except (KeyboardInterrupt, Exception) as error:
         for path in set(temp.iterdir()) - before:  # partial views go; the data stays
             path.unlink(missing_ok=True)
         if isinstance(error, KeyboardInterrupt):
             saved.status, saved.note = "interrupted", "Ctrl-C during the animation: no views"
-        elif isinstance(error, Exception):
+        else:
             message = error.args[0] if isinstance(error, KeyError) and error.args else error
             saved.status, saved.note = "failed", f"the views failed: {shown(str(message), 200)}"
-        else:
-            raise
         return
     sim.timings.update(views.timings)
     saved.files.extend(views.written)
@@ -487,11 +479,9 @@ def tree_record(tree: str) -> dict[str, Any]:
 
 def file_record(path: Path) -> dict[str, Any]:
     """A file's name, size (bytes) and SHA-256, as ``run.json`` lists it."""
-    digest = hashlib.sha256()
     with path.open("rb") as file:
-        for block in iter(lambda: file.read(1 << 20), b""):
-            digest.update(block)
-    return {"name": path.name, "bytes": path.stat().st_size, "sha256": digest.hexdigest()}
+        digest = hashlib.file_digest(file, "sha256").hexdigest()
+    return {"name": path.name, "bytes": path.stat().st_size, "sha256": digest}
 
 
 def verify(folder: str | Path) -> dict[str, Any]:
@@ -602,23 +592,12 @@ def claim_existing(folder: str | Path) -> Iterator[Claim]:
         raise RunError(f"{path} is being written by another run ({error.strerror})") from None
 
 
-def versions(
-    packages: Iterable[str] = (
-        "pyautonomousagent",
-        "numpy",
-        "py_trees",
-        "pyarrow",
-        "matplotlib",
-        "pillow",
-    ),
-) -> dict[str, str]:
+def versions(packages: Iterable[str] = VERSIONED) -> dict[str, str]:
     """Python's and the given installed packages' versions (those not installed left out)."""
     found = {"python": platform.python_version()}
     for name in packages:
-        try:
+        with contextlib.suppress(metadata.PackageNotFoundError):
             found[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            continue
     return found
 
 

@@ -94,19 +94,14 @@ class Swarm:
         ``indices`` is an int array, a slice or a boolean mask of shape (N,)."""
         return self.view_type(self, np.arange(self.size) if indices is None else indices)
 
-    def index_of(self, name: str) -> int:
-        """The row of the agent called ``name``; ValueError if there is none."""
-        return self.names.index(name)
-
-
-def _plain(value: Any) -> Any:
-    """A NumPy scalar as a Python number (one agent); an array unchanged (a group)."""
-    return value.item() if value.ndim == 0 else value
-
 
 def _read(column: np.ndarray, index: Any, masked: bool) -> Any:
-    """The view's values of ``column``: all N of them when the view is a mask."""
-    return column if masked else _plain(column[index])
+    """The view's values of ``column``: all N of them when the view is a mask, a Python
+    number for one agent."""
+    if masked:
+        return column
+    values = column[index]
+    return values.item() if values.ndim == 0 else values
 
 
 def _write(column: np.ndarray, index: Any, masked: bool, value: Any) -> None:
@@ -310,9 +305,6 @@ def view_type(columns: Iterable[str]) -> type[AgentView]:
     extra = [k for k in columns if not hasattr(AgentView, k)]
     if not extra:
         return AgentView
-    attributes: dict[str, Any] = {"__slots__": ()}
-    for key in extra:
-        column = _Column()
-        column.name = key
-        attributes[key] = column
+    # type() names each descriptor after its key (_Column.__set_name__)
+    attributes: dict[str, Any] = {"__slots__": (), **{k: _Column() for k in extra}}
     return type("AgentView", (AgentView,), attributes)

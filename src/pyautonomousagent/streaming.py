@@ -13,6 +13,7 @@ with a spare core the writing overlaps the loop.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import queue
 import sys
@@ -123,10 +124,7 @@ def _lower_priority() -> None:
     """Lower the calling thread's priority by :data:`NICER` (Linux threads have their own),
     so that on a busy machine the loop keeps its core and the writing takes what is spare;
     elsewhere, or where it is refused, nothing changes."""
-    if sys.platform != "linux":
-        return
-    try:
-        thread = threading.get_native_id()
-        os.setpriority(os.PRIO_PROCESS, thread, os.getpriority(os.PRIO_PROCESS, thread) + NICER)
-    except OSError:
-        return
+    if sys.platform == "linux":
+        with contextlib.suppress(OSError):
+            thread = threading.get_native_id()
+            os.setpriority(os.PRIO_PROCESS, thread, os.getpriority(os.PRIO_PROCESS, thread) + NICER)
