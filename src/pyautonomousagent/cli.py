@@ -13,6 +13,7 @@ import sys
 from collections import Counter, defaultdict
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from itertools import product
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
@@ -350,11 +351,7 @@ def bench_command(args: argparse.Namespace) -> int:
     scenario = load(args.scenario)
     engines = _bench_engines(args, scenario)
     _bench_defaults(args, scenario, bench.PAPER_TABLES)
-    for option in ("iterations", "reference_iterations", "stress_iterations", "stress_start"):
-        value = getattr(args, option)
-        if value is not None and value < 1:
-            flag = "--" + option.replace("_", "-")
-            raise ScenarioError(f"{flag} must be a whole number >= 1, got {value}")
+    _check_whole(args, "iterations", "reference_iterations", "stress_iterations", "stress_start")
     if args.timeout is not None and not (finite(args.timeout) and args.timeout > 0):
         raise ScenarioError(f"--timeout must be a number of seconds > 0, got {args.timeout}")
     if args.bandwidth is not None and not (finite(args.bandwidth) and args.bandwidth > 0):
@@ -369,24 +366,21 @@ def bench_command(args: argparse.Namespace) -> int:
     variants = _bench_variants(args, scenario, bench)
     _note_grown_worlds(scenario, args.agents)
     results = []
-    for _ in range(args.repeat):
-        for every in args.record_every or [1]:
-            for agents in args.agents:
-                for engine in engines:
-                    for name, parameters in variants:
-                        scaled = bool(short) and engine == engines[0] and short < args.iterations
-                        its = short if scaled else args.iterations
-                        case = bench.Case(
-                            args.scenario, engine, agents, its, every, args.iterations, scaled,
-                            args.save, name, parameters,
-                        )  # fmt: skip
-                        print(
-                            f"measuring {engine}{' ' + name if name else ''} with {agents} "
-                            f"agents x {its} iterations, record every {every} ...",
-                            file=sys.stderr,
-                            flush=True,
-                        )
-                        results.append(bench.measure(case, args.timeout))
+    cases = product(range(args.repeat), args.record_every or [1], args.agents, engines, variants)
+    for _, every, agents, engine, (name, parameters) in cases:
+        scaled = bool(short) and engine == engines[0] and short < args.iterations
+        its = short if scaled else args.iterations
+        case = bench.Case(
+            args.scenario, engine, agents, its, every, args.iterations, scaled, args.save, name,
+            parameters,
+        )  # fmt: skip
+        print(
+            f"measuring {engine}{' ' + name if name else ''} with {agents} agents x {its} "
+            f"iterations, record every {every} ...",
+            file=sys.stderr,
+            flush=True,
+        )
+        results.append(bench.measure(case, args.timeout))
     if args.compare and not args.json:
         print(bench.compare_table(results))
         return 0
@@ -446,8 +440,7 @@ def _bench_variants(
 ) -> list[tuple[str, str]]:
     """``--compare`` as (name, "KEY=VALUE,...") pairs, each checked against the scenario
     (one variant, the scenario as it is, without the option); ``--repeat`` checked."""
-    if args.repeat < 1:
-        raise ScenarioError(f"--repeat must be a whole number >= 1, got {args.repeat}")
+    _check_whole(args, "repeat")
     variants = []
     for text in args.compare or [":"]:
         name, sep, parameters = text.partition(":")
@@ -525,11 +518,9 @@ def _parse_overrides(pairs: list[str], known: list[str] | None = None) -> dict[s
         key = key.strip()
         if not sep or not key or not text.strip():
             raise ScenarioError(f"--set needs KEY=VALUE with a value, got {shown(pair)}")
-        if known is None:
-            pass
-        elif key in OPTIONS:
+        if known is not None and key in OPTIONS:
             raise ScenarioError(f"--set {key}: use the option {OPTIONS[key]} {text.strip()}")
-        elif key not in known:
+        if known is not None and key not in known:
             close = difflib.get_close_matches(key, known, n=1)
             hint = f"did you mean {close[0]!r}? " if close else ""
             raise ScenarioError(
@@ -542,20 +533,23 @@ def _parse_overrides(pairs: list[str], known: list[str] | None = None) -> dict[s
     return values
 
 
-def _scenario(args: argparse.Namespace) -> Scenario:
+def _scenario(args: argparse.Namespace) -> tuple[Scenario, dict[str, Any]]:
+    """The scenario ``pyaa run`` runs, and its overrides (``--set``)."""
     scenario = load(args.scenario)
     overrides = _parse_overrides(args.set, list(to_mapping(scenario)["parameters"]))
     return scenario.with_overrides(
         agents=args.agents, iterations=args.iterations, frame_every=args.frame_every,
         size=args.world, **overrides,
-    )  # fmt: skip
+    ), overrides  # fmt: skip
 
 
-def _check_run_options(args: argparse.Namespace) -> None:
-    if args.record_every < 1:
-        raise ScenarioError(f"--record-every must be a whole number >= 1, got {args.record_every}")
-    if args.seed < 0:
-        raise ScenarioError(f"--seed must be a whole number >= 0, got {args.seed}")
+def _check_whole(args: argparse.Namespace, *options: str, minimum: int = 1) -> None:
+    """Each of ``options`` given is a whole number >= ``minimum``, else one line naming it."""
+    for option in options:
+        value = getattr(args, option)
+        if value is not None and value < minimum:
+            flag = "--" + option.replace("_", "-")
+            raise ScenarioError(f"{flag} must be a whole number >= {minimum}, got {value}")
 
 
 def _tree_option(value: str) -> str:
@@ -574,8 +568,9 @@ def run(args: argparse.Namespace) -> int:
     folder (see :mod:`pyautonomousagent.runs`); the folder is claimed once the simulation is
     set up (bad input writes nothing) and before it runs, so a second run into it is
     refused."""
-    _check_run_options(args)
-    scenario = _scenario(args)
+    _check_whole(args, "record_every")
+    _check_whole(args, "seed", minimum=0)
+    scenario, overrides = _scenario(args)
     _check_agent_options(args, scenario)
     if args.tree is not None:
         scenario = scenario.with_overrides(tree=_tree_option(args.tree))
@@ -593,7 +588,7 @@ def run(args: argparse.Namespace) -> int:
     if why and not args.quiet:
         print(f"pyaa: the compiled engine ticks the tree only, not whole iterations: {why}")
     with claim_run(out, args.overwrite, report=_note) as held:
-        return _run_claimed(args, scenario, sim, held)
+        return _run_claimed(args, sim, held, overrides)
 
 
 @contextmanager
@@ -621,8 +616,11 @@ def _note(text: str) -> None:
     print(f"pyaa: {text}", file=sys.stderr)
 
 
-def _run_claimed(args: argparse.Namespace, scenario: Scenario, sim: Simulation, held: Claim) -> int:
-    """Run ``sim`` (of ``scenario``) and save the run into the claimed folder ``held``."""
+def _run_claimed(
+    args: argparse.Namespace, sim: Simulation, held: Claim, overrides: dict[str, Any]
+) -> int:
+    """Run ``sim`` and save the run (``overrides``: its ``--set`` values) into the claimed
+    folder ``held``."""
     progress = None if not args.quiet else False
     out = held.folder
     with streaming(sim, out, args.format) as stream:
@@ -635,12 +633,12 @@ def _run_claimed(args: argparse.Namespace, scenario: Scenario, sim: Simulation, 
             views=_views(args, progress),
             overwrite=args.overwrite,
             command=["pyaa", *sys.argv[1:]] if sys.argv else None,
-            overrides=_parse_overrides(args.set, list(to_mapping(scenario)["parameters"])),
+            overrides=overrides,
             stream=stream,
             claim=held,
         )
     if saved.status != "complete":
-        print(_not_complete(saved, last_recorded(sim), scenario.iterations), file=sys.stderr)
+        print(_not_complete(saved, last_recorded(sim), sim.scenario.iterations), file=sys.stderr)
         return 130 if saved.status == "interrupted" else 1
     if not args.quiet:
         _print_summary(sim, saved.files)
@@ -701,30 +699,24 @@ def _views(args: argparse.Namespace, progress: bool | None) -> Views:
     from pyautonomousagent.render.views import Views
 
     return Views(
-        video=None if getattr(args, "no_gif", False) else getattr(args, "video", None),
-        replay=not getattr(args, "no_replay", False),
+        video=None if args.no_gif else args.video,
+        replay=not args.no_replay,
         btlog=args.btlog,
-        follow=getattr(args, "follow", None) or 0,
-        inset=getattr(args, "inset", False),
+        follow=args.follow or 0,
+        inset=args.inset,
         progress=progress,
     )
 
 
 def _write_views(
-    recorder: Recorder,
-    scenario: Scenario,
-    events: list[dict[str, Any]],
-    out: Path,
-    args: argparse.Namespace,
-    progress: bool | None,
+    recorder: Recorder, scenario: Scenario, events: list[dict[str, Any]], out: Path, views: Views
 ) -> Views:
-    """The animation, replay.html and Groot2 logs ``args`` ask for, written into ``out``."""
-    from pyautonomousagent.render.video import VideoError
+    """Write ``views`` of a run into ``out``; bad data in the run folder is one line."""
     from pyautonomousagent.render.views import write_views
 
     try:
-        return write_views(recorder, scenario, events, out, _views(args, progress))
-    except (KeyError, ValueError, VideoError) as error:  # an agent not traced, no ffmpeg, ...
+        return write_views(recorder, scenario, events, out, views)
+    except (KeyError, ValueError) as error:  # e.g. an agent not traced
         message = error.args[0] if isinstance(error, KeyError) and error.args else str(error)
         raise ScenarioError(str(message)) from None
 
@@ -759,6 +751,7 @@ def replay_command(args: argparse.Namespace) -> int:
 def _replay_into(folder: Path, out: Path, args: argparse.Namespace) -> list[Path]:
     """Write the replay page of ``folder`` as ``out`` and its logs beside it: drawn in a
     temporary folder there, then each renamed into place (no other file is touched)."""
+    from pyautonomousagent.render.views import Views
     from pyautonomousagent.run_inputs import read_recorder, read_summary
 
     summary = read_summary(folder)  # every file of the run checked first (run_inputs)
@@ -767,16 +760,8 @@ def _replay_into(folder: Path, out: Path, args: argparse.Namespace) -> list[Path
     _check_btlog(recorder, args.btlog)
     temp = hidden_folder(out, "tmp")
     try:
-        views = _write_views(
-            recorder,
-            scenario,
-            summary.get("events", []),
-            temp,
-            argparse.Namespace(
-                video=None, no_replay=False, btlog=args.btlog, follow=None, inset=False
-            ),
-            None,
-        )
+        events = summary.get("events", [])
+        views = _write_views(recorder, scenario, events, temp, Views(None, btlog=args.btlog))
         placed = [out] + [out.parent / path.name for path in views.written[1:]]
         for path, target in zip(views.written, placed, strict=True):
             os.replace(path, target)
@@ -965,11 +950,8 @@ def _all_defaults() -> dict[str, Any]:
     from pyautonomousagent.simulation.motion import MOTION_MODELS
     from pyautonomousagent.simulation.scenario import CORE_PARAMETERS
 
-    params = [*CORE_PARAMETERS]
-    for model in MOTION_MODELS.values():
-        params.extend(model.parameters)
-    for mission in MISSIONS.values():
-        params.extend(mission.parameters)
+    owners: list[Any] = [*MOTION_MODELS.values(), *MISSIONS.values()]
+    params = [*CORE_PARAMETERS, *(p for owner in owners for p in owner.parameters)]
     return {p.name: p.default for p in params}
 
 
@@ -1009,12 +991,8 @@ def tree_command(args: argparse.Namespace) -> int:
         from pyautonomousagent.bt.draw import draw_tree
 
         target = args.out or Path(f"{name}.{fmt}")
-        check_output(target)  # never over a run's own files
-        try:
+        with _writing(target):
             path = draw_tree(build(document), target, title=name)
-        except OSError as error:
-            reason = error.strerror or type(error).__name__
-            raise InputError(f"cannot write {target}: {reason}; check the folder exists") from None
         print(f"wrote {path}")
         return 0
     if fmt in ("xml", "yaml"):
@@ -1030,17 +1008,19 @@ def tree_command(args: argparse.Namespace) -> int:
     if args.out is None:
         print(text, end="")
         return 0
-    _write_output(args.out, text)
+    with _writing(args.out):
+        args.out.write_text(text, encoding="utf-8")
     print(f"wrote {args.out}")
     return 0
 
 
-def _write_output(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` (never over a run's own files: :func:`check_output`); an
+@contextmanager
+def _writing(path: Path) -> Iterator[None]:
+    """Write ``path`` in the body, never over a run's own files (:func:`check_output`); an
     OSError becomes one line naming the path."""
     check_output(path)
     try:
-        path.write_text(text, encoding="utf-8")
+        yield
     except OSError as error:
         reason = error.strerror or type(error).__name__
         raise InputError(f"cannot write {path}: {reason}; check the folder exists") from None
@@ -1079,13 +1059,7 @@ def _experiment(args: argparse.Namespace) -> Any:
         loaded = read_file(source)
         if isinstance(loaded, dict) and "scenario" in loaded:
             data = {"name": Path(source).stem, **loaded}
-    for key, value in (
-        ("design", args.design),
-        ("samples", args.samples),
-        ("design_seed", args.design_seed),
-    ):
-        if value is not None:
-            data[key] = value
+    data |= _given(args, "design", "samples", "design_seed")
     data = with_options(data, source, args.vary, _parse_overrides(args.set))
     if args.agents is not None:
         data["set"]["agents"] = args.agents
@@ -1093,17 +1067,15 @@ def _experiment(args: argparse.Namespace) -> Any:
     for text in args.measure:
         name, sep, expression = text.partition("=")
         measures.append({name: expression} if sep and name.isidentifier() else text)
-    for key, value in (
-        ("seeds", args.seeds),
-        ("iterations", args.iterations),
-        ("engine", args.engine),
-        ("record_every", args.record_every),
-        ("every", args.every),
-        ("measures", measures or None),
-    ):
-        if value is not None:
-            data[key] = value
+    data |= _given(args, "seeds", "iterations", "engine", "record_every", "every")
+    if measures:
+        data["measures"] = measures
     return Experiment.from_mapping(data, source=source)
+
+
+def _given(args: argparse.Namespace, *options: str) -> dict[str, Any]:
+    """The ``options`` given on the command line (not None), by name."""
+    return {key: getattr(args, key) for key in options if getattr(args, key) is not None}
 
 
 def _inside(root: Path, name: str) -> Path:
@@ -1125,8 +1097,7 @@ def sweep_command(args: argparse.Namespace) -> int:
     out = args.out or _inside(Path("runs") / "sweeps", experiment.name)
     backend = "serial" if args.serial else "dask" if args.dask else "pool"
     address = None if args.dask in (None, "local") else args.dask
-    if args.workers is not None and args.workers < 1:
-        raise ScenarioError(f"--workers must be a whole number >= 1, got {args.workers}")
+    _check_whole(args, "workers")
     try:
         result = sweep(
             experiment,
