@@ -112,9 +112,8 @@ class Result:
     @property
     def per_agent_iteration(self) -> float | None:
         """Loop seconds per agent-iteration (set-up excluded)."""
-        if self.seconds is None:
-            return None
-        return (self.seconds - self.setup) / (self.case.agents * self.case.iterations)
+        loop = self.loop
+        return None if loop is None else loop / (self.case.agents * self.case.iterations)
 
     def bandwidth_fraction(self, gbps: float) -> float | None:
         """The share of ``gbps`` (GB/s, e.g. the card's measured copy bandwidth) that the
@@ -240,18 +239,7 @@ def measure(case: Case, timeout: float | None = None, budget_mb: float | None = 
     if child.returncode != 0:
         lines = err.strip().splitlines()
         return Result(case, None, None, lines[-1] if lines else f"exit code {child.returncode}")
-    figures = json.loads(out.strip().splitlines()[-1])
-    return Result(
-        case,
-        figures["seconds"],
-        figures["peak_mb"],
-        setup=figures["setup"],
-        write=figures.get("write"),
-        views=figures.get("views"),
-        write_thread=figures.get("write_thread"),
-        gpu=figures.get("gpu"),
-        bytes_per_drone_iteration=figures.get("bytes_per_drone_iteration"),
-    )
+    return Result(case, **json.loads(out.strip().splitlines()[-1]))  # run_case_here's figures
 
 
 def _peak_mb(pid: int) -> float | None:
