@@ -787,9 +787,8 @@ def _check_btlog(recorder: Recorder, agents: Sequence[str]) -> None:
 
 
 def _print_summary(sim: Simulation, written: list[Path]) -> None:
-    alerts = sum(1 for e in sim.events if e["event"] == "alert")
-    messages = sum(1 for e in sim.events if e["event"] == "message")
-    others = Counter(e["event"] for e in sim.events if e["event"] not in ("alert", "message"))
+    others = Counter(e["event"] for e in sim.events)
+    alerts, messages = others.pop("alert", 0), others.pop("message", 0)
     more = "".join(f", {count} {kind}(s)" for kind, count in sorted(others.items()))
     n, its = sim.swarm.size, sim.scenario.iterations
     print(
@@ -1226,12 +1225,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(stop.code or 0)
     try:
         return HANDLERS[args.command](args)
-    except USER_ERRORS as error:
+    except (*USER_ERRORS, SaveError) as error:  # bad input: 2; a run that could not be saved: 1
         print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
-        return 2
-    except SaveError as error:
-        print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
-        return 1
+        return 1 if isinstance(error, SaveError) else 2
     except OSError as error:  # a path given on the command line: one line, no traceback
         where = f"{error.filename}: " if error.filename else ""
         reason = error.strerror or type(error).__name__

@@ -174,9 +174,6 @@ def _behaviour(recorder: Any) -> np.ndarray:
     return recorder.behaviour_block(0, recorder.count)
 
 
-ENGINE_PAIR = ("pytrees", "batched")
-
-
 def check_leaf(
     leaf_type: type[Leaf],
     scenario: str | Scenario = "gathering",
@@ -245,7 +242,7 @@ def _same(
     sim: Simulation,
     rows: list[str] | None,
     what: str,
-    engines: tuple[str, str] = ("pytrees", "batched"),
+    engines: tuple[str, str],
 ) -> None:
     """Raise at the first entry where ``a`` (``engines[0]``) and ``b`` (``engines[1]``) differ."""
     if np.array_equal(a, b, equal_nan=a.dtype.kind == "f"):
