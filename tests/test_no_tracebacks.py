@@ -82,11 +82,12 @@ def stubbed(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     import pyautonomousagent.experiments
     import pyautonomousagent.experiments.plot
     import pyautonomousagent.experiments.sensitivity
+    import pyautonomousagent.render.views
     import pyautonomousagent.studio
 
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(cli, "simulate", _accept)
-    monkeypatch.setattr(cli, "_write_views", _accept)
+    monkeypatch.setattr(pyautonomousagent.render.views, "write_views", _accept)
     monkeypatch.setattr(pyautonomousagent.bench, "measure", _accept)
     monkeypatch.setattr(pyautonomousagent.bench, "stress", _accept)
     monkeypatch.setattr(pyautonomousagent.experiments, "sweep", _accept)

@@ -667,10 +667,7 @@ def _check_agent_options(args: argparse.Namespace, scenario: Scenario) -> None:
     names = AgentNames(scenario.mission_type.agent_prefix, scenario.agents)
     agents = [("--follow", args.follow)] if args.follow is not None else []
     for flag, agent in [*agents, *(("--btlog", agent) for agent in args.btlog)]:
-        if agent not in names:
-            raise ScenarioError(
-                f"{flag}: no agent named {shown(agent)}; agents are {names[0]}..{names[-1]}"
-            )
+        _check_agent(flag, agent, names)
     if args.trace is None:
         return
     items = args.trace.split(",")
@@ -708,19 +705,6 @@ def _views(args: argparse.Namespace, progress: bool | None) -> Views:
     )
 
 
-def _write_views(
-    recorder: Recorder, scenario: Scenario, events: list[dict[str, Any]], out: Path, views: Views
-) -> Views:
-    """Write ``views`` of a run into ``out``; bad data in the run folder is one line."""
-    from pyautonomousagent.render.views import write_views
-
-    try:
-        return write_views(recorder, scenario, events, out, views)
-    except (KeyError, ValueError) as error:  # e.g. an agent not traced
-        message = error.args[0] if isinstance(error, KeyError) and error.args else str(error)
-        raise ScenarioError(str(message)) from None
-
-
 def replay_command(args: argparse.Namespace) -> int:
     """``pyaa replay``: replay.html (and Groot2 logs) of a run folder that pyaa run wrote.
 
@@ -751,7 +735,7 @@ def replay_command(args: argparse.Namespace) -> int:
 def _replay_into(folder: Path, out: Path, args: argparse.Namespace) -> list[Path]:
     """Write the replay page of ``folder`` as ``out`` and its logs beside it: drawn in a
     temporary folder there, then each renamed into place (no other file is touched)."""
-    from pyautonomousagent.render.views import Views
+    from pyautonomousagent.render.views import Views, write_views
     from pyautonomousagent.run_inputs import read_recorder, read_summary
 
     summary = read_summary(folder)  # every file of the run checked first (run_inputs)
@@ -761,13 +745,23 @@ def _replay_into(folder: Path, out: Path, args: argparse.Namespace) -> list[Path
     temp = hidden_folder(out, "tmp")
     try:
         events = summary.get("events", [])
-        views = _write_views(recorder, scenario, events, temp, Views(None, btlog=args.btlog))
+        views = write_views(recorder, scenario, events, temp, Views(None, btlog=args.btlog))
         placed = [out] + [out.parent / path.name for path in views.written[1:]]
         for path, target in zip(views.written, placed, strict=True):
             os.replace(path, target)
+    except (KeyError, ValueError) as error:  # what the run's data cannot draw: one line
+        message = error.args[0] if isinstance(error, KeyError) and error.args else str(error)
+        raise ScenarioError(str(message)) from None
     finally:
         shutil.rmtree(temp, ignore_errors=True)
     return placed
+
+
+def _check_agent(flag: str, agent: str, names: Sequence[str]) -> None:
+    """``agent``, given to option ``flag``, is one of ``names``, else one line naming them."""
+    if agent not in names:
+        known = f"agents are {names[0]}..{names[-1]}" if names else "the run has no agents"
+        raise ScenarioError(f"{flag}: no agent named {shown(agent)}; {known}")
 
 
 def _check_btlog(recorder: Recorder, agents: Sequence[str]) -> None:
@@ -776,9 +770,7 @@ def _check_btlog(recorder: Recorder, agents: Sequence[str]) -> None:
     names = list(recorder.names)
     traced = [names[i] for i in recorder.traced]
     for agent in agents:
-        if agent not in names:
-            known = f"agents are {names[0]}..{names[-1]}" if names else "the run has no agents"
-            raise ScenarioError(f"--btlog: no agent named {shown(agent)}; {known}")
+        _check_agent("--btlog", agent, names)
         if agent not in traced:
             raise ScenarioError(
                 f"--btlog: agent {agent!r} was not traced in this run (traced: "
@@ -934,13 +926,9 @@ def _tree_source(source: str) -> tuple[Document, str, dict[str, Any], Scenario |
 def _scenario_leaves(scenario: Scenario | None) -> list[str] | None:
     """The leaf types that fit ``scenario`` (for a tree written for it), or None for a bare
     tree file (no scenario)."""
-    if scenario is None:
-        return None
-    from pyautonomousagent.bt.leaf import LEAF_TYPES
     from pyautonomousagent.simulation.fit import fitting_leaves
 
-    fitting = fitting_leaves(scenario)
-    return [name for name, cls in LEAF_TYPES.items() if cls in fitting]
+    return None if scenario is None else [cls.type_name for cls in fitting_leaves(scenario)]
 
 
 def _all_defaults() -> dict[str, Any]:
