@@ -405,13 +405,9 @@ def parse_size_mb(text: str) -> float:
     """
     units = {"gb": 1024.0, "mb": 1.0, "kb": 1 / 1024}
     lowered = text.strip().lower()
-    factor = 1.0
-    for suffix, unit in units.items():
-        if lowered.endswith(suffix):
-            lowered, factor = lowered[: -len(suffix)].strip(), unit
-            break
+    suffix = next((s for s in units if lowered.endswith(s)), "")
     try:
-        size = float(lowered) * factor
+        size = float(lowered.removesuffix(suffix)) * units.get(suffix, 1.0)
     except ValueError:
         size = float("nan")
     if not math.isfinite(size) or size <= 0:

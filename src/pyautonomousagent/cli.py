@@ -12,7 +12,7 @@ import shutil
 import sys
 from collections import Counter, defaultdict
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from itertools import product
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
@@ -576,7 +576,7 @@ def run(args: argparse.Namespace) -> int:
         scenario = scenario.with_overrides(tree=_tree_option(args.tree))
     out = args.out or default_folder(scenario.name)
     check_target(out, overwrite=True, create=False)  # as claim_run first does, before set-up
-    with _saying_compiles(not args.quiet):
+    with nullcontext() if args.quiet else _saying_compiles():
         sim = Simulation.create(
             scenario,
             seed=args.seed,
@@ -592,13 +592,10 @@ def run(args: argparse.Namespace) -> int:
 
 
 @contextmanager
-def _saying_compiles(enabled: bool) -> Iterator[None]:
+def _saying_compiles() -> Iterator[None]:
     """While the body runs, show the ``pyautonomousagent.compile`` logger's lines (the
     compiled engine compiling, and how long it took) on stderr as ``pyaa: ...`` lines."""
     logger = logging.getLogger("pyautonomousagent.compile")
-    if not enabled:
-        yield
-        return
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter("pyaa: %(message)s"))
     level = logger.level
