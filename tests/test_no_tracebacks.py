@@ -203,7 +203,7 @@ def test_running_out_of_memory_is_one_line(monkeypatch, capsys) -> None:
     def exhausted(*args: Any, **kwargs: Any) -> None:
         raise MemoryError
 
-    monkeypatch.setattr(cli, "run", exhausted)
+    monkeypatch.setitem(cli.HANDLERS, "run", exhausted)
     assert cli.main(["run", "gathering"]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "out of memory" in err and "--engine batched" in err

@@ -366,8 +366,8 @@ def bench_command(args: argparse.Namespace) -> int:
     variants = _bench_variants(args, scenario, bench)
     _note_grown_worlds(scenario, args.agents)
     results = []
-    cases = product(range(args.repeat), args.record_every or [1], args.agents, engines, variants)
-    for _, every, agents, engine, (name, parameters) in cases:
+    cases = list(product(args.record_every or [1], args.agents, engines, variants))
+    for every, agents, engine, (name, parameters) in (c for _ in range(args.repeat) for c in cases):
         scaled = bool(short) and engine == engines[0] and short < args.iterations
         its = short if scaled else args.iterations
         case = bench.Case(

@@ -1,10 +1,6 @@
-"""Helpers for the lesson notebooks (notebooks/NN_*.ipynb): tick tables and exercise checks.
-
-- :func:`tick_table`: tick a small tree a few times and show every node's status per tick,
-  as a coloured table in a notebook (plain text elsewhere);
-- :func:`check_exercise`: the check cell at the end of each lesson. It works the answer out
-  itself (the answer is not in the notebook), prints a friendly verdict, and raises
-  :class:`ExerciseError` with a hint when the answer is missing or wrong.
+"""Helpers for the lesson notebooks (notebooks/NN_*.ipynb): :func:`tick_table`, every node's
+status per tick as a coloured table, and :func:`check_exercise`, the check cell at the end of
+each lesson, which works the answer out itself (the notebook holds no answer).
 """
 
 from __future__ import annotations

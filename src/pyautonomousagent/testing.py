@@ -222,8 +222,7 @@ def _same(
     """Raise at the first entry where ``a`` (``engines[0]``) and ``b`` (``engines[1]``) differ."""
     if np.array_equal(a, b, equal_nan=a.dtype.kind == "f"):
         return
-    diff = np.argwhere(~((a == b) | ((a != a) & (b != b))))[0]
-    row, agent = int(diff[0]), int(diff[1])
+    row, agent = (int(i) for i in np.argwhere(~((a == b) | ((a != a) & (b != b))))[0])
     if rows is not None:
         where = f"iteration {sim.world.iteration}, node {rows[row]!r}"
     else:
