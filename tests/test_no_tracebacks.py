@@ -82,11 +82,12 @@ def stubbed(monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     import pyautonomousagent.experiments
     import pyautonomousagent.experiments.plot
     import pyautonomousagent.experiments.sensitivity
+    import pyautonomousagent.render.views
     import pyautonomousagent.studio
 
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(cli, "simulate", _accept)
-    monkeypatch.setattr(cli, "_write_views", _accept)
+    monkeypatch.setattr(pyautonomousagent.render.views, "write_views", _accept)
     monkeypatch.setattr(pyautonomousagent.bench, "measure", _accept)
     monkeypatch.setattr(pyautonomousagent.bench, "stress", _accept)
     monkeypatch.setattr(pyautonomousagent.experiments, "sweep", _accept)
@@ -202,7 +203,7 @@ def test_running_out_of_memory_is_one_line(monkeypatch, capsys) -> None:
     def exhausted(*args: Any, **kwargs: Any) -> None:
         raise MemoryError
 
-    monkeypatch.setattr(cli, "run", exhausted)
+    monkeypatch.setitem(cli.HANDLERS, "run", exhausted)
     assert cli.main(["run", "gathering"]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "out of memory" in err and "--engine batched" in err

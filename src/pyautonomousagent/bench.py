@@ -1,13 +1,9 @@
 """``pyaa bench``: time and memory of scenario runs, engine against engine (paper Tables 4, 5).
 
-Each case (scenario, engine, agents, iterations, recording) runs in a fresh Python process,
-so its peak memory (maximum resident set size) is its own. The simulation is timed: set-up
-(Phase 1, building the engine, preallocating the records) and the loop (Phases 2-6), not
-Phase 7, as in the paper; each is also shown on its own. A case with ``save`` then writes
-the run folder as ``pyaa run`` does (into a temporary folder) and times writing the data
-and the views (animation, replay) separately. The table's speed-up is the first engine's
-time per agent-iteration over each other engine's, for the same agents, measured in the
-same run.
+Each case runs in a fresh Python process, so its peak memory (maximum resident set size)
+is its own. Timed: set-up (Phase 1) and the loop (Phases 2-6), not Phase 7, as in the paper;
+a case with ``save`` also times writing the run folder as ``pyaa run`` does. The speed-up is
+the first engine's time per agent-iteration over each other engine's, measured in one run.
 """
 
 from __future__ import annotations
@@ -95,13 +91,9 @@ class Result:
     write: float | None = None
     views: float | None = None
     write_thread: float | None = None
-    #: The GPU engine's parts (seconds; ``engines.gpu.TIMINGS``): "compile" (in set-up),
-    #: "kernel", "copy_back" and "state" (in the loop, partly overlapped), and "write" (the
-    #: data written after the loop, as ``write``; None without ``case.save``); None for the
-    #: other engines.
+    #: The GPU engine's parts (seconds; ``engines.gpu.TIMINGS``, and "write" as ``write``);
+    #: None for the other engines, as is its bytes of device memory per drone-iteration.
     gpu: dict[str, float | None] | None = None
-    #: The GPU engine's bytes of device memory per drone-iteration
-    #: (``GpuEngine.bytes_per_drone_iteration``); None for the other engines.
     bytes_per_drone_iteration: float | None = None
 
     @property
@@ -112,9 +104,8 @@ class Result:
     @property
     def per_agent_iteration(self) -> float | None:
         """Loop seconds per agent-iteration (set-up excluded)."""
-        if self.seconds is None:
-            return None
-        return (self.seconds - self.setup) / (self.case.agents * self.case.iterations)
+        loop = self.loop
+        return None if loop is None else loop / (self.case.agents * self.case.iterations)
 
     def bandwidth_fraction(self, gbps: float) -> float | None:
         """The share of ``gbps`` (GB/s, e.g. the card's measured copy bandwidth) that the
@@ -160,9 +151,7 @@ def run_case_here(case: Case) -> dict[str, Any]:
 
 def case_scenario(case: Case) -> Scenario:
     """The scenario ``case`` runs: its agents, iterations (enough for ``full_iterations``)
-    and parameters, in the world the mission needs for that many agents
-    (:meth:`~pyautonomousagent.simulation.Mission.world_for`: crowded's lattice of
-    positions grows with the swarm; the bench has no option for the world's size)."""
+    and parameters, in the world the mission needs for that many agents (``world_for``)."""
     from pyautonomousagent.scenarios import load
 
     full = max(case.full_iterations or case.iterations, case.iterations)
@@ -185,11 +174,9 @@ def gpu_figures(sim: Simulation, write: float | None) -> dict[str, Any]:
 
 
 def saved_timings(sim: Simulation, iterations: int, start: float) -> dict[str, float]:
-    """Run ``iterations`` of ``sim`` and save it as ``pyaa run`` does (the data written
-    while the loop runs, then the animation and replay) into a temporary folder, removed
-    afterwards. Seconds from ``start`` to the loop's end ("seconds"), peak memory (MB) at
-    the loop's end, and the seconds of writing the data after the loop ("write"), of the
-    writing thread (CPU seconds, "write_thread") and of the views ("views")."""
+    """Run ``iterations`` of ``sim`` and save it as ``pyaa run`` does into a temporary
+    folder: seconds from ``start`` to the loop's end, peak memory (MB) then, and the seconds
+    of writing the data after the loop, of the writing thread (CPU) and of the views."""
     from pyautonomousagent.runs import save_run, streaming
 
     with tempfile.TemporaryDirectory(prefix="pyaa-bench-") as folder:
@@ -216,11 +203,8 @@ def peak_rss_mb(maxrss: int | None = None, system: str = sys.platform) -> float:
 
 
 def measure(case: Case, timeout: float | None = None, budget_mb: float | None = None) -> Result:
-    """Run ``case`` in a fresh process (so its peak memory is its own).
-
-    With ``budget_mb``, the process is stopped as soon as its peak memory passes the budget
-    (read from /proc where there is one), and the result says so.
-    """
+    """Run ``case`` in a fresh process (so its peak memory is its own); with ``budget_mb``,
+    stop it as soon as its peak memory (read from /proc) passes the budget."""
     command = [sys.executable, "-m", "pyautonomousagent.bench", json.dumps(asdict(case))]
     started = time.perf_counter()
     with subprocess.Popen(
@@ -240,18 +224,7 @@ def measure(case: Case, timeout: float | None = None, budget_mb: float | None = 
     if child.returncode != 0:
         lines = err.strip().splitlines()
         return Result(case, None, None, lines[-1] if lines else f"exit code {child.returncode}")
-    figures = json.loads(out.strip().splitlines()[-1])
-    return Result(
-        case,
-        figures["seconds"],
-        figures["peak_mb"],
-        setup=figures["setup"],
-        write=figures.get("write"),
-        views=figures.get("views"),
-        write_thread=figures.get("write_thread"),
-        gpu=figures.get("gpu"),
-        bytes_per_drone_iteration=figures.get("bytes_per_drone_iteration"),
-    )
+    return Result(case, **json.loads(out.strip().splitlines()[-1]))  # run_case_here's figures
 
 
 def _peak_mb(pid: int) -> float | None:
@@ -282,13 +255,9 @@ def speedups(results: Sequence[Result], reference: str) -> dict[Case, float]:
 
 
 def table(results: Sequence[Result], reference: str) -> str:
-    """The results as a text table like the paper's Tables 4 and 5.
-
-    Speed-ups are per agent-iteration against ``reference``; a time marked ``~`` was
-    scaled from a shorter run of the same case. The last columns split the time: set-up,
-    loop (as measured, not scaled), and writing the data and the views (``-`` when the case
-    did not save).
-    """
+    """The results as a text table like the paper's Tables 4 and 5: speed-ups per
+    agent-iteration against ``reference`` (``~``: a time scaled from a shorter run), then
+    set-up, loop (not scaled), writing the data and the views (``-``: not saved)."""
     ratios = speedups(results, reference)
     head = (
         f"{'agents':>8} {'engine':>8} {'record':>7} {'seconds':>10} {'s/agent-it':>11} "
@@ -403,13 +372,10 @@ def stress(
     report: Callable[[Result], None] = lambda r: None,
     full_iterations: int | None = None,
 ) -> tuple[int, list[Result]]:
-    """The largest swarm whose run stays within ``budget_mb`` of peak memory.
-
-    Each probe runs ``iterations`` iterations of a run whose recording is sized for
-    ``full_iterations`` (memory is preallocated, so the peak comes in the first iterations).
-    Doubles the agents from ``start`` until a run exceeds the budget (or fails), then
-    bisects to within 2 %. Returns the largest fitting count and every probe.
-    """
+    """The largest swarm whose run stays within ``budget_mb`` of peak memory, and every
+    probe: each runs ``iterations`` of a run whose (preallocated) recording is sized for
+    ``full_iterations``; the agents double from ``start`` until a probe exceeds the budget
+    (or fails), then a bisection narrows them to within 2 %."""
     probes: list[Result] = []
 
     def fits(agents: int) -> bool:
@@ -439,13 +405,9 @@ def parse_size_mb(text: str) -> float:
     """
     units = {"gb": 1024.0, "mb": 1.0, "kb": 1 / 1024}
     lowered = text.strip().lower()
-    factor = 1.0
-    for suffix, unit in units.items():
-        if lowered.endswith(suffix):
-            lowered, factor = lowered[: -len(suffix)].strip(), unit
-            break
+    suffix = next((s for s in units if lowered.endswith(s)), "")
     try:
-        size = float(lowered) * factor
+        size = float(lowered.removesuffix(suffix)) * units.get(suffix, 1.0)
     except ValueError:
         size = float("nan")
     if not math.isfinite(size) or size <= 0:

@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import functools
 import json
 import logging
 import os
 import shutil
 import sys
-from collections import Counter
-from collections.abc import Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections import Counter, defaultdict
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager, nullcontext
+from itertools import product
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
@@ -57,7 +59,8 @@ if TYPE_CHECKING:
 #: Errors that mean bad input: shown as one line, no traceback (TreeFileError is a TreeError;
 #: ScenarioError and the runs' RunError are InputErrors).
 USER_ERRORS = (InputError, TreeError, LeafError)
-TREE_FORMATS = ("text", "png", "svg", "dot", "xml", "yaml")
+#: A subcommand: the parsed arguments -> the exit status.
+Command = Callable[[argparse.Namespace], int]
 
 
 class _Parser(argparse.ArgumentParser):
@@ -67,132 +70,229 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+def world_size(text: str) -> list[float]:
+    """``--world``: ``"WIDTH,HEIGHT"`` -> [width, height] (world units; the scenario checks
+    that they are finite and above 0)."""
+    parts = text.replace("x", ",").split(",")
+    try:
+        size = [float(part) for part in parts]
+    except ValueError:
+        size = []
+    if len(size) != 2:
+        raise argparse.ArgumentTypeError(f"WIDTH,HEIGHT in world units, e.g. 500,400; got {text!r}")
+    return size
+
+
+def _int_list(text: str) -> list[int]:
+    try:
+        values = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        message = f"expected whole numbers separated by commas, got {text!r}"
+        raise argparse.ArgumentTypeError(message) from None
+    if not values or min(values) < 1:
+        raise argparse.ArgumentTypeError(f"expected whole numbers >= 1, got {text!r}")
+    return values
+
+
+#: The converters that :data:`COMMANDS` names as ``type=NAME``.
+TYPES: dict[str, Callable[[str], Any]] = {
+    "int": int, "float": float, "Path": Path, "world_size": world_size, "int_list": _int_list,
+}  # fmt: skip
+SCENARIO = "a registered scenario name or a scenario .yaml file"
+ENGINE_OPTION = "--engine choices=auto,ENGINES"
+RUN_DIR = "run_dir type=Path metavar=RUN_DIR"
+
+#: pyaa's subcommands, in the order ``pyaa --help`` lists them: "" -> the subcommand's help,
+#: then each argument -> its help. An argument is its flag (or a positional's name) and
+#: add_argument's settings as KEY=VALUE: ``type`` names one of :data:`TYPES` (a default is
+#: converted by it), ``choices`` are comma-separated (ENGINES: the registered engines),
+#: ``action=append`` starts from [], and ``group=NAME`` puts the options of one NAME into
+#: one mutually exclusive group.
+COMMANDS: dict[str, dict[str, str]] = {
+    "scenarios": {
+        "": "list the registered scenarios, or show one with its parameters",
+        "name nargs=?": "a scenario name or .yaml file: its mission, world and parameters",
+    },
+    "run": {
+        "": "run a scenario and write its data and animation",
+        "scenario": SCENARIO,
+        "--agents type=int": "number of agents (default: the scenario's)",
+        "--iterations type=int": "iterations to simulate",
+        "--world type=world_size metavar=WIDTH,HEIGHT": "the world's size in world units, e.g. "
+        "500,400 (default: the scenario's)",
+        "--seed type=int default=0": "seed of the run's random generator",
+        f"{ENGINE_OPTION} default=auto": "decision engine (default auto: compiled for long runs "
+        "and trees compiled before, pytrees for hand-written leaves, else batched)",
+        "--out type=Path": "output folder (default: runs/SCENARIO)",
+        "--overwrite action=store_true": "replace the earlier run in the output folder (by "
+        "default it is kept and the run refused)",
+        "--format choices=parquet,csv default=parquet": "data format",
+        "--record-every type=int default=1 metavar=K": "record every K-th iteration (default: "
+        "1, all; longer than the run: the initial and final state)",
+        "--no-gif action=store_true": "skip the animation (Phase 7)",
+        "--frame-every type=int": "iterations between animation frames",
+        "--set action=append metavar=KEY=VALUE": "override a scenario parameter, e.g. --set "
+        "low_energy_threshold=30",
+        "--quiet action=store_true": "no progress bar or summary",
+        "--tree metavar=FILE|NAME": "run this tree instead: a tree file (.xml, .yaml) or a "
+        "built-in tree (gathering, patrol)",
+        "--trace metavar=AGENTS": "agents whose node statuses are recorded: names "
+        "(drone2,drone7), a count, all, or 0 (default: all of a swarm of at most 10, else the "
+        "first 10)",
+        "--video choices=gif,mp4 default=gif": "animation format (default gif)",
+        "--follow metavar=AGENT": "the agent the animation's panel shows (default: first)",
+        "--inset action=store_true": "draw the followed agent's tree beside the map",
+        "--no-replay action=store_true": "do not write replay.html",
+        "--btlog action=append metavar=AGENT": "also write AGENT.btlog, the agent's trace as a "
+        "Groot2 log (repeatable)",
+    },
+    "leaves": {
+        "": "list the leaves a scenario's tree may use, with their docs and ports",
+        "scenario": SCENARIO,
+    },
+    "bench": {
+        "": "time and peak memory per engine (paper Tables 4, 5)",
+        "scenario": "a registered scenario name",
+        "--agents type=int_list": "agent counts, e.g. 1,10,100,1000 (default: those for the "
+        "paper's tables, else the scenario's own)",
+        "--iterations type=int": "iterations per run (default: 4000 for the paper's tables, else "
+        "the scenario's)",
+        "--save action=store_true": "also write each run's data and views as pyaa run does (to "
+        "a temporary folder) and time the writing and the views",
+        "--engines": "engines, comma-separated; the first is the reference of the speed-ups "
+        "(default: pytrees,batched; pyfly,batched for the X8)",
+        "--record-every type=int_list metavar=K[,K...]": "recording decimation(s) to measure, "
+        "e.g. 1,100 (default 1)",
+        "--reference-iterations type=int metavar=K": "run the reference engine K iterations "
+        "only and scale its time (marked ~)",
+        "--compare action=append metavar=NAME:KEY=VALUE[,KEY=VALUE...]": "measure every case in "
+        "variants with these parameter values (repeat the option; NAME: alone is the scenario "
+        "as it is): the variants alternate (A B A B ...) --repeat times; the table gives each "
+        "one's best loop time and peak memory and their ratios to the first variant's",
+        "--repeat type=int default=1 metavar=R": "measure every case R times",
+        "--bandwidth type=float metavar=GBPS": "the GPU's measured memory bandwidth in GB/s "
+        "(scripts/gpu_figures.py bandwidth): the GPU cases also give the share of it their "
+        "bytes per drone-iteration make",
+        "--json action=store_true": "print JSON instead of a table",
+        "--timeout type=float": "give up on a case after this many seconds",
+        "--stress action=store_true": "find the largest swarm within --memory-budget (per engine)",
+        "--memory-budget default=5.12GB": "peak memory allowed, e.g. 5.12GB",
+        "--stress-start type=int default=1000 metavar=N": "agents of the first stress probe",
+        "--stress-iterations type=int default=20 metavar=K": "iterations of each stress probe "
+        "(memory is preallocated)",
+    },
+    "replay": {
+        "": "write replay.html (and Groot2 logs) of a finished run",
+        RUN_DIR: "a folder pyaa run wrote",
+        "--out type=Path": "the page to write (default RUN_DIR/replay.html)",
+        "--btlog action=append metavar=AGENT": "also write RUN_DIR/AGENT.btlog for Groot2 (a "
+        "traced agent; repeatable)",
+    },
+    "verify": {
+        "": "check a run folder against its run.json (exit 0, or 1 naming what differs)",
+        RUN_DIR: "a folder pyaa run wrote",
+    },
+    "sweep": {
+        "": "run a parameter sweep with seeds, one row per run",
+        "experiment": "an experiment .yaml file, or a scenario to sweep",
+        "--vary action=append metavar=NAME=V1,V2|FROM:TO:STEP": "a parameter to vary (several: "
+        "a grid), e.g. refuel_rate=1:3:1",
+        "--design choices=grid,lhs,sobol,morris": "grid (default: every combination of --vary) "
+        "or a sampled design over bounds (--vary NAME=LOW:HIGH)",
+        "--samples type=int metavar=N": "a sampled design's N (sobol: a power of 2)",
+        "--design-seed type=int": "the sampled design's seed (default 0)",
+        "--seeds type=int": "seeds 0..N-1 per point (default 1)",
+        "--iterations type=int": "iterations per run",
+        "--agents type=int": "agents per run",
+        "--set action=append metavar=KEY=VALUE": "a fixed override for every run",
+        "--measure action=append metavar=NAME|NAME=EXPR": "a registered measure or "
+        "NAME=expression (default: all registered)",
+        ENGINE_OPTION: "decision engine",
+        "--record-every type=int metavar=K": "record every K-th iteration",
+        "--every type=int metavar=K": "also keep each measure every K iterations per run "
+        "(OUT/timeseries.parquet)",
+        "--out type=Path": "sweep folder (default: runs/sweeps/NAME)",
+        "--workers type=int": "local processes (default: all cores)",
+        "--dask metavar=ADDRESS|local group=where": "run on a Dask cluster (scheduler address) "
+        "or a local Dask cluster",
+        "--serial action=store_true group=where": "run in this process, one by one",
+        "--resume action=store_true": "continue the sweep in --out",
+        "--save-runs action=store_true": "also write each run's data under OUT/runs "
+        "(hive-partitioned)",
+        "--quiet action=store_true": "no progress bar or summary",
+    },
+    "plot": {
+        "": "plot a measure of a sweep against a parameter",
+        "sweep type=Path": "a sweep folder (or its results.parquet)",
+        "--measure required=true": "the measure (a results column)",
+        "--x": "the parameter on the horizontal axis (not with --over-time)",
+        "--by": "a second parameter: one line per value",
+        "--over-time action=store_true": "the measure over the iterations, one line per value "
+        "of --by (or the only varied parameter), from a sweep run with --every",
+        "--interval default=ci95 choices=ci95,sd,range,none": "the band: 95%% CI of the mean "
+        "(default), sd, min-max, none",
+        "--out type=Path": "picture file, .png or .svg",
+    },
+    "measures": {"": "list the registered measures"},
+    "analyse": {
+        "": "Sobol or Morris sensitivity indices of a sweep run with such a design",
+        "sweep type=Path": "a sweep folder (--design sobol or morris)",
+        "--measure action=append metavar=M": "a measure to analyse (several: one each; default: "
+        "every measure of the sweep)",
+        "--out type=Path": "picture file, .png or .svg (default SWEEP/sensitivity.png)",
+    },
+    "studio": {
+        "": "build a tree from blocks in the browser, run it live",
+        "scenario nargs=? default=gathering": f"{SCENARIO} (default: gathering)",
+        "--port type=int default=8765": "port (default 8765; 0: any)",
+        "--host default=127.0.0.1": "address (default 127.0.0.1)",
+        "--no-browser action=store_true": "do not open a browser",
+    },
+    "tree": {
+        "": "print, draw or convert a behaviour tree",
+        "source metavar=FILE_OR_SCENARIO": "a tree file (.xml, .yaml, .yml), a registered "
+        "scenario or a scenario .yaml file",
+        "--format choices=text,png,svg,dot,xml,yaml default=text": "text (default), a png/svg "
+        "picture, Graphviz dot, or a tree file (xml, yaml)",
+        "--out type=Path": "write to this file (pictures: default NAME.png)",
+        "--style choices=paper,py_trees default=paper": "text format: the paper's symbols, or "
+        "py_trees' own drawing",
+    },
+}
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="pyaa", description="Model autonomous agents with behaviour trees.")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    scenarios = sub.add_parser(
-        "scenarios", help="list the registered scenarios, or show one with its parameters"
-    )
-    scenarios.add_argument(
-        "name", nargs="?", help="a scenario name or .yaml file: its mission, world and parameters"
-    )
-    run = sub.add_parser("run", help="run a scenario and write its data and animation")
-    run.add_argument("scenario", help="a registered scenario name or a scenario .yaml file")
-    run.add_argument("--agents", type=int, help="number of agents (default: the scenario's)")
-    run.add_argument("--iterations", type=int, help="iterations to simulate")
-    run.add_argument(
-        "--world", type=world_size, metavar="WIDTH,HEIGHT",
-        help="the world's size in world units, e.g. 500,400 (default: the scenario's)",
-    )  # fmt: skip
-    run.add_argument("--seed", type=int, default=0, help="seed of the run's random generator")
-    run.add_argument(
-        "--engine",
-        choices=["auto", *ENGINES],
-        default="auto",
-        help="decision engine (default auto: compiled for long runs and trees compiled "
-        "before, pytrees for hand-written leaves, else batched)",
-    )
-    run.add_argument("--out", type=Path, help="output folder (default: runs/SCENARIO)")
-    run.add_argument(
-        "--overwrite",
-        action="store_true",
-        help="replace the earlier run in the output folder (by default it is kept and the "
-        "run refused)",
-    )
-    run.add_argument("--format", choices=["parquet", "csv"], default="parquet", help="data format")
-    run.add_argument(
-        "--record-every",
-        type=int,
-        default=1,
-        metavar="K",
-        help="record every K-th iteration (default: 1, all; longer than the run: the initial "
-        "and final state)",
-    )
-    run.add_argument("--no-gif", action="store_true", help="skip the animation (Phase 7)")
-    run.add_argument("--frame-every", type=int, help="iterations between animation frames")
-    run.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a scenario parameter, e.g. --set low_energy_threshold=30",
-    )
-    run.add_argument("--quiet", action="store_true", help="no progress bar or summary")
-    run.add_argument(
-        "--tree",
-        metavar="FILE|NAME",
-        help="run this tree instead: a tree file (.xml, .yaml) or a built-in tree "
-        "(gathering, patrol)",
-    )
-    _add_view_options(run)
-    leaves = sub.add_parser(
-        "leaves", help="list the leaves a scenario's tree may use, with their docs and ports"
-    )
-    leaves.add_argument("scenario", help="a registered scenario name or a scenario .yaml file")
-    _add_bench(sub)
-    _add_replay(sub)
-    _add_verify(sub)
-    _add_experiments(sub)
-    _add_studio(sub)
-    tree = sub.add_parser("tree", help="print, draw or convert a behaviour tree")
-    tree.add_argument(
-        "source",
-        metavar="FILE_OR_SCENARIO",
-        help="a tree file (.xml, .yaml, .yml), a registered scenario or a scenario .yaml file",
-    )
-    tree.add_argument(
-        "--format",
-        choices=list(TREE_FORMATS),
-        default="text",
-        help="text (default), a png/svg picture, Graphviz dot, or a tree file (xml, yaml)",
-    )
-    tree.add_argument("--out", type=Path, help="write to this file (pictures: default NAME.png)")
-    tree.add_argument(
-        "--style",
-        choices=["paper", "py_trees"],
-        default="paper",
-        help="text format: the paper's symbols, or py_trees' own drawing",
-    )
+    for command, table in COMMANDS.items():
+        _add_arguments(sub.add_parser(command, help=table[""]), table)
     return parser
 
 
-def _add_view_options(run: argparse.ArgumentParser) -> None:
-    """``pyaa run``'s options for traces, the animation, the replay and Groot2 logs."""
-    run.add_argument(
-        "--trace",
-        metavar="AGENTS",
-        help="agents whose node statuses are recorded: names (drone2,drone7), a count, all, "
-        "or 0 (default: all of a swarm of at most 10, else the first 10)",
-    )
-    run.add_argument(
-        "--video", choices=["gif", "mp4"], default="gif", help="animation format (default gif)"
-    )
-    run.add_argument(
-        "--follow", metavar="AGENT", help="the agent the animation's panel shows (default: first)"
-    )
-    run.add_argument(
-        "--inset", action="store_true", help="draw the followed agent's tree beside the map"
-    )
-    run.add_argument("--no-replay", action="store_true", help="do not write replay.html")
-    run.add_argument(
-        "--btlog",
-        action="append",
-        default=[],
-        metavar="AGENT",
-        help="also write AGENT.btlog, the agent's trace as a Groot2 log (repeatable)",
-    )
+def _add_arguments(parser: argparse.ArgumentParser, table: Mapping[str, str]) -> None:
+    """Add the arguments of one of :data:`COMMANDS`' tables (all but its "" entry)."""
+    groups: defaultdict[str, Any] = defaultdict(parser.add_mutually_exclusive_group)
+    for spec, text in list(table.items())[1:]:
+        name, *settings = spec.split()
+        kwargs: dict[str, Any] = dict(setting.split("=", 1) for setting in settings)
+        if "type" in kwargs:
+            kwargs["type"] = TYPES[kwargs["type"]]
+            if "default" in kwargs:
+                kwargs["default"] = kwargs["type"](kwargs["default"])
+        if "choices" in kwargs:
+            kwargs["choices"] = kwargs["choices"].replace("ENGINES", ",".join(ENGINES)).split(",")
+        if kwargs.get("action") == "append":
+            kwargs["default"] = []
+        if "required" in kwargs:
+            kwargs["required"] = kwargs["required"] == "true"
+        target = groups[kwargs.pop("group")] if "group" in kwargs else parser
+        target.add_argument(name, help=text, **kwargs)
 
 
-def _add_verify(sub: Any) -> None:
-    verify = sub.add_parser(
-        "verify", help="check a run folder against its run.json (exit 0, or 1 naming what differs)"
-    )
-    verify.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="a folder pyaa run wrote")
-
-
-def verify_command(folder: Path) -> int:
+def verify_command(args: argparse.Namespace) -> int:
     """``pyaa verify``: one line; exit 0 where every file ``run.json`` lists is there with its
     size and hash (:func:`pyautonomousagent.runs.verify`), else 1 naming what differs."""
+    folder: Path = args.run_dir
     try:
         summary = verify(folder)
     except RunError as error:
@@ -206,17 +306,6 @@ def verify_command(folder: Path) -> int:
         "match run.json"
     )
     return 0
-
-
-def _add_studio(sub: Any) -> None:
-    studio = sub.add_parser("studio", help="build a tree from blocks in the browser, run it live")
-    studio.add_argument(
-        "scenario", nargs="?", default="gathering",
-        help="a registered scenario name or a scenario .yaml file (default: gathering)",
-    )  # fmt: skip
-    studio.add_argument("--port", type=int, default=8765, help="port (default 8765; 0: any)")
-    studio.add_argument("--host", default="127.0.0.1", help="address (default 127.0.0.1)")
-    studio.add_argument("--no-browser", action="store_true", help="do not open a browser")
 
 
 def studio_command(args: argparse.Namespace) -> int:
@@ -241,110 +330,6 @@ def studio_command(args: argparse.Namespace) -> int:
     return 0
 
 
-def _add_replay(sub: Any) -> None:
-    replay = sub.add_parser("replay", help="write replay.html (and Groot2 logs) of a finished run")
-    replay.add_argument("run_dir", type=Path, metavar="RUN_DIR", help="a folder pyaa run wrote")
-    replay.add_argument("--out", type=Path, help="the page to write (default RUN_DIR/replay.html)")
-    replay.add_argument(
-        "--btlog",
-        action="append",
-        default=[],
-        metavar="AGENT",
-        help="also write RUN_DIR/AGENT.btlog for Groot2 (a traced agent; repeatable)",
-    )
-
-
-def _int_list(text: str) -> list[int]:
-    try:
-        values = [int(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        message = f"expected whole numbers separated by commas, got {text!r}"
-        raise argparse.ArgumentTypeError(message) from None
-    if not values or min(values) < 1:
-        raise argparse.ArgumentTypeError(f"expected whole numbers >= 1, got {text!r}")
-    return values
-
-
-def _add_bench(sub: Any) -> None:
-    bench = sub.add_parser("bench", help="time and peak memory per engine (paper Tables 4, 5)")
-    bench.add_argument("scenario", help="a registered scenario name")
-    bench.add_argument(
-        "--agents",
-        type=_int_list,
-        help="agent counts, e.g. 1,10,100,1000 (default: those for the paper's tables, "
-        "else the scenario's own)",
-    )
-    bench.add_argument(
-        "--iterations",
-        type=int,
-        help="iterations per run (default: 4000 for the paper's tables, else the scenario's)",
-    )
-    bench.add_argument(
-        "--save",
-        action="store_true",
-        help="also write each run's data and views as pyaa run does (to a temporary folder) "
-        "and time the writing and the views",
-    )
-    bench.add_argument(
-        "--engines",
-        help="engines, comma-separated; the first is the reference "
-        "of the speed-ups (default: pytrees,batched; pyfly,batched for the X8)",
-    )
-    bench.add_argument(
-        "--record-every",
-        type=_int_list,
-        metavar="K[,K...]",
-        help="recording decimation(s) to measure, e.g. 1,100 (default 1)",
-    )
-    bench.add_argument(
-        "--reference-iterations",
-        type=int,
-        metavar="K",
-        help="run the reference engine K iterations only and scale its time (marked ~)",
-    )
-    bench.add_argument(
-        "--compare",
-        action="append",
-        metavar="NAME:KEY=VALUE[,KEY=VALUE...]",
-        help="measure every case in variants with these parameter values (repeat the option; "
-        "NAME: alone is the scenario as it is): the variants alternate (A B A B ...) "
-        "--repeat times; the table gives each one's best loop time and peak memory and their "
-        "ratios to the first variant's",
-    )
-    bench.add_argument(
-        "--repeat", type=int, default=1, metavar="R", help="measure every case R times"
-    )
-    bench.add_argument(
-        "--bandwidth",
-        type=float,
-        metavar="GBPS",
-        help="the GPU's measured memory bandwidth in GB/s (scripts/gpu_figures.py bandwidth): "
-        "the GPU cases also give the share of it their bytes per drone-iteration make",
-    )
-    bench.add_argument("--json", action="store_true", help="print JSON instead of a table")
-    bench.add_argument("--timeout", type=float, help="give up on a case after this many seconds")
-    bench.add_argument(
-        "--stress",
-        action="store_true",
-        help="find the largest swarm within --memory-budget (per engine)",
-    )
-    bench.add_argument("--memory-budget", default="5.12GB", help="peak memory allowed, e.g. 5.12GB")
-    bench.add_argument(
-        "--stress-start",
-        type=int,
-        default=1000,
-        metavar="N",
-        help="agents of the first stress probe",
-    )
-    bench.add_argument(
-        "--stress-iterations",
-        type=int,
-        default=20,
-        metavar="K",
-        help="iterations of each stress probe (memory is preallocated)",
-    )
-
-
 def _bench_engines(args: argparse.Namespace, scenario: Scenario) -> list[str]:
     from pyautonomousagent.bench import BENCH_ENGINES
 
@@ -366,11 +351,7 @@ def bench_command(args: argparse.Namespace) -> int:
     scenario = load(args.scenario)
     engines = _bench_engines(args, scenario)
     _bench_defaults(args, scenario, bench.PAPER_TABLES)
-    for option in ("iterations", "reference_iterations", "stress_iterations", "stress_start"):
-        value = getattr(args, option)
-        if value is not None and value < 1:
-            flag = "--" + option.replace("_", "-")
-            raise ScenarioError(f"{flag} must be a whole number >= 1, got {value}")
+    _check_whole(args, "iterations", "reference_iterations", "stress_iterations", "stress_start")
     if args.timeout is not None and not (finite(args.timeout) and args.timeout > 0):
         raise ScenarioError(f"--timeout must be a number of seconds > 0, got {args.timeout}")
     if args.bandwidth is not None and not (finite(args.bandwidth) and args.bandwidth > 0):
@@ -385,24 +366,21 @@ def bench_command(args: argparse.Namespace) -> int:
     variants = _bench_variants(args, scenario, bench)
     _note_grown_worlds(scenario, args.agents)
     results = []
-    for _ in range(args.repeat):
-        for every in args.record_every or [1]:
-            for agents in args.agents:
-                for engine in engines:
-                    for name, parameters in variants:
-                        scaled = bool(short) and engine == engines[0] and short < args.iterations
-                        its = short if scaled else args.iterations
-                        case = bench.Case(
-                            args.scenario, engine, agents, its, every, args.iterations, scaled,
-                            args.save, name, parameters,
-                        )  # fmt: skip
-                        print(
-                            f"measuring {engine}{' ' + name if name else ''} with {agents} "
-                            f"agents x {its} iterations, record every {every} ...",
-                            file=sys.stderr,
-                            flush=True,
-                        )
-                        results.append(bench.measure(case, args.timeout))
+    cases = list(product(args.record_every or [1], args.agents, engines, variants))
+    for every, agents, engine, (name, parameters) in (c for _ in range(args.repeat) for c in cases):
+        scaled = bool(short) and engine == engines[0] and short < args.iterations
+        its = short if scaled else args.iterations
+        case = bench.Case(
+            args.scenario, engine, agents, its, every, args.iterations, scaled, args.save, name,
+            parameters,
+        )  # fmt: skip
+        print(
+            f"measuring {engine}{' ' + name if name else ''} with {agents} agents x {its} "
+            f"iterations, record every {every} ...",
+            file=sys.stderr,
+            flush=True,
+        )
+        results.append(bench.measure(case, args.timeout))
     if args.compare and not args.json:
         print(bench.compare_table(results))
         return 0
@@ -462,8 +440,7 @@ def _bench_variants(
 ) -> list[tuple[str, str]]:
     """``--compare`` as (name, "KEY=VALUE,...") pairs, each checked against the scenario
     (one variant, the scenario as it is, without the option); ``--repeat`` checked."""
-    if args.repeat < 1:
-        raise ScenarioError(f"--repeat must be a whole number >= 1, got {args.repeat}")
+    _check_whole(args, "repeat")
     variants = []
     for text in args.compare or [":"]:
         name, sep, parameters = text.partition(":")
@@ -530,19 +507,6 @@ OPTIONS = {"agents": "--agents", "iterations": "--iterations", "frame_every": "-
            "tree": "--tree", "size": "--world", "world": "--world"}  # fmt: skip
 
 
-def world_size(text: str) -> list[float]:
-    """``--world``: ``"WIDTH,HEIGHT"`` -> [width, height] (world units; the scenario checks
-    that they are finite and above 0)."""
-    parts = text.replace("x", ",").split(",")
-    try:
-        size = [float(part) for part in parts]
-    except ValueError:
-        size = []
-    if len(size) != 2:
-        raise argparse.ArgumentTypeError(f"WIDTH,HEIGHT in world units, e.g. 500,400; got {text!r}")
-    return size
-
-
 def _parse_overrides(pairs: list[str], known: list[str] | None = None) -> dict[str, Any]:
     """``["a=1", "b=x"]`` -> ``{"a": 1, "b": "x"}`` (values read as YAML scalars); names
     are checked against ``known`` when given."""
@@ -554,11 +518,9 @@ def _parse_overrides(pairs: list[str], known: list[str] | None = None) -> dict[s
         key = key.strip()
         if not sep or not key or not text.strip():
             raise ScenarioError(f"--set needs KEY=VALUE with a value, got {shown(pair)}")
-        if known is None:
-            pass
-        elif key in OPTIONS:
+        if known is not None and key in OPTIONS:
             raise ScenarioError(f"--set {key}: use the option {OPTIONS[key]} {text.strip()}")
-        elif key not in known:
+        if known is not None and key not in known:
             close = difflib.get_close_matches(key, known, n=1)
             hint = f"did you mean {close[0]!r}? " if close else ""
             raise ScenarioError(
@@ -571,20 +533,23 @@ def _parse_overrides(pairs: list[str], known: list[str] | None = None) -> dict[s
     return values
 
 
-def _scenario(args: argparse.Namespace) -> Scenario:
+def _scenario(args: argparse.Namespace) -> tuple[Scenario, dict[str, Any]]:
+    """The scenario ``pyaa run`` runs, and its overrides (``--set``)."""
     scenario = load(args.scenario)
     overrides = _parse_overrides(args.set, list(to_mapping(scenario)["parameters"]))
     return scenario.with_overrides(
         agents=args.agents, iterations=args.iterations, frame_every=args.frame_every,
         size=args.world, **overrides,
-    )  # fmt: skip
+    ), overrides  # fmt: skip
 
 
-def _check_run_options(args: argparse.Namespace) -> None:
-    if args.record_every < 1:
-        raise ScenarioError(f"--record-every must be a whole number >= 1, got {args.record_every}")
-    if args.seed < 0:
-        raise ScenarioError(f"--seed must be a whole number >= 0, got {args.seed}")
+def _check_whole(args: argparse.Namespace, *options: str, minimum: int = 1) -> None:
+    """Each of ``options`` given is a whole number >= ``minimum``, else one line naming it."""
+    for option in options:
+        value = getattr(args, option)
+        if value is not None and value < minimum:
+            flag = "--" + option.replace("_", "-")
+            raise ScenarioError(f"{flag} must be a whole number >= {minimum}, got {value}")
 
 
 def _tree_option(value: str) -> str:
@@ -603,14 +568,15 @@ def run(args: argparse.Namespace) -> int:
     folder (see :mod:`pyautonomousagent.runs`); the folder is claimed once the simulation is
     set up (bad input writes nothing) and before it runs, so a second run into it is
     refused."""
-    _check_run_options(args)
-    scenario = _scenario(args)
+    _check_whole(args, "record_every")
+    _check_whole(args, "seed", minimum=0)
+    scenario, overrides = _scenario(args)
     _check_agent_options(args, scenario)
     if args.tree is not None:
         scenario = scenario.with_overrides(tree=_tree_option(args.tree))
     out = args.out or default_folder(scenario.name)
     check_target(out, overwrite=True, create=False)  # as claim_run first does, before set-up
-    with _saying_compiles(not args.quiet):
+    with nullcontext() if args.quiet else _saying_compiles():
         sim = Simulation.create(
             scenario,
             seed=args.seed,
@@ -622,17 +588,14 @@ def run(args: argparse.Namespace) -> int:
     if why and not args.quiet:
         print(f"pyaa: the compiled engine ticks the tree only, not whole iterations: {why}")
     with claim_run(out, args.overwrite, report=_note) as held:
-        return _run_claimed(args, scenario, sim, held)
+        return _run_claimed(args, sim, held, overrides)
 
 
 @contextmanager
-def _saying_compiles(enabled: bool) -> Iterator[None]:
+def _saying_compiles() -> Iterator[None]:
     """While the body runs, show the ``pyautonomousagent.compile`` logger's lines (the
     compiled engine compiling, and how long it took) on stderr as ``pyaa: ...`` lines."""
     logger = logging.getLogger("pyautonomousagent.compile")
-    if not enabled:
-        yield
-        return
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter("pyaa: %(message)s"))
     level = logger.level
@@ -650,8 +613,11 @@ def _note(text: str) -> None:
     print(f"pyaa: {text}", file=sys.stderr)
 
 
-def _run_claimed(args: argparse.Namespace, scenario: Scenario, sim: Simulation, held: Claim) -> int:
-    """Run ``sim`` (of ``scenario``) and save the run into the claimed folder ``held``."""
+def _run_claimed(
+    args: argparse.Namespace, sim: Simulation, held: Claim, overrides: dict[str, Any]
+) -> int:
+    """Run ``sim`` and save the run (``overrides``: its ``--set`` values) into the claimed
+    folder ``held``."""
     progress = None if not args.quiet else False
     out = held.folder
     with streaming(sim, out, args.format) as stream:
@@ -664,12 +630,12 @@ def _run_claimed(args: argparse.Namespace, scenario: Scenario, sim: Simulation, 
             views=_views(args, progress),
             overwrite=args.overwrite,
             command=["pyaa", *sys.argv[1:]] if sys.argv else None,
-            overrides=_parse_overrides(args.set, list(to_mapping(scenario)["parameters"])),
+            overrides=overrides,
             stream=stream,
             claim=held,
         )
     if saved.status != "complete":
-        print(_not_complete(saved, last_recorded(sim), scenario.iterations), file=sys.stderr)
+        print(_not_complete(saved, last_recorded(sim), sim.scenario.iterations), file=sys.stderr)
         return 130 if saved.status == "interrupted" else 1
     if not args.quiet:
         _print_summary(sim, saved.files)
@@ -698,10 +664,7 @@ def _check_agent_options(args: argparse.Namespace, scenario: Scenario) -> None:
     names = AgentNames(scenario.mission_type.agent_prefix, scenario.agents)
     agents = [("--follow", args.follow)] if args.follow is not None else []
     for flag, agent in [*agents, *(("--btlog", agent) for agent in args.btlog)]:
-        if agent not in names:
-            raise ScenarioError(
-                f"{flag}: no agent named {shown(agent)}; agents are {names[0]}..{names[-1]}"
-            )
+        _check_agent(flag, agent, names)
     if args.trace is None:
         return
     items = args.trace.split(",")
@@ -730,32 +693,13 @@ def _views(args: argparse.Namespace, progress: bool | None) -> Views:
     from pyautonomousagent.render.views import Views
 
     return Views(
-        video=None if getattr(args, "no_gif", False) else getattr(args, "video", None),
-        replay=not getattr(args, "no_replay", False),
+        video=None if args.no_gif else args.video,
+        replay=not args.no_replay,
         btlog=args.btlog,
-        follow=getattr(args, "follow", None) or 0,
-        inset=getattr(args, "inset", False),
+        follow=args.follow or 0,
+        inset=args.inset,
         progress=progress,
     )
-
-
-def _write_views(
-    recorder: Recorder,
-    scenario: Scenario,
-    events: list[dict[str, Any]],
-    out: Path,
-    args: argparse.Namespace,
-    progress: bool | None,
-) -> Views:
-    """The animation, replay.html and Groot2 logs ``args`` ask for, written into ``out``."""
-    from pyautonomousagent.render.video import VideoError
-    from pyautonomousagent.render.views import write_views
-
-    try:
-        return write_views(recorder, scenario, events, out, _views(args, progress))
-    except (KeyError, ValueError, VideoError) as error:  # an agent not traced, no ffmpeg, ...
-        message = error.args[0] if isinstance(error, KeyError) and error.args else str(error)
-        raise ScenarioError(str(message)) from None
 
 
 def replay_command(args: argparse.Namespace) -> int:
@@ -788,6 +732,7 @@ def replay_command(args: argparse.Namespace) -> int:
 def _replay_into(folder: Path, out: Path, args: argparse.Namespace) -> list[Path]:
     """Write the replay page of ``folder`` as ``out`` and its logs beside it: drawn in a
     temporary folder there, then each renamed into place (no other file is touched)."""
+    from pyautonomousagent.render.views import Views, write_views
     from pyautonomousagent.run_inputs import read_recorder, read_summary
 
     summary = read_summary(folder)  # every file of the run checked first (run_inputs)
@@ -796,22 +741,24 @@ def _replay_into(folder: Path, out: Path, args: argparse.Namespace) -> list[Path
     _check_btlog(recorder, args.btlog)
     temp = hidden_folder(out, "tmp")
     try:
-        views = _write_views(
-            recorder,
-            scenario,
-            summary.get("events", []),
-            temp,
-            argparse.Namespace(
-                video=None, no_replay=False, btlog=args.btlog, follow=None, inset=False
-            ),
-            None,
-        )
+        events = summary.get("events", [])
+        views = write_views(recorder, scenario, events, temp, Views(None, btlog=args.btlog))
         placed = [out] + [out.parent / path.name for path in views.written[1:]]
         for path, target in zip(views.written, placed, strict=True):
             os.replace(path, target)
+    except (KeyError, ValueError) as error:  # what the run's data cannot draw: one line
+        message = error.args[0] if isinstance(error, KeyError) and error.args else str(error)
+        raise ScenarioError(str(message)) from None
     finally:
         shutil.rmtree(temp, ignore_errors=True)
     return placed
+
+
+def _check_agent(flag: str, agent: str, names: Sequence[str]) -> None:
+    """``agent``, given to option ``flag``, is one of ``names``, else one line naming them."""
+    if agent not in names:
+        known = f"agents are {names[0]}..{names[-1]}" if names else "the run has no agents"
+        raise ScenarioError(f"{flag}: no agent named {shown(agent)}; {known}")
 
 
 def _check_btlog(recorder: Recorder, agents: Sequence[str]) -> None:
@@ -820,9 +767,7 @@ def _check_btlog(recorder: Recorder, agents: Sequence[str]) -> None:
     names = list(recorder.names)
     traced = [names[i] for i in recorder.traced]
     for agent in agents:
-        if agent not in names:
-            known = f"agents are {names[0]}..{names[-1]}" if names else "the run has no agents"
-            raise ScenarioError(f"--btlog: no agent named {shown(agent)}; {known}")
+        _check_agent("--btlog", agent, names)
         if agent not in traced:
             raise ScenarioError(
                 f"--btlog: agent {agent!r} was not traced in this run (traced: "
@@ -831,9 +776,8 @@ def _check_btlog(recorder: Recorder, agents: Sequence[str]) -> None:
 
 
 def _print_summary(sim: Simulation, written: list[Path]) -> None:
-    alerts = sum(1 for e in sim.events if e["event"] == "alert")
-    messages = sum(1 for e in sim.events if e["event"] == "message")
-    others = Counter(e["event"] for e in sim.events if e["event"] not in ("alert", "message"))
+    others = Counter(e["event"] for e in sim.events)
+    alerts, messages = others.pop("alert", 0), others.pop("message", 0)
     more = "".join(f", {count} {kind}(s)" for kind, count in sorted(others.items()))
     n, its = sim.swarm.size, sim.scenario.iterations
     print(
@@ -871,11 +815,11 @@ def timings_line(timings: Mapping[str, float]) -> str:
     return ", ".join(parts)
 
 
-def scenarios_command(name: str | None = None) -> int:
+def scenarios_command(args: argparse.Namespace) -> int:
     """``pyaa scenarios``: one line per registered scenario; with a name, that scenario's
     mission, world objects and parameters (units, ranges, values)."""
-    if name is not None:
-        print(_describe(load(name)))
+    if args.name is not None:
+        print(_describe(load(args.name)))
         return 0
     width = max(12, *(len(n) for n in names()))
     for name in names():
@@ -921,13 +865,13 @@ def _describe(scenario: Scenario) -> str:
     return "\n".join(lines)
 
 
-def leaves_command(name: str) -> int:
+def leaves_command(args: argparse.Namespace) -> int:
     """``pyaa leaves``: the leaf types that fit a scenario's mission, each with its one-line
     doc, ports (type, the scenario parameter that gives the default, its value) and
     blackboard keys; then the general leaves, which fit any mission."""
     from pyautonomousagent.simulation.fit import fitting_leaves, is_general
 
-    scenario = load(name)
+    scenario = load(args.scenario)
     fits = fitting_leaves(scenario)
     own = [cls for cls in fits if not is_general(cls)]
     print(
@@ -979,13 +923,9 @@ def _tree_source(source: str) -> tuple[Document, str, dict[str, Any], Scenario |
 def _scenario_leaves(scenario: Scenario | None) -> list[str] | None:
     """The leaf types that fit ``scenario`` (for a tree written for it), or None for a bare
     tree file (no scenario)."""
-    if scenario is None:
-        return None
-    from pyautonomousagent.bt.leaf import LEAF_TYPES
     from pyautonomousagent.simulation.fit import fitting_leaves
 
-    fitting = fitting_leaves(scenario)
-    return [name for name, cls in LEAF_TYPES.items() if cls in fitting]
+    return None if scenario is None else [cls.type_name for cls in fitting_leaves(scenario)]
 
 
 def _all_defaults() -> dict[str, Any]:
@@ -994,11 +934,8 @@ def _all_defaults() -> dict[str, Any]:
     from pyautonomousagent.simulation.motion import MOTION_MODELS
     from pyautonomousagent.simulation.scenario import CORE_PARAMETERS
 
-    params = [*CORE_PARAMETERS]
-    for model in MOTION_MODELS.values():
-        params.extend(model.parameters)
-    for mission in MISSIONS.values():
-        params.extend(mission.parameters)
+    owners: list[Any] = [*MOTION_MODELS.values(), *MISSIONS.values()]
+    params = [*CORE_PARAMETERS, *(p for owner in owners for p in owner.parameters)]
     return {p.name: p.default for p in params}
 
 
@@ -1038,12 +975,8 @@ def tree_command(args: argparse.Namespace) -> int:
         from pyautonomousagent.bt.draw import draw_tree
 
         target = args.out or Path(f"{name}.{fmt}")
-        check_output(target)  # never over a run's own files
-        try:
+        with _writing(target):
             path = draw_tree(build(document), target, title=name)
-        except OSError as error:
-            reason = error.strerror or type(error).__name__
-            raise InputError(f"cannot write {target}: {reason}; check the folder exists") from None
         print(f"wrote {path}")
         return 0
     if fmt in ("xml", "yaml"):
@@ -1059,17 +992,19 @@ def tree_command(args: argparse.Namespace) -> int:
     if args.out is None:
         print(text, end="")
         return 0
-    _write_output(args.out, text)
+    with _writing(args.out):
+        args.out.write_text(text, encoding="utf-8")
     print(f"wrote {args.out}")
     return 0
 
 
-def _write_output(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` (never over a run's own files: :func:`check_output`); an
+@contextmanager
+def _writing(path: Path) -> Iterator[None]:
+    """Write ``path`` in the body, never over a run's own files (:func:`check_output`); an
     OSError becomes one line naming the path."""
     check_output(path)
     try:
-        path.write_text(text, encoding="utf-8")
+        yield
     except OSError as error:
         reason = error.strerror or type(error).__name__
         raise InputError(f"cannot write {path}: {reason}; check the folder exists") from None
@@ -1077,103 +1012,23 @@ def _write_output(path: Path, text: str) -> None:
 
 # --- experiments: pyaa sweep, pyaa plot, pyaa measures (library: pyautonomousagent.experiments)
 
-EXPERIMENT_COMMANDS = ("sweep", "plot", "measures", "analyse")
 
+def _experiment_errors(command: Command) -> Command:
+    """``command`` with the experiments' errors that are no InputError (a bad measure
+    expression, a backend that fails) shown as one line (exit 2)."""
 
-def _add_experiments(sub: Any) -> None:
-    sweep = sub.add_parser("sweep", help="run a parameter sweep with seeds, one row per run")
-    sweep.add_argument("experiment", help="an experiment .yaml file, or a scenario to sweep")
-    sweep.add_argument(
-        "--vary",
-        action="append",
-        default=[],
-        metavar="NAME=V1,V2|FROM:TO:STEP",
-        help="a parameter to vary (several: a grid), e.g. refuel_rate=1:3:1",
-    )
-    sweep.add_argument(
-        "--design",
-        choices=["grid", "lhs", "sobol", "morris"],
-        help="grid (default: every combination of --vary) or a sampled design over bounds "
-        "(--vary NAME=LOW:HIGH)",
-    )
-    sweep.add_argument(
-        "--samples", type=int, metavar="N", help="a sampled design's N (sobol: a power of 2)"
-    )
-    sweep.add_argument("--design-seed", type=int, help="the sampled design's seed (default 0)")
-    sweep.add_argument("--seeds", type=int, help="seeds 0..N-1 per point (default 1)")
-    sweep.add_argument("--iterations", type=int, help="iterations per run")
-    sweep.add_argument("--agents", type=int, help="agents per run")
-    sweep.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="a fixed override for every run",
-    )
-    sweep.add_argument(
-        "--measure",
-        action="append",
-        default=[],
-        metavar="NAME|NAME=EXPR",
-        help="a registered measure or NAME=expression (default: all registered)",
-    )
-    sweep.add_argument("--engine", choices=["auto", *ENGINES], help="decision engine")
-    sweep.add_argument("--record-every", type=int, metavar="K", help="record every K-th iteration")
-    sweep.add_argument(
-        "--every",
-        type=int,
-        metavar="K",
-        help="also keep each measure every K iterations per run (OUT/timeseries.parquet)",
-    )
-    sweep.add_argument("--out", type=Path, help="sweep folder (default: runs/sweeps/NAME)")
-    sweep.add_argument("--workers", type=int, help="local processes (default: all cores)")
-    where = sweep.add_mutually_exclusive_group()
-    where.add_argument(
-        "--dask",
-        metavar="ADDRESS|local",
-        help="run on a Dask cluster (scheduler address) or a local Dask cluster",
-    )
-    where.add_argument("--serial", action="store_true", help="run in this process, one by one")
-    sweep.add_argument("--resume", action="store_true", help="continue the sweep in --out")
-    sweep.add_argument(
-        "--save-runs",
-        action="store_true",
-        help="also write each run's data under OUT/runs (hive-partitioned)",
-    )
-    sweep.add_argument("--quiet", action="store_true", help="no progress bar or summary")
-    plot = sub.add_parser("plot", help="plot a measure of a sweep against a parameter")
-    plot.add_argument("sweep", type=Path, help="a sweep folder (or its results.parquet)")
-    plot.add_argument("--measure", required=True, help="the measure (a results column)")
-    plot.add_argument("--x", help="the parameter on the horizontal axis (not with --over-time)")
-    plot.add_argument("--by", help="a second parameter: one line per value")
-    plot.add_argument(
-        "--over-time",
-        action="store_true",
-        help="the measure over the iterations, one line per value of --by (or the only "
-        "varied parameter), from a sweep run with --every",
-    )
-    plot.add_argument(
-        "--interval",
-        default="ci95",
-        choices=["ci95", "sd", "range", "none"],
-        help="the band: 95%% CI of the mean (default), sd, min-max, none",
-    )
-    plot.add_argument("--out", type=Path, help="picture file, .png or .svg")
-    sub.add_parser("measures", help="list the registered measures")
-    analyse = sub.add_parser(
-        "analyse", help="Sobol or Morris sensitivity indices of a sweep run with such a design"
-    )
-    analyse.add_argument("sweep", type=Path, help="a sweep folder (--design sobol or morris)")
-    analyse.add_argument(
-        "--measure",
-        action="append",
-        default=[],
-        metavar="M",
-        help="a measure to analyse (several: one each; default: every measure of the sweep)",
-    )
-    analyse.add_argument(
-        "--out", type=Path, help="picture file, .png or .svg (default SWEEP/sensitivity.png)"
-    )
+    @functools.wraps(command)
+    def guarded(args: argparse.Namespace) -> int:
+        from pyautonomousagent.experiments import ExpressionError
+        from pyautonomousagent.experiments.backends import BackendError
+
+        try:
+            return command(args)
+        except (ExpressionError, BackendError) as error:
+            print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
+            return 2
+
+    return guarded
 
 
 def _experiment(args: argparse.Namespace) -> Any:
@@ -1188,13 +1043,7 @@ def _experiment(args: argparse.Namespace) -> Any:
         loaded = read_file(source)
         if isinstance(loaded, dict) and "scenario" in loaded:
             data = {"name": Path(source).stem, **loaded}
-    for key, value in (
-        ("design", args.design),
-        ("samples", args.samples),
-        ("design_seed", args.design_seed),
-    ):
-        if value is not None:
-            data[key] = value
+    data |= _given(args, "design", "samples", "design_seed")
     data = with_options(data, source, args.vary, _parse_overrides(args.set))
     if args.agents is not None:
         data["set"]["agents"] = args.agents
@@ -1202,17 +1051,15 @@ def _experiment(args: argparse.Namespace) -> Any:
     for text in args.measure:
         name, sep, expression = text.partition("=")
         measures.append({name: expression} if sep and name.isidentifier() else text)
-    for key, value in (
-        ("seeds", args.seeds),
-        ("iterations", args.iterations),
-        ("engine", args.engine),
-        ("record_every", args.record_every),
-        ("every", args.every),
-        ("measures", measures or None),
-    ):
-        if value is not None:
-            data[key] = value
+    data |= _given(args, "seeds", "iterations", "engine", "record_every", "every")
+    if measures:
+        data["measures"] = measures
     return Experiment.from_mapping(data, source=source)
+
+
+def _given(args: argparse.Namespace, *options: str) -> dict[str, Any]:
+    """The ``options`` given on the command line (not None), by name."""
+    return {key: getattr(args, key) for key in options if getattr(args, key) is not None}
 
 
 def _inside(root: Path, name: str) -> Path:
@@ -1223,6 +1070,7 @@ def _inside(root: Path, name: str) -> Path:
     return path
 
 
+@_experiment_errors
 def sweep_command(args: argparse.Namespace) -> int:
     """``pyaa sweep``: run an experiment into a sweep folder (see docs/experiments.md)."""
     from pyautonomousagent.experiments import sweep
@@ -1233,8 +1081,7 @@ def sweep_command(args: argparse.Namespace) -> int:
     out = args.out or _inside(Path("runs") / "sweeps", experiment.name)
     backend = "serial" if args.serial else "dask" if args.dask else "pool"
     address = None if args.dask in (None, "local") else args.dask
-    if args.workers is not None and args.workers < 1:
-        raise ScenarioError(f"--workers must be a whole number >= 1, got {args.workers}")
+    _check_whole(args, "workers")
     try:
         result = sweep(
             experiment,
@@ -1265,6 +1112,7 @@ def sweep_command(args: argparse.Namespace) -> int:
     return 1 if result.counts["failed"] else 0
 
 
+@_experiment_errors
 def plot_command(args: argparse.Namespace) -> int:
     """``pyaa plot``: a measure against a parameter, mean and interval over seeds."""
     from pyautonomousagent.experiments.plot import plot_measure, read_results, summarize
@@ -1287,6 +1135,7 @@ def plot_command(args: argparse.Namespace) -> int:
     return 0
 
 
+@_experiment_errors
 def analyse_command(args: argparse.Namespace) -> int:
     """``pyaa analyse``: print and draw a Sobol or Morris sweep's sensitivity indices."""
     from pyautonomousagent.experiments import sensitivity
@@ -1334,25 +1183,23 @@ def _plot_over_time(args: argparse.Namespace) -> int:
     return 0
 
 
-def experiments_command(args: argparse.Namespace) -> int:
-    """``pyaa sweep``, ``pyaa plot``, ``pyaa analyse`` and ``pyaa measures``; bad input is
-    one line (exit 2)."""
-    from pyautonomousagent.experiments import MEASURES, ExperimentError, ExpressionError
-    from pyautonomousagent.experiments.backends import BackendError
+@_experiment_errors
+def measures_command(args: argparse.Namespace) -> int:
+    """``pyaa measures``: one line per registered measure."""
+    from pyautonomousagent.experiments import MEASURES
 
-    try:
-        if args.command == "sweep":
-            return sweep_command(args)
-        if args.command == "plot":
-            return plot_command(args)
-        if args.command == "analyse":
-            return analyse_command(args)
-        for name, measure in MEASURES.items():
-            print(f"{name:22s} {measure.unit:12s} {measure.doc}")
-        return 0
-    except (ExperimentError, ExpressionError, BackendError) as error:
-        print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
-        return 2
+    for name, measure in MEASURES.items():
+        print(f"{name:22s} {measure.unit:12s} {measure.doc}")
+    return 0
+
+
+#: pyaa's subcommands (:data:`COMMANDS`) -> the function that runs one.
+HANDLERS: dict[str, Command] = {
+    "scenarios": scenarios_command, "run": run, "leaves": leaves_command,
+    "bench": bench_command, "replay": replay_command, "verify": verify_command,
+    "sweep": sweep_command, "plot": plot_command, "measures": measures_command,
+    "analyse": analyse_command, "studio": studio_command, "tree": tree_command,
+}  # fmt: skip
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -1362,29 +1209,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as stop:  # usage errors and --help: argparse has printed its message
         return int(stop.code or 0)
     try:
-        if args.command == "run":
-            return run(args)
-        if args.command == "scenarios":
-            return scenarios_command(args.name)
-        if args.command == "leaves":
-            return leaves_command(args.scenario)
-        if args.command == "bench":
-            return bench_command(args)
-        if args.command in EXPERIMENT_COMMANDS:
-            return experiments_command(args)
-        if args.command == "replay":
-            return replay_command(args)
-        if args.command == "verify":
-            return verify_command(args.run_dir)
-        if args.command == "studio":
-            return studio_command(args)
-        return tree_command(args)
-    except USER_ERRORS as error:
+        return HANDLERS[args.command](args)
+    except (*USER_ERRORS, SaveError) as error:  # bad input: 2; a run that could not be saved: 1
         print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
-        return 2
-    except SaveError as error:
-        print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
-        return 1
+        return 1 if isinstance(error, SaveError) else 2
     except OSError as error:  # a path given on the command line: one line, no traceback
         where = f"{error.filename}: " if error.filename else ""
         reason = error.strerror or type(error).__name__

@@ -1,14 +1,11 @@
-"""Helpers for the lesson notebooks (notebooks/NN_*.ipynb): tick tables and exercise checks.
-
-- :func:`tick_table`: tick a small tree a few times and show every node's status per tick,
-  as a coloured table in a notebook (plain text elsewhere);
-- :func:`check_exercise`: the check cell at the end of each lesson. It works the answer out
-  itself (the answer is not in the notebook), prints a friendly verdict, and raises
-  :class:`ExerciseError` with a hint when the answer is missing or wrong.
+"""Helpers for the lesson notebooks (notebooks/NN_*.ipynb): :func:`tick_table`, every node's
+status per tick as a coloured table, and :func:`check_exercise`, the check cell at the end of
+each lesson, which works the answer out itself (the notebook holds no answer).
 """
 
 from __future__ import annotations
 
+import bisect
 import difflib
 import html
 import inspect
@@ -260,13 +257,6 @@ def _status_list(name: str, value: Any, length: int) -> list[str]:
     return names
 
 
-def _first_wrong(got: Sequence[Any], expected: Sequence[Any]) -> int | None:
-    for i, (a, b) in enumerate(zip(got, expected, strict=True)):
-        if a != b:
-            return i
-    return None
-
-
 # --- Lesson 02: behaviour trees -------------------------------------------------------------
 
 #: Lesson 02's exercise: the statuses of the three leaves, one row per tick.
@@ -296,7 +286,7 @@ def _check_02(root_statuses: Any = None) -> str:
     ticks = len(L02_SCRIPTS["door_open"])
     got = _status_list("root_statuses", root_statuses, ticks)
     expected = tick_table(l02_tree(), ticks).column("enter_room")
-    wrong = _first_wrong(got, expected)
+    wrong = next((i for i, (a, b) in enumerate(zip(got, expected, strict=True)) if a != b), None)
     if wrong is not None:
         raise ExerciseError(
             f"Not quite: the root's status after tick {wrong + 1} is not {got[wrong]}.\n"
@@ -420,48 +410,62 @@ def _check_03(heard: Any = None) -> str:
 # --- Lesson 05: tree files ------------------------------------------------------------------
 
 
-def l05_expected_tree() -> Node:
-    """Lesson 05's answer: the gathering tree with the last branch cruising at 0.05."""
+def _gathering_tree_with(ports: dict[str, dict[str, float]]) -> Node:
+    """The gathering tree (Fig. 6) with ``ports`` set: node name or type -> port values."""
     from dataclasses import replace
 
     from pyautonomousagent.missions.drones.trees import gathering_tree
 
-    def slow(node: Node) -> Node:
-        if node.name == "action_navigate_to_destination_a_2":
-            return replace(node, params={**node.params, "speed": 0.05})
-        return replace(node, children=tuple(slow(child) for child in node.children))
+    def edited(node: Node) -> Node:
+        extra = ports.get(node.name, ports.get(node.type, {}))
+        return replace(node, params={**node.params, **extra},
+                       children=tuple(edited(child) for child in node.children))  # fmt: skip
 
-    return slow(gathering_tree())
+    return edited(gathering_tree())
+
+
+def l05_expected_tree() -> Node:
+    """Lesson 05's answer: the gathering tree with the last branch cruising at 0.05."""
+    return _gathering_tree_with({"action_navigate_to_destination_a_2": {"speed": 0.05}})
+
+
+def _tree_file(
+    value: Any, what: str, example: str, suffixes: tuple[str, ...], how: str, where: str
+) -> Path:
+    """The tree file a student named (``tree_file``), or ExerciseError: no name, a name not
+    ending in one of ``suffixes`` (``how`` to make one), or no such file (``where`` it comes
+    from)."""
+    given = _given("tree_file", value, f"the name of {what}")
+    if not isinstance(given, str | os.PathLike) or not str(given).strip():
+        raise ExerciseError(f"`tree_file` should be the name of {what}, like {example!r}, got "
+                            f"{shown(given)}.")  # fmt: skip
+    path = Path(given)
+    if path.suffix not in suffixes:
+        raise ExerciseError(f"{path} is not {how}.")
+    if not path.is_file():
+        raise ExerciseError(f"There is no file {path} here: {where}.")
+    return path
+
+
+def _load_tree(path: Path) -> Node:
+    """The tree of the student's file, or ExerciseError with the file's mistake."""
+    from pyautonomousagent.bt.files import load_tree
+
+    try:
+        return load_tree(path)
+    except Exception as error:  # the file's mistake, in its own words
+        raise ExerciseError(f"Your file does not load: {error}") from None
 
 
 @_lesson("05")
 def _check_05(tree_file: Any = None) -> str:
-    from pathlib import Path
-
-    from pyautonomousagent.bt.files import load_tree
-    from pyautonomousagent.scenarios import load
-    from pyautonomousagent.simulation.run import Simulation
-
-    given = _given("tree_file", tree_file, "the name of your YAML tree file")
-    if not isinstance(given, str | os.PathLike) or not str(given).strip():
-        raise ExerciseError(f"`tree_file` should be the name of your YAML tree file, like "
-                            f"'slow.yaml', got {shown(given)}.")  # fmt: skip
-    path = Path(given)
-    if path.suffix not in (".yaml", ".yml"):
-        raise ExerciseError(f"{path} is not a YAML file: save your tree as slow.yaml.")
-    if not path.is_file():
-        raise ExerciseError(f"There is no file {path} here: write it first (Path.write_text).")
-    try:
-        tree = load_tree(path)
-    except Exception as error:  # the file's mistake, in its own words
-        raise ExerciseError(f"Your file does not load: {error}") from None
-    scenario = load("gathering").with_overrides(iterations=600)
-    got, expected = (
-        Simulation.create(scenario, seed=0, tree=t).run(progress=False).recorder
-        for t in (tree, l05_expected_tree())
-    )
-    for key in ("x", "y", "speed", "energy"):
-        if not np.array_equal(got.column(key), expected.column(key)):
+    path = _tree_file(tree_file, "your YAML tree file", "slow.yaml", (".yaml", ".yml"),
+                      "a YAML file: save your tree as slow.yaml",
+                      "write it first (Path.write_text)")  # fmt: skip
+    keys = ("x", "y", "speed", "energy")
+    got, expected = (_flight(t, 600, keys) for t in (_load_tree(path), l05_expected_tree()))
+    for key, a, b in zip(keys, got, expected, strict=True):
+        if not np.array_equal(a, b):
             raise ExerciseError(
                 f"Not quite: with {path} the drones' {key} is not what it should be.\n"
                 "Hint: only the last branch's Action_Navigate_To_Destination_A gets `speed: "
@@ -478,14 +482,10 @@ def smallest_compiled_swarm(iterations: int) -> int:
     engine "auto" compiles (:data:`~pyautonomousagent.simulation.costs.AUTO_COMPILE_SECONDS`)."""
     from pyautonomousagent.simulation.costs import AUTO_COMPILE_SECONDS, batched_seconds
 
-    low, high = 1, 10**12
-    while low < high:
-        middle = (low + high) // 2
-        if batched_seconds(middle, iterations) >= AUTO_COMPILE_SECONDS:
-            high = middle
-        else:
-            low = middle + 1
-    return low
+    def worth_it(agents: int) -> bool:
+        return batched_seconds(agents, iterations) >= AUTO_COMPILE_SECONDS
+
+    return 1 + bisect.bisect_left(range(1, 10**12), True, key=worth_it)
 
 
 @_lesson("07")
@@ -613,30 +613,21 @@ L09_THRESHOLD, L09_RATE = 60.0, 5.0
 def l09_expected_tree(threshold: float = L09_THRESHOLD, rate: float = L09_RATE) -> Node:
     """The gathering tree (Fig. 6) with ``Condition_Low_Energy_Level``'s threshold (percent)
     and ``Action_Refuel_A``'s rate (percent per iteration) set."""
-    from dataclasses import replace
-
-    from pyautonomousagent.missions.drones.trees import gathering_tree
-
-    ports = {"Condition_Low_Energy_Level": {"threshold": threshold},
-             "Action_Refuel_A": {"rate": rate}}  # fmt: skip
-
-    def edited(node: Node) -> Node:
-        extra = ports.get(node.type, {})
-        return replace(node, params={**node.params, **extra},
-                       children=tuple(edited(child) for child in node.children))  # fmt: skip
-
-    return edited(gathering_tree())
+    return _gathering_tree_with({"Condition_Low_Energy_Level": {"threshold": threshold},
+                                 "Action_Refuel_A": {"rate": rate}})  # fmt: skip
 
 
-def _flight(tree: Node) -> list[np.ndarray]:
-    """x, y and energy of the gathering scenario's drones (seed 0, 3000 iterations) flying
+def _flight(
+    tree: Node, iterations: int = 3000, keys: Sequence[str] = ("x", "y", "energy")
+) -> list[np.ndarray]:
+    """``keys`` of the gathering scenario's drones (seed 0, ``iterations`` iterations) flying
     ``tree``: arrays of shape (records, agents)."""
     from pyautonomousagent.scenarios import load
     from pyautonomousagent.simulation.run import Simulation
 
-    scenario = load("gathering").with_overrides(iterations=3000)
+    scenario = load("gathering").with_overrides(iterations=iterations)
     recorder = Simulation.create(scenario, seed=0, tree=tree).run(progress=False).recorder
-    return [recorder.column(key) for key in ("x", "y", "energy")]
+    return [recorder.column(key) for key in keys]
 
 
 def _same_flight(a: list[np.ndarray], b: list[np.ndarray]) -> bool:
@@ -645,28 +636,11 @@ def _same_flight(a: list[np.ndarray], b: list[np.ndarray]) -> bool:
 
 @_lesson("09")
 def _check_09(tree_file: Any = None) -> str:
-    from pyautonomousagent.bt.files import load_tree
-
-    given = _given("tree_file", tree_file, "the name of the XML file you saved from the studio")
-    if not isinstance(given, str | os.PathLike) or not str(given).strip():
-        raise ExerciseError(
-            f"`tree_file` should be the name of the XML file you saved "
-            f"from the studio, like 'refuel-early.xml', got {shown(given)}."
-        )
-    path = Path(given)
-    if path.suffix != ".xml":
-        raise ExerciseError(f"{path} is not an XML file: press Save XML in the studio, and give "
-                            "the name it wrote (NAME.xml).")  # fmt: skip
-    if not path.is_file():
-        raise ExerciseError(
-            f"There is no file {path} here: type a name in the studio's name "
-            "box and press Save XML (it writes NAME.xml next to this notebook)."
-        )
-    try:
-        tree = load_tree(path)
-    except Exception as error:  # the file's mistake, in its own words
-        raise ExerciseError(f"Your file does not load: {error}") from None
-    got = _flight(tree)
+    path = _tree_file(tree_file, "the XML file you saved from the studio", "refuel-early.xml",
+                      (".xml",), "an XML file: press Save XML in the studio, and give the name it "
+                      "wrote (NAME.xml)", "type a name in the studio's name box and press Save "
+                      "XML (it writes NAME.xml next to this notebook)")  # fmt: skip
+    got = _flight(_load_tree(path))
     if _same_flight(got, _flight(l09_expected_tree())):
         return (f"{path} makes the drones refuel at {L09_THRESHOLD:g} %, {L09_RATE:g} % per "
                 "iteration.")  # fmt: skip

@@ -6,8 +6,6 @@ asked for, it writes one whole line at most every :data:`LINE_SECONDS` seconds o
 :data:`LINE_STEP` of the work, whichever comes first, and one at the end::
 
     sweep threshold: 12/240 runs (5 %), 31 s, about 9.8 min left
-
-:meth:`Progress.note` writes a line of its own (e.g. a lost worker) without breaking the bar.
 """
 
 from __future__ import annotations

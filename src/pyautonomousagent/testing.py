@@ -1,18 +1,7 @@
-"""Test tools for a user's leaves and missions — the ones the project's own tests use.
-
-- :class:`Harness`: a tree on one engine for a few agents, ticked one iteration at a time, with
-  every node's status after every tick;
-- :func:`check_engines_agree`: run a tree on both engines side by side and fail at the first
-  node status, state or blackboard value, or event that differs;
-- :func:`check_same_runs`: two finished runs (of two engines, say) recorded the same bits:
-  every column, the traces, the active behaviour, the record iterations and the events;
-- :func:`check_leaf`: prove a leaf type gives the same results on both engines when it is
-  ticked for all, most or few of the agents;
-- :func:`scoped_registrations`: whatever a test registers (leaves, missions, scenarios, motion
-  models, engines, mission files) is gone after the block.
-
-The lesson notebooks' exercise checks and per-tick status tables (:func:`check_exercise`,
-:func:`tick_table`) are in :mod:`pyautonomousagent.lessons`, which uses these tools.
+"""Test tools for a user's leaves and missions — the ones the project's own tests use: a
+tree :class:`Harness` ticked one iteration at a time, checks that two engines or two runs
+agree (:func:`check_engines_agree`, :func:`check_same_runs`, :func:`check_leaf`), and
+:func:`scoped_registrations`. The lessons' checks (:mod:`pyautonomousagent.lessons`) use them.
 """
 
 from __future__ import annotations
@@ -100,17 +89,9 @@ def check_engines_agree(
     engines: tuple[str, str] = ("pytrees", "batched"),
     **overrides: Any,
 ) -> int:
-    """Run ``tree`` (default: the scenario's) on two engines side by side, stepping both.
-
-    Args:
-        tree: the tree, or None for the scenario's own.
-        scenario: a scenario name, file or object.
-        seed: the run's seed.
-        engines: the reference engine and the engine checked against it.
-        overrides: scenario changes, e.g. ``agents=6, iterations=200``.
-
-    Returns:
-        The number of iterations compared.
+    """Run ``tree`` (None: the scenario's) on two ``engines`` (the reference first) side by
+    side, stepping both, with ``overrides`` of the scenario (a name, file or object), e.g.
+    ``agents=6, iterations=200``; return the number of iterations compared.
 
     Raises:
         AssertionError: naming the first iteration, node or column, and agent that differ.
@@ -132,13 +113,9 @@ def check_engines_agree(
 
 
 def check_same_runs(a: Simulation, b: Simulation, names: tuple[str, str] = ("a", "b")) -> None:
-    """Check that two finished runs recorded the same bits: every recorded column, the traced
-    node statuses, the active behaviour, the record iterations (compared as raw bytes, so
-    NaN payloads and the sign of zero count) and the events.
-
-    Args:
-        a, b: the runs (e.g. of ``engine="batched"`` and ``engine="gpu"``).
-        names: what to call them in the message.
+    """Check that two finished runs (``names`` in the message) recorded the same bits: every
+    recorded column, the traced node statuses, the active behaviour, the record iterations
+    (compared as raw bytes, so NaN payloads and the sign of zero count) and the events.
 
     Raises:
         AssertionError: naming the first record array that differs and its first differing
@@ -174,9 +151,6 @@ def _behaviour(recorder: Any) -> np.ndarray:
     return recorder.behaviour_block(0, recorder.count)
 
 
-ENGINE_PAIR = ("pytrees", "batched")
-
-
 def check_leaf(
     leaf_type: type[Leaf],
     scenario: str | Scenario = "gathering",
@@ -185,11 +159,9 @@ def check_leaf(
     seed: int = 0,
     **ports: Any,
 ) -> int:
-    """Check that a leaf type runs alike on both engines, ticked for all, most or few agents.
-
-    The leaf sits behind a gate that lets a random subset of the agents through on each tick
-    (all of them, most of them, or a few: the batched engine's three ways of calling a leaf),
-    in the scenario's world, and :func:`check_engines_agree` compares everything.
+    """Check that a leaf type runs alike on both engines (:func:`check_engines_agree`) behind
+    a gate that lets all, most or a few agents through on each tick at random (the batched
+    engine's three ways of calling a leaf).
 
     Raises:
         TypeError: ``leaf_type`` is not a registered :class:`Leaf` subclass.
@@ -245,13 +217,12 @@ def _same(
     sim: Simulation,
     rows: list[str] | None,
     what: str,
-    engines: tuple[str, str] = ("pytrees", "batched"),
+    engines: tuple[str, str],
 ) -> None:
     """Raise at the first entry where ``a`` (``engines[0]``) and ``b`` (``engines[1]``) differ."""
     if np.array_equal(a, b, equal_nan=a.dtype.kind == "f"):
         return
-    diff = np.argwhere(~((a == b) | ((a != a) & (b != b))))[0]
-    row, agent = int(diff[0]), int(diff[1])
+    row, agent = (int(i) for i in np.argwhere(~((a == b) | ((a != a) & (b != b))))[0])
     if rows is not None:
         where = f"iteration {sim.world.iteration}, node {rows[row]!r}"
     else:
