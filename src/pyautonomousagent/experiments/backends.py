@@ -14,7 +14,7 @@ so the same seed gives the same numbers on every backend.
   is submitted under its own key (never ``pure=True``'s hash, which would merge identical
   calls), so two runs are never merged; Dask computes again the runs of a worker that dies.
 
-At most ``window`` runs are submitted at a time, so a sweep of a million runs does not hold a
+At most 4 runs per worker are submitted at a time, so a sweep of a million runs does not hold a
 million futures.
 
 The pool and Dask backends say what happened to their workers: :meth:`stats` gives the
@@ -146,11 +146,10 @@ class PoolBackend:
 
     name = "pool"
 
-    def __init__(self, workers: int | None = None, window: int | None = None) -> None:
+    def __init__(self, workers: int | None = None) -> None:
         if workers is not None and workers < 1:
             raise ValueError(f"workers must be a whole number >= 1, got {workers}")
         self._workers = workers or os.cpu_count() or 1
-        self.window = window or 4 * self._workers
         self._pool: ProcessPoolExecutor | None = None
         self._known: dict[str, Any] = {}  # process id -> process of the pool
         self.tally = WorkerStats()
@@ -211,7 +210,7 @@ class PoolBackend:
         running: dict[Future[Any], tuple[T, int]] = {}
         pool = self._pool or self._start()
         while pending or running:
-            while pending and len(running) < self.window:
+            while pending and len(running) < 4 * self._workers:
                 task, tries = pending.popleft()
                 running[pool.submit(fn, task)] = (task, tries)
             self._look()  # before a worker can die: a broken pool forgets its processes
@@ -291,7 +290,6 @@ class DaskBackend:
         address: the scheduler's address (``tcp://host:8786``), or None to start a local
             cluster of ``workers`` single-threaded worker processes for the sweep.
         workers: workers of the local cluster (default all cores).
-        window: runs submitted at a time (default 4 per worker).
         timeout: seconds to wait for the scheduler.
 
     Raises:
@@ -304,7 +302,6 @@ class DaskBackend:
         self,
         address: str | None = None,
         workers: int | None = None,
-        window: int | None = None,
         timeout: float = 20.0,
     ) -> None:
         try:
@@ -332,7 +329,6 @@ class DaskBackend:
                     f"cannot reach a Dask scheduler at {address!r} within {timeout:g} s "
                     f"({type(error).__name__}); start one (dask scheduler) or check the address"
                 ) from None
-        self._window = window
         self._prefix = f"pyaa-run-{uuid.uuid4().hex[:8]}"
         self.tally = WorkerStats()
         #: Called with one line when a worker is lost and its runs are given again.
@@ -398,7 +394,6 @@ class DaskBackend:
     def map_unordered(self, fn: Callable[[T], Any], tasks: Sequence[T]) -> Iterator[tuple[T, Any]]:
         from distributed import as_completed
 
-        window = self._window or 4 * self.workers()
         queue = deque(enumerate(tasks))
         owner: dict[str, T] = {}
 
@@ -408,7 +403,7 @@ class DaskBackend:
             owner[key] = task
             return self.client.submit(_logged, fn, task, key, self._topic, key=key, pure=False)
 
-        running = as_completed([submit() for _ in range(min(window, len(queue)))])
+        running = as_completed([submit() for _ in range(min(4 * self.workers(), len(queue)))])
         for future in running:
             task = owner.pop(future.key)
             try:

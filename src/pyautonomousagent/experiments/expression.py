@@ -16,11 +16,12 @@ below 30 %. The result must be one number.
 from __future__ import annotations
 
 import ast
-import difflib
 from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
+
+from pyautonomousagent.experiments.errors import close_hint
 
 #: Longest expression accepted (characters).
 MAX_LENGTH = 400
@@ -140,8 +141,7 @@ class Expression:
         """
         for name in self.names:
             if name not in columns:
-                close = difflib.get_close_matches(name, list(columns), n=1)
-                hint = f" (did you mean {close[0]!r}?)" if close else ""
+                hint = close_hint(name, columns)
                 raise ExpressionError(f"expression {self.text!r}: unknown column {name!r}{hint}")
         with np.errstate(all="ignore"):
             value = np.asarray(self._eval(self._tree, columns), dtype=np.float64)

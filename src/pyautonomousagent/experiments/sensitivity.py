@@ -34,7 +34,8 @@ import numpy as np
 import pyarrow as pa
 
 from pyautonomousagent.experiments.design import DESIGN_FILE, MORRIS_LEVELS, Design, library
-from pyautonomousagent.experiments.spec import ExperimentError
+from pyautonomousagent.experiments.errors import ExperimentError, close_hint
+from pyautonomousagent.experiments.plot import measure_label, pyplot, read_results, save
 from pyautonomousagent.inputs import InputError, read_parquet
 
 #: The indices of each method, in the table's order.
@@ -70,7 +71,6 @@ def read_sweep(folder: str | Path) -> StoredSweep:
     Raises:
         ExperimentError: no sweep there, no design file, or a damaged file.
     """
-    from pyautonomousagent.experiments.plot import read_results
     from pyautonomousagent.experiments.store import read_manifest
 
     folder = Path(folder)
@@ -118,14 +118,11 @@ def _read_design(path: Path) -> tuple[Design, np.ndarray]:
 
 def check_measures(results: pa.Table, measures: list[str], known: list[str]) -> None:
     """Every name in ``measures`` must be one of the sweep's measures ``known``."""
-    import difflib
-
     for name in measures:
         if name not in known or name not in results.column_names:
-            close = difflib.get_close_matches(name, known, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ExperimentError(
-                f"unknown measure {name!r}{hint}; the sweep measured {', '.join(known)}"
+                f"unknown measure {name!r}{close_hint(name, known)}; the sweep measured "
+                f"{', '.join(known)}"
             )
 
 
@@ -205,7 +202,7 @@ def report(table: pa.Table, stored: StoredSweep) -> list[str]:
     for measure in dict.fromkeys(table["measure"].to_pylist()):
         rows = [r for r in table.to_pylist() if r["measure"] == measure]
         unit = stored.measures.get(measure, {}).get("unit", "")
-        shown = f"{measure} ({unit})" if unit and unit != measure else measure
+        shown = measure_label(measure, stored.measures)
         if all(math.isnan(r["value"]) for r in rows):
             lines.append(f"{shown}: {_why_none(stored, measure)}: no indices")
             continue
@@ -219,7 +216,9 @@ def report(table: pa.Table, stored: StoredSweep) -> list[str]:
         for name in design.names:
             found = {r["index"]: r for r in rows if r["parameter"] == name}
             if design.method == "sobol":
-                cells = [_pm(found[i]) for i in ("S1", "ST")]
+                cells = [
+                    f"{found[i]['value']:.3f} ± {found[i]['confidence']:.3f}" for i in ("S1", "ST")
+                ]
                 lines.append(f"  {name:24s} {cells[0]:>20s} {cells[1]:>20s}")
             else:
                 star, sigma, mu = (found[i]["value"] for i in ("mu_star", "sigma", "mu"))
@@ -240,25 +239,14 @@ def _why_none(stored: StoredSweep, measure: str) -> str:
     return f"the same value at every point ({y[0]:.6g})"
 
 
-def _pm(row: dict[str, Any]) -> str:
-    """``value ± half-width``."""
-    return f"{row['value']:.3f} ± {row['confidence']:.3f}"
-
-
 def plot_indices(table: pa.Table, stored: StoredSweep, out: str | Path) -> Path:
     """Draw the indices: a panel per measure, bars with 95 % intervals (Sobol: S1 and ST
     per parameter; Morris: mu* per parameter, sigma as a second bar). PNG or SVG by
     ``out``'s suffix; returns the path."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out = Path(out)
     measures = list(dict.fromkeys(table["measure"].to_pylist()))
     columns = 1 if len(measures) == 1 else 2
     lines = math.ceil(len(measures) / columns)
-    fig, axes = plt.subplots(
+    fig, axes = pyplot().subplots(
         lines, columns, figsize=(6.4 * columns, 0.6 + 2.6 * lines), dpi=120, squeeze=False
     )
     for ax, measure in zip(axes.flat, measures, strict=False):
@@ -268,11 +256,7 @@ def plot_indices(table: pa.Table, stored: StoredSweep, out: str | Path) -> Path:
     method = {"sobol": "Sobol indices", "morris": "Morris screening"}[stored.design.method]
     seeds = f"{stored.seeds} seed{'s' * (stored.seeds > 1)}"
     fig.suptitle(f"{method}: {stored.design.size()} points x {seeds}, 95 % intervals", fontsize=10)
-    fig.tight_layout()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out)
-    plt.close(fig)
-    return out
+    return save(fig, Path(out))
 
 
 def _panel(ax: Any, table: pa.Table, stored: StoredSweep, measure: str) -> None:
@@ -281,7 +265,7 @@ def _panel(ax: Any, table: pa.Table, stored: StoredSweep, measure: str) -> None:
     names = stored.design.names
     first, second = ("S1", "ST") if stored.design.method == "sobol" else ("mu_star", "sigma")
     unit = stored.measures.get(measure, {}).get("unit", "")
-    ax.set_title(f"{measure} ({unit})" if unit and unit != measure else measure, fontsize=9)
+    ax.set_title(measure_label(measure, stored.measures), fontsize=9)
     if all(math.isnan(r["value"]) for r in rows):
         ax.text(0.5, 0.5, "no indices", ha="center", transform=ax.transAxes)
         ax.set_xticks([])

@@ -28,6 +28,8 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
+from pyautonomousagent.experiments.store import described
+
 if TYPE_CHECKING:
     from pyautonomousagent.experiments.measures import Measure, RunData
 
@@ -47,19 +49,10 @@ SERIES_DOCS: dict[str, tuple[str, str]] = {
 
 def series_schema() -> pa.Schema:
     """The time series' columns, each with its unit and description as field metadata."""
-    types = {
-        "run_id": pa.string(),
-        "iteration": pa.int64(),
-        "measure": pa.string(),
-        "value": pa.float64(),
-    }
-    return pa.schema(
-        [
-            pa.field(name, kind, metadata={"unit": SERIES_DOCS[name][0],
-                                           "description": SERIES_DOCS[name][1]})
-            for name, kind in types.items()
-        ]
-    )  # fmt: skip
+    types = (pa.string(), pa.int64(), pa.string(), pa.float64())  # SERIES_DOCS' columns
+    return described(
+        [pa.field(name, kind) for name, kind in zip(SERIES_DOCS, types, strict=True)], SERIES_DOCS
+    )
 
 
 def checkpoints(iterations: np.ndarray, every: int) -> np.ndarray:

@@ -1,37 +1,12 @@
 """An experiment: a scenario, the parameters to vary, the seeds and the measures.
 
-Written as YAML (or given on the command line, which builds the same mapping)::
-
-    name: threshold                 # optional; names the output folder
-    scenario: patrol                # a registered scenario or a scenario .yaml file
-    iterations: 4000                # optional: the scenario's own otherwise
-    set: {agents: 100}              # optional: fixed overrides of fields or parameters
-    vary:                           # a grid: every combination of the values below
-      low_energy_threshold: {from: 20, to: 50, step: 10}   # 20, 30, 40, 50 (inclusive)
-      refuel_rate: [1, 2]                                   # a list
-    sample:                         # optional: random points (crossed with the grid)
-      count: 8
-      seed: 7
-      parameters:
-        energy_use: {uniform: [0.03, 0.07]}
-        agents: {integers: [10, 100]}     # both ends included
-        tree: {choice: [patrol.xml, my.xml]}
-    seeds: 5                        # seeds 0..4 per point, or a list [3, 7, 11]
-    measures: [refuels, alerts, {low: "mean(energy < 30)"}]
-    engine: auto
-    record_every: 1
-    every: 100                      # optional: each measure every 100 iterations per run
-                                    # (timeseries.parquet; a multiple of record_every)
-
-or, instead of a grid, a sampled design over bounded parameters (see
-:mod:`~pyautonomousagent.experiments.design`)::
-
-    design: sobol                   # grid (default), lhs, sobol or morris
-    samples: 64                     # N (sobol: a power of two)
-    design_seed: 1                  # the design's own seed (default 0)
-    vary:
-      low_energy_threshold: {from: 30, to: 45}             # bounds, both ends included
-      agents: {from: 10, to: 100}                           # an int parameter stays int
+Written as YAML, or given on the command line, which builds the same mapping: the keys
+``name``, ``scenario``, ``iterations``, ``set`` (fixed overrides), ``vary`` (a grid: lists or
+``{from, to, step}`` ranges, both ends included), ``sample`` (random points crossed with the
+grid), ``seeds``, ``measures``, ``engine``, ``record_every`` and ``every`` (the time series'
+interval); or, instead of the grid, ``design`` (lhs, sobol or morris), ``samples`` and
+``design_seed`` with bounds ``{from, to}`` in ``vary`` (see
+:mod:`~pyautonomousagent.experiments.design`). docs/experiments.md shows a full file.
 
 :meth:`Experiment.from_mapping` validates it; every error is an :class:`ExperimentError`
 naming the source, the field and what it must be. :func:`read_file` reads the file as
@@ -42,7 +17,6 @@ refusing a parameter both fixed and varied, or varied twice.
 
 from __future__ import annotations
 
-import difflib
 import hashlib
 import itertools
 import json
@@ -62,7 +36,7 @@ from pyautonomousagent.experiments.design import (
     schema_types,
     typed,
 )
-from pyautonomousagent.experiments.errors import ExperimentError
+from pyautonomousagent.experiments.errors import ExperimentError, close_hint
 from pyautonomousagent.experiments.expression import ExpressionError
 from pyautonomousagent.experiments.measures import MEASURES, Measure, expression_measure
 from pyautonomousagent.inputs import InputError, load_yaml, plain_value, read_text
@@ -199,10 +173,11 @@ class Experiment:
 
     def to_mapping(self) -> dict[str, Any]:
         """The experiment as plain data (for the manifest; read back by :meth:`from_mapping`)."""
-        measures: list[Any] = []
-        for m in self.measures:
-            text = m.doc.removeprefix("expression: ")
-            measures.append({m.name: text} if m.doc.startswith("expression: ") else m.name)
+        expression = "expression: "
+        measures = [
+            {m.name: m.doc.removeprefix(expression)} if m.doc.startswith(expression) else m.name
+            for m in self.measures
+        ]
         data: dict[str, Any] = {
             "name": self.name,
             "scenario": self.scenario,
@@ -305,34 +280,31 @@ class _Reader:
     def __init__(self, source: str) -> None:
         self.source = source
 
+    def error(self, text: str) -> ExperimentError:
+        return ExperimentError(f"{self.source}: {text}")
+
     def fail(self, path: str, must: str, value: Any) -> ExperimentError:
         shown = repr(value)
         shown = shown if len(shown) <= 80 else shown[:77] + "..."
-        return ExperimentError(f"{self.source}: {path} must be {must}, got {shown}")
+        return self.error(f"{path} must be {must}, got {shown}")
 
     def experiment(self, data: Any) -> Experiment:
         if not isinstance(data, Mapping):
             raise self.fail("the file", "a mapping of keys to values", data)
         for key in data:
             if key not in _KEYS:
-                close = difflib.get_close_matches(str(key), _KEYS, n=1)
-                hint = f" (did you mean {close[0]!r}?)" if close else ""
-                raise ExperimentError(f"{self.source}: unknown key {key!r}{hint}")
+                raise self.error(f"unknown key {key!r}{close_hint(str(key), _KEYS)}")
         if "scenario" not in data:
-            raise ExperimentError(f"{self.source}: missing key 'scenario' (a scenario name)")
+            raise self.error("missing key 'scenario' (a scenario name)")
         fixed = self.mapping(data.get("set") or {}, "set")
         if "iterations" in fixed and data.get("iterations") is not None:
-            raise ExperimentError(
-                f"{self.source}: iterations given twice, as 'iterations' and in 'set'; keep one"
-            )
+            raise self.error("iterations given twice, as 'iterations' and in 'set'; keep one")
         design = self.design(data)
         vary = self.vary(data.get("vary") or {}) if design is None else {}
         sample = self.sample(data["sample"]) if data.get("sample") is not None else None
         self.overlap(fixed, list(vary) if design is None else design.names)
         if not vary and not sample and design is None:
-            raise ExperimentError(
-                f"{self.source}: nothing varies; give 'vary' (a grid) or 'sample' (random points)"
-            )
+            raise self.error("nothing varies; give 'vary' (a grid) or 'sample' (random points)")
         experiment = Experiment(
             scenario=self.text(data["scenario"], "scenario"),
             vary=vary,
@@ -350,9 +322,7 @@ class _Reader:
             every=self.every(data.get("every"), data.get("record_every", 1)),
         )
         self.columns(experiment)
-        grid = math.prod(len(values) for values in experiment.vary.values())
-        if design is not None:
-            grid = design.size()
+        grid = design.size() if design is not None else math.prod(len(v) for v in vary.values())
         total = grid * (sample["count"] if sample else 1) * len(experiment.seeds)
         if total > MAX_RUNS:
             raise self.fail("the experiment", f"at most {MAX_RUNS} runs", f"{total} runs")
@@ -367,29 +337,28 @@ class _Reader:
         if method == "grid":
             for key in ("samples", "design_seed"):
                 if data.get(key) is not None:
-                    raise ExperimentError(
-                        f"{self.source}: {key} is for a sampled design (lhs, sobol or morris); "
-                        "a grid runs every combination of vary"
+                    raise self.error(
+                        f"{key} is for a sampled design (lhs, sobol or morris); a grid runs "
+                        "every combination of vary"
                     )
             return None
         if data.get("sample") is not None:
-            raise ExperimentError(
-                f"{self.source}: sample (random points crossed with a grid) is for the grid "
-                f"design; design {method} draws its own points: give the bounds in vary"
+            raise self.error(
+                "sample (random points crossed with a grid) is for the grid design; design "
+                f"{method} draws its own points: give the bounds in vary"
             )
         if data.get("samples") is None:
-            raise ExperimentError(
-                f"{self.source}: design {method} needs samples, the number of samples N "
-                "(e.g. --samples 64)"
+            raise self.error(
+                f"design {method} needs samples, the number of samples N (e.g. --samples 64)"
             )
         samples = self.count(data["samples"], "samples")
         if method == "sobol" and not is_power_of_two(samples):
             raise self.fail("samples", "a power of two for design sobol (e.g. 32, 64)", samples)
         grid = self.mapping(data.get("vary") or {}, "vary")
         if not grid:
-            raise ExperimentError(
-                f"{self.source}: nothing varies; design {method} needs bounds in vary "
-                "(e.g. --vary low_energy_threshold=30:45)"
+            raise self.error(
+                f"nothing varies; design {method} needs bounds in vary (e.g. --vary "
+                "low_energy_threshold=30:45)"
             )
         bounds = {name: self.bounds(value, name, method) for name, value in grid.items()}
         seed = self.whole(data.get("design_seed", 0), "design_seed", 0)
@@ -419,7 +388,7 @@ class _Reader:
         if value is None:
             return None
         every = self.whole(value, "every", 1)
-        if isinstance(record_every, int) and record_every >= 1 and every % record_every:
+        if every % record_every:  # record_every is checked by then
             raise self.fail("every", f"a multiple of record_every ({record_every})", value)
         return every
 
@@ -428,9 +397,8 @@ class _Reader:
         parameter replaces its fixed value: ``set`` then gives the base scenario)."""
         both = [name for name in varied if name in fixed]
         if both:
-            raise ExperimentError(
-                f"{self.source}: parameter {both[0]!r} is both fixed ('set') and varied; "
-                "keep one of them"
+            raise self.error(
+                f"parameter {both[0]!r} is both fixed ('set') and varied; keep one of them"
             )
 
     def engine(self, value: Any) -> str:
@@ -579,7 +547,7 @@ class _Reader:
                 try:
                     out.append(MEASURES.get(item))
                 except UnknownNameError as error:
-                    raise ExperimentError(f"{self.source}: {path}: {error}") from None
+                    raise self.error(f"{path}: {error}") from None
             elif isinstance(item, Mapping) and len(item) == 1:
                 name, text = next(iter(item.items()))
                 if not isinstance(name, str) or not name.isidentifier():
@@ -587,7 +555,7 @@ class _Reader:
                 try:
                     out.append(expression_measure(name, text))
                 except ExpressionError as error:
-                    raise ExperimentError(f"{self.source}: {path}: {error}") from None
+                    raise self.error(f"{path}: {error}") from None
             else:
                 raise self.fail(path, "a measure name or {name: expression}", item)
         names = [m.name for m in out]
@@ -600,15 +568,11 @@ class _Reader:
         seen: dict[str, str] = {name: "a result column" for name in RESERVED}
         for name in experiment.parameters:
             if name in seen:
-                raise ExperimentError(
-                    f"{self.source}: parameter {name!r} is {seen[name]}; it cannot be varied"
-                )
+                raise self.error(f"parameter {name!r} is {seen[name]}; it cannot be varied")
             seen[name] = "a varied parameter"
         for m in experiment.measures:
             if m.name in seen:
-                raise ExperimentError(
-                    f"{self.source}: measure {m.name!r} is {seen[m.name]}; rename the measure"
-                )
+                raise self.error(f"measure {m.name!r} is {seen[m.name]}; rename the measure")
 
 
 def parse_vary(items: Sequence[str], bounds: bool = False) -> dict[str, Any]:

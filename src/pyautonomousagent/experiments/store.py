@@ -26,7 +26,7 @@ import json
 import os
 import re
 import uuid
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -44,30 +44,20 @@ JOURNAL = "journal"
 RUNS = "runs"
 
 
-#: The temporary files :func:`atomic_write_bytes` and :func:`atomic_write_table` write.
+#: The temporary files :func:`atomic_write` writes.
 TEMPORARY = re.compile(r"\..+\.[0-9a-f]{32}\.tmp")
 
 
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file, an fsync and a rename."""
-    temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
-    try:
-        with temporary.open("wb") as file:
-            file.write(data)
-            file.flush()
-            os.fsync(file.fileno())
-        os.replace(temporary, path)
-        sync_folder(path.parent)
-    finally:
-        temporary.unlink(missing_ok=True)
-
-
 def atomic_write_table(table: pa.Table, path: Path) -> None:
-    """Write ``table`` as Parquet (the run data's options) to ``path`` through a temporary
-    file, an fsync and a rename."""
+    """Write ``table`` as Parquet (the run data's options) to ``path`` atomically."""
+    atomic_write(path, lambda file: pq.write_table(table, file, **parquet_options(table.schema)))
+
+
+def atomic_write(path: Path, write: Callable[[Path], object]) -> None:
+    """Write ``path`` by ``write(temporary)`` to a temporary file, an fsync and a rename."""
     temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
     try:
-        pq.write_table(table, temporary, **parquet_options(table.schema))
+        write(temporary)
         fd = os.open(temporary, os.O_RDONLY)
         try:
             os.fsync(fd)
@@ -153,14 +143,16 @@ def results_schema(
     for name, value in (constants or {}).items():
         if name not in taken:
             fields.append(typed(name, [value]))
-    described = {**RESULT_DOCS, **(docs or {})}
+    return described(fields, {**RESULT_DOCS, **(docs or {})})
+
+
+def described(fields: Iterable[pa.Field], docs: Mapping[str, tuple[str, str]]) -> pa.Schema:
+    """A schema of ``fields``, each with metadata ``unit`` and ``description`` from ``docs``
+    (name -> (unit, description); empty for a name it lacks)."""
+    keys = ("unit", "description")
     return pa.schema(
-        [
-            f.with_metadata(dict(zip(("unit", "description"), described.get(f.name, ("", "")),
-                                     strict=True)))
-            for f in fields
-        ]
-    )  # fmt: skip
+        [f.with_metadata(dict(zip(keys, docs.get(f.name, ("", "")), strict=True))) for f in fields]
+    )
 
 
 class Journal:
@@ -181,16 +173,13 @@ class Journal:
         #: What opening the journal repaired, one line each (torn parts set aside...).
         self.notes: list[str] = []
         self._check_parts()
-        parts = sorted(self.folder.glob("part-*.parquet")) + self._torn()
+        parts = self.parts() + sorted(self.folder.glob(".part-*.parquet.torn"))
         numbers = [int(p.name.split("-")[1].split(".")[0]) for p in parts]
         self.next_part = max(numbers) + 1 if numbers else 0
 
     def parts(self) -> list[Path]:
         """The journal's files, in the order they were written."""
         return sorted(self.folder.glob("part-*.parquet"))
-
-    def _torn(self) -> list[Path]:
-        return sorted(self.folder.glob(".part-*.parquet.torn"))
 
     def _check_parts(self) -> None:
         """Read every part; one that cannot be read is set aside, with a note."""
@@ -264,13 +253,6 @@ def last_row_per_run(table: pa.Table) -> pa.Table:
     return kept.sort_by("run")
 
 
-def write_results(journal: Journal, out: Path) -> pa.Table:
-    """Compact the journal into ``results.parquet`` (one row per run) and return it."""
-    table = last_row_per_run(journal.read())
-    atomic_write_table(table, out / RESULTS)
-    return table
-
-
 #: Largest manifest read, bytes (it names the experiment, not each run).
 MAX_MANIFEST_BYTES = 50_000_000
 
@@ -293,5 +275,6 @@ def read_manifest(out: Path) -> dict[str, Any] | None:
 def write_manifest(out: Path, manifest: Mapping[str, Any]) -> Path:
     """Write the manifest (pretty JSON) atomically."""
     path = out / MANIFEST
-    atomic_write_bytes(path, (json.dumps(manifest, indent=2, default=str) + "\n").encode())
+    text = json.dumps(manifest, indent=2, default=str) + "\n"
+    atomic_write(path, lambda file: file.write_bytes(text.encode()))
     return path

@@ -18,7 +18,6 @@ experiment's ``every``, each run's measures every K iterations go to ``timeserie
 from __future__ import annotations
 
 import contextlib
-import difflib
 import json
 import math
 import pickle
@@ -33,7 +32,7 @@ import pyarrow as pa
 
 from pyautonomousagent.experiments.backends import Backend, make_backend
 from pyautonomousagent.experiments.design import write_design
-from pyautonomousagent.experiments.expression import Expression
+from pyautonomousagent.experiments.errors import close_hint
 from pyautonomousagent.experiments.measures import RunData, _Evaluate
 from pyautonomousagent.experiments.runner import (
     RunTask,
@@ -50,10 +49,10 @@ from pyautonomousagent.experiments.store import (
     RUNS,
     Journal,
     atomic_write_table,
+    last_row_per_run,
     read_manifest,
     results_schema,
     write_manifest,
-    write_results,
 )
 from pyautonomousagent.folders import BusyError, claimed
 from pyautonomousagent.progress import Progress
@@ -117,8 +116,7 @@ def check(experiment: Experiment, scenario: Any) -> RunData:
             values.setdefault(name, set()).add(json.dumps(value))
     for name, texts in values.items():
         if name not in known:
-            close = difflib.get_close_matches(name, known, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            hint = close_hint(name, known)
             raise ExperimentError(
                 f"experiment {experiment.name!r}: unknown parameter {name!r}{hint}"
             )
@@ -135,8 +133,10 @@ def check(experiment: Experiment, scenario: Any) -> RunData:
     recorded = RunData.from_simulation(probe)
     names = list(recorded.expression_values())
     for measure in experiment.measures:
-        if isinstance(measure.fn, _Evaluate):
-            _check_names(measure.name, measure.fn.expression, names)
+        columns = measure.fn.expression.names if isinstance(measure.fn, _Evaluate) else []
+        for column in (c for c in columns if c not in names):
+            hint = close_hint(column, names)
+            raise ExperimentError(f"measure {measure.name!r}: unknown column {column!r}{hint}")
     return recorded
 
 
@@ -193,14 +193,6 @@ def _check_tree(name: str, value: Any, experiment: str) -> None:
             f"experiment {experiment!r}: tree: no file {value!r} (a varied tree is a path "
             "relative to the working directory, or an absolute one)"
         )
-
-
-def _check_names(name: str, expression: Expression, known: list[str]) -> None:
-    for column in expression.names:
-        if column not in known:
-            close = difflib.get_close_matches(column, known, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
-            raise ExperimentError(f"measure {name!r}: unknown column {column!r}{hint}")
 
 
 def run_bytes(experiment: Experiment, scenario: Any, columns: int, save_runs: bool) -> int:
@@ -265,23 +257,14 @@ def sweep(
     Raises:
         ExperimentError: bad experiment, ``out`` holds another sweep, or a run too large.
     """
-    out = Path(out)
+    out, report = Path(out), report or _ignore
     scenario = base_scenario(experiment)
     experiment = for_scenario(experiment, scenario)  # a design's int parameters stay int
     runs = experiment.runs()
-    compile_once(experiment, scenario, len(runs), report or _ignore)
+    compile_once(experiment, scenario, len(runs), report)
     probe = check(experiment, scenario)
-    previous = _previous_manifest(out, experiment, resume)
-    points = experiment.points()
-    types, docs = parameter_columns(scenario)
-    docs.update({m.name: (m.unit, m.doc) for m in experiment.measures})
-    schema = results_schema(
-        {name: [p[name] for p in points] for name in experiment.parameters},
-        [m.name for m in experiment.measures],
-        scenario_parameters(scenario),
-        types=types,
-        docs=docs,
-    )
+    _previous_manifest(out, experiment, resume)  # refused before a backend starts
+    schema = _schema(experiment, scenario)
     owned = isinstance(backend, str)
     chosen = make_backend(backend, workers, address) if isinstance(backend, str) else backend
     held = contextlib.ExitStack()
@@ -289,7 +272,7 @@ def sweep(
         check_memory(run_bytes(experiment, scenario, len(probe.columns), save_runs), chosen)
         if chosen.name == "pool":
             _check_picklable(_tasks(experiment, scenario, runs[:1], None)[0])
-        held.enter_context(_claim(out, report or _ignore))
+        held.enter_context(_claim(out, report))
         previous = _previous_manifest(out, experiment, resume)  # again, now that it is ours
     except ExperimentError:
         held.close()
@@ -301,7 +284,7 @@ def sweep(
         out.mkdir(parents=True, exist_ok=True)
         journal = Journal(out, schema)
         for note in journal.notes:
-            (report or _ignore)(note)
+            report(note)
         done = journal.finished() if resume else set()
         todo = [run for run in runs if run.run_id not in done]
         counts = {"ok": 0, "failed": 0, "skipped": len(runs) - len(todo)}
@@ -335,12 +318,24 @@ def sweep(
     return SweepResult(out, table, counts, time.perf_counter() - start, workers_text)
 
 
+def _schema(experiment: Experiment, scenario: Any) -> pa.Schema:
+    """The results' schema (:func:`~pyautonomousagent.experiments.store.results_schema`)."""
+    points = experiment.points()
+    types, docs = parameter_columns(scenario)
+    docs.update({m.name: (m.unit, m.doc) for m in experiment.measures})
+    parameters = {name: [p[name] for p in points] for name in experiment.parameters}
+    measures = [m.name for m in experiment.measures]
+    constants = scenario_parameters(scenario)
+    return results_schema(parameters, measures, constants, types=types, docs=docs)
+
+
 def _finish(
     journal: Journal, out: Path, manifest: dict[str, Any], counts: dict[str, int], start: float
 ) -> pa.Table:
-    """Write the results, the time series (if the experiment keeps one) and the final
-    manifest; the results."""
-    table = write_results(journal, out)
+    """Write the results (the journal's last row of each run), the time series (if the
+    experiment keeps one) and the final manifest; the results."""
+    table = last_row_per_run(journal.read())
+    atomic_write_table(table, out / RESULTS)
     if manifest["experiment"].get("every") is not None:
         series = documented(compact(journal.folder, table), manifest["measures"])
         atomic_write_table(series, out / TIMESERIES)
