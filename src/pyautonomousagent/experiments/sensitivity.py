@@ -33,7 +33,13 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
-from pyautonomousagent.experiments.design import DESIGN_FILE, MORRIS_LEVELS, Design, library
+from pyautonomousagent.experiments.design import (
+    DESIGN_FILE,
+    MORRIS_LEVELS,
+    Design,
+    library,
+    unit_problem,
+)
 from pyautonomousagent.experiments.errors import ExperimentError, close_hint
 from pyautonomousagent.experiments.plot import measure_label, pyplot, read_results, save
 from pyautonomousagent.inputs import InputError, read_parquet
@@ -169,7 +175,7 @@ def _analyse(design: Design, unit: np.ndarray, y: np.ndarray) -> dict[str, list[
     d = len(design.names)
     if not np.isfinite(y).all() or np.ptp(y) == 0:  # a point without a value, or no variance
         return {index: [(math.nan, math.nan)] * d for index in names}
-    problem = design.problem()
+    problem = unit_problem(design.names)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         if design.method == "sobol":

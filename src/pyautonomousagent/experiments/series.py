@@ -137,24 +137,13 @@ def compact(folder: Path, results: pa.Table) -> pa.Table:
     parts = read_parts(folder)
     ok = results.filter(pc.equal(results["status"], "ok"))
     order = {run_id: i for i, run_id in enumerate(ok["run_id"].to_pylist())}
+    rows = list(zip(parts["run_id"].to_pylist(), parts["part"].to_pylist(), strict=True))
     latest: dict[str, int] = {}
-    for run_id, part in zip(parts["run_id"].to_pylist(), parts["part"].to_pylist(), strict=True):
+    for run_id, part in rows:
         latest[run_id] = max(part, latest.get(run_id, part))
-    keep = [
-        i
-        for i, (run_id, part) in enumerate(
-            zip(parts["run_id"].to_pylist(), parts["part"].to_pylist(), strict=True)
-        )
-        if run_id in order and latest[run_id] == part
-    ]
-    kept = parts.take(pa.array(keep, pa.int64())).drop_columns(["part"])
-    rank = pa.array([order[r] for r in kept["run_id"].to_pylist()], pa.int64())
-    ranked = kept.append_column("rank", rank).append_column(
-        "row", pa.array(np.arange(kept.num_rows), pa.int64())
-    )
-    return ranked.sort_by([("rank", "ascending"), ("row", "ascending")]).select(
-        series_schema().names
-    )
+    keep = [i for i, (run, part) in enumerate(rows) if run in order and latest[run] == part]
+    keep.sort(key=lambda i: order[rows[i][0]])  # stable: a run's rows keep their order
+    return parts.take(pa.array(keep, pa.int64())).select(series_schema().names)
 
 
 def documented(table: pa.Table, units: Mapping[str, Any]) -> pa.Table:

@@ -31,7 +31,6 @@ import numpy as np
 from pyautonomousagent.experiments.design import (
     DESIGNS,
     Design,
-    design_size,
     is_power_of_two,
     schema_types,
     typed,
@@ -362,9 +361,10 @@ class _Reader:
             )
         bounds = {name: self.bounds(value, name, method) for name, value in grid.items()}
         seed = self.whole(data.get("design_seed", 0), "design_seed", 0)
-        if design_size(method, samples, len(bounds)) > MAX_RUNS:
+        design = Design(method, samples, seed, bounds)
+        if design.size() > MAX_RUNS:
             raise self.fail("samples", f"a number giving at most {MAX_RUNS} points", samples)
-        return Design(method, samples, seed, bounds)
+        return design
 
     def bounds(self, value: Any, name: str, method: str) -> tuple[float, float]:
         """A parameter's bounds ``{from: LOW, to: HIGH}`` with LOW < HIGH."""
