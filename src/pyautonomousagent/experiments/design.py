@@ -1,20 +1,13 @@
-"""Designs of experiments beyond the grid: Latin hypercube, Sobol (Saltelli) and Morris.
+"""Designs of experiments beyond the grid: Latin hypercube (SciPy), Sobol (SALib's Saltelli
+scheme, first-order and total indices only) and Morris (SALib, 4 levels); docs/experiments.md
+has the table of their sizes.
 
 A design draws points in the unit cube ``[0, 1]^D`` (one dimension per varied parameter)
-with a library and its own seed, then scales each dimension to the parameter's bounds::
-
-    lhs     SciPy's qmc.LatinHypercube             samples points
-    sobol   SALib's Sobol' sequence (Saltelli)      samples x (D + 2) points
-    morris  SALib's Morris trajectories, 4 levels   samples x (D + 1) points
-
-The Sobol design leaves out the second-order columns (first-order and total indices only).
-A float parameter takes ``low + u * (high - low)``; a whole-number parameter (``agents``, an
-int parameter of the scenario's schema) takes ``low + floor(u * (high - low + 1))`` (at most
-``high``), so each of ``low..high`` is equally likely. The same design and seed give the same
-points, bit for bit, so a sweep's ``--resume`` finds its runs again.
-
-SALib and SciPy are optional (the ``[experiments]`` extra); they are imported only here, when
-a design is drawn or analysed.
+from its own seed (the same design and seed give the same points bit for bit, so
+``--resume`` finds its runs again), then scales each to the parameter's bounds: a float
+parameter takes ``low + u * (high - low)``, a whole-number one
+``low + floor(u * (high - low + 1))`` (at most ``high``), so each of ``low..high`` is equally
+likely. SALib and SciPy are the optional ``[experiments]`` extra, imported only here.
 """
 
 from __future__ import annotations

@@ -2,14 +2,10 @@
 
 A measure is a function of a :class:`RunData` (the recorded columns, events and scenario of
 one run) that returns a float, kept in the registry :data:`MEASURES` with a one-line
-description and a unit. The built-in ones below read what every run records today (state
-columns, blackboard columns, alert and gathering events); missions add their own with
-:func:`register_measure`. An experiment can also use a small expression over the columns
-(:mod:`pyautonomousagent.experiments.expression`).
-
-The fraction of time spent in each behaviour comes from the recorded active behaviour (the
-leaf each agent is running): :func:`behaviour_fractions` gives all of them, and an expression
-``mean(in_<leaf name>)`` one, e.g. ``mean(in_action_refuel_a)``.
+description and a unit; missions add their own with :func:`register_measure`, and an
+experiment can use an expression over the columns
+(:mod:`~pyautonomousagent.experiments.expression`; ``mean(in_<leaf name>)`` is the share of
+time in a behaviour, :func:`behaviour_fractions` gives all of them).
 """
 
 from __future__ import annotations

@@ -1,11 +1,9 @@
 """One run of a sweep, as a worker executes it: simulate, measure, optionally save the data.
 
-:func:`execute` is what every backend calls (in this process, a pool process or a Dask
-worker). It never raises for a failing run: the row it returns then has ``status`` "failed"
-and the error's first line, so the sweep goes on. The per-run data, when asked for, is
-written under ``runs/NAME=VALUE/.../seed=S/data.parquet`` (hive partitioning) by renaming a
-finished temporary file, so a worker killed mid-write leaves no partial file and a run done
-again writes the same file.
+:func:`execute` is what every backend calls. It never raises for a failing run: the row it
+returns then has ``status`` "failed" and the error's first line, so the sweep goes on. The
+per-run data is written as ``runs/NAME=VALUE/.../seed=S/data.parquet`` (hive partitions)
+through a temporary file and a rename, so a killed worker leaves no partial file.
 """
 
 from __future__ import annotations

@@ -1,24 +1,13 @@
-"""Sensitivity analysis of a sweep drawn with a Sobol or Morris design (``pyaa analyse``).
+"""Sensitivity analysis of a sweep drawn with a Sobol or Morris design (``pyaa analyse``;
+docs/experiments.md says what each index means).
 
-:func:`indices` takes a results table (one row per run: ``run``, ``status`` and the
-measures), the design and its points in the unit cube, and gives a tidy table, one row per
-(measure, parameter, index):
-
-- Sobol (SALib's ``analyze.sobol``, first-order and total): ``S1``, the share of the
-  measure's variance due to the parameter alone, and ``ST``, its share with all its
-  interactions (both without unit, 0 to 1); ``confidence`` is the half-width of the 95 %
-  bootstrap interval.
-- Morris (SALib's ``analyze.morris``): ``mu_star``, the mean absolute elementary effect,
-  ``mu`` its signed mean and ``sigma`` its standard deviation (interactions and
-  non-linearity), each in the measure's unit per the parameter's whole range (from ``from``
-  to ``to``); ``confidence`` is the 95 % bootstrap half-width of ``mu_star``.
-
-A point run with several seeds counts by the mean of its successful runs (the sensitivity of
-the seeds' mean). The bootstrap draws from the design's seed, so the same sweep always gives
-the same table. A measure that takes one value at every point, or has no value at some
-point (its runs failed, are not done, or the measure is NaN there), has no indices (NaN).
-:func:`read_sweep` reads what the analysis needs from a sweep folder (its results, manifest
-and ``design.parquet``), and :func:`plot_indices` draws the table.
+:func:`indices` gives a tidy table, one row per (measure, parameter, index): Sobol's ``S1``
+and ``ST`` (no unit, 0 to 1) or Morris's ``mu_star``, ``sigma`` and ``mu`` (the measure's
+unit per the parameter's whole range), each with ``confidence``, the half-width of its 95 %
+bootstrap interval (drawn from the design's seed: the same sweep gives the same table). A
+point run with several seeds counts by the mean of its successful runs; a measure with one
+value everywhere, or none at some point, has no indices (NaN). :func:`read_sweep` reads what
+the analysis needs from a sweep folder, and :func:`plot_indices` draws the table.
 """
 
 from __future__ import annotations

@@ -1,18 +1,10 @@
-"""Time series of a sweep: each measure every K iterations of every run.
+"""Time series of a sweep: each measure every K iterations of every run (``every: K``).
 
-With ``every: K`` in the experiment (``pyaa sweep --every K``) each worker computes, after
-its run, every measure of the run *as it stood* at iterations 0, K, 2K, ... and at its last
-iteration: the measure of the records up to and including that iteration, and of the
-events raised by then (:func:`prefix`). The value at the last iteration is the run's value
-in ``results.parquet``. The rows travel with the run's result row, are journaled with it
-(``journal/series-*.parquet``, the same part number as the results' part) and are compacted
-into a tidy long table beside the results::
-
-    OUT/timeseries.parquet   run_id (string), iteration (int64), measure (string),
-                             value (float64): one row per run, measure and checkpoint
-
-Only runs whose status is "ok" have rows. K must be a multiple of the recording's
-``record_every``, so that every checkpoint is a recorded iteration.
+Each worker computes, after its run, every measure of the run *as it stood* at iterations
+0, K, 2K, ... and at its last iteration (:func:`prefix`). The rows travel with the run's
+result row, are journaled with it (``journal/series-N.parquet`` beside the results' part N)
+and are compacted into ``timeseries.parquet``: run_id, iteration, measure, value, one row
+per ok run, measure and checkpoint (docs/experiments.md, "Time series").
 """
 
 from __future__ import annotations

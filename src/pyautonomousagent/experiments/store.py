@@ -1,22 +1,13 @@
-"""A sweep's folder: the manifest, the journal of finished runs, and the results.
+"""A sweep's folder (docs/experiments.md, "What a sweep writes"): the manifest
+``experiment.json``, the journal of finished runs (``journal/part-*.parquet``, with their
+time series beside as ``series-*.parquet``) and ``results.parquet``, the journal's last row
+of each run.
 
-::
-
-    OUT/experiment.json        the manifest: experiment, base scenario, runs, backend,
-                               versions, counts, start and end times
-    OUT/journal/part-*.parquet rows of finished runs, appended in batches as they finish
-    OUT/journal/series-*.parquet  the time series of a part's runs (``every``), if kept
-    OUT/results.parquet        one row per run (the journal's last row of each run)
-    OUT/timeseries.parquet     each measure every K iterations per run (``every``), if kept
-    OUT/runs/NAME=VALUE/.../seed=S/data.parquet   each run's recorded data (optional)
-
-Every file is written to a temporary name, flushed to disk (fsync) and renamed, so an
-interrupted or killed sweep, or a machine that stops, leaves whole files only: the journal
-holds exactly the runs that finished, and ``--resume`` runs the others. A journal part that
-cannot be read all the same (a torn file left by an older version, a disk that lied) is
-set aside as ``journal/.part-*.parquet.torn`` when the journal is opened, so that its runs
-run again, and :attr:`Journal.notes` says so; temporary files a killed sweep left are
-deleted.
+Every file is written to a temporary name, flushed to disk (fsync) and renamed, so a killed
+sweep or a stopped machine leaves whole files only: the journal holds exactly the runs that
+finished, and ``--resume`` runs the others. A journal part that cannot be read all the same
+is set aside as ``journal/.part-*.parquet.torn`` when the journal is opened, so that its runs
+run again (:attr:`Journal.notes` says so); temporary files a killed sweep left are deleted.
 """
 
 from __future__ import annotations

@@ -1,18 +1,10 @@
 """Run an experiment: every point x seed on a backend, into a sweep folder.
 
-:func:`sweep` is the library function behind ``pyaa sweep``; call it from a notebook::
-
-    from pyautonomousagent.experiments import Experiment, sweep
-    result = sweep(Experiment.from_file("threshold.yaml"), "runs/threshold")
-    result.table.to_pandas()
-
-Before anything runs, every varied value is checked against the scenario, expression
-measures against the recorded columns, and the estimated memory of the largest run against
-what a worker may use. Runs are journaled as they finish (see
-:mod:`pyautonomousagent.experiments.store`); a run that raises is recorded as failed with
-its message and the sweep goes on; ``resume=True`` skips the runs already done. With the
-experiment's ``every``, each run's measures every K iterations go to ``timeseries.parquet``
-(:mod:`pyautonomousagent.experiments.series`).
+:func:`sweep` is the library function behind ``pyaa sweep``. Before anything runs, every
+varied value is checked against the scenario, expression measures against the recorded
+columns, and the estimated memory of the largest run against what a worker may use. Runs
+are journaled as they finish (:mod:`~pyautonomousagent.experiments.store`); a run that raises
+is recorded as failed and the sweep goes on; ``resume=True`` skips the runs already done.
 """
 
 from __future__ import annotations
@@ -30,7 +22,7 @@ from typing import Any
 
 import pyarrow as pa
 
-from pyautonomousagent.experiments.backends import Backend, make_backend
+from pyautonomousagent.experiments.backends import Backend, make_backend, quiet
 from pyautonomousagent.experiments.design import write_design
 from pyautonomousagent.experiments.errors import close_hint
 from pyautonomousagent.experiments.measures import RunData, _Evaluate
@@ -105,6 +97,7 @@ def check(experiment: Experiment, scenario: Any) -> RunData:
     Raises:
         ExperimentError: an unknown parameter, a bad value, or an unknown column.
     """
+    from pyautonomousagent.bt.files import is_tree_file
     from pyautonomousagent.simulation import ScenarioError, Simulation
     from pyautonomousagent.simulation.scenario import to_mapping
 
@@ -122,7 +115,12 @@ def check(experiment: Experiment, scenario: Any) -> RunData:
             )
         for text in sorted(texts):
             value = json.loads(text)
-            _check_tree(name, value, experiment.name)
+            tree_file = name == "tree" and isinstance(value, str) and is_tree_file(value)
+            if tree_file and not Path(value).is_file():  # it is read on the worker
+                raise ExperimentError(
+                    f"experiment {experiment.name!r}: tree: no file {value!r} (a varied tree is "
+                    "a path relative to the working directory, or an absolute one)"
+                )
             try:
                 scenario.with_overrides(**{name: value})
             except ScenarioError as error:
@@ -181,18 +179,6 @@ def compile_once(
         report(f"the compiled engine ticks the tree only, not whole iterations: {why}")
     report(f"compiled engine: compiling (or loading) the tree's code took {seconds:.1f} s")
     return seconds
-
-
-def _check_tree(name: str, value: Any, experiment: str) -> None:
-    """A varied tree file must exist (it is read on the worker, relative to its folder)."""
-    from pyautonomousagent.bt.files import is_tree_file
-
-    tree_file = name == "tree" and isinstance(value, str) and is_tree_file(value)
-    if tree_file and not Path(value).is_file():
-        raise ExperimentError(
-            f"experiment {experiment!r}: tree: no file {value!r} (a varied tree is a path "
-            "relative to the working directory, or an absolute one)"
-        )
 
 
 def run_bytes(experiment: Experiment, scenario: Any, columns: int, save_runs: bool) -> int:
@@ -257,7 +243,7 @@ def sweep(
     Raises:
         ExperimentError: bad experiment, ``out`` holds another sweep, or a run too large.
     """
-    out, report = Path(out), report or _ignore
+    out, report = Path(out), report or quiet
     scenario = base_scenario(experiment)
     experiment = for_scenario(experiment, scenario)  # a design's int parameters stay int
     runs = experiment.runs()
@@ -453,10 +439,6 @@ def _claim(out: Path, report: Callable[[str], None]) -> Iterator[None]:
             f"{out} is being written by another sweep or run ({error.strerror}); wait for it "
             "to finish, or choose another --out"
         ) from None
-
-
-def _ignore(note: str) -> None:
-    """Drop ``note`` (no ``report`` given to :func:`sweep`)."""
 
 
 def _previous_manifest(out: Path, experiment: Experiment, resume: bool) -> dict[str, Any] | None:
