@@ -360,8 +360,7 @@ class DaskBackend(Watched):
         self.report(f"run {key} given again on {worker} (its worker {before} was lost)")
 
     def _worker_info(self) -> dict[str, Any]:
-        info: dict[str, Any] = self.client.scheduler_info().get("workers", {})
-        return info
+        return dict(self.client.scheduler_info().get("workers", {}))
 
     def workers(self) -> int:
         return max(sum(int(w.get("nthreads", 1)) for w in self._worker_info().values()), 1)

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -176,12 +175,3 @@ def design_table(design: Design) -> pa.Table:
         "morris_levels": MORRIS_LEVELS,
     }
     return pa.table(columns).replace_schema_metadata({"pyaa.design": json.dumps(about)})
-
-
-def write_design(out: Path, design: Design) -> Path:
-    """Write :func:`design_table` as ``out/design.parquet`` (atomically); its path."""
-    from pyautonomousagent.experiments.store import atomic_write_table
-
-    path = out / DESIGN_FILE
-    atomic_write_table(design_table(design), path)
-    return path

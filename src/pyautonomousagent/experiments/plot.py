@@ -25,33 +25,10 @@ from pyautonomousagent.inputs import InputError, read_parquet
 INTERVALS = ("ci95", "sd", "range", "none")
 #: Two-sided 95 % quantiles of Student's t distribution by degrees of freedom (published
 #: tables); between entries the next smaller one is used (a slightly wider interval).
-_T95 = {
-    1: 12.706,
-    2: 4.303,
-    3: 3.182,
-    4: 2.776,
-    5: 2.571,
-    6: 2.447,
-    7: 2.365,
-    8: 2.306,
-    9: 2.262,
-    10: 2.228,
-    11: 2.201,
-    12: 2.179,
-    13: 2.160,
-    14: 2.145,
-    15: 2.131,
-    16: 2.120,
-    17: 2.110,
-    18: 2.101,
-    19: 2.093,
-    20: 2.086,
-    25: 2.060,
-    30: 2.042,
-    40: 2.021,
-    60: 2.000,
-    120: 1.980,
-}
+_T95 = dict(zip((*range(1, 21), 25, 30, 40, 60, 120), (
+    12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
+    2.201, 2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086,
+    2.060, 2.042, 2.021, 2.000, 1.980), strict=True))  # fmt: skip
 
 
 def t95(df: int) -> float:

@@ -374,8 +374,7 @@ class _Reader:
         )
         if not isinstance(value, Mapping) or set(value) != {"from", "to"}:
             raise self.fail(f"vary.{name}", must, value)
-        low = self.number(value["from"], f"vary.{name}.from")
-        high = self.number(value["to"], f"vary.{name}.to")
+        low, high = (self.number(value[k], f"vary.{name}.{k}") for k in ("from", "to"))
         if not low < high:
             raise self.fail(f"vary.{name}", must, value)
         if not math.isfinite(high - low) or max(-low, high) > 2**62:
@@ -452,12 +451,11 @@ class _Reader:
 
     def values(self, value: Any, path: str) -> list[Any]:
         if isinstance(value, Mapping):
-            keys = set(value)
-            if keys != {"from", "to", "step"}:
+            if set(value) != {"from", "to", "step"}:
                 raise self.fail(path, "a list of values or {from: A, to: B, step: S}", value)
-            start = self.number(value["from"], f"{path}.from")
-            stop = self.number(value["to"], f"{path}.to")
-            step = self.number(value["step"], f"{path}.step")
+            start, stop, step = (
+                self.number(value[k], f"{path}.{k}") for k in ("from", "to", "step")
+            )
             if step <= 0 or stop < start:
                 raise self.fail(path, "a range with step > 0 and to >= from", value)
             if (stop - start) / step >= MAX_RUNS:

@@ -23,7 +23,7 @@ from typing import Any
 import pyarrow as pa
 
 from pyautonomousagent.experiments.backends import Backend, make_backend, quiet
-from pyautonomousagent.experiments.design import write_design
+from pyautonomousagent.experiments.design import DESIGN_FILE, design_table
 from pyautonomousagent.experiments.errors import close_hint
 from pyautonomousagent.experiments.measures import RunData, _Evaluate
 from pyautonomousagent.experiments.runner import (
@@ -278,7 +278,7 @@ def sweep(
         try:
             write_manifest(out, manifest)
             if experiment.design is not None:
-                write_design(out, experiment.design)
+                atomic_write_table(design_table(experiment.design), out / DESIGN_FILE)
             tasks = _tasks(experiment, scenario, todo, out / RUNS if save_runs else None)
             _execute(
                 tasks,
