@@ -253,19 +253,14 @@ def sweep(
     schema = _schema(experiment, scenario)
     owned = isinstance(backend, str)
     chosen = make_backend(backend, workers, address) if isinstance(backend, str) else backend
-    held = contextlib.ExitStack()
-    try:
+    with contextlib.ExitStack() as held:
+        if owned:  # closed on an error before the runs (after them, closing again does nothing)
+            held.callback(chosen.close)
         check_memory(run_bytes(experiment, scenario, len(probe.columns), save_runs), chosen)
         if chosen.name == "pool":
             _check_picklable(_tasks(experiment, scenario, runs[:1], None)[0])
         held.enter_context(_claim(out, report))
         previous = _previous_manifest(out, experiment, resume)  # again, now that it is ours
-    except ExperimentError:
-        held.close()
-        if owned:
-            chosen.close()
-        raise
-    with held:
         start = time.perf_counter()
         out.mkdir(parents=True, exist_ok=True)
         journal = Journal(out, schema)
@@ -280,16 +275,10 @@ def sweep(
             if experiment.design is not None:
                 atomic_write_table(design_table(experiment.design), out / DESIGN_FILE)
             tasks = _tasks(experiment, scenario, todo, out / RUNS if save_runs else None)
-            _execute(
-                tasks,
-                chosen,
-                journal,
-                counts,
-                experiment.name,
-                progress,
-                on_result,
-                (flush_every, flush_seconds),
+            bar = Progress(
+                len(tasks), f"sweep {experiment.name}", enabled=progress, lines=True, unit="runs"
             )
+            _execute(tasks, chosen, journal, counts, bar, on_result, (flush_every, flush_seconds))
             manifest["status"] = "finished"
         except BaseException:
             manifest["status"] = "interrupted"
@@ -381,13 +370,12 @@ def _execute(
     backend: Backend,
     journal: Journal,
     counts: dict[str, int],
-    name: str,
-    progress: bool | None,
+    bar: Progress,
     on_result: Callable[[dict[str, Any]], None] | None,
     flush: tuple[int, float],
 ) -> None:
-    """Run the tasks, journaling each result once (in batches)."""
-    bar = Progress(len(tasks), f"sweep {name}", enabled=progress, lines=True, unit="runs")
+    """Run the tasks, journaling each result once (in batches); ``bar`` shows them (and is
+    closed here)."""
     told = getattr(backend, "report", None)
     if told is not None:
         backend.report = bar.note  # type: ignore[attr-defined]  # a lost worker: one line
