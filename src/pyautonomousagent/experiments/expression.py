@@ -22,14 +22,6 @@ from pyautonomousagent.experiments.errors import close_hint
 MAX_LENGTH = 400
 
 
-def _first(a: np.ndarray) -> np.ndarray:
-    return a[0] if a.ndim >= 1 else a
-
-
-def _last(a: np.ndarray) -> np.ndarray:
-    return a[-1] if a.ndim >= 1 else a
-
-
 #: Functions an expression may call, each of one argument.
 FUNCTIONS: dict[str, Callable[[np.ndarray], Any]] = {
     "mean": np.mean,
@@ -38,8 +30,8 @@ FUNCTIONS: dict[str, Callable[[np.ndarray], Any]] = {
     "sum": np.sum,
     "std": np.std,
     "count": np.count_nonzero,
-    "first": _first,
-    "last": _last,
+    "first": lambda a: a[0] if a.ndim >= 1 else a,  # the first record, shape (N,)
+    "last": lambda a: a[-1] if a.ndim >= 1 else a,
     "abs": np.abs,
     "sqrt": np.sqrt,
 }

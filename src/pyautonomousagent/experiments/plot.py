@@ -111,8 +111,7 @@ def summarize(
     rows = []
     for (group, xv), found in sorted(cells.items(), key=lambda c: (_rank(c[0][0]), _rank(c[0][1]))):
         data = np.asarray(found)
-        mean = float(data.mean())
-        low, high = _interval(data, interval)
+        mean, (low, high) = float(data.mean()), _interval(data, interval)
         rows.append({"by": group, "x": xv, "n": data.size, "mean": mean, "low": low, "high": high})
     return rows
 

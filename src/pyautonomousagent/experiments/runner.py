@@ -118,21 +118,17 @@ def one_line(error: BaseException) -> str:
 
 def partition_dir(root: Path, run: Run) -> Path:
     """``root/NAME=VALUE/.../seed=S`` for the run's point (values URL-quoted)."""
-    path = root
-    for name, value in run.point.items():
-        path = path / f"{name}={quote(str(value), safe='')}"
-    return path / f"seed={run.seed}"
+    parts = (f"{name}={quote(str(value), safe='')}" for name, value in run.point.items())
+    return root.joinpath(*parts, f"seed={run.seed}")
 
 
-def write_run_data(sim: Any, root: Path, run: Run) -> Path:
+def write_run_data(sim: Any, root: Path, run: Run) -> None:
     """Write the run's recorded table as ``data.parquet`` in its partition folder."""
     from pyautonomousagent.experiments.store import atomic_write_table
 
     folder = partition_dir(root, run)
     folder.mkdir(parents=True, exist_ok=True)
-    target = folder / "data.parquet"
-    atomic_write_table(sim.table(), target)
-    return target
+    atomic_write_table(sim.table(), folder / "data.parquet")
 
 
 #: The scenario fields a sweep may vary besides its parameters: type, unit, description.
@@ -153,10 +149,8 @@ def parameter_columns(scenario: Any) -> tuple[dict[str, Any], dict[str, tuple[st
     from pyautonomousagent.simulation.scenario import parameter_list
 
     arrow = {bool: pa.bool_(), int: pa.int64(), float: pa.float64(), str: pa.string()}
-    types: dict[str, Any] = {}
-    docs: dict[str, tuple[str, str]] = {}
-    for name, (kind, unit, doc) in _FIELD_COLUMNS.items():
-        types[name], docs[name] = arrow[kind], (unit, doc)
+    types = {name: arrow[kind] for name, (kind, _, _) in _FIELD_COLUMNS.items()}
+    docs = {name: (unit, doc) for name, (_, unit, doc) in _FIELD_COLUMNS.items()}
     for _, param in parameter_list(scenario):
         if param.type in arrow:
             types[param.name] = arrow[param.type]

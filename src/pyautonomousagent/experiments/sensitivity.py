@@ -258,7 +258,6 @@ def _panel(ax: Any, table: pa.Table, stored: StoredSweep, measure: str) -> None:
     """One measure's bars: per parameter, the method's two main indices side by side."""
     rows = [r for r in table.to_pylist() if r["measure"] == measure]
     names = stored.design.names
-    first, second = ("S1", "ST") if stored.design.method == "sobol" else ("mu_star", "sigma")
     unit = stored.measures.get(measure, {}).get("unit", "")
     ax.set_title(measure_label(measure, stored.measures), fontsize=9)
     if all(math.isnan(r["value"]) for r in rows):
@@ -268,7 +267,7 @@ def _panel(ax: Any, table: pa.Table, stored: StoredSweep, measure: str) -> None:
         return
     labels = {"S1": "first order S1", "ST": "total ST", "mu_star": "mu*", "sigma": "sigma"}
     where = np.arange(len(names))
-    for k, index in enumerate((first, second)):
+    for k, index in enumerate(INDICES[stored.design.method][:2]):
         found = {r["parameter"]: r for r in rows if r["index"] == index}
         values = [found[n]["value"] for n in names]
         halves = [found[n]["confidence"] for n in names]
@@ -278,9 +277,7 @@ def _panel(ax: Any, table: pa.Table, stored: StoredSweep, measure: str) -> None:
     ax.set_yticks(where, names, fontsize=8)
     ax.invert_yaxis()
     ax.axvline(0, color="black", linewidth=0.6)
-    if stored.design.method == "sobol":
-        ax.set_xlabel("share of the variance", fontsize=8)
-    else:
-        ax.set_xlabel(f"{unit or measure} per whole range", fontsize=8)
+    per = f"{unit or measure} per whole range"
+    ax.set_xlabel("share of the variance" if stored.design.method == "sobol" else per, fontsize=8)
     ax.grid(True, axis="x", alpha=0.3)
     ax.legend(fontsize=7)

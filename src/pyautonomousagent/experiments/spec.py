@@ -150,11 +150,8 @@ class Experiment:
         schema: :func:`~pyautonomousagent.experiments.sweeps.sweep` calls it; floats before)."""
         if self.design is not None:
             return self.design.points()
-        names = list(self.vary)
-        grid = [
-            dict(zip(names, values, strict=True))
-            for values in itertools.product(*self.vary.values())
-        ]
+        product = itertools.product(*self.vary.values())
+        grid = [dict(zip(self.vary, values, strict=True)) for values in product]
         if not self.sample:
             return grid
         samples = draw_samples(self.sample)
