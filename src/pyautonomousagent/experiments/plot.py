@@ -73,13 +73,9 @@ def _numbers(table: pa.Table, name: str) -> list[Any]:
     """The measure column ``name``; ExperimentError unless it holds numbers (or true/false)."""
     values = _column(table, name, "measure")
     kind = table.schema.field(name).type
-    numbers = (pa.types.is_integer, pa.types.is_floating, pa.types.is_boolean, pa.types.is_null)
-    if not any(is_kind(kind) for is_kind in numbers):
-        numeric = [
-            f.name
-            for f in table.schema
-            if pa.types.is_integer(f.type) or pa.types.is_floating(f.type)
-        ]
+    number = (pa.types.is_integer, pa.types.is_floating)
+    if not any(is_kind(kind) for is_kind in (*number, pa.types.is_boolean, pa.types.is_null)):
+        numeric = [f.name for f in table.schema if any(is_kind(f.type) for is_kind in number)]
         raise ExperimentError(
             f"measure {name!r} is a column of {kind}, not numbers: {name!r} is not a measure; "
             f"plot one of {', '.join(numeric) or 'no column'}"

@@ -465,11 +465,7 @@ class _Reader:
                 raise self.fail(f"{path}[{i}]", "a number, a string or true/false", item)
             if isinstance(item, float) and not math.isfinite(item):
                 raise self.fail(f"{path}[{i}]", "a finite number", item)
-        kinds = {
-            "bool" if isinstance(v, bool) else "str" if isinstance(v, str) else "number"
-            for v in value
-        }
-        if len(kinds) > 1:
+        if len({(isinstance(v, bool), isinstance(v, str)) for v in value}) > 1:  # kinds mixed
             raise self.fail(path, "values of one kind (numbers, strings or true/false)", value)
         if len({json.dumps(v) for v in value}) != len(value):
             raise self.fail(path, "a list without repeated values", value)
@@ -488,11 +484,8 @@ class _Reader:
         out: dict[str, tuple[str, list[Any]]] = {}
         for name, spec in params.items():
             path = f"sample.parameters.{name}"
-            if (
-                not isinstance(spec, Mapping)
-                or len(spec) != 1
-                or next(iter(spec)) not in (_DISTRIBUTIONS)
-            ):
+            kinds = list(spec) if isinstance(spec, Mapping) else []
+            if len(kinds) != 1 or kinds[0] not in _DISTRIBUTIONS:
                 raise self.fail(
                     path, "{uniform: [lo, hi]}, {integers: [lo, hi]} or {choice: [values]}", spec
                 )
