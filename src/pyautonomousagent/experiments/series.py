@@ -100,11 +100,6 @@ def run_series(run_id: str, data: RunData, measures: Sequence[Measure], every: i
     return pa.table(columns, schema=series_schema())
 
 
-def part_path(folder: Path, number: int) -> Path:
-    """The time-series part beside the journal's results part ``number``."""
-    return folder / f"series-{number:06d}.parquet"
-
-
 def read_parts(folder: Path) -> pa.Table:
     """Every time-series part of a journal folder, each row tagged with its part number
     (column ``part``), oldest first; parts that cannot be read are left out (their runs'

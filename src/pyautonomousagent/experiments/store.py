@@ -213,14 +213,11 @@ class Journal:
         """Write the held rows as the next part (nothing if none are held); the held time
         series first, as ``series-N.parquet`` beside ``part-N.parquet``, so a part's runs
         never lack their series."""
-        from pyautonomousagent.experiments.series import part_path
-
         if not self.buffer:
             return
         if self.series:
-            atomic_write_table(
-                pa.concat_tables(self.series), part_path(self.folder, self.next_part)
-            )
+            series = self.folder / f"series-{self.next_part:06d}.parquet"
+            atomic_write_table(pa.concat_tables(self.series), series)
         rows = [{name: row.get(name) for name in self.schema.names} for row in self.buffer]
         table = pa.Table.from_pylist(rows, schema=self.schema)
         atomic_write_table(table, self.folder / f"part-{self.next_part:06d}.parquet")
