@@ -141,14 +141,11 @@ def check(experiment: Experiment, scenario: Any) -> RunData:
 def compile_once(
     experiment: Experiment, scenario: Any, runs: int, report: Callable[[str], None]
 ) -> float | None:
-    """Compile the tree's fused loop here, once, before the runs go to the workers, where
-    they take the compiled engine: ``engine: compiled``, or ``auto`` where the largest run
-    is faster on the compiled engine than on the batched one (``choose_engine`` with
-    ``compiled_ready``) by enough, over all ``runs``, to pay for the compiling
-    (:data:`~pyautonomousagent.simulation.costs.AUTO_COMPILE_SECONDS`). Each worker then
-    loads it from numba's cache (``auto`` takes it there once it is compiled). Not for a
-    varied tree. ``report`` is told before and how long it took; the seconds, or None
-    where nothing was compiled."""
+    """Compile the tree's fused loop here, once, for workers that take the compiled engine
+    (``engine: compiled``, or ``auto`` where the largest run saves enough over all ``runs``
+    to pay for compiling: :data:`~pyautonomousagent.simulation.costs.AUTO_COMPILE_SECONDS`);
+    they load it from numba's cache. Not for a varied tree. ``report`` is told before and
+    how long it took; the seconds, or None where nothing was compiled."""
     from pyautonomousagent.engines.compiled import CompiledEngine
     from pyautonomousagent.simulation import Simulation
     from pyautonomousagent.simulation.costs import AUTO_COMPILE_SECONDS, run_costs
