@@ -583,12 +583,9 @@ def parse_vary(items: Sequence[str], bounds: bool = False) -> dict[str, Any]:
         if name in vary:
             raise ExperimentError(f"--vary {name} is given twice; give its values in one --vary")
         parts = text.split(":")
-        if len(parts) == 3:
-            start, stop, step = (_vary_value(p, name) for p in parts)
-            vary[name] = {"from": start, "to": stop, "step": step}
-        elif bounds and len(parts) == 2:
-            start, stop = (_vary_value(p, name) for p in parts)
-            vary[name] = {"from": start, "to": stop}
+        if len(parts) == 3 or (bounds and len(parts) == 2):  # a range, or bounds
+            keys = ("from", "to", "step")[: len(parts)]
+            vary[name] = {k: _vary_value(p, name) for k, p in zip(keys, parts, strict=True)}
         elif len(parts) > 1 and all(isinstance(_vary_value(p, name), int | float) for p in parts):
             raise ExperimentError(
                 f"--vary {name}: a range is FROM:TO:STEP, three numbers (e.g. 20:50:5), "
