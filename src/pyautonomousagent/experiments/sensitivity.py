@@ -173,18 +173,16 @@ def _analyse(design: Design, unit: np.ndarray, y: np.ndarray) -> dict[str, list[
                 problem, y, calc_second_order=False, num_resamples=RESAMPLES,
                 conf_level=CONFIDENCE, seed=design.seed,
             )  # fmt: skip
-            pairs = {"S1": "S1_conf", "ST": "ST_conf"}
         else:
             morris = library("SALib.analyze.morris", "morris")
             found = morris.analyze(
                 problem, unit, y, num_resamples=RESAMPLES, conf_level=CONFIDENCE,
                 num_levels=MORRIS_LEVELS, seed=design.seed,
             )  # fmt: skip
-            pairs = {"mu_star": "mu_star_conf", "sigma": "", "mu": ""}
     out: dict[str, list[tuple]] = {}
-    for index, conf in pairs.items():
+    for index in names:  # SALib gives S1_conf, ST_conf and mu_star_conf, not sigma's or mu's
         values = np.asarray(found[index], dtype=np.float64)
-        halves = np.asarray(found[conf], dtype=np.float64) if conf else np.full(d, math.nan)
+        halves = np.asarray(found.get(f"{index}_conf", np.full(d, math.nan)), dtype=np.float64)
         out[index] = [(float(v), float(h)) for v, h in zip(values, halves, strict=True)]
     return out
 
