@@ -1,26 +1,16 @@
-"""Where the runs of a sweep execute: this process, a local process pool, or Dask.
+"""Where the runs of a sweep execute: this process (:class:`SerialBackend`), a local pool of
+"spawn" processes (:class:`PoolBackend`, the default) or a Dask cluster (:class:`DaskBackend`,
+``dask[distributed]`` imported only there); see docs/experiments.md, "Backends".
 
-Every backend takes a function and a list of tasks and yields ``(task, outcome)`` as runs
-finish, ``outcome`` being the function's result or the exception that stopped the worker.
-The function is the same everywhere (:func:`pyautonomousagent.experiments.runner.execute`),
-so the same seed gives the same numbers on every backend.
-
-- :class:`SerialBackend`: one run after another in this process (debugging, notebooks).
-- :class:`PoolBackend` (the default): a pool of ``workers`` processes started with "spawn".
-  A worker that dies (killed, out of memory) breaks the pool; the pool is started again and
-  the runs it held are given again, up to :data:`ATTEMPTS` times each.
-- :class:`DaskBackend`: a Dask distributed cluster (``dask[distributed]``, imported only
-  here), given by its scheduler address, or a local cluster started for the sweep. Each run
-  is submitted under its own key (never ``pure=True``'s hash, which would merge identical
-  calls), so two runs are never merged; Dask computes again the runs of a worker that dies.
-
-At most ``window`` runs are submitted at a time, so a sweep of a million runs does not hold a
-million futures.
-
-The pool and Dask backends say what happened to their workers: :meth:`stats` gives the
-workers seen, those lost and how many runs were given again (the sweep writes it into
-``experiment.json``), and ``report`` (a function of one line, set by the sweep) is called
-when a worker is lost and its runs are given again.
+Every backend yields ``(task, outcome)`` as runs finish, ``outcome`` being the function's
+result or the exception that stopped the worker. The function is the same everywhere
+(:func:`~pyautonomousagent.experiments.runner.execute`), so a seed gives the same numbers on
+every backend. At most 4 runs per worker are in flight, so a sweep of a million runs does not
+hold a million futures. A pool that breaks (a worker killed, out of memory) is started again
+and its runs given again, up to :data:`ATTEMPTS` times each; a Dask run is submitted under
+its own key (never ``pure=True``'s hash, which would merge identical runs). The pool and Dask
+backends count the workers seen and lost and the runs given again (:meth:`stats`, written
+into ``experiment.json``) and tell ``report`` (one line, set by the sweep) of a lost worker.
 """
 
 from __future__ import annotations
@@ -66,25 +56,26 @@ class Backend(Protocol):
         """Stop what was started for the sweep (promptly, also mid-sweep)."""
 
 
-def _quiet(line: str) -> None:
+def quiet(line: str) -> None:
     """The default ``report``: say nothing."""
 
 
-class WorkerStats:
-    """The workers a backend has seen and lost, and the runs given again (no global state:
-    one per backend).
+class Watched:
+    """A backend that says what happened to its workers (the pool and Dask backends).
 
     Attributes:
         seen: every worker that ran for the sweep (a process id or a Dask address), in the
             order first seen.
         lost: the workers that died or left mid-sweep, in that order.
         retried: how many times a run was given again after its worker was lost.
+        report: called with one line when a worker is lost and its runs are given again.
     """
 
     def __init__(self) -> None:
         self.seen: list[str] = []
         self.lost: list[str] = []
         self.retried = 0
+        self.report: Callable[[str], None] = quiet
 
     def see(self, workers: Sequence[str]) -> None:
         """Add the workers not seen before."""
@@ -98,8 +89,9 @@ class WorkerStats:
         self.lost.append(worker)
         return True
 
-    def as_dict(self) -> dict[str, Any]:
-        """``{"workers_seen", "workers_lost", "runs_retried", "seen", "lost"}``."""
+    def stats(self) -> dict[str, Any]:
+        """``{"workers_seen", "workers_lost", "runs_retried", "seen", "lost"}``: the workers
+        by process id (pool) or address (Dask)."""
         return {
             "workers_seen": len(self.seen),
             "workers_lost": len(self.lost),
@@ -141,35 +133,28 @@ def _ignore_interrupts() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-class PoolBackend:
+class PoolBackend(Watched):
     """A local pool of worker processes (``workers``: default all cores)."""
 
     name = "pool"
 
-    def __init__(self, workers: int | None = None, window: int | None = None) -> None:
+    def __init__(self, workers: int | None = None) -> None:
+        super().__init__()
         if workers is not None and workers < 1:
             raise ValueError(f"workers must be a whole number >= 1, got {workers}")
         self._workers = workers or os.cpu_count() or 1
-        self.window = window or 4 * self._workers
         self._pool: ProcessPoolExecutor | None = None
         self._known: dict[str, Any] = {}  # process id -> process of the pool
-        self.tally = WorkerStats()
-        #: Called with one line when a worker dies and its runs are given again.
-        self.report: Callable[[str], None] = _quiet
 
     def workers(self) -> int:
         return self._workers
-
-    def stats(self) -> dict[str, Any]:
-        """Workers seen (process ids), lost, and runs given again (:class:`WorkerStats`)."""
-        return self.tally.as_dict()
 
     def _look(self) -> None:
         """Note the pool's processes (they start as runs are submitted)."""
         processes = getattr(self._pool, "_processes", None) or {}
         for pid, process in list(processes.items()):
             self._known[f"process {pid}"] = process
-        self.tally.see(list(self._known))
+        self.see(list(self._known))
 
     def _lost(self, again: int) -> None:
         """The pool broke: name the processes that died (not those the pool then stopped).
@@ -186,12 +171,12 @@ class PoolBackend:
             if process.exitcode is not None and process.exitcode != -signal.SIGTERM
         ]
         for name in dead or ["a process"]:
-            if self.tally.lose(name):
+            if self.lose(name):
                 code = self._known[name].exitcode if name in self._known else "?"
                 self.report(
                     f"pool worker {name} died (exit code {code}); {again} run(s) given again"
                 )
-        self.tally.retried += again
+        self.retried += again
         self._known.clear()
 
     def memory_per_worker(self) -> int | None:
@@ -211,7 +196,7 @@ class PoolBackend:
         running: dict[Future[Any], tuple[T, int]] = {}
         pool = self._pool or self._start()
         while pending or running:
-            while pending and len(running) < self.window:
+            while pending and len(running) < 4 * self._workers:
                 task, tries = pending.popleft()
                 running[pool.submit(fn, task)] = (task, tries)
             self._look()  # before a worker can die: a broken pool forgets its processes
@@ -284,14 +269,13 @@ class StartLog:
         return again
 
 
-class DaskBackend:
+class DaskBackend(Watched):
     """A Dask distributed cluster.
 
     Args:
         address: the scheduler's address (``tcp://host:8786``), or None to start a local
             cluster of ``workers`` single-threaded worker processes for the sweep.
         workers: workers of the local cluster (default all cores).
-        window: runs submitted at a time (default 4 per worker).
         timeout: seconds to wait for the scheduler.
 
     Raises:
@@ -304,9 +288,9 @@ class DaskBackend:
         self,
         address: str | None = None,
         workers: int | None = None,
-        window: int | None = None,
         timeout: float = 20.0,
     ) -> None:
+        super().__init__()
         try:
             from distributed import Client, LocalCluster
         except ImportError:  # pragma: no cover - depends on the installation
@@ -332,23 +316,19 @@ class DaskBackend:
                     f"cannot reach a Dask scheduler at {address!r} within {timeout:g} s "
                     f"({type(error).__name__}); start one (dask scheduler) or check the address"
                 ) from None
-        self._window = window
         self._prefix = f"pyaa-run-{uuid.uuid4().hex[:8]}"
-        self.tally = WorkerStats()
-        #: Called with one line when a worker is lost and its runs are given again.
-        self.report: Callable[[str], None] = _quiet
         self._log = StartLog()
         self._inbox: list[Any] = []  # start events pushed by the scheduler (topic below)
         self._topic = f"{self._prefix}-starts"
         self._last_look = 0.0
         self.client.subscribe_topic(self._topic, self._inbox.append)
-        self.tally.see(list(self._worker_info()))
+        self.see(list(self._worker_info()))
 
     def stats(self) -> dict[str, Any]:
-        """Workers seen (addresses), lost, and runs given again (:class:`WorkerStats`): read
-        from the start of every run, which each run logs to the scheduler."""
+        """:meth:`Watched.stats`, read from the start of every run, which each run logs to
+        the scheduler."""
         self._look(force=True)
-        return self.tally.as_dict()
+        return super().stats()
 
     def _look(self, force: bool = False) -> None:
         """Count the runs started again and the workers gone (at most once a second, unless
@@ -361,27 +341,26 @@ class DaskBackend:
             present = list(self._worker_info())
             events = self.client.get_events(self._topic) if force else self._inbox[:]
             del self._inbox[: len(self._inbox)]
-            self.tally.see(present)
-            self.tally.see([str(message.get("worker")) for _, message in events])
+            self.see(present)
+            self.see([str(message.get("worker")) for _, message in events])
             for key, worker, before in self._log.read(events):
                 self._restarted(key, worker, before, present)
-            for worker in self.tally.seen:
-                if worker not in present and self.tally.lose(worker):
+            for worker in self.seen:
+                if worker not in present and self.lose(worker):
                     self.report(f"dask worker {worker} lost")
 
     def _restarted(self, key: str, worker: str, before: str, present: Sequence[str]) -> None:
         """Run ``key`` started again on ``worker`` after starting on ``before``."""
-        self.tally.retried += 1
+        self.retried += 1
         if before in present:  # not lost (e.g. its result went missing): started again
             self.report(f"run {key} started again on {worker} (it started on {before})")
             return
-        if self.tally.lose(before):
+        if self.lose(before):
             self.report(f"dask worker {before} lost")
         self.report(f"run {key} given again on {worker} (its worker {before} was lost)")
 
     def _worker_info(self) -> dict[str, Any]:
-        info: dict[str, Any] = self.client.scheduler_info().get("workers", {})
-        return info
+        return dict(self.client.scheduler_info().get("workers", {}))
 
     def workers(self) -> int:
         return max(sum(int(w.get("nthreads", 1)) for w in self._worker_info().values()), 1)
@@ -398,7 +377,6 @@ class DaskBackend:
     def map_unordered(self, fn: Callable[[T], Any], tasks: Sequence[T]) -> Iterator[tuple[T, Any]]:
         from distributed import as_completed
 
-        window = self._window or 4 * self.workers()
         queue = deque(enumerate(tasks))
         owner: dict[str, T] = {}
 
@@ -408,7 +386,7 @@ class DaskBackend:
             owner[key] = task
             return self.client.submit(_logged, fn, task, key, self._topic, key=key, pure=False)
 
-        running = as_completed([submit() for _ in range(min(window, len(queue)))])
+        running = as_completed([submit() for _ in range(min(4 * self.workers(), len(queue)))])
         for future in running:
             task = owner.pop(future.key)
             try:

@@ -1,27 +1,19 @@
-"""Designs of experiments beyond the grid: Latin hypercube, Sobol (Saltelli) and Morris.
+"""Designs of experiments beyond the grid: Latin hypercube (SciPy), Sobol (SALib's Saltelli
+scheme, first-order and total indices only) and Morris (SALib, 4 levels); docs/experiments.md
+has the table of their sizes.
 
 A design draws points in the unit cube ``[0, 1]^D`` (one dimension per varied parameter)
-with a library and its own seed, then scales each dimension to the parameter's bounds::
-
-    lhs     SciPy's qmc.LatinHypercube             samples points
-    sobol   SALib's Sobol' sequence (Saltelli)      samples x (D + 2) points
-    morris  SALib's Morris trajectories, 4 levels   samples x (D + 1) points
-
-The Sobol design leaves out the second-order columns (first-order and total indices only).
-A float parameter takes ``low + u * (high - low)``; a whole-number parameter (``agents``, an
-int parameter of the scenario's schema) takes ``low + floor(u * (high - low + 1))`` (at most
-``high``), so each of ``low..high`` is equally likely. The same design and seed give the same
-points, bit for bit, so a sweep's ``--resume`` finds its runs again.
-
-SALib and SciPy are optional (the ``[experiments]`` extra); they are imported only here, when
-a design is drawn or analysed.
+from its own seed (the same design and seed give the same points bit for bit, so
+``--resume`` finds its runs again), then scales each to the parameter's bounds: a float
+parameter takes ``low + u * (high - low)``, a whole-number one
+``low + floor(u * (high - low + 1))`` (at most ``high``), so each of ``low..high`` is equally
+likely. SALib and SciPy are the optional ``[experiments]`` extra, imported only here.
 """
 
 from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -64,68 +56,47 @@ class Design:
         return list(self.bounds)
 
     def size(self) -> int:
-        """The number of points the design draws."""
-        return design_size(self.method, self.samples, len(self.bounds))
+        """The number of points the design draws: ``samples`` (lhs), ``samples * (D + 2)``
+        (sobol, first-order and total indices), ``samples * (D + 1)`` (morris)."""
+        d = len(self.bounds)
+        return self.samples * {"lhs": 1, "sobol": d + 2, "morris": d + 1}[self.method]
 
     def unit(self) -> np.ndarray:
-        """The points in the unit cube, shape (:meth:`size`, D), float64."""
-        return unit_points(self.method, self.samples, len(self.bounds), self.seed)
+        """The points in the unit cube drawn from :attr:`seed`, shape (:meth:`size`, D).
+
+        Raises:
+            ExperimentError: the library the design needs is not installed.
+        """
+        d, n, seed = len(self.bounds), self.samples, self.seed
+        if self.method == "lhs":
+            qmc = library("scipy.stats.qmc", "lhs")
+            unit = qmc.LatinHypercube(d=d, rng=np.random.default_rng(seed)).random(n=n)
+        elif self.method == "sobol":
+            sobol = library("SALib.sample.sobol", "sobol")
+            unit = sobol.sample(unit_problem(self.names), n, calc_second_order=False, seed=seed)
+        else:
+            morris = library("SALib.sample.morris", "morris")
+            unit = morris.sample(unit_problem(self.names), n, num_levels=MORRIS_LEVELS, seed=seed)
+        return np.asarray(unit, dtype=np.float64)
 
     def points(self) -> list[dict[str, Any]]:
-        """The points in the parameters' units (whole numbers where :attr:`integers`)."""
-        return scale(self.unit(), self.bounds, self.integers)
-
-    def problem(self) -> dict[str, Any]:
-        """SALib's problem over the unit cube (the designs are drawn and analysed there)."""
-        return unit_problem(self.names)
-
-
-def design_size(method: str, samples: int, dimensions: int) -> int:
-    """Points of a design: ``samples`` (lhs), ``samples * (D + 2)`` (sobol, first-order and
-    total indices), ``samples * (D + 1)`` (morris)."""
-    return samples * {"lhs": 1, "sobol": dimensions + 2, "morris": dimensions + 1}[method]
+        """The points in the parameters' units (see the module docstring for the mapping)."""
+        unit = self.unit()
+        columns: list[list[Any]] = []
+        for j, (name, (low, high)) in enumerate(self.bounds.items()):
+            if name in self.integers:
+                lo, hi = int(low), int(high)
+                whole = np.minimum(lo + np.floor(unit[:, j] * (hi - lo + 1)), hi)
+                columns.append([int(v) for v in whole])
+            else:
+                columns.append([float(v) for v in low + unit[:, j] * (high - low)])
+        return [dict(zip(self.names, row, strict=True)) for row in zip(*columns, strict=True)]
 
 
 def unit_problem(names: list[str]) -> dict[str, Any]:
-    """SALib's problem over the unit cube, one dimension per name."""
+    """SALib's problem over the unit cube, one dimension per name (the designs are drawn
+    and analysed there)."""
     return {"num_vars": len(names), "names": list(names), "bounds": [[0.0, 1.0]] * len(names)}
-
-
-def unit_points(method: str, samples: int, dimensions: int, seed: int) -> np.ndarray:
-    """``method``'s points in ``[0, 1]^dimensions`` drawn from ``seed``.
-
-    Raises:
-        ExperimentError: the library the design needs is not installed.
-    """
-    if method == "lhs":
-        qmc = library("scipy.stats.qmc", method)
-        sampler = qmc.LatinHypercube(d=dimensions, rng=np.random.default_rng(seed))
-        return np.asarray(sampler.random(n=samples), dtype=np.float64)
-    problem = unit_problem([f"x{i}" for i in range(dimensions)])
-    if method == "sobol":
-        sobol = library("SALib.sample.sobol", method)
-        unit = sobol.sample(problem, samples, calc_second_order=False, seed=seed)
-    else:
-        morris = library("SALib.sample.morris", method)
-        unit = morris.sample(problem, samples, num_levels=MORRIS_LEVELS, seed=seed)
-    return np.asarray(unit, dtype=np.float64)
-
-
-def scale(
-    unit: np.ndarray, bounds: dict[str, tuple[float, float]], integers: frozenset[str]
-) -> list[dict[str, Any]]:
-    """Unit-cube points as parameter values (see the module docstring for the mapping)."""
-    columns: dict[str, list[Any]] = {}
-    for j, (name, (low, high)) in enumerate(bounds.items()):
-        u = unit[:, j]
-        if name in integers:
-            lo, hi = int(low), int(high)
-            whole = np.minimum(lo + np.floor(u * (hi - lo + 1)), hi)
-            columns[name] = [int(v) for v in whole]
-        else:
-            columns[name] = [float(v) for v in low + u * (high - low)]
-    rows = zip(*columns.values(), strict=True)
-    return [dict(zip(columns, values, strict=True)) for values in rows]
 
 
 def typed(design: Design, kinds: dict[str, type]) -> Design:
@@ -204,12 +175,3 @@ def design_table(design: Design) -> pa.Table:
         "morris_levels": MORRIS_LEVELS,
     }
     return pa.table(columns).replace_schema_metadata({"pyaa.design": json.dumps(about)})
-
-
-def write_design(out: Path, design: Design) -> Path:
-    """Write :func:`design_table` as ``out/design.parquet`` (atomically); its path."""
-    from pyautonomousagent.experiments.store import atomic_write_table
-
-    path = out / DESIGN_FILE
-    atomic_write_table(design_table(design), path)
-    return path

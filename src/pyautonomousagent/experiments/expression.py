@@ -1,37 +1,25 @@
 """A small, safe expression language for measures over a run's recorded columns.
 
-``mean(energy < 30)``, ``min(last(energy))`` or ``sum(number_ticks) / agents`` are parsed
-with :mod:`ast` and checked against a whitelist before anything is evaluated: column names,
-numbers, ``+ - * / // % **``, comparisons, and the functions of :data:`FUNCTIONS`. No
-attribute, subscript, keyword, lambda, comprehension or other name is accepted, so an
-expression cannot reach Python's builtins, modules or objects.
-
-A column is an array of shape ``(records, N)`` (one row per recorded iteration, one column
-per agent); ``first``/``last`` take its first or last record (shape ``(N,)``); ``mean``,
-``min``, ``max``, ``sum``, ``std`` and ``count`` reduce over everything to one number.
-Comparisons give 1.0 or 0.0, so ``mean(energy < 30)`` is the fraction of drone-records
-below 30 %. The result must be one number.
+``mean(energy < 30)`` or ``sum(number_ticks) / agents`` is parsed with :mod:`ast` and checked
+against a whitelist before anything is evaluated (column names, numbers, ``+ - * / // % **``,
+comparisons and :data:`FUNCTIONS`), so an expression cannot reach Python's builtins, modules
+or objects. A column has shape ``(records, N)``; ``first``/``last`` take one record (shape
+``(N,)``), the other functions reduce to one number; comparisons give 1.0 or 0.0. The result
+must be one number.
 """
 
 from __future__ import annotations
 
 import ast
-import difflib
 from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
+from pyautonomousagent.experiments.errors import close_hint
+
 #: Longest expression accepted (characters).
 MAX_LENGTH = 400
-
-
-def _first(a: np.ndarray) -> np.ndarray:
-    return a[0] if a.ndim >= 1 else a
-
-
-def _last(a: np.ndarray) -> np.ndarray:
-    return a[-1] if a.ndim >= 1 else a
 
 
 #: Functions an expression may call, each of one argument.
@@ -42,8 +30,8 @@ FUNCTIONS: dict[str, Callable[[np.ndarray], Any]] = {
     "sum": np.sum,
     "std": np.std,
     "count": np.count_nonzero,
-    "first": _first,
-    "last": _last,
+    "first": lambda a: a[0] if a.ndim >= 1 else a,  # the first record, shape (N,)
+    "last": lambda a: a[-1] if a.ndim >= 1 else a,
     "abs": np.abs,
     "sqrt": np.sqrt,
 }
@@ -94,8 +82,9 @@ class Expression:
             tree = ast.parse(text.strip(), mode="eval")
         except SyntaxError as error:
             raise ExpressionError(f"expression {text!r}: syntax error: {error.msg}") from None
-        self._tree = tree.body
-        self.names = sorted(self._check(self._tree))
+        self._evaluate = self._compile(tree.body)
+        names = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name)}
+        self.names = sorted(names - set(FUNCTIONS))  # a column is never named as a function
 
     def _refuse(self, node: ast.AST) -> ExpressionError:
         what = ast.unparse(node) if isinstance(node, ast.expr) else type(node).__name__
@@ -103,25 +92,23 @@ class Expression:
             f"expression {self.text!r}: {what!r} is not allowed; use only {_ALLOWED}"
         )
 
-    def _check(self, node: ast.AST) -> set[str]:
-        """The column names ``node`` uses; raises on anything not whitelisted."""
-        if isinstance(node, ast.Constant):
-            if isinstance(node.value, bool) or not isinstance(node.value, int | float):
-                raise self._refuse(node)
-            return set()
-        if isinstance(node, ast.Name):
-            if node.id.startswith("_") or node.id in FUNCTIONS:
-                raise self._refuse(node)
-            return {node.id}
+    def _compile(self, node: ast.AST) -> Callable[[Mapping[str, Any]], Any]:
+        """``node`` as a function of the columns; raises on anything not whitelisted."""
+        if isinstance(node, ast.Constant) and type(node.value) in (int, float):
+            value = np.float64(float(node.value))  # type: ignore[arg-type]
+            return lambda columns: value
+        if isinstance(node, ast.Name) and not node.id.startswith("_") and node.id not in FUNCTIONS:
+            return lambda columns: np.asarray(columns[node.id], dtype=np.float64)
         if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub | ast.UAdd):
-            return self._check(node.operand)
+            operand = self._compile(node.operand)
+            return (lambda columns: -operand(columns)) if isinstance(node.op, ast.USub) else operand
         if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
-            return self._check(node.left) | self._check(node.right)
+            left, right, op = self._compile(node.left), self._compile(node.right), node.op
+            return lambda columns: _BINARY[type(op)](left(columns), right(columns))
         if isinstance(node, ast.Compare) and all(type(op) in _COMPARE for op in node.ops):
-            names = self._check(node.left)
-            for comparator in node.comparators:
-                names |= self._check(comparator)
-            return names
+            terms = [self._compile(term) for term in (node.left, *node.comparators)]
+            ops = [_COMPARE[type(op)] for op in node.ops]
+            return lambda columns: _chain(ops, [term(columns) for term in terms])
         if (
             isinstance(node, ast.Call)
             and isinstance(node.func, ast.Name)
@@ -129,7 +116,8 @@ class Expression:
             and len(node.args) == 1
             and not node.keywords
         ):
-            return self._check(node.args[0])
+            function, argument = FUNCTIONS[node.func.id], self._compile(node.args[0])
+            return lambda columns: _reduced(function, np.asarray(argument(columns)))
         raise self._refuse(node)
 
     def evaluate(self, columns: Mapping[str, Any]) -> float:
@@ -140,42 +128,16 @@ class Expression:
         """
         for name in self.names:
             if name not in columns:
-                close = difflib.get_close_matches(name, list(columns), n=1)
-                hint = f" (did you mean {close[0]!r}?)" if close else ""
+                hint = close_hint(name, columns)
                 raise ExpressionError(f"expression {self.text!r}: unknown column {name!r}{hint}")
         with np.errstate(all="ignore"):
-            value = np.asarray(self._eval(self._tree, columns), dtype=np.float64)
+            value = np.asarray(self._evaluate(columns), dtype=np.float64)
         if value.size != 1:
             raise ExpressionError(
                 f"expression {self.text!r} gives {value.size} values, not one; wrap it in "
                 "mean/min/max/sum(...)"
             )
         return float(value.reshape(()))
-
-    def _eval(self, node: ast.AST, columns: Mapping[str, Any]) -> Any:
-        if isinstance(node, ast.Constant):
-            return np.float64(float(node.value))  # type: ignore[arg-type]
-        if isinstance(node, ast.Name):
-            return np.asarray(columns[node.id], dtype=np.float64)
-        if isinstance(node, ast.UnaryOp):
-            operand = self._eval(node.operand, columns)
-            return -operand if isinstance(node.op, ast.USub) else operand
-        if isinstance(node, ast.BinOp):
-            left, right = self._eval(node.left, columns), self._eval(node.right, columns)
-            return _BINARY[type(node.op)](left, right)
-        if isinstance(node, ast.Compare):
-            left = self._eval(node.left, columns)
-            result: Any = True
-            for op, comparator in zip(node.ops, node.comparators, strict=True):
-                right = self._eval(comparator, columns)
-                result = np.logical_and(result, _COMPARE[type(op)](left, right))
-                left = right
-            return np.asarray(result, dtype=np.float64)
-        assert isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
-        argument = np.asarray(self._eval(node.args[0], columns))
-        if argument.size == 0:
-            return np.float64("nan")
-        return FUNCTIONS[node.func.id](argument)
 
     def __repr__(self) -> str:
         return f"Expression({self.text!r})"
@@ -188,3 +150,16 @@ class Expression:
 
     def __reduce__(self) -> tuple[type, tuple[str]]:
         return (Expression, (self.text,))
+
+
+def _chain(ops: list[Callable[[Any, Any], Any]], values: list[Any]) -> np.ndarray:
+    """``a < b <= c ...``: 1.0 where every comparison of neighbours holds, else 0.0."""
+    result: Any = True
+    for op, left, right in zip(ops, values, values[1:], strict=False):
+        result = np.logical_and(result, op(left, right))
+    return np.asarray(result, dtype=np.float64)
+
+
+def _reduced(function: Callable[[np.ndarray], Any], argument: np.ndarray) -> Any:
+    """``function(argument)``, NaN for an empty argument."""
+    return np.float64("nan") if argument.size == 0 else function(argument)

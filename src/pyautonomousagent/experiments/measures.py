@@ -2,14 +2,10 @@
 
 A measure is a function of a :class:`RunData` (the recorded columns, events and scenario of
 one run) that returns a float, kept in the registry :data:`MEASURES` with a one-line
-description and a unit. The built-in ones below read what every run records today (state
-columns, blackboard columns, alert and gathering events); missions add their own with
-:func:`register_measure`. An experiment can also use a small expression over the columns
-(:mod:`pyautonomousagent.experiments.expression`).
-
-The fraction of time spent in each behaviour comes from the recorded active behaviour (the
-leaf each agent is running): :func:`behaviour_fractions` gives all of them, and an expression
-``mean(in_<leaf name>)`` one, e.g. ``mean(in_action_refuel_a)``.
+description and a unit; missions add their own with :func:`register_measure`, and an
+experiment can use an expression over the columns
+(:mod:`~pyautonomousagent.experiments.expression`; ``mean(in_<leaf name>)`` is the share of
+time in a behaviour, :func:`behaviour_fractions` gives all of them).
 """
 
 from __future__ import annotations
@@ -77,13 +73,6 @@ class RunData:
         """A scenario parameter by name (``default`` if the scenario has none of that name)."""
         return float(getattr(self.scenario.parameters, name, default))
 
-    def behaviour_names(self) -> dict[str, int]:
-        """``in_<node name>`` -> node index, for every node an agent's behaviour can be
-        (characters other than letters, digits and _ become _)."""
-        if self.behaviour is None:
-            return {}
-        return {"in_" + re.sub(r"\W", "_", name): i for i, name in enumerate(self.nodes)}
-
     def expression_values(self) -> Mapping[str, Any]:
         """Names an expression may use: every column, ``iteration`` (shape (records, 1)),
         ``agents`` and ``iterations`` (the run's length), and ``in_<leaf>`` (shape
@@ -92,23 +81,23 @@ class RunData:
         values["iteration"] = self.iterations.astype(np.float64)[:, None]
         values["agents"] = float(self.agents)
         values["iterations"] = float(self.scenario.iterations)
-        return _Lazy(values, self.behaviour, self.behaviour_names())
+        if self.behaviour is None:
+            return values
+        # in_<node name> (characters other than letters, digits and _ become _) -> node index
+        leaves = {"in_" + re.sub(r"\W", "_", name): i for i, name in enumerate(self.nodes)}
+        return _Lazy(values, self.behaviour, leaves)
 
 
 class _Lazy(Mapping[str, Any]):
     """Columns, plus ``in_<leaf>`` arrays computed only when an expression uses them."""
 
-    def __init__(
-        self, values: dict[str, Any], behaviour: np.ndarray | None, leaves: dict[str, int]
-    ) -> None:
+    def __init__(self, values: dict[str, Any], behaviour: np.ndarray, leaves: dict[str, int]):
         self.plain, self.behaviour, self.leaves = values, behaviour, leaves
 
     def __getitem__(self, name: str) -> Any:
         if name in self.plain:
             return self.plain[name]
-        if name in self.leaves and self.behaviour is not None:
-            return self.behaviour == self.leaves[name]
-        raise KeyError(name)
+        return self.behaviour == self.leaves[name]  # KeyError for an unknown name
 
     def __iter__(self) -> Iterator[str]:
         return iter([*self.plain, *self.leaves])

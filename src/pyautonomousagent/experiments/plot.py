@@ -9,7 +9,6 @@ band, written as PNG or SVG. Failed runs, and runs where the measure is NaN, are
 
 from __future__ import annotations
 
-import difflib
 import math
 from pathlib import Path
 from typing import Any
@@ -17,7 +16,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
-from pyautonomousagent.experiments.spec import ExperimentError
+from pyautonomousagent.experiments.errors import ExperimentError, close_hint
 from pyautonomousagent.experiments.store import MANIFEST, RESULTS, read_manifest
 from pyautonomousagent.inputs import InputError, read_parquet
 
@@ -26,33 +25,10 @@ from pyautonomousagent.inputs import InputError, read_parquet
 INTERVALS = ("ci95", "sd", "range", "none")
 #: Two-sided 95 % quantiles of Student's t distribution by degrees of freedom (published
 #: tables); between entries the next smaller one is used (a slightly wider interval).
-_T95 = {
-    1: 12.706,
-    2: 4.303,
-    3: 3.182,
-    4: 2.776,
-    5: 2.571,
-    6: 2.447,
-    7: 2.365,
-    8: 2.306,
-    9: 2.262,
-    10: 2.228,
-    11: 2.201,
-    12: 2.179,
-    13: 2.160,
-    14: 2.145,
-    15: 2.131,
-    16: 2.120,
-    17: 2.110,
-    18: 2.101,
-    19: 2.093,
-    20: 2.086,
-    25: 2.060,
-    30: 2.042,
-    40: 2.021,
-    60: 2.000,
-    120: 1.980,
-}
+_T95 = dict(zip((*range(1, 21), 25, 30, 40, 60, 120), (
+    12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228,
+    2.201, 2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086,
+    2.060, 2.042, 2.021, 2.000, 1.980), strict=True))  # fmt: skip
 
 
 def t95(df: int) -> float:
@@ -84,10 +60,9 @@ def read_results(source: str | Path | pa.Table) -> tuple[pa.Table, dict[str, Any
 
 def _column(table: pa.Table, name: str, what: str) -> list[Any]:
     if name not in table.column_names:
-        close = difflib.get_close_matches(name, table.column_names, n=1)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise ExperimentError(
-            f"unknown {what} {name!r}{hint}; the results have {', '.join(table.column_names)}"
+            f"unknown {what} {name!r}{close_hint(name, table.column_names)}; the results have "
+            f"{', '.join(table.column_names)}"
         )
     if pa.types.is_nested(table.schema.field(name).type):
         raise ExperimentError(f"{what} {name!r} is a column of lists or records, not values")
@@ -98,13 +73,9 @@ def _numbers(table: pa.Table, name: str) -> list[Any]:
     """The measure column ``name``; ExperimentError unless it holds numbers (or true/false)."""
     values = _column(table, name, "measure")
     kind = table.schema.field(name).type
-    numbers = (pa.types.is_integer, pa.types.is_floating, pa.types.is_boolean, pa.types.is_null)
-    if not any(is_kind(kind) for is_kind in numbers):
-        numeric = [
-            f.name
-            for f in table.schema
-            if pa.types.is_integer(f.type) or pa.types.is_floating(f.type)
-        ]
+    number = (pa.types.is_integer, pa.types.is_floating)
+    if not any(is_kind(kind) for is_kind in (*number, pa.types.is_boolean, pa.types.is_null)):
+        numeric = [f.name for f in table.schema if any(is_kind(f.type) for is_kind in number)]
         raise ExperimentError(
             f"measure {name!r} is a column of {kind}, not numbers: {name!r} is not a measure; "
             f"plot one of {', '.join(numeric) or 'no column'}"
@@ -134,21 +105,16 @@ def summarize(
     if not cells:
         raise ExperimentError(f"no successful run has a value of {measure!r} to plot")
     rows = []
-    for (group, xv), found in sorted(cells.items(), key=lambda item: _order(item[0])):
+    for (group, xv), found in sorted(cells.items(), key=lambda c: (_rank(c[0][0]), _rank(c[0][1]))):
         data = np.asarray(found)
-        mean = float(data.mean())
-        low, high = _interval(data, interval)
+        mean, (low, high) = float(data.mean()), _interval(data, interval)
         rows.append({"by": group, "x": xv, "n": data.size, "mean": mean, "low": low, "high": high})
     return rows
 
 
-def _order(key: tuple[Any, Any]) -> tuple[str, Any, str, Any]:
+def _rank(value: Any) -> tuple[str, Any]:
     """Sort numbers as numbers, strings as strings, whatever their mix."""
-    return tuple(  # type: ignore[return-value]
-        part
-        for value in key
-        for part in (("0", value) if isinstance(value, int | float) else ("1", str(value)))
-    )
+    return ("0", value) if isinstance(value, int | float) else ("1", str(value))
 
 
 def _interval(data: np.ndarray, interval: str) -> tuple[float, float]:
@@ -183,56 +149,34 @@ def plot_measure(
         interval: "ci95" (default), "sd", "range" or "none".
         title: the title (default: says what is drawn).
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     table, descriptions = read_results(source)
     rows = summarize(table, measure, x, by, interval)
-    if out is None:
-        folder = Path(source) if isinstance(source, str | Path) else Path(".")
-        folder = folder if folder.is_dir() else folder.parent
-        out = folder / f"{measure}-vs-{x}.png"
-    out = Path(out)
-    if out.suffix.lower() not in (".png", ".svg"):
-        raise ExperimentError(f"plot file {out}: use a .png or .svg name")
+    folder = Path(source) if isinstance(source, str | Path) else Path(".")
+    folder = folder if folder.is_dir() else folder.parent
+    out = Path(out) if out is not None else folder / f"{measure}-vs-{x}.png"
+    fig, ax = _figure(out)
     numeric = all(isinstance(r["x"], int | float) and not isinstance(r["x"], bool) for r in rows)
-    labels = sorted({r["x"] for r in rows}, key=lambda v: _order((v, None)))
-    position = {v: (v if numeric else i) for i, v in enumerate(labels)}
-    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=120)
-    groups = sorted({r["by"] for r in rows}, key=lambda v: _order((v, None)))
+    labels = sorted({r["x"] for r in rows}, key=_rank)
+    groups = sorted({r["by"] for r in rows}, key=_rank)
     for k, group in enumerate(groups):
         line = [r for r in rows if r["by"] == group]
         label = f"{by} = {group}" if by else None
-        means = [r["mean"] for r in line]
-        low, high = [r["low"] for r in line], [r["high"] for r in line]
         if numeric:  # a line, the interval as a band
-            px = [position[r["x"]] for r in line]
-            (drawn,) = ax.plot(px, means, marker="o", label=label)
-            if interval != "none":
-                ax.fill_between(px, low, high, color=drawn.get_color(), alpha=0.2, linewidth=0)
-        else:  # categories: points with error bars, groups side by side
-            shift = (k - (len(groups) - 1) / 2) * 0.08
-            px = [position[r["x"]] + shift for r in line]
-            spread = [
-                [m - lo for m, lo in zip(means, low, strict=True)],
-                [hi - m for m, hi in zip(means, high, strict=True)],
-            ]
-            ax.errorbar(px, means, yerr=spread, fmt="o", capsize=4, label=label)
+            _line(ax, [r["x"] for r in line], line, label, interval != "none", marker="o")
+            continue
+        # categories: points with error bars, groups side by side
+        shift = (k - (len(groups) - 1) / 2) * 0.08
+        means = [r["mean"] for r in line]
+        spread = [[r["mean"] - r["low"] for r in line], [r["high"] - r["mean"] for r in line]]
+        px = [labels.index(r["x"]) + shift for r in line]
+        ax.errorbar(px, means, yerr=spread, fmt="o", capsize=4, label=label)
     if not numeric:
         names = [str(v).rsplit("/", 1)[-1] for v in labels]  # a file: its name
         ax.set_xticks(range(len(labels)), names)
         ax.set_xlim(-0.5, len(labels) - 0.5)
-    unit = descriptions.get(measure, {}).get("unit", "")
-    ax.set_xlabel(x)
-    ax.set_ylabel(f"{measure} ({unit})" if unit and unit != measure else measure)
-    seeds = sorted({r["n"] for r in rows})
-    n_text = f"{seeds[0]}" if len(seeds) == 1 else f"{seeds[0]}-{seeds[-1]}"
     band = {"ci95": ", 95 % CI", "sd": ", ± 1 sd", "range": ", min to max", "none": ""}
-    default = f"{measure} vs {x} (mean of {n_text} runs{band[interval]})"
-    ax.set_title(title or default, fontsize=10)
-    return _saved(fig, ax, by, out)
+    default = f"{measure} vs {x} (mean of {_runs(rows)} runs{band[interval]})"
+    return _saved(fig, ax, out, by, x, measure_label(measure, descriptions), title or default)
 
 
 def read_series(folder: str | Path) -> tuple[pa.Table, pa.Table, dict[str, Any], list[str]]:
@@ -275,10 +219,9 @@ def summarize_over_time(
 
     names = sorted(set(series["measure"].to_pylist()))
     if measure not in names:
-        close = difflib.get_close_matches(measure, names, n=1)
-        hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise ExperimentError(
-            f"unknown measure {measure!r} in the time series{hint}; it has {', '.join(names)}"
+            f"unknown measure {measure!r} in the time series{close_hint(measure, names)}; it "
+            f"has {', '.join(names)}"
         )
     if by is not None:
         _column(results, by, "parameter")
@@ -301,7 +244,7 @@ def summarize_over_time(
             {"by": row.get(by) if by else None, "iteration": row["iteration"], "n": n,
              "mean": mean, "low": mean - half, "high": mean + half}
         )  # fmt: skip
-    return sorted(rows, key=lambda r: (_order((r["by"], None)), r["iteration"]))
+    return sorted(rows, key=lambda r: (_rank(r["by"]), r["iteration"]))
 
 
 def lines_parameter(varied: list[str], by: str | None) -> str | None:
@@ -336,44 +279,77 @@ def plot_over_time(
         out: the picture (default: ``MEASURE-over-time.png`` in the sweep folder).
         title: the title (default: says what is drawn).
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     series, results, descriptions, varied = read_series(source)
     by = lines_parameter(varied, by)
     rows = summarize_over_time(series, results, measure, by)
     folder = Path(source) if Path(source).is_dir() else Path(source).parent
     out = Path(out) if out is not None else folder / f"{measure}-over-time.png"
-    if out.suffix.lower() not in (".png", ".svg"):
-        raise ExperimentError(f"plot file {out}: use a .png or .svg name")
-    fig, ax = plt.subplots(figsize=(6.4, 4.2), dpi=120)
-    for group in sorted({r["by"] for r in rows}, key=lambda v: _order((v, None))):
+    fig, ax = _figure(out)
+    for group in sorted({r["by"] for r in rows}, key=_rank):
         line = [r for r in rows if r["by"] == group]
-        px = [r["iteration"] for r in line]
-        (drawn,) = ax.plot(px, [r["mean"] for r in line], label=f"{by} = {group}" if by else None)
-        low, high = [r["low"] for r in line], [r["high"] for r in line]
-        ax.fill_between(px, low, high, color=drawn.get_color(), alpha=0.2, linewidth=0)
+        _line(ax, [r["iteration"] for r in line], line, f"{by} = {group}" if by else None)
+    default = f"{measure} over time (mean of {_runs(rows)} runs, 95 % CI)"
+    ylabel = measure_label(measure, descriptions)
+    return _saved(fig, ax, out, by, "iteration", ylabel, title or default)
+
+
+def measure_label(measure: str, descriptions: dict[str, Any]) -> str:
+    """``measure (unit)`` by the manifest's ``descriptions``, or ``measure`` (no unit, or a
+    unit of the measure's own name)."""
     unit = descriptions.get(measure, {}).get("unit", "")
-    ax.set_xlabel("iteration")
-    ax.set_ylabel(f"{measure} ({unit})" if unit and unit != measure else measure)
-    counts = sorted({r["n"] for r in rows})
-    n_text = f"{counts[0]}" if len(counts) == 1 else f"{counts[0]}-{counts[-1]}"
-    ax.set_title(title or f"{measure} over time (mean of {n_text} runs, 95 % CI)", fontsize=10)
-    return _saved(fig, ax, by, out)
+    return f"{measure} ({unit})" if unit and unit != measure else measure
 
 
-def _saved(fig: Any, ax: Any, by: str | None, out: Path) -> Path:
-    """Finish a plot (grid; a legend where lines are ``by`` a parameter) and save it to
-    ``out`` (its folder made); ``out``."""
+def pyplot() -> Any:
+    """matplotlib's pyplot, drawing off screen (Agg)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    return plt
+
+
+def _figure(out: Path) -> tuple[Any, Any]:
+    """The figure and axes of a plot to be written to ``out`` (a .png or .svg name)."""
+    if out.suffix.lower() not in (".png", ".svg"):
+        raise ExperimentError(f"plot file {out}: use a .png or .svg name")
+    return pyplot().subplots(figsize=(6.4, 4.2), dpi=120)
+
+
+def _line(ax: Any, px: list[Any], rows: list[dict[str, Any]], label: Any, band: bool = True,
+          marker: str | None = None) -> None:  # fmt: skip
+    """The rows' means at ``px``, their interval (``low`` to ``high``) as a band."""
+    (drawn,) = ax.plot(px, [r["mean"] for r in rows], label=label, marker=marker)
+    if band:
+        low, high = [r["low"] for r in rows], [r["high"] for r in rows]
+        ax.fill_between(px, low, high, color=drawn.get_color(), alpha=0.2, linewidth=0)
+
+
+def _runs(rows: list[dict[str, Any]]) -> str:
+    """The runs per point of ``rows``: ``N``, or ``LOW-HIGH`` where they differ."""
+    low, high = min(r["n"] for r in rows), max(r["n"] for r in rows)
+    return f"{low}" if low == high else f"{low}-{high}"
+
+
+def _saved(
+    fig: Any, ax: Any, out: Path, by: str | None, xlabel: str, ylabel: str, title: str
+) -> Path:
+    """Label and finish a plot (grid; a legend where lines are ``by`` a parameter) and save
+    it to ``out``; ``out``."""
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=10)
     ax.grid(True, alpha=0.3)
     if by:
         ax.legend(fontsize=8)
+    return save(fig, out)
+
+
+def save(fig: Any, out: Path) -> Path:
+    """Lay out ``fig``, write it to ``out`` (its folder made) and close it; ``out``."""
     fig.tight_layout()
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out)
-    plt.close(fig)
+    pyplot().close(fig)
     return out

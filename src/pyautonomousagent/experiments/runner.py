@@ -1,11 +1,9 @@
 """One run of a sweep, as a worker executes it: simulate, measure, optionally save the data.
 
-:func:`execute` is what every backend calls (in this process, a pool process or a Dask
-worker). It never raises for a failing run: the row it returns then has ``status`` "failed"
-and the error's first line, so the sweep goes on. The per-run data, when asked for, is
-written under ``runs/NAME=VALUE/.../seed=S/data.parquet`` (hive partitioning) by renaming a
-finished temporary file, so a worker killed mid-write leaves no partial file and a run done
-again writes the same file.
+:func:`execute` is what every backend calls. It never raises for a failing run: the row it
+returns then has ``status`` "failed" and the error's first line, so the sweep goes on. The
+per-run data is written as ``runs/NAME=VALUE/.../seed=S/data.parquet`` (hive partitions)
+through a temporary file and a rename, so a killed worker leaves no partial file.
 """
 
 from __future__ import annotations
@@ -120,21 +118,17 @@ def one_line(error: BaseException) -> str:
 
 def partition_dir(root: Path, run: Run) -> Path:
     """``root/NAME=VALUE/.../seed=S`` for the run's point (values URL-quoted)."""
-    path = root
-    for name, value in run.point.items():
-        path = path / f"{name}={quote(str(value), safe='')}"
-    return path / f"seed={run.seed}"
+    parts = (f"{name}={quote(str(value), safe='')}" for name, value in run.point.items())
+    return root.joinpath(*parts, f"seed={run.seed}")
 
 
-def write_run_data(sim: Any, root: Path, run: Run) -> Path:
+def write_run_data(sim: Any, root: Path, run: Run) -> None:
     """Write the run's recorded table as ``data.parquet`` in its partition folder."""
     from pyautonomousagent.experiments.store import atomic_write_table
 
     folder = partition_dir(root, run)
     folder.mkdir(parents=True, exist_ok=True)
-    target = folder / "data.parquet"
-    atomic_write_table(sim.table(), target)
-    return target
+    atomic_write_table(sim.table(), folder / "data.parquet")
 
 
 #: The scenario fields a sweep may vary besides its parameters: type, unit, description.
@@ -155,10 +149,8 @@ def parameter_columns(scenario: Any) -> tuple[dict[str, Any], dict[str, tuple[st
     from pyautonomousagent.simulation.scenario import parameter_list
 
     arrow = {bool: pa.bool_(), int: pa.int64(), float: pa.float64(), str: pa.string()}
-    types: dict[str, Any] = {}
-    docs: dict[str, tuple[str, str]] = {}
-    for name, (kind, unit, doc) in _FIELD_COLUMNS.items():
-        types[name], docs[name] = arrow[kind], (unit, doc)
+    types = {name: arrow[kind] for name, (kind, _, _) in _FIELD_COLUMNS.items()}
+    docs = {name: (unit, doc) for name, (_, unit, doc) in _FIELD_COLUMNS.items()}
     for _, param in parameter_list(scenario):
         if param.type in arrow:
             types[param.name] = arrow[param.type]

@@ -1,24 +1,13 @@
-"""Sensitivity analysis of a sweep drawn with a Sobol or Morris design (``pyaa analyse``).
+"""Sensitivity analysis of a sweep drawn with a Sobol or Morris design (``pyaa analyse``;
+docs/experiments.md says what each index means).
 
-:func:`indices` takes a results table (one row per run: ``run``, ``status`` and the
-measures), the design and its points in the unit cube, and gives a tidy table, one row per
-(measure, parameter, index):
-
-- Sobol (SALib's ``analyze.sobol``, first-order and total): ``S1``, the share of the
-  measure's variance due to the parameter alone, and ``ST``, its share with all its
-  interactions (both without unit, 0 to 1); ``confidence`` is the half-width of the 95 %
-  bootstrap interval.
-- Morris (SALib's ``analyze.morris``): ``mu_star``, the mean absolute elementary effect,
-  ``mu`` its signed mean and ``sigma`` its standard deviation (interactions and
-  non-linearity), each in the measure's unit per the parameter's whole range (from ``from``
-  to ``to``); ``confidence`` is the 95 % bootstrap half-width of ``mu_star``.
-
-A point run with several seeds counts by the mean of its successful runs (the sensitivity of
-the seeds' mean). The bootstrap draws from the design's seed, so the same sweep always gives
-the same table. A measure that takes one value at every point, or has no value at some
-point (its runs failed, are not done, or the measure is NaN there), has no indices (NaN).
-:func:`read_sweep` reads what the analysis needs from a sweep folder (its results, manifest
-and ``design.parquet``), and :func:`plot_indices` draws the table.
+:func:`indices` gives a tidy table, one row per (measure, parameter, index): Sobol's ``S1``
+and ``ST`` (no unit, 0 to 1) or Morris's ``mu_star``, ``sigma`` and ``mu`` (the measure's
+unit per the parameter's whole range), each with ``confidence``, the half-width of its 95 %
+bootstrap interval (drawn from the design's seed: the same sweep gives the same table). A
+point run with several seeds counts by the mean of its successful runs; a measure with one
+value everywhere, or none at some point, has no indices (NaN). :func:`read_sweep` reads what
+the analysis needs from a sweep folder, and :func:`plot_indices` draws the table.
 """
 
 from __future__ import annotations
@@ -33,8 +22,15 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
-from pyautonomousagent.experiments.design import DESIGN_FILE, MORRIS_LEVELS, Design, library
-from pyautonomousagent.experiments.spec import ExperimentError
+from pyautonomousagent.experiments.design import (
+    DESIGN_FILE,
+    MORRIS_LEVELS,
+    Design,
+    library,
+    unit_problem,
+)
+from pyautonomousagent.experiments.errors import ExperimentError, close_hint
+from pyautonomousagent.experiments.plot import measure_label, pyplot, read_results, save
 from pyautonomousagent.inputs import InputError, read_parquet
 
 #: The indices of each method, in the table's order.
@@ -70,7 +66,6 @@ def read_sweep(folder: str | Path) -> StoredSweep:
     Raises:
         ExperimentError: no sweep there, no design file, or a damaged file.
     """
-    from pyautonomousagent.experiments.plot import read_results
     from pyautonomousagent.experiments.store import read_manifest
 
     folder = Path(folder)
@@ -118,14 +113,11 @@ def _read_design(path: Path) -> tuple[Design, np.ndarray]:
 
 def check_measures(results: pa.Table, measures: list[str], known: list[str]) -> None:
     """Every name in ``measures`` must be one of the sweep's measures ``known``."""
-    import difflib
-
     for name in measures:
         if name not in known or name not in results.column_names:
-            close = difflib.get_close_matches(name, known, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
             raise ExperimentError(
-                f"unknown measure {name!r}{hint}; the sweep measured {', '.join(known)}"
+                f"unknown measure {name!r}{close_hint(name, known)}; the sweep measured "
+                f"{', '.join(known)}"
             )
 
 
@@ -172,7 +164,7 @@ def _analyse(design: Design, unit: np.ndarray, y: np.ndarray) -> dict[str, list[
     d = len(design.names)
     if not np.isfinite(y).all() or np.ptp(y) == 0:  # a point without a value, or no variance
         return {index: [(math.nan, math.nan)] * d for index in names}
-    problem = design.problem()
+    problem = unit_problem(design.names)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         if design.method == "sobol":
@@ -181,18 +173,16 @@ def _analyse(design: Design, unit: np.ndarray, y: np.ndarray) -> dict[str, list[
                 problem, y, calc_second_order=False, num_resamples=RESAMPLES,
                 conf_level=CONFIDENCE, seed=design.seed,
             )  # fmt: skip
-            pairs = {"S1": "S1_conf", "ST": "ST_conf"}
         else:
             morris = library("SALib.analyze.morris", "morris")
             found = morris.analyze(
                 problem, unit, y, num_resamples=RESAMPLES, conf_level=CONFIDENCE,
                 num_levels=MORRIS_LEVELS, seed=design.seed,
             )  # fmt: skip
-            pairs = {"mu_star": "mu_star_conf", "sigma": "", "mu": ""}
     out: dict[str, list[tuple]] = {}
-    for index, conf in pairs.items():
+    for index in names:  # SALib gives S1_conf, ST_conf and mu_star_conf, not sigma's or mu's
         values = np.asarray(found[index], dtype=np.float64)
-        halves = np.asarray(found[conf], dtype=np.float64) if conf else np.full(d, math.nan)
+        halves = np.asarray(found.get(f"{index}_conf", np.full(d, math.nan)), dtype=np.float64)
         out[index] = [(float(v), float(h)) for v, h in zip(values, halves, strict=True)]
     return out
 
@@ -205,7 +195,7 @@ def report(table: pa.Table, stored: StoredSweep) -> list[str]:
     for measure in dict.fromkeys(table["measure"].to_pylist()):
         rows = [r for r in table.to_pylist() if r["measure"] == measure]
         unit = stored.measures.get(measure, {}).get("unit", "")
-        shown = f"{measure} ({unit})" if unit and unit != measure else measure
+        shown = measure_label(measure, stored.measures)
         if all(math.isnan(r["value"]) for r in rows):
             lines.append(f"{shown}: {_why_none(stored, measure)}: no indices")
             continue
@@ -219,7 +209,9 @@ def report(table: pa.Table, stored: StoredSweep) -> list[str]:
         for name in design.names:
             found = {r["index"]: r for r in rows if r["parameter"] == name}
             if design.method == "sobol":
-                cells = [_pm(found[i]) for i in ("S1", "ST")]
+                cells = [
+                    f"{found[i]['value']:.3f} ± {found[i]['confidence']:.3f}" for i in ("S1", "ST")
+                ]
                 lines.append(f"  {name:24s} {cells[0]:>20s} {cells[1]:>20s}")
             else:
                 star, sigma, mu = (found[i]["value"] for i in ("mu_star", "sigma", "mu"))
@@ -240,25 +232,14 @@ def _why_none(stored: StoredSweep, measure: str) -> str:
     return f"the same value at every point ({y[0]:.6g})"
 
 
-def _pm(row: dict[str, Any]) -> str:
-    """``value ± half-width``."""
-    return f"{row['value']:.3f} ± {row['confidence']:.3f}"
-
-
 def plot_indices(table: pa.Table, stored: StoredSweep, out: str | Path) -> Path:
     """Draw the indices: a panel per measure, bars with 95 % intervals (Sobol: S1 and ST
     per parameter; Morris: mu* per parameter, sigma as a second bar). PNG or SVG by
     ``out``'s suffix; returns the path."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out = Path(out)
     measures = list(dict.fromkeys(table["measure"].to_pylist()))
     columns = 1 if len(measures) == 1 else 2
     lines = math.ceil(len(measures) / columns)
-    fig, axes = plt.subplots(
+    fig, axes = pyplot().subplots(
         lines, columns, figsize=(6.4 * columns, 0.6 + 2.6 * lines), dpi=120, squeeze=False
     )
     for ax, measure in zip(axes.flat, measures, strict=False):
@@ -268,20 +249,15 @@ def plot_indices(table: pa.Table, stored: StoredSweep, out: str | Path) -> Path:
     method = {"sobol": "Sobol indices", "morris": "Morris screening"}[stored.design.method]
     seeds = f"{stored.seeds} seed{'s' * (stored.seeds > 1)}"
     fig.suptitle(f"{method}: {stored.design.size()} points x {seeds}, 95 % intervals", fontsize=10)
-    fig.tight_layout()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out)
-    plt.close(fig)
-    return out
+    return save(fig, Path(out))
 
 
 def _panel(ax: Any, table: pa.Table, stored: StoredSweep, measure: str) -> None:
     """One measure's bars: per parameter, the method's two main indices side by side."""
     rows = [r for r in table.to_pylist() if r["measure"] == measure]
     names = stored.design.names
-    first, second = ("S1", "ST") if stored.design.method == "sobol" else ("mu_star", "sigma")
     unit = stored.measures.get(measure, {}).get("unit", "")
-    ax.set_title(f"{measure} ({unit})" if unit and unit != measure else measure, fontsize=9)
+    ax.set_title(measure_label(measure, stored.measures), fontsize=9)
     if all(math.isnan(r["value"]) for r in rows):
         ax.text(0.5, 0.5, "no indices", ha="center", transform=ax.transAxes)
         ax.set_xticks([])
@@ -289,7 +265,7 @@ def _panel(ax: Any, table: pa.Table, stored: StoredSweep, measure: str) -> None:
         return
     labels = {"S1": "first order S1", "ST": "total ST", "mu_star": "mu*", "sigma": "sigma"}
     where = np.arange(len(names))
-    for k, index in enumerate((first, second)):
+    for k, index in enumerate(INDICES[stored.design.method][:2]):
         found = {r["parameter"]: r for r in rows if r["index"] == index}
         values = [found[n]["value"] for n in names]
         halves = [found[n]["confidence"] for n in names]
@@ -299,9 +275,7 @@ def _panel(ax: Any, table: pa.Table, stored: StoredSweep, measure: str) -> None:
     ax.set_yticks(where, names, fontsize=8)
     ax.invert_yaxis()
     ax.axvline(0, color="black", linewidth=0.6)
-    if stored.design.method == "sobol":
-        ax.set_xlabel("share of the variance", fontsize=8)
-    else:
-        ax.set_xlabel(f"{unit or measure} per whole range", fontsize=8)
+    per = f"{unit or measure} per whole range"
+    ax.set_xlabel("share of the variance" if stored.design.method == "sobol" else per, fontsize=8)
     ax.grid(True, axis="x", alpha=0.3)
     ax.legend(fontsize=7)

@@ -1,18 +1,10 @@
-"""Time series of a sweep: each measure every K iterations of every run.
+"""Time series of a sweep: each measure every K iterations of every run (``every: K``).
 
-With ``every: K`` in the experiment (``pyaa sweep --every K``) each worker computes, after
-its run, every measure of the run *as it stood* at iterations 0, K, 2K, ... and at its last
-iteration: the measure of the records up to and including that iteration, and of the
-events raised by then (:func:`prefix`). The value at the last iteration is the run's value
-in ``results.parquet``. The rows travel with the run's result row, are journaled with it
-(``journal/series-*.parquet``, the same part number as the results' part) and are compacted
-into a tidy long table beside the results::
-
-    OUT/timeseries.parquet   run_id (string), iteration (int64), measure (string),
-                             value (float64): one row per run, measure and checkpoint
-
-Only runs whose status is "ok" have rows. K must be a multiple of the recording's
-``record_every``, so that every checkpoint is a recorded iteration.
+Each worker computes, after its run, every measure of the run *as it stood* at iterations
+0, K, 2K, ... and at its last iteration (:func:`prefix`). The rows travel with the run's
+result row, are journaled with it (``journal/series-N.parquet`` beside the results' part N)
+and are compacted into ``timeseries.parquet``: run_id, iteration, measure, value, one row
+per ok run, measure and checkpoint (docs/experiments.md, "Time series").
 """
 
 from __future__ import annotations
@@ -27,6 +19,8 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
+
+from pyautonomousagent.experiments.store import described
 
 if TYPE_CHECKING:
     from pyautonomousagent.experiments.measures import Measure, RunData
@@ -47,19 +41,10 @@ SERIES_DOCS: dict[str, tuple[str, str]] = {
 
 def series_schema() -> pa.Schema:
     """The time series' columns, each with its unit and description as field metadata."""
-    types = {
-        "run_id": pa.string(),
-        "iteration": pa.int64(),
-        "measure": pa.string(),
-        "value": pa.float64(),
-    }
-    return pa.schema(
-        [
-            pa.field(name, kind, metadata={"unit": SERIES_DOCS[name][0],
-                                           "description": SERIES_DOCS[name][1]})
-            for name, kind in types.items()
-        ]
-    )  # fmt: skip
+    types = (pa.string(), pa.int64(), pa.string(), pa.float64())  # SERIES_DOCS' columns
+    return described(
+        [pa.field(name, kind) for name, kind in zip(SERIES_DOCS, types, strict=True)], SERIES_DOCS
+    )
 
 
 def checkpoints(iterations: np.ndarray, every: int) -> np.ndarray:
@@ -115,11 +100,6 @@ def run_series(run_id: str, data: RunData, measures: Sequence[Measure], every: i
     return pa.table(columns, schema=series_schema())
 
 
-def part_path(folder: Path, number: int) -> Path:
-    """The time-series part beside the journal's results part ``number``."""
-    return folder / f"series-{number:06d}.parquet"
-
-
 def read_parts(folder: Path) -> pa.Table:
     """Every time-series part of a journal folder, each row tagged with its part number
     (column ``part``), oldest first; parts that cannot be read are left out (their runs'
@@ -144,24 +124,13 @@ def compact(folder: Path, results: pa.Table) -> pa.Table:
     parts = read_parts(folder)
     ok = results.filter(pc.equal(results["status"], "ok"))
     order = {run_id: i for i, run_id in enumerate(ok["run_id"].to_pylist())}
+    rows = list(zip(parts["run_id"].to_pylist(), parts["part"].to_pylist(), strict=True))
     latest: dict[str, int] = {}
-    for run_id, part in zip(parts["run_id"].to_pylist(), parts["part"].to_pylist(), strict=True):
+    for run_id, part in rows:
         latest[run_id] = max(part, latest.get(run_id, part))
-    keep = [
-        i
-        for i, (run_id, part) in enumerate(
-            zip(parts["run_id"].to_pylist(), parts["part"].to_pylist(), strict=True)
-        )
-        if run_id in order and latest[run_id] == part
-    ]
-    kept = parts.take(pa.array(keep, pa.int64())).drop_columns(["part"])
-    rank = pa.array([order[r] for r in kept["run_id"].to_pylist()], pa.int64())
-    ranked = kept.append_column("rank", rank).append_column(
-        "row", pa.array(np.arange(kept.num_rows), pa.int64())
-    )
-    return ranked.sort_by([("rank", "ascending"), ("row", "ascending")]).select(
-        series_schema().names
-    )
+    keep = [i for i, (run, part) in enumerate(rows) if run in order and latest[run] == part]
+    keep.sort(key=lambda i: order[rows[i][0]])  # stable: a run's rows keep their order
+    return parts.take(pa.array(keep, pa.int64())).select(series_schema().names)
 
 
 def documented(table: pa.Table, units: Mapping[str, Any]) -> pa.Table:

@@ -1,37 +1,12 @@
 """An experiment: a scenario, the parameters to vary, the seeds and the measures.
 
-Written as YAML (or given on the command line, which builds the same mapping)::
-
-    name: threshold                 # optional; names the output folder
-    scenario: patrol                # a registered scenario or a scenario .yaml file
-    iterations: 4000                # optional: the scenario's own otherwise
-    set: {agents: 100}              # optional: fixed overrides of fields or parameters
-    vary:                           # a grid: every combination of the values below
-      low_energy_threshold: {from: 20, to: 50, step: 10}   # 20, 30, 40, 50 (inclusive)
-      refuel_rate: [1, 2]                                   # a list
-    sample:                         # optional: random points (crossed with the grid)
-      count: 8
-      seed: 7
-      parameters:
-        energy_use: {uniform: [0.03, 0.07]}
-        agents: {integers: [10, 100]}     # both ends included
-        tree: {choice: [patrol.xml, my.xml]}
-    seeds: 5                        # seeds 0..4 per point, or a list [3, 7, 11]
-    measures: [refuels, alerts, {low: "mean(energy < 30)"}]
-    engine: auto
-    record_every: 1
-    every: 100                      # optional: each measure every 100 iterations per run
-                                    # (timeseries.parquet; a multiple of record_every)
-
-or, instead of a grid, a sampled design over bounded parameters (see
-:mod:`~pyautonomousagent.experiments.design`)::
-
-    design: sobol                   # grid (default), lhs, sobol or morris
-    samples: 64                     # N (sobol: a power of two)
-    design_seed: 1                  # the design's own seed (default 0)
-    vary:
-      low_energy_threshold: {from: 30, to: 45}             # bounds, both ends included
-      agents: {from: 10, to: 100}                           # an int parameter stays int
+Written as YAML, or given on the command line, which builds the same mapping: the keys
+``name``, ``scenario``, ``iterations``, ``set`` (fixed overrides), ``vary`` (a grid: lists or
+``{from, to, step}`` ranges, both ends included), ``sample`` (random points crossed with the
+grid), ``seeds``, ``measures``, ``engine``, ``record_every`` and ``every`` (the time series'
+interval); or, instead of the grid, ``design`` (lhs, sobol or morris), ``samples`` and
+``design_seed`` with bounds ``{from, to}`` in ``vary`` (see
+:mod:`~pyautonomousagent.experiments.design`). docs/experiments.md shows a full file.
 
 :meth:`Experiment.from_mapping` validates it; every error is an :class:`ExperimentError`
 naming the source, the field and what it must be. :func:`read_file` reads the file as
@@ -42,7 +17,6 @@ refusing a parameter both fixed and varied, or varied twice.
 
 from __future__ import annotations
 
-import difflib
 import hashlib
 import itertools
 import json
@@ -57,12 +31,11 @@ import numpy as np
 from pyautonomousagent.experiments.design import (
     DESIGNS,
     Design,
-    design_size,
     is_power_of_two,
     schema_types,
     typed,
 )
-from pyautonomousagent.experiments.errors import ExperimentError
+from pyautonomousagent.experiments.errors import ExperimentError, close_hint
 from pyautonomousagent.experiments.expression import ExpressionError
 from pyautonomousagent.experiments.measures import MEASURES, Measure, expression_measure
 from pyautonomousagent.inputs import InputError, load_yaml, plain_value, read_text
@@ -177,11 +150,8 @@ class Experiment:
         schema: :func:`~pyautonomousagent.experiments.sweeps.sweep` calls it; floats before)."""
         if self.design is not None:
             return self.design.points()
-        names = list(self.vary)
-        grid = [
-            dict(zip(names, values, strict=True))
-            for values in itertools.product(*self.vary.values())
-        ]
+        product = itertools.product(*self.vary.values())
+        grid = [dict(zip(self.vary, values, strict=True)) for values in product]
         if not self.sample:
             return grid
         samples = draw_samples(self.sample)
@@ -199,10 +169,11 @@ class Experiment:
 
     def to_mapping(self) -> dict[str, Any]:
         """The experiment as plain data (for the manifest; read back by :meth:`from_mapping`)."""
-        measures: list[Any] = []
-        for m in self.measures:
-            text = m.doc.removeprefix("expression: ")
-            measures.append({m.name: text} if m.doc.startswith("expression: ") else m.name)
+        expression = "expression: "
+        measures = [
+            {m.name: m.doc.removeprefix(expression)} if m.doc.startswith(expression) else m.name
+            for m in self.measures
+        ]
         data: dict[str, Any] = {
             "name": self.name,
             "scenario": self.scenario,
@@ -305,34 +276,31 @@ class _Reader:
     def __init__(self, source: str) -> None:
         self.source = source
 
+    def error(self, text: str) -> ExperimentError:
+        return ExperimentError(f"{self.source}: {text}")
+
     def fail(self, path: str, must: str, value: Any) -> ExperimentError:
         shown = repr(value)
         shown = shown if len(shown) <= 80 else shown[:77] + "..."
-        return ExperimentError(f"{self.source}: {path} must be {must}, got {shown}")
+        return self.error(f"{path} must be {must}, got {shown}")
 
     def experiment(self, data: Any) -> Experiment:
         if not isinstance(data, Mapping):
             raise self.fail("the file", "a mapping of keys to values", data)
         for key in data:
             if key not in _KEYS:
-                close = difflib.get_close_matches(str(key), _KEYS, n=1)
-                hint = f" (did you mean {close[0]!r}?)" if close else ""
-                raise ExperimentError(f"{self.source}: unknown key {key!r}{hint}")
+                raise self.error(f"unknown key {key!r}{close_hint(str(key), _KEYS)}")
         if "scenario" not in data:
-            raise ExperimentError(f"{self.source}: missing key 'scenario' (a scenario name)")
+            raise self.error("missing key 'scenario' (a scenario name)")
         fixed = self.mapping(data.get("set") or {}, "set")
         if "iterations" in fixed and data.get("iterations") is not None:
-            raise ExperimentError(
-                f"{self.source}: iterations given twice, as 'iterations' and in 'set'; keep one"
-            )
+            raise self.error("iterations given twice, as 'iterations' and in 'set'; keep one")
         design = self.design(data)
         vary = self.vary(data.get("vary") or {}) if design is None else {}
         sample = self.sample(data["sample"]) if data.get("sample") is not None else None
         self.overlap(fixed, list(vary) if design is None else design.names)
         if not vary and not sample and design is None:
-            raise ExperimentError(
-                f"{self.source}: nothing varies; give 'vary' (a grid) or 'sample' (random points)"
-            )
+            raise self.error("nothing varies; give 'vary' (a grid) or 'sample' (random points)")
         experiment = Experiment(
             scenario=self.text(data["scenario"], "scenario"),
             vary=vary,
@@ -350,9 +318,7 @@ class _Reader:
             every=self.every(data.get("every"), data.get("record_every", 1)),
         )
         self.columns(experiment)
-        grid = math.prod(len(values) for values in experiment.vary.values())
-        if design is not None:
-            grid = design.size()
+        grid = design.size() if design is not None else math.prod(len(v) for v in vary.values())
         total = grid * (sample["count"] if sample else 1) * len(experiment.seeds)
         if total > MAX_RUNS:
             raise self.fail("the experiment", f"at most {MAX_RUNS} runs", f"{total} runs")
@@ -367,35 +333,35 @@ class _Reader:
         if method == "grid":
             for key in ("samples", "design_seed"):
                 if data.get(key) is not None:
-                    raise ExperimentError(
-                        f"{self.source}: {key} is for a sampled design (lhs, sobol or morris); "
-                        "a grid runs every combination of vary"
+                    raise self.error(
+                        f"{key} is for a sampled design (lhs, sobol or morris); a grid runs "
+                        "every combination of vary"
                     )
             return None
         if data.get("sample") is not None:
-            raise ExperimentError(
-                f"{self.source}: sample (random points crossed with a grid) is for the grid "
-                f"design; design {method} draws its own points: give the bounds in vary"
+            raise self.error(
+                "sample (random points crossed with a grid) is for the grid design; design "
+                f"{method} draws its own points: give the bounds in vary"
             )
         if data.get("samples") is None:
-            raise ExperimentError(
-                f"{self.source}: design {method} needs samples, the number of samples N "
-                "(e.g. --samples 64)"
+            raise self.error(
+                f"design {method} needs samples, the number of samples N (e.g. --samples 64)"
             )
         samples = self.count(data["samples"], "samples")
         if method == "sobol" and not is_power_of_two(samples):
             raise self.fail("samples", "a power of two for design sobol (e.g. 32, 64)", samples)
         grid = self.mapping(data.get("vary") or {}, "vary")
         if not grid:
-            raise ExperimentError(
-                f"{self.source}: nothing varies; design {method} needs bounds in vary "
-                "(e.g. --vary low_energy_threshold=30:45)"
+            raise self.error(
+                f"nothing varies; design {method} needs bounds in vary (e.g. --vary "
+                "low_energy_threshold=30:45)"
             )
         bounds = {name: self.bounds(value, name, method) for name, value in grid.items()}
         seed = self.whole(data.get("design_seed", 0), "design_seed", 0)
-        if design_size(method, samples, len(bounds)) > MAX_RUNS:
+        design = Design(method, samples, seed, bounds)
+        if design.size() > MAX_RUNS:
             raise self.fail("samples", f"a number giving at most {MAX_RUNS} points", samples)
-        return Design(method, samples, seed, bounds)
+        return design
 
     def bounds(self, value: Any, name: str, method: str) -> tuple[float, float]:
         """A parameter's bounds ``{from: LOW, to: HIGH}`` with LOW < HIGH."""
@@ -405,8 +371,7 @@ class _Reader:
         )
         if not isinstance(value, Mapping) or set(value) != {"from", "to"}:
             raise self.fail(f"vary.{name}", must, value)
-        low = self.number(value["from"], f"vary.{name}.from")
-        high = self.number(value["to"], f"vary.{name}.to")
+        low, high = (self.number(value[k], f"vary.{name}.{k}") for k in ("from", "to"))
         if not low < high:
             raise self.fail(f"vary.{name}", must, value)
         if not math.isfinite(high - low) or max(-low, high) > 2**62:
@@ -419,7 +384,7 @@ class _Reader:
         if value is None:
             return None
         every = self.whole(value, "every", 1)
-        if isinstance(record_every, int) and record_every >= 1 and every % record_every:
+        if every % record_every:  # record_every is checked by then
             raise self.fail("every", f"a multiple of record_every ({record_every})", value)
         return every
 
@@ -428,9 +393,8 @@ class _Reader:
         parameter replaces its fixed value: ``set`` then gives the base scenario)."""
         both = [name for name in varied if name in fixed]
         if both:
-            raise ExperimentError(
-                f"{self.source}: parameter {both[0]!r} is both fixed ('set') and varied; "
-                "keep one of them"
+            raise self.error(
+                f"parameter {both[0]!r} is both fixed ('set') and varied; keep one of them"
             )
 
     def engine(self, value: Any) -> str:
@@ -484,12 +448,11 @@ class _Reader:
 
     def values(self, value: Any, path: str) -> list[Any]:
         if isinstance(value, Mapping):
-            keys = set(value)
-            if keys != {"from", "to", "step"}:
+            if set(value) != {"from", "to", "step"}:
                 raise self.fail(path, "a list of values or {from: A, to: B, step: S}", value)
-            start = self.number(value["from"], f"{path}.from")
-            stop = self.number(value["to"], f"{path}.to")
-            step = self.number(value["step"], f"{path}.step")
+            start, stop, step = (
+                self.number(value[k], f"{path}.{k}") for k in ("from", "to", "step")
+            )
             if step <= 0 or stop < start:
                 raise self.fail(path, "a range with step > 0 and to >= from", value)
             if (stop - start) / step >= MAX_RUNS:
@@ -502,11 +465,7 @@ class _Reader:
                 raise self.fail(f"{path}[{i}]", "a number, a string or true/false", item)
             if isinstance(item, float) and not math.isfinite(item):
                 raise self.fail(f"{path}[{i}]", "a finite number", item)
-        kinds = {
-            "bool" if isinstance(v, bool) else "str" if isinstance(v, str) else "number"
-            for v in value
-        }
-        if len(kinds) > 1:
+        if len({(isinstance(v, bool), isinstance(v, str)) for v in value}) > 1:  # kinds mixed
             raise self.fail(path, "values of one kind (numbers, strings or true/false)", value)
         if len({json.dumps(v) for v in value}) != len(value):
             raise self.fail(path, "a list without repeated values", value)
@@ -525,11 +484,8 @@ class _Reader:
         out: dict[str, tuple[str, list[Any]]] = {}
         for name, spec in params.items():
             path = f"sample.parameters.{name}"
-            if (
-                not isinstance(spec, Mapping)
-                or len(spec) != 1
-                or next(iter(spec)) not in (_DISTRIBUTIONS)
-            ):
+            kinds = list(spec) if isinstance(spec, Mapping) else []
+            if len(kinds) != 1 or kinds[0] not in _DISTRIBUTIONS:
                 raise self.fail(
                     path, "{uniform: [lo, hi]}, {integers: [lo, hi]} or {choice: [values]}", spec
                 )
@@ -579,7 +535,7 @@ class _Reader:
                 try:
                     out.append(MEASURES.get(item))
                 except UnknownNameError as error:
-                    raise ExperimentError(f"{self.source}: {path}: {error}") from None
+                    raise self.error(f"{path}: {error}") from None
             elif isinstance(item, Mapping) and len(item) == 1:
                 name, text = next(iter(item.items()))
                 if not isinstance(name, str) or not name.isidentifier():
@@ -587,7 +543,7 @@ class _Reader:
                 try:
                     out.append(expression_measure(name, text))
                 except ExpressionError as error:
-                    raise ExperimentError(f"{self.source}: {path}: {error}") from None
+                    raise self.error(f"{path}: {error}") from None
             else:
                 raise self.fail(path, "a measure name or {name: expression}", item)
         names = [m.name for m in out]
@@ -600,15 +556,11 @@ class _Reader:
         seen: dict[str, str] = {name: "a result column" for name in RESERVED}
         for name in experiment.parameters:
             if name in seen:
-                raise ExperimentError(
-                    f"{self.source}: parameter {name!r} is {seen[name]}; it cannot be varied"
-                )
+                raise self.error(f"parameter {name!r} is {seen[name]}; it cannot be varied")
             seen[name] = "a varied parameter"
         for m in experiment.measures:
             if m.name in seen:
-                raise ExperimentError(
-                    f"{self.source}: measure {m.name!r} is {seen[m.name]}; rename the measure"
-                )
+                raise self.error(f"measure {m.name!r} is {seen[m.name]}; rename the measure")
 
 
 def parse_vary(items: Sequence[str], bounds: bool = False) -> dict[str, Any]:
@@ -631,12 +583,9 @@ def parse_vary(items: Sequence[str], bounds: bool = False) -> dict[str, Any]:
         if name in vary:
             raise ExperimentError(f"--vary {name} is given twice; give its values in one --vary")
         parts = text.split(":")
-        if len(parts) == 3:
-            start, stop, step = (_vary_value(p, name) for p in parts)
-            vary[name] = {"from": start, "to": stop, "step": step}
-        elif bounds and len(parts) == 2:
-            start, stop = (_vary_value(p, name) for p in parts)
-            vary[name] = {"from": start, "to": stop}
+        if len(parts) == 3 or (bounds and len(parts) == 2):  # a range, or bounds
+            keys = ("from", "to", "step")[: len(parts)]
+            vary[name] = {k: _vary_value(p, name) for k, p in zip(keys, parts, strict=True)}
         elif len(parts) > 1 and all(isinstance(_vary_value(p, name), int | float) for p in parts):
             raise ExperimentError(
                 f"--vary {name}: a range is FROM:TO:STEP, three numbers (e.g. 20:50:5), "

@@ -1,22 +1,13 @@
-"""A sweep's folder: the manifest, the journal of finished runs, and the results.
+"""A sweep's folder (docs/experiments.md, "What a sweep writes"): the manifest
+``experiment.json``, the journal of finished runs (``journal/part-*.parquet``, with their
+time series beside as ``series-*.parquet``) and ``results.parquet``, the journal's last row
+of each run.
 
-::
-
-    OUT/experiment.json        the manifest: experiment, base scenario, runs, backend,
-                               versions, counts, start and end times
-    OUT/journal/part-*.parquet rows of finished runs, appended in batches as they finish
-    OUT/journal/series-*.parquet  the time series of a part's runs (``every``), if kept
-    OUT/results.parquet        one row per run (the journal's last row of each run)
-    OUT/timeseries.parquet     each measure every K iterations per run (``every``), if kept
-    OUT/runs/NAME=VALUE/.../seed=S/data.parquet   each run's recorded data (optional)
-
-Every file is written to a temporary name, flushed to disk (fsync) and renamed, so an
-interrupted or killed sweep, or a machine that stops, leaves whole files only: the journal
-holds exactly the runs that finished, and ``--resume`` runs the others. A journal part that
-cannot be read all the same (a torn file left by an older version, a disk that lied) is
-set aside as ``journal/.part-*.parquet.torn`` when the journal is opened, so that its runs
-run again, and :attr:`Journal.notes` says so; temporary files a killed sweep left are
-deleted.
+Every file is written to a temporary name, flushed to disk (fsync) and renamed, so a killed
+sweep or a stopped machine leaves whole files only: the journal holds exactly the runs that
+finished, and ``--resume`` runs the others. A journal part that cannot be read all the same
+is set aside as ``journal/.part-*.parquet.torn`` when the journal is opened, so that its runs
+run again (:attr:`Journal.notes` says so); temporary files a killed sweep left are deleted.
 """
 
 from __future__ import annotations
@@ -26,7 +17,7 @@ import json
 import os
 import re
 import uuid
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -44,30 +35,20 @@ JOURNAL = "journal"
 RUNS = "runs"
 
 
-#: The temporary files :func:`atomic_write_bytes` and :func:`atomic_write_table` write.
+#: The temporary files :func:`atomic_write` writes.
 TEMPORARY = re.compile(r"\..+\.[0-9a-f]{32}\.tmp")
 
 
-def atomic_write_bytes(path: Path, data: bytes) -> None:
-    """Write ``data`` to ``path`` through a temporary file, an fsync and a rename."""
-    temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
-    try:
-        with temporary.open("wb") as file:
-            file.write(data)
-            file.flush()
-            os.fsync(file.fileno())
-        os.replace(temporary, path)
-        sync_folder(path.parent)
-    finally:
-        temporary.unlink(missing_ok=True)
-
-
 def atomic_write_table(table: pa.Table, path: Path) -> None:
-    """Write ``table`` as Parquet (the run data's options) to ``path`` through a temporary
-    file, an fsync and a rename."""
+    """Write ``table`` as Parquet (the run data's options) to ``path`` atomically."""
+    atomic_write(path, lambda file: pq.write_table(table, file, **parquet_options(table.schema)))
+
+
+def atomic_write(path: Path, write: Callable[[Path], object]) -> None:
+    """Write ``path`` by ``write(temporary)`` to a temporary file, an fsync and a rename."""
     temporary = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp")
     try:
-        pq.write_table(table, temporary, **parquet_options(table.schema))
+        write(temporary)
         fd = os.open(temporary, os.O_RDONLY)
         try:
             os.fsync(fd)
@@ -153,14 +134,16 @@ def results_schema(
     for name, value in (constants or {}).items():
         if name not in taken:
             fields.append(typed(name, [value]))
-    described = {**RESULT_DOCS, **(docs or {})}
+    return described(fields, {**RESULT_DOCS, **(docs or {})})
+
+
+def described(fields: Iterable[pa.Field], docs: Mapping[str, tuple[str, str]]) -> pa.Schema:
+    """A schema of ``fields``, each with metadata ``unit`` and ``description`` from ``docs``
+    (name -> (unit, description); empty for a name it lacks)."""
+    keys = ("unit", "description")
     return pa.schema(
-        [
-            f.with_metadata(dict(zip(("unit", "description"), described.get(f.name, ("", "")),
-                                     strict=True)))
-            for f in fields
-        ]
-    )  # fmt: skip
+        [f.with_metadata(dict(zip(keys, docs.get(f.name, ("", "")), strict=True))) for f in fields]
+    )
 
 
 class Journal:
@@ -181,16 +164,13 @@ class Journal:
         #: What opening the journal repaired, one line each (torn parts set aside...).
         self.notes: list[str] = []
         self._check_parts()
-        parts = sorted(self.folder.glob("part-*.parquet")) + self._torn()
+        parts = self.parts() + sorted(self.folder.glob(".part-*.parquet.torn"))
         numbers = [int(p.name.split("-")[1].split(".")[0]) for p in parts]
         self.next_part = max(numbers) + 1 if numbers else 0
 
     def parts(self) -> list[Path]:
         """The journal's files, in the order they were written."""
         return sorted(self.folder.glob("part-*.parquet"))
-
-    def _torn(self) -> list[Path]:
-        return sorted(self.folder.glob(".part-*.parquet.torn"))
 
     def _check_parts(self) -> None:
         """Read every part; one that cannot be read is set aside, with a note."""
@@ -233,14 +213,11 @@ class Journal:
         """Write the held rows as the next part (nothing if none are held); the held time
         series first, as ``series-N.parquet`` beside ``part-N.parquet``, so a part's runs
         never lack their series."""
-        from pyautonomousagent.experiments.series import part_path
-
         if not self.buffer:
             return
         if self.series:
-            atomic_write_table(
-                pa.concat_tables(self.series), part_path(self.folder, self.next_part)
-            )
+            series = self.folder / f"series-{self.next_part:06d}.parquet"
+            atomic_write_table(pa.concat_tables(self.series), series)
         rows = [{name: row.get(name) for name in self.schema.names} for row in self.buffer]
         table = pa.Table.from_pylist(rows, schema=self.schema)
         atomic_write_table(table, self.folder / f"part-{self.next_part:06d}.parquet")
@@ -262,13 +239,6 @@ def last_row_per_run(table: pa.Table) -> pa.Table:
     last = {run_id: i for i, run_id in enumerate(ids)}
     kept = table.take(pa.array(sorted(last.values()), pa.int64()))
     return kept.sort_by("run")
-
-
-def write_results(journal: Journal, out: Path) -> pa.Table:
-    """Compact the journal into ``results.parquet`` (one row per run) and return it."""
-    table = last_row_per_run(journal.read())
-    atomic_write_table(table, out / RESULTS)
-    return table
 
 
 #: Largest manifest read, bytes (it names the experiment, not each run).
@@ -293,5 +263,6 @@ def read_manifest(out: Path) -> dict[str, Any] | None:
 def write_manifest(out: Path, manifest: Mapping[str, Any]) -> Path:
     """Write the manifest (pretty JSON) atomically."""
     path = out / MANIFEST
-    atomic_write_bytes(path, (json.dumps(manifest, indent=2, default=str) + "\n").encode())
+    text = json.dumps(manifest, indent=2, default=str) + "\n"
+    atomic_write(path, lambda file: file.write_bytes(text.encode()))
     return path

@@ -1,24 +1,15 @@
 """Run an experiment: every point x seed on a backend, into a sweep folder.
 
-:func:`sweep` is the library function behind ``pyaa sweep``; call it from a notebook::
-
-    from pyautonomousagent.experiments import Experiment, sweep
-    result = sweep(Experiment.from_file("threshold.yaml"), "runs/threshold")
-    result.table.to_pandas()
-
-Before anything runs, every varied value is checked against the scenario, expression
-measures against the recorded columns, and the estimated memory of the largest run against
-what a worker may use. Runs are journaled as they finish (see
-:mod:`pyautonomousagent.experiments.store`); a run that raises is recorded as failed with
-its message and the sweep goes on; ``resume=True`` skips the runs already done. With the
-experiment's ``every``, each run's measures every K iterations go to ``timeseries.parquet``
-(:mod:`pyautonomousagent.experiments.series`).
+:func:`sweep` is the library function behind ``pyaa sweep``. Before anything runs, every
+varied value is checked against the scenario, expression measures against the recorded
+columns, and the estimated memory of the largest run against what a worker may use. Runs
+are journaled as they finish (:mod:`~pyautonomousagent.experiments.store`); a run that raises
+is recorded as failed and the sweep goes on; ``resume=True`` skips the runs already done.
 """
 
 from __future__ import annotations
 
 import contextlib
-import difflib
 import json
 import math
 import pickle
@@ -31,9 +22,9 @@ from typing import Any
 
 import pyarrow as pa
 
-from pyautonomousagent.experiments.backends import Backend, make_backend
-from pyautonomousagent.experiments.design import write_design
-from pyautonomousagent.experiments.expression import Expression
+from pyautonomousagent.experiments.backends import Backend, make_backend, quiet
+from pyautonomousagent.experiments.design import DESIGN_FILE, design_table
+from pyautonomousagent.experiments.errors import close_hint
 from pyautonomousagent.experiments.measures import RunData, _Evaluate
 from pyautonomousagent.experiments.runner import (
     RunTask,
@@ -50,10 +41,10 @@ from pyautonomousagent.experiments.store import (
     RUNS,
     Journal,
     atomic_write_table,
+    last_row_per_run,
     read_manifest,
     results_schema,
     write_manifest,
-    write_results,
 )
 from pyautonomousagent.folders import BusyError, claimed
 from pyautonomousagent.progress import Progress
@@ -106,6 +97,7 @@ def check(experiment: Experiment, scenario: Any) -> RunData:
     Raises:
         ExperimentError: an unknown parameter, a bad value, or an unknown column.
     """
+    from pyautonomousagent.bt.files import is_tree_file
     from pyautonomousagent.simulation import ScenarioError, Simulation
     from pyautonomousagent.simulation.scenario import to_mapping
 
@@ -117,14 +109,18 @@ def check(experiment: Experiment, scenario: Any) -> RunData:
             values.setdefault(name, set()).add(json.dumps(value))
     for name, texts in values.items():
         if name not in known:
-            close = difflib.get_close_matches(name, known, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            hint = close_hint(name, known)
             raise ExperimentError(
                 f"experiment {experiment.name!r}: unknown parameter {name!r}{hint}"
             )
         for text in sorted(texts):
             value = json.loads(text)
-            _check_tree(name, value, experiment.name)
+            tree_file = name == "tree" and isinstance(value, str) and is_tree_file(value)
+            if tree_file and not Path(value).is_file():  # it is read on the worker
+                raise ExperimentError(
+                    f"experiment {experiment.name!r}: tree: no file {value!r} (a varied tree is "
+                    "a path relative to the working directory, or an absolute one)"
+                )
             try:
                 scenario.with_overrides(**{name: value})
             except ScenarioError as error:
@@ -135,22 +131,21 @@ def check(experiment: Experiment, scenario: Any) -> RunData:
     recorded = RunData.from_simulation(probe)
     names = list(recorded.expression_values())
     for measure in experiment.measures:
-        if isinstance(measure.fn, _Evaluate):
-            _check_names(measure.name, measure.fn.expression, names)
+        columns = measure.fn.expression.names if isinstance(measure.fn, _Evaluate) else []
+        for column in (c for c in columns if c not in names):
+            hint = close_hint(column, names)
+            raise ExperimentError(f"measure {measure.name!r}: unknown column {column!r}{hint}")
     return recorded
 
 
 def compile_once(
     experiment: Experiment, scenario: Any, runs: int, report: Callable[[str], None]
 ) -> float | None:
-    """Compile the tree's fused loop here, once, before the runs go to the workers, where
-    they take the compiled engine: ``engine: compiled``, or ``auto`` where the largest run
-    is faster on the compiled engine than on the batched one (``choose_engine`` with
-    ``compiled_ready``) by enough, over all ``runs``, to pay for the compiling
-    (:data:`~pyautonomousagent.simulation.costs.AUTO_COMPILE_SECONDS`). Each worker then
-    loads it from numba's cache (``auto`` takes it there once it is compiled). Not for a
-    varied tree. ``report`` is told before and how long it took; the seconds, or None
-    where nothing was compiled."""
+    """Compile the tree's fused loop here, once, for workers that take the compiled engine
+    (``engine: compiled``, or ``auto`` where the largest run saves enough over all ``runs``
+    to pay for compiling: :data:`~pyautonomousagent.simulation.costs.AUTO_COMPILE_SECONDS`);
+    they load it from numba's cache. Not for a varied tree. ``report`` is told before and
+    how long it took; the seconds, or None where nothing was compiled."""
     from pyautonomousagent.engines.compiled import CompiledEngine
     from pyautonomousagent.simulation import Simulation
     from pyautonomousagent.simulation.costs import AUTO_COMPILE_SECONDS, run_costs
@@ -181,26 +176,6 @@ def compile_once(
         report(f"the compiled engine ticks the tree only, not whole iterations: {why}")
     report(f"compiled engine: compiling (or loading) the tree's code took {seconds:.1f} s")
     return seconds
-
-
-def _check_tree(name: str, value: Any, experiment: str) -> None:
-    """A varied tree file must exist (it is read on the worker, relative to its folder)."""
-    from pyautonomousagent.bt.files import is_tree_file
-
-    tree_file = name == "tree" and isinstance(value, str) and is_tree_file(value)
-    if tree_file and not Path(value).is_file():
-        raise ExperimentError(
-            f"experiment {experiment!r}: tree: no file {value!r} (a varied tree is a path "
-            "relative to the working directory, or an absolute one)"
-        )
-
-
-def _check_names(name: str, expression: Expression, known: list[str]) -> None:
-    for column in expression.names:
-        if column not in known:
-            close = difflib.get_close_matches(column, known, n=1)
-            hint = f" (did you mean {close[0]!r}?)" if close else ""
-            raise ExperimentError(f"measure {name!r}: unknown column {column!r}{hint}")
 
 
 def run_bytes(experiment: Experiment, scenario: Any, columns: int, save_runs: bool) -> int:
@@ -265,43 +240,29 @@ def sweep(
     Raises:
         ExperimentError: bad experiment, ``out`` holds another sweep, or a run too large.
     """
-    out = Path(out)
+    out, report = Path(out), report or quiet
     scenario = base_scenario(experiment)
     experiment = for_scenario(experiment, scenario)  # a design's int parameters stay int
     runs = experiment.runs()
-    compile_once(experiment, scenario, len(runs), report or _ignore)
+    compile_once(experiment, scenario, len(runs), report)
     probe = check(experiment, scenario)
-    previous = _previous_manifest(out, experiment, resume)
-    points = experiment.points()
-    types, docs = parameter_columns(scenario)
-    docs.update({m.name: (m.unit, m.doc) for m in experiment.measures})
-    schema = results_schema(
-        {name: [p[name] for p in points] for name in experiment.parameters},
-        [m.name for m in experiment.measures],
-        scenario_parameters(scenario),
-        types=types,
-        docs=docs,
-    )
+    _previous_manifest(out, experiment, resume)  # refused before a backend starts
+    schema = _schema(experiment, scenario)
     owned = isinstance(backend, str)
     chosen = make_backend(backend, workers, address) if isinstance(backend, str) else backend
-    held = contextlib.ExitStack()
-    try:
+    with contextlib.ExitStack() as held:
+        if owned:  # closed on an error before the runs (after them, closing again does nothing)
+            held.callback(chosen.close)
         check_memory(run_bytes(experiment, scenario, len(probe.columns), save_runs), chosen)
         if chosen.name == "pool":
             _check_picklable(_tasks(experiment, scenario, runs[:1], None)[0])
-        held.enter_context(_claim(out, report or _ignore))
+        held.enter_context(_claim(out, report))
         previous = _previous_manifest(out, experiment, resume)  # again, now that it is ours
-    except ExperimentError:
-        held.close()
-        if owned:
-            chosen.close()
-        raise
-    with held:
         start = time.perf_counter()
         out.mkdir(parents=True, exist_ok=True)
         journal = Journal(out, schema)
         for note in journal.notes:
-            (report or _ignore)(note)
+            report(note)
         done = journal.finished() if resume else set()
         todo = [run for run in runs if run.run_id not in done]
         counts = {"ok": 0, "failed": 0, "skipped": len(runs) - len(todo)}
@@ -309,18 +270,12 @@ def sweep(
         try:
             write_manifest(out, manifest)
             if experiment.design is not None:
-                write_design(out, experiment.design)
+                atomic_write_table(design_table(experiment.design), out / DESIGN_FILE)
             tasks = _tasks(experiment, scenario, todo, out / RUNS if save_runs else None)
-            _execute(
-                tasks,
-                chosen,
-                journal,
-                counts,
-                experiment.name,
-                progress,
-                on_result,
-                (flush_every, flush_seconds),
+            bar = Progress(
+                len(tasks), f"sweep {experiment.name}", enabled=progress, lines=True, unit="runs"
             )
+            _execute(tasks, chosen, journal, counts, bar, on_result, (flush_every, flush_seconds))
             manifest["status"] = "finished"
         except BaseException:
             manifest["status"] = "interrupted"
@@ -335,12 +290,24 @@ def sweep(
     return SweepResult(out, table, counts, time.perf_counter() - start, workers_text)
 
 
+def _schema(experiment: Experiment, scenario: Any) -> pa.Schema:
+    """The results' schema (:func:`~pyautonomousagent.experiments.store.results_schema`)."""
+    points = experiment.points()
+    types, docs = parameter_columns(scenario)
+    docs.update({m.name: (m.unit, m.doc) for m in experiment.measures})
+    parameters = {name: [p[name] for p in points] for name in experiment.parameters}
+    measures = [m.name for m in experiment.measures]
+    constants = scenario_parameters(scenario)
+    return results_schema(parameters, measures, constants, types=types, docs=docs)
+
+
 def _finish(
     journal: Journal, out: Path, manifest: dict[str, Any], counts: dict[str, int], start: float
 ) -> pa.Table:
-    """Write the results, the time series (if the experiment keeps one) and the final
-    manifest; the results."""
-    table = write_results(journal, out)
+    """Write the results (the journal's last row of each run), the time series (if the
+    experiment keeps one) and the final manifest; the results."""
+    table = last_row_per_run(journal.read())
+    atomic_write_table(table, out / RESULTS)
     if manifest["experiment"].get("every") is not None:
         series = documented(compact(journal.folder, table), manifest["measures"])
         atomic_write_table(series, out / TIMESERIES)
@@ -400,13 +367,12 @@ def _execute(
     backend: Backend,
     journal: Journal,
     counts: dict[str, int],
-    name: str,
-    progress: bool | None,
+    bar: Progress,
     on_result: Callable[[dict[str, Any]], None] | None,
     flush: tuple[int, float],
 ) -> None:
-    """Run the tasks, journaling each result once (in batches)."""
-    bar = Progress(len(tasks), f"sweep {name}", enabled=progress, lines=True, unit="runs")
+    """Run the tasks, journaling each result once (in batches); ``bar`` shows them (and is
+    closed here)."""
     told = getattr(backend, "report", None)
     if told is not None:
         backend.report = bar.note  # type: ignore[attr-defined]  # a lost worker: one line
@@ -458,10 +424,6 @@ def _claim(out: Path, report: Callable[[str], None]) -> Iterator[None]:
             f"{out} is being written by another sweep or run ({error.strerror}); wait for it "
             "to finish, or choose another --out"
         ) from None
-
-
-def _ignore(note: str) -> None:
-    """Drop ``note`` (no ``report`` given to :func:`sweep`)."""
 
 
 def _previous_manifest(out: Path, experiment: Experiment, resume: bool) -> dict[str, Any] | None:
