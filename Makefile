@@ -72,11 +72,13 @@ browser:
 
 # The suite on two workers (pytest-xdist): CI has 2 cores, and a worker waits on numba's
 # compiles and on subprocesses much of the time. Tests of one xdist_group run on one worker
-# (the lessons, executed once for the tests that read them, not once per worker).
+# (the lessons, executed once for the tests that read them, not once per worker; the tests
+# sharing a module's fixture). The groups go out in the order of the tests (tests/conftest.py
+# puts the lessons', the longest, first), not the largest first.
 test: $(VENV)/.installed-test browser
 	$(BIN)/ruff check src tests
 	$(BIN)/mypy src
-	$(BIN)/python -m pytest -n 2 --dist loadgroup --durations=25
+	$(BIN)/python -m pytest -n 2 --dist loadgroup --no-loadscope-reorder --durations=25
 
 lint: $(VENV)/.installed-test
 	$(BIN)/ruff check src tests

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -121,15 +121,63 @@ def on_channel(link: Datalink) -> list[tuple]:
     return out
 
 
+#: Session fixtures (per xdist worker) worth building once: their tests share a worker.
+SHARED_RUNS = ("gathering_run", "patrol_run")
+
+
+def _shared_keys(item: pytest.Item) -> list[str]:
+    """What ``item`` shares with other tests when they run on its worker: the module-scoped
+    fixtures it uses (its module's tests) and :data:`SHARED_RUNS`."""
+    info = getattr(item, "_fixtureinfo", None)
+    if info is None:
+        return []
+    keys = [f"runs-{name}" for name in SHARED_RUNS if name in info.names_closure]
+    for name in info.names_closure:
+        definitions = info.name2fixturedefs.get(name, ())
+        if any(d.scope == "module" for d in definitions):
+            keys.append(f"module-{item.path.stem}")
+            break
+    return keys
+
+
+def _groups(items: list[pytest.Item]) -> dict[pytest.Item, str]:
+    """The group of each test that shares something (:func:`_shared_keys`): tests sharing a
+    key, directly or through others, are in one group, named by its first key."""
+    parent: dict[str, str] = {}
+
+    def root(key: str) -> str:
+        while parent.setdefault(key, key) != key:
+            key = parent[key]
+        return key
+
+    keys = {item: _shared_keys(item) for item in items}
+    for item_keys in keys.values():
+        for key in item_keys[1:]:
+            parent[root(key)] = root(item_keys[0])
+    return {item: root(k[0]) for item, k in keys.items() if k}
+
+
 @pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Tests that read the executed lessons run on one xdist worker (``--dist loadgroup``),
     so that the lessons are executed and the docs site built once, not once per worker
-    (about 4 minutes each time). First among the hooks: xdist's own hook turns the mark
-    into the test's group, and a mark added after it is ignored."""
+    (about 4 minutes each time). Likewise the tests of a module with a module-scoped
+    fixture (a run, a sweep, a browser), and those of a session's scenario run
+    (:data:`SHARED_RUNS`), share a worker: xdist would split them and build the fixture on
+    both. The lessons' tests come first: with ``--no-loadscope-reorder`` (``make test``)
+    xdist hands out the groups in this order, and the longest starts at once. First among
+    the hooks: xdist's own hook turns the mark into the test's group, and a mark added after
+    it is ignored."""
+    lessons, others = [], []
     for item in items:
         if "executed_lessons" in getattr(item, "fixturenames", ()):
             item.add_marker(pytest.mark.xdist_group("lessons"))
+            lessons.append(item)
+        else:
+            others.append(item)
+    for item, group in _groups(others).items():
+        item.add_marker(pytest.mark.xdist_group(group))
+    items[:] = lessons + others
 
 
 @pytest.fixture(scope="session")
@@ -142,6 +190,34 @@ def executed_lessons(tmp_path_factory: pytest.TempPathFactory) -> Path:
     dest = tmp_path_factory.mktemp("lessons")
     execute_lessons(dest)
     return dest
+
+
+@pytest.fixture(scope="session")
+def compiled_loop() -> Callable[[str], None]:
+    """Factory: ``compiled_loop(name)`` has the fused loop of scenario ``name`` compiled in
+    this process, from numba's shared cache (``$PYAA_CACHE_DIR`` or ``~/.cache``), once per
+    worker. A test that points ``PYAA_CACHE_DIR`` at an empty folder after it (to see its
+    marker missing, then written) finds the module in memory and does not compile the tree
+    a second time (about a minute on two cores). One worker compiles, the other waits for
+    it under a lock and loads the code from the cache."""
+    import fcntl
+
+    from pyautonomousagent.loop.modules import cache_folder
+
+    done: set[str] = set()
+
+    def compile_(name: str) -> None:
+        if name in done:
+            return
+        folder = cache_folder()
+        folder.mkdir(parents=True, exist_ok=True)
+        with open(folder / f"tests-{name}.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file is closed
+            probe = load(name).with_overrides(agents=1, iterations=1)
+            Simulation.create(probe, seed=0, engine="compiled")
+        done.add(name)
+
+    return compile_
 
 
 @pytest.fixture

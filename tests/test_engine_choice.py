@@ -96,11 +96,14 @@ TINY = {
 
 @pytest.mark.skipif(not jit.available(), reason="numba missing or PYAA_NO_JIT set")
 def test_a_sweep_compiles_once_before_its_runs_and_says_so(
-    tmp_path, monkeypatch: pytest.MonkeyPatch
+    tmp_path, monkeypatch: pytest.MonkeyPatch, compiled_loop
 ) -> None:
+    """(The code comes from the shared cache, ``compiled_loop``: what is asserted is when
+    ``compile_once`` compiles or loads, and what it says, not numba compiling.)"""
     from pyautonomousagent.experiments import Experiment, sweep
     from pyautonomousagent.experiments.sweeps import base_scenario, compile_once
 
+    compiled_loop("patrol")
     monkeypatch.setenv("PYAA_CACHE_DIR", str(tmp_path / "cache"))
     said: list[str] = []
     auto = Experiment.from_mapping(TINY)  # 2 runs of 5 drones x 30: the batched engine's

@@ -57,6 +57,10 @@ def _ptx_problem() -> str | None:
 
 needs_nvvm = pytest.mark.skipif(_ptx_problem() is not None, reason=str(_ptx_problem()))
 
+#: One xdist worker runs these tests: they share the launches recorded and the PTX compiled
+#: (:data:`_RECORDED`, :data:`_COMPILED`: the datalink's kernels, patrol's launches).
+pytestmark = pytest.mark.xdist_group("gpu-ptx")
+
 #: Run under NUMBA_ENABLE_CUDASIM=1: scenario ``argv[1]`` with overrides ``argv[2]`` (a
 #: Python literal) on the GPU engine; pickles into ``argv[3]`` the kernels launched, as
 #: sorted (module, module's file, kernel name, numba types of the arguments), the simulator's

@@ -214,10 +214,23 @@ def test_check_04_a_wrong_leaf_in_the_lessons_mission(executed_lessons: Path) ->
 
 
 def test_check_09_names_the_field_left_unset(tmp_path: Path, monkeypatch) -> None:
+    from pyautonomousagent import lessons
     from pyautonomousagent.bt import save_tree
     from pyautonomousagent.missions.drones.trees import gathering_tree
 
     monkeypatch.chdir(tmp_path)
+    # Each check flies the expected tree and the hint's trees again (3000 iterations each):
+    # a tree flown once is not flown again (a deterministic run, keyed by the whole tree).
+    flights: dict[str, list[np.ndarray]] = {}
+    fly = lessons._flight
+
+    def flown_once(tree):
+        key = repr(tree)
+        if key not in flights:
+            flights[key] = fly(tree)
+        return flights[key]
+
+    monkeypatch.setattr(lessons, "_flight", flown_once)
     for name, tree, message in (
         ("threshold-only.xml", l09_expected_tree(60, 2), "the refuel rate is not 5"),
         ("rate-only.xml", l09_expected_tree(40, 5), "the threshold is not 60"),
