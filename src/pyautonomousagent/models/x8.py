@@ -171,18 +171,10 @@ def observe(state: np.ndarray) -> Flight:
     y = np.array([east, 2 * (e0 * e1 + e2 * e3), s])
     x = np.array([north, e0 * e0 + e3 * e3 - e1 * e1 - e2 * e2, np.sqrt((1.0 - s) * (1.0 + s))])
     course, roll, pitch = arctan2(y, x)  # one call: dyn.roll_pitch's angles and the course
-    return Flight(
-        north=state[dyn.PN],
-        east=state[dyn.PE],
-        altitude=0.0 - state[dyn.PD],  # +0.0 on the ground, not -0.0
-        airspeed=np.sqrt(u * u + v * v + w * w),
-        course=course,
-        roll=roll,
-        pitch=pitch,
-        p=state[dyn.P],
-        q=state[dyn.Q],
-        climb=-down,
-    )
+    airspeed = np.sqrt(u * u + v * v + w * w)
+    altitude = 0.0 - state[dyn.PD]  # +0.0 on the ground, not -0.0
+    return Flight(state[dyn.PN], state[dyn.PE], altitude, airspeed, course, roll, pitch,
+                  state[dyn.P], state[dyn.Q], -down)  # fmt: skip
 
 
 class X8Model:
