@@ -84,15 +84,9 @@ def read_obstacles(reader: Reader, data: Any, path: str) -> tuple[Obstacle, ...]
             raise reader.fail(f"{where}.shape", "rect or circle", shape)
         fields = _FIELDS[shape]
         given = reader.keys(item, where, ["shape", *fields], list(fields))
-        x = reader.number(given["x"], f"{where}.x")
-        y = reader.number(given["y"], f"{where}.y")
-        if shape == "rect":
-            width = reader.number(given["width"], f"{where}.width", above=0.0)
-            height = reader.number(given["height"], f"{where}.height", above=0.0)
-            obstacles.append(Rectangle(x, y, width, height))
-        else:
-            radius = reader.number(given["radius"], f"{where}.radius", above=0.0)
-            obstacles.append(Circle(x, y, radius))
+        above = dict.fromkeys(fields[2:], 0.0)  # width, height, radius > 0
+        values = [reader.number(given[k], f"{where}.{k}", above=above.get(k)) for k in fields]
+        obstacles.append(Rectangle(*values) if shape == "rect" else Circle(*values))
     return tuple(obstacles)
 
 
