@@ -209,10 +209,6 @@ class X8PyFly(X8Model):
                 self.commands[i, 2] = throttle[i]
 
     def _clear_attitude(self, airspeed: np.ndarray, roll: np.ndarray, pitch: np.ndarray) -> None:
-        for i, pid in enumerate(self.pids):
-            if airspeed[i]:
-                pid.int_va = 0
-            if roll[i]:
-                pid.int_roll = 0
-            if pitch[i]:
-                pid.int_pitch = 0
+        for name, held in (("int_va", airspeed), ("int_roll", roll), ("int_pitch", pitch)):
+            for i in np.flatnonzero(held):
+                setattr(self.pids[i], name, 0)
