@@ -101,8 +101,7 @@ class Room:
     def __init__(self, width: float, height: float, obstacles: tuple[Obstacle, ...]) -> None:
         self.width = width
         self.height = height
-        rects = [(o.x, o.y, o.x + o.width, o.y + o.height) for o in obstacles
-                 if isinstance(o, Rectangle)]  # fmt: skip
+        rects = [extent(o) for o in obstacles if isinstance(o, Rectangle)]
         circles = [(o.x, o.y, o.radius) for o in obstacles if isinstance(o, Circle)]
         self.rects = np.asarray(rects, dtype=np.float64).reshape(-1, 4)  # x0, y0, x1, y1
         self.circles = np.asarray(circles, dtype=np.float64).reshape(-1, 3)  # x, y, r
