@@ -91,17 +91,12 @@ class Guidance:
     ) -> None:
         self.altitude = altitude
         self.min_airspeed = min_airspeed
-        self.course = PID(
-            gains.course_kp, gains.course_ki, gains.course_kd, math.radians(gains.max_roll), dt, n
-        )
-        self.height = PID(
-            gains.altitude_kp,
-            gains.altitude_ki,
-            gains.altitude_kd,
-            math.radians(gains.max_pitch),
-            dt,
-            n,
-        )
+
+        def pid(name: str, limit: float) -> PID:
+            kp, ki, kd = (getattr(gains, f"{name}_{k}") for k in ("kp", "ki", "kd"))
+            return PID(kp, ki, kd, math.radians(limit), dt, n)
+
+        self.course, self.height = pid("course", gains.max_roll), pid("altitude", gains.max_pitch)
 
     def references(
         self,
@@ -153,20 +148,9 @@ def attitude_gains(dt: float) -> AttitudeGains:
     from pyfly.pid_controller import PIDController
 
     c = PIDController(dt)
-    return AttitudeGains(
-        kp_airspeed=float(c.k_p_V),
-        ki_airspeed=float(c.k_i_V),
-        kp_roll=float(c.k_p_phi),
-        ki_roll=float(c.k_i_phi),
-        kd_roll=float(c.k_d_phi),
-        kp_pitch=float(c.k_p_theta),
-        ki_pitch=float(c.k_i_theta),
-        kd_pitch=float(c.k_d_theta),
-        aileron_min=float(c.delta_a_min),
-        aileron_max=float(c.delta_a_max),
-        elevator_min=float(c.delta_e_min),
-        elevator_max=float(c.delta_e_max),
-    )
+    names = ["k_p_V", "k_i_V", "k_p_phi", "k_i_phi", "k_d_phi", "k_p_theta", "k_i_theta"]
+    names += ["k_d_theta", "delta_a_min", "delta_a_max", "delta_e_min", "delta_e_max"]
+    return AttitudeGains(*(float(getattr(c, name)) for name in names))  # in the fields' order
 
 
 class AttitudeController:

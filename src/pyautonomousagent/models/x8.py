@@ -163,26 +163,15 @@ def initial_state(
 def observe(state: np.ndarray) -> Flight:
     """The :class:`Flight` view of a state array of shape (STATES, N) (rows are views)."""
     (e0, e1, e2, e3), (u, v, w) = state[dyn.QUATERNION], state[dyn.VELOCITY]
-    rot = dyn.rotation(state[dyn.QUATERNION])
-    north = rot[0, 0] * u + rot[0, 1] * v + rot[0, 2] * w  # ground velocity, m/s
-    east = rot[1, 0] * u + rot[1, 1] * v + rot[1, 2] * w
-    down = rot[2, 0] * u + rot[2, 1] * v + rot[2, 2] * w
+    north, east, down = dyn.body_to_ned(state[dyn.QUATERNION], u, v, w)  # ground velocity, m/s
     s = np.minimum(np.maximum(2 * (e0 * e2 - e1 * e3), -1.0), 1.0)  # sin(pitch)
     y = np.array([east, 2 * (e0 * e1 + e2 * e3), s])
     x = np.array([north, e0 * e0 + e3 * e3 - e1 * e1 - e2 * e2, np.sqrt((1.0 - s) * (1.0 + s))])
     course, roll, pitch = arctan2(y, x)  # one call: dyn.roll_pitch's angles and the course
-    return Flight(
-        north=state[dyn.PN],
-        east=state[dyn.PE],
-        altitude=0.0 - state[dyn.PD],  # +0.0 on the ground, not -0.0
-        airspeed=np.sqrt(u * u + v * v + w * w),
-        course=course,
-        roll=roll,
-        pitch=pitch,
-        p=state[dyn.P],
-        q=state[dyn.Q],
-        climb=-down,
-    )
+    airspeed = np.sqrt(u * u + v * v + w * w)
+    altitude = 0.0 - state[dyn.PD]  # +0.0 on the ground, not -0.0
+    return Flight(state[dyn.PN], state[dyn.PE], altitude, airspeed, course, roll, pitch,
+                  state[dyn.P], state[dyn.Q], -down)  # fmt: skip
 
 
 class X8Model:

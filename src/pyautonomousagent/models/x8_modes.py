@@ -186,9 +186,7 @@ def ground_contact(b: np.ndarray, mu: np.ndarray, max_pitch: float) -> Contact:
     """
     rot = dyn.rotation(b[dyn.QUATERNION])
     u, v, w = b[dyn.U], b[dyn.V], b[dyn.W]
-    north = rot[0, 0] * u + rot[0, 1] * v + rot[0, 2] * w
-    east = rot[1, 0] * u + rot[1, 1] * v + rot[1, 2] * w
-    down = rot[2, 0] * u + rot[2, 1] * v + rot[2, 2] * w
+    north, east, down = dyn.body_to_ned(b[dyn.QUATERNION], u, v, w)
     # attitude: the body x axis's heading kept, wings levelled, pitch within [0, max_pitch]
     span = np.sqrt(rot[0, 0] * rot[0, 0] + rot[1, 0] * rot[1, 0])  # cos(pitch) > 0
     cos_yaw, sin_yaw = rot[0, 0] / span, rot[1, 0] / span

@@ -217,21 +217,15 @@ def _variables(config: dict[str, Any]) -> dict[str, dict[str, Any]]:
 def _actuators(config: dict[str, Any]) -> Actuators:
     v = _variables(config)
     right, left, throttle = v["elevon_right"], v["elevon_left"], v["throttle"]
-    for key in ("value_min", "value_max", "dot_max", "omega_0", "zeta"):
+    elevon = ("value_min", "value_max", "dot_max", "omega_0", "zeta")  # Actuators' field order
+    for key in elevon:
         if right.get(key) != left.get(key):
             raise X8UnavailableError(
                 f"the two elevons differ in {key}; this model needs them equal"
             )
-    return Actuators(
-        elevon_min=float(right["value_min"]),
-        elevon_max=float(right["value_max"]),
-        elevon_rate_max=float(right["dot_max"]),
-        omega_0=float(right["omega_0"]),
-        zeta=float(right["zeta"]),
-        throttle_min=float(throttle["value_min"]),
-        throttle_max=float(throttle["value_max"]),
-        throttle_tau=float(throttle["tau"]),
-    )
+    values = [right[key] for key in elevon]
+    values += [throttle[key] for key in ("value_min", "value_max", "tau")]
+    return Actuators(*map(float, values))
 
 
 @lru_cache(maxsize=1)

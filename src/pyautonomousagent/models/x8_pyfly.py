@@ -70,24 +70,12 @@ def _make_pyfly(settings: X8Settings, seed: int) -> Any:
 
 def _start(settings: X8Settings, x: float, y: float, heading: float) -> dict[str, Any]:
     """PyFly's reset state for the start of :func:`~pyautonomousagent.models.x8.initial_state`."""
-    return {
-        "roll": 0.0,
-        "pitch": 0.0,
-        "yaw": float(np.radians(heading)),
-        "omega_p": 0.0,
-        "omega_q": 0.0,
-        "omega_r": 0.0,
-        "position_n": float(y),
-        "position_e": float(x),
-        "position_d": -settings.initial_altitude,
-        "velocity_u": settings.initial_airspeed,
-        "velocity_v": 0.0,
-        "velocity_w": 0.0,
-        "elevon_left": (0.0, 0.0),
-        "elevon_right": (0.0, 0.0),
-        "throttle": (0.0, 0.0),
-        "wind": (0.0, 0.0, 0.0),
-    }
+    start: dict[str, Any] = {"yaw": float(np.radians(heading)), "wind": (0.0, 0.0, 0.0)}
+    start.update(dict.fromkeys(["roll", "pitch", "omega_p", "omega_q", "omega_r"], 0.0))
+    start.update(position_n=float(y), position_e=float(x), position_d=-settings.initial_altitude)
+    start.update(velocity_u=settings.initial_airspeed, velocity_v=0.0, velocity_w=0.0)
+    start.update(dict.fromkeys(["elevon_left", "elevon_right", "throttle"], (0.0, 0.0)))
+    return start
 
 
 #: PyFly's names of the airframe's 13 states, in the rows of :mod:`x8_dynamics` (after the
@@ -204,18 +192,8 @@ class X8PyFly(X8Model):
         north, east, down, airspeed, roll, pitch, p, q, u, v, w = values
         quaternion = np.array([a.state["attitude"].value for a in self.aircraft], dtype=float).T
         velocity = body_to_ned(quaternion, u, v, w)
-        return Flight(
-            north=north,
-            east=east,
-            altitude=0.0 - down,
-            airspeed=airspeed,
-            course=np.arctan2(velocity[1], velocity[0]),
-            roll=roll,
-            pitch=pitch,
-            p=p,
-            q=q,
-            climb=-velocity[2],
-        )
+        course, climb = np.arctan2(velocity[1], velocity[0]), -velocity[2]
+        return Flight(north, east, 0.0 - down, airspeed, course, roll, pitch, p, q, climb)
 
     def _attitude(
         self, refs: tuple[np.ndarray, np.ndarray, np.ndarray], throttle: np.ndarray
@@ -231,10 +209,6 @@ class X8PyFly(X8Model):
                 self.commands[i, 2] = throttle[i]
 
     def _clear_attitude(self, airspeed: np.ndarray, roll: np.ndarray, pitch: np.ndarray) -> None:
-        for i, pid in enumerate(self.pids):
-            if airspeed[i]:
-                pid.int_va = 0
-            if roll[i]:
-                pid.int_roll = 0
-            if pitch[i]:
-                pid.int_pitch = 0
+        for name, held in (("int_va", airspeed), ("int_roll", roll), ("int_pitch", pitch)):
+            for i in np.flatnonzero(held):
+                setattr(self.pids[i], name, 0)

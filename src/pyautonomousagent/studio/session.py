@@ -72,20 +72,12 @@ class Session:
         agents, iterations and seed with the scenario's values."""
         values = vars(self.base.parameters)
         params = [
-            {
-                "name": p.name,
-                "owner": owner,
-                "type": p.type.__name__,
-                "value": values.get(p.name, p.default),
-                "default": p.default,
-                "unit": p.unit,
-                "doc": p.doc,
-                "minimum": p.minimum,
-                "maximum": p.maximum,
-            }
+            {"name": p.name, "owner": owner, "type": p.type.__name__,
+             "value": values.get(p.name, p.default),
+             **{key: getattr(p, key) for key in ("default", "unit", "doc", "minimum", "maximum")}}
             for owner, p in parameter_list(self.base)
             if p.type in (int, float, str, bool)
-        ]
+        ]  # fmt: skip
         return {
             "scenario": self.base.name,
             "description": self.base.description,

@@ -21,7 +21,7 @@ from pyautonomousagent.missions.crowded import leaves  # noqa: F401  (registers 
 from pyautonomousagent.missions.crowded.collisions import (
     COLUMNS,
     Collisions,
-    collisions_per_agent,
+    Reading,
     sense_plane,
     take_reading,
 )
@@ -183,20 +183,17 @@ class CrowdedMission(DroneMission):
         p = self.params
         return layout(self.scenario.agents, p.group_size, p.point_spacing, p.slot_radius)
 
+    def slots(self, n: int) -> np.ndarray:
+        """The groups' refuelling slots (:func:`layout`), shape (n, 2)."""
+        return self._layout()[0]
+
     def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
         """Drones full of energy on their slots, at rest; destination: the group's position."""
-        from pyautonomousagent.missions.drones.shared_data import SharedData
-
-        self.shared = SharedData(swarm.size)
-        slots, points = self._layout()
-        s, bb = swarm.columns, swarm.blackboard
-        s["x"][:], s["y"][:] = slots[:, 0], slots[:, 1]
-        s["energy"][:] = 100.0
-        bb["x_refueling_position"][:], bb["y_refueling_position"][:] = slots.T
-        self.set_surveillance(swarm, points)
+        super().place(swarm, world, rng)
+        self.set_surveillance(swarm, self._layout()[1])
         p = self.params
         self.collisions = Collisions(swarm.size, p.collision_radius, p.proximity_range)
-        s["neighbour_distance"][:] = p.proximity_range
+        swarm.columns["neighbour_distance"][:] = p.proximity_range
 
     def sense(self, sim: SimulationView) -> np.ndarray:
         """The drones' sensors, then the proximity sensor and collisions (each colliding
@@ -210,21 +207,19 @@ class CrowdedMission(DroneMission):
         np.copyto(s["neighbour_distance"], reading.distance, where=True if everyone else powered)
         np.copyto(s["neighbour_bearing"], reading.bearing, where=True if everyone else powered)
         if reading.first.size:
-            self._collided(sim, reading.first, reading.second, reading.pair_distance)
+            self._collided(sim, reading)
         return powered
 
-    def _collided(
-        self, sim: SimulationView, first: np.ndarray, second: np.ndarray, distance: np.ndarray
-    ) -> None:
-        """Damage, counts and one ``collision`` event per new colliding pair."""
-        s = sim.swarm.columns
-        counts = collisions_per_agent(first, second, sim.swarm.size)
+    def _collided(self, sim: SimulationView, reading: Reading) -> None:
+        """Damage, counts and one ``collision`` event per new colliding pair (the new
+        collisions per agent are the check's :attr:`Collisions.hits`)."""
+        s, counts = sim.swarm.columns, self.collisions.hits
         hit = np.flatnonzero(counts)
         s["collisions"][hit] += counts[hit]
         damage = s["damage"][hit] + counts[hit] * self.params.collision_damage
         s["damage"][hit] = np.minimum(damage, 100.0)
-        t = np.full(first.size, sim.world.iteration, dtype=np.int64)
-        self._events(sim, t, first, second, distance)
+        t = np.full(reading.first.size, sim.world.iteration, dtype=np.int64)
+        self._events(sim, t, reading.first, reading.second, reading.pair_distance)
 
     def _events(
         self, sim: SimulationView, t: np.ndarray, first: np.ndarray, second: np.ndarray,

@@ -252,8 +252,3 @@ def bearings(x: np.ndarray, y: np.ndarray, nearest: np.ndarray, out: np.ndarray)
     for i in range(x.size):
         j = nearest[i]
         out[i] = bearing(x[i], y[i], x[j], y[j]) if j >= 0 else 0.0
-
-
-def collisions_per_agent(first: np.ndarray, second: np.ndarray, agents: int) -> np.ndarray:
-    """How many of the pairs each agent is in, shape (N,) int64."""
-    return np.bincount(first, minlength=agents) + np.bincount(second, minlength=agents)

@@ -130,13 +130,17 @@ class DroneMission(Mission):
         return {k: np.float64 for k in SURVEILLANCE + REFUELING + DESTINATION}
 
     def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
-        """Drones start full of energy on their refuelling slots, at rest."""
+        """Drones start full of energy on their refuelling slots (:meth:`slots`), at rest."""
         self.shared = SharedData(swarm.size)
-        refuel = cycled(self.scenario.objects.refueling_positions, swarm.size)
+        refuel = self.slots(swarm.size)
         s, bb = swarm.columns, swarm.blackboard
         s["x"][:], s["y"][:] = refuel[:, 0], refuel[:, 1]
         s["energy"][:] = 100.0
         bb["x_refueling_position"][:], bb["y_refueling_position"][:] = refuel[:, 0], refuel[:, 1]
+
+    def slots(self, n: int) -> np.ndarray:
+        """The refuelling slots of drones 1..n, shape (n, 2): the scenario's, cycled."""
+        return cycled(self.scenario.objects.refueling_positions, n)
 
     def set_surveillance(self, swarm: Swarm, points: np.ndarray) -> None:
         """Each drone's surveillance position, and its first destination, shape (N, axes):

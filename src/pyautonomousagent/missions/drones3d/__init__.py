@@ -111,9 +111,8 @@ class Drone3DMission(DroneMission):
 
     def blackboard(self) -> dict[str, Any]:
         """The 2-D mission's keys (Table 3's) with altitudes."""
-        keys = super().blackboard()
-        keys.update({k: np.float64 for k in DESTINATION_3D + SURVEILLANCE_3D + REFUELING_3D})
-        return keys
+        altitudes = dict.fromkeys(DESTINATION_3D + SURVEILLANCE_3D + REFUELING_3D, np.float64)
+        return {**super().blackboard(), **altitudes}
 
     def sense(self, sim: SimulationView) -> np.ndarray:
         """Phase 2: climbing costs ``climb_energy_use`` percent per world unit climbed this
@@ -186,6 +185,4 @@ class Patrol3DMission(Drone3DMission, PatrolMission):
 
     def blackboard(self) -> dict[str, Any]:
         """The patrol's keys with altitudes."""
-        keys = super().blackboard()
-        keys.update({k: np.float64 for k in PATROL_3D[1:]})
-        return keys
+        return {**super().blackboard(), **dict.fromkeys(PATROL_3D[1:], np.float64)}

@@ -53,10 +53,8 @@ class PatrolMission(DroneMission):
 
     def blackboard(self) -> dict[str, Any]:
         """Table 3 plus the two patrol positions and the index of the current one."""
-        keys = super().blackboard()
-        keys.update({k: np.float64 for k in PATROL})
-        keys["index_current_surveillance_position"] = np.int64
-        return keys
+        keys = {**super().blackboard(), **dict.fromkeys(PATROL, np.float64)}
+        return {**keys, "index_current_surveillance_position": np.int64}
 
     def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
         """On the refuelling slots; the first patrol position is the first destination."""

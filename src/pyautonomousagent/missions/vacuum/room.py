@@ -84,15 +84,9 @@ def read_obstacles(reader: Reader, data: Any, path: str) -> tuple[Obstacle, ...]
             raise reader.fail(f"{where}.shape", "rect or circle", shape)
         fields = _FIELDS[shape]
         given = reader.keys(item, where, ["shape", *fields], list(fields))
-        x = reader.number(given["x"], f"{where}.x")
-        y = reader.number(given["y"], f"{where}.y")
-        if shape == "rect":
-            width = reader.number(given["width"], f"{where}.width", above=0.0)
-            height = reader.number(given["height"], f"{where}.height", above=0.0)
-            obstacles.append(Rectangle(x, y, width, height))
-        else:
-            radius = reader.number(given["radius"], f"{where}.radius", above=0.0)
-            obstacles.append(Circle(x, y, radius))
+        above = dict.fromkeys(fields[2:], 0.0)  # width, height, radius > 0
+        values = [reader.number(given[k], f"{where}.{k}", above=above.get(k)) for k in fields]
+        obstacles.append(Rectangle(*values) if shape == "rect" else Circle(*values))
     return tuple(obstacles)
 
 
@@ -107,8 +101,7 @@ class Room:
     def __init__(self, width: float, height: float, obstacles: tuple[Obstacle, ...]) -> None:
         self.width = width
         self.height = height
-        rects = [(o.x, o.y, o.x + o.width, o.y + o.height) for o in obstacles
-                 if isinstance(o, Rectangle)]  # fmt: skip
+        rects = [extent(o) for o in obstacles if isinstance(o, Rectangle)]
         circles = [(o.x, o.y, o.radius) for o in obstacles if isinstance(o, Circle)]
         self.rects = np.asarray(rects, dtype=np.float64).reshape(-1, 4)  # x0, y0, x1, y1
         self.circles = np.asarray(circles, dtype=np.float64).reshape(-1, 3)  # x, y, r
