@@ -21,7 +21,7 @@ from pyautonomousagent.experiments.errors import ExperimentError, close_hint
 from pyautonomousagent.experiments.store import MANIFEST, RESULTS, read_manifest
 from pyautonomousagent.inputs import InputError, read_parquet
 
-#: What a plot function calls with its summarised rows and the parameter of its lines.
+#: A plot's ``echo``: called with its summarised rows and the parameter of its lines.
 Echo = Callable[[list[dict[str, Any]], str | None], None]
 #: Intervals :func:`summarize` knows: Student-t 95 % confidence interval of the mean, one
 #: standard deviation either side, the smallest to the largest value, or none.
@@ -140,7 +140,7 @@ def plot_measure(
     out: str | Path | None = None,
     interval: str = "ci95",
     title: str | None = None,
-    echo: Echo | None = None,
+    echo: Echo = lambda rows, by: None,
 ) -> Path:
     """Draw ``measure`` against the parameter ``x`` (mean and interval over seeds), one line
     per value of ``by``; write it as PNG or SVG (by ``out``'s suffix) and return the path.
@@ -157,8 +157,7 @@ def plot_measure(
     """
     table, manifest = read_results(source)
     rows = summarize(table, measure, x, by, interval)
-    if echo is not None:
-        echo(rows, by)
+    echo(rows, by)
     folder = Path(source) if isinstance(source, str | Path) else Path(".")
     folder = folder if folder.is_dir() else folder.parent
     out = Path(out) if out is not None else folder / f"{measure}-vs-{x}.png"
@@ -276,7 +275,7 @@ def plot_over_time(
     by: str | None = None,
     out: str | Path | None = None,
     title: str | None = None,
-    echo: Echo | None = None,
+    echo: Echo = lambda rows, by: None,
 ) -> Path:
     """Draw ``measure`` over the iterations (mean over the runs and its 95 % confidence
     band), one line per value of the parameter ``by`` (default: the only varied one),
@@ -288,14 +287,12 @@ def plot_over_time(
         by: the parameter whose values are the lines.
         out: the picture (default: ``MEASURE-over-time.png`` in the sweep folder).
         title: the title (default: says what is drawn).
-        echo: called with the rows (:func:`summarize_over_time`) and the lines' parameter
-            before drawing.
+        echo: called with the rows (:func:`summarize_over_time`) and ``by`` before drawing.
     """
     series, results, descriptions, varied = read_series(source)
     by = lines_parameter(varied, by)
     rows = summarize_over_time(series, results, measure, by)
-    if echo is not None:
-        echo(rows, by)
+    echo(rows, by)
     folder = Path(source) if Path(source).is_dir() else Path(source).parent
     out = Path(out) if out is not None else folder / f"{measure}-over-time.png"
     fig, ax = _figure(out)

@@ -98,8 +98,7 @@ def execute(task: RunTask) -> dict[str, Any]:
 
 
 def blank_row(task: RunTask) -> dict[str, Any]:
-    """The row of ``task`` before it runs: its run, point, seed and the scenario's
-    parameters; NaN measures, no engine."""
+    """``task``'s row before it runs: run, point, seed, parameters; NaN measures, no engine."""
     run = task.run
     row: dict[str, Any] = {"run": run.index, "run_id": run.run_id, **run.point, "seed": run.seed}
     row.update({m.name: math.nan for m in task.measures})
