@@ -390,10 +390,7 @@ def stress(
         low, high = high, high * 2
     while high - low > max(1, low // 50):
         middle = (low + high) // 2
-        if fits(middle):
-            low = middle
-        else:
-            high = middle
+        low, high = (middle, high) if fits(middle) else (low, middle)
     return low, probes
 
 

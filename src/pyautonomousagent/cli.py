@@ -1115,7 +1115,7 @@ def sweep_command(args: argparse.Namespace) -> int:
 @_experiment_errors
 def plot_command(args: argparse.Namespace) -> int:
     """``pyaa plot``: a measure against a parameter, mean and interval over seeds."""
-    from pyautonomousagent.experiments.plot import plot_measure, read_results, summarize
+    from pyautonomousagent.experiments.plot import plot_measure
 
     if args.out is not None:
         check_output(args.out)  # never over a run's own files
@@ -1123,16 +1123,21 @@ def plot_command(args: argparse.Namespace) -> int:
         return _plot_over_time(args)
     if args.x is None:
         raise ScenarioError("--x is needed: the parameter on the horizontal axis (or --over-time)")
-    table, _ = read_results(args.sweep)
-    for row in summarize(table, args.measure, args.x, args.by, args.interval):
-        group = f"{args.by}={row['by']} " if args.by else ""
-        print(
-            f"{group}{args.x}={row['x']}: n={row['n']} mean={row['mean']:.6g} "
-            f"[{row['low']:.6g}, {row['high']:.6g}]"
-        )
-    path = plot_measure(args.sweep, args.measure, args.x, args.by, args.out, args.interval)
+
+    def show(rows: list[dict[str, Any]], by: str | None) -> None:
+        for row in rows:
+            _print_row(f"{by}={row['by']} " if by else "", f"{args.x}={row['x']}", row)
+
+    path = plot_measure(args.sweep, args.measure, args.x, args.by, args.out, args.interval,
+                        echo=show)  # fmt: skip
     print(f"wrote {path}")
     return 0
+
+
+def _print_row(group: str, where: str, row: Mapping[str, Any]) -> None:
+    """One summarised row of a plot: its runs, mean and interval."""
+    print(f"{group}{where}: n={row['n']} mean={row['mean']:.6g} "
+          f"[{row['low']:.6g}, {row['high']:.6g}]")  # fmt: skip
 
 
 @_experiment_errors
@@ -1158,28 +1163,18 @@ def analyse_command(args: argparse.Namespace) -> int:
 
 def _plot_over_time(args: argparse.Namespace) -> int:
     """``pyaa plot --over-time``: a measure over the iterations, a line per parameter value."""
-    from pyautonomousagent.experiments.plot import (
-        lines_parameter,
-        plot_over_time,
-        read_series,
-        summarize_over_time,
-    )
+    from pyautonomousagent.experiments.plot import plot_over_time
 
     if args.x is not None or args.interval != "ci95":
         raise ScenarioError("--over-time draws iterations across and a 95 % band: leave out "
                               "--x and --interval")  # fmt: skip
-    series, results, _, varied = read_series(args.sweep)
-    by = lines_parameter(varied, args.by)
-    rows = summarize_over_time(series, results, args.measure, by)
-    last = max(r["iteration"] for r in rows)
-    for row in (r for r in rows if r["iteration"] == last):
-        group = f"{by}={row['by']} " if by else ""
-        print(
-            f"{group}iteration {last}: n={row['n']} mean={row['mean']:.6g} "
-            f"[{row['low']:.6g}, {row['high']:.6g}]"
-        )
-    path = plot_over_time(args.sweep, args.measure, by, args.out)
-    print(f"wrote {path}")
+
+    def show(rows: list[dict[str, Any]], by: str | None) -> None:
+        last = max(r["iteration"] for r in rows)
+        for row in (r for r in rows if r["iteration"] == last):
+            _print_row(f"{by}={row['by']} " if by else "", f"iteration {last}", row)
+
+    print(f"wrote {plot_over_time(args.sweep, args.measure, args.by, args.out, echo=show)}")
     return 0
 
 

@@ -10,6 +10,7 @@ band, written as PNG or SVG. Failed runs, and runs where the measure is NaN, are
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +21,8 @@ from pyautonomousagent.experiments.errors import ExperimentError, close_hint
 from pyautonomousagent.experiments.store import MANIFEST, RESULTS, read_manifest
 from pyautonomousagent.inputs import InputError, read_parquet
 
+#: A plot's ``echo``: called with its summarised rows and the parameter of its lines.
+Echo = Callable[[list[dict[str, Any]], str | None], None]
 #: Intervals :func:`summarize` knows: Student-t 95 % confidence interval of the mean, one
 #: standard deviation either side, the smallest to the largest value, or none.
 INTERVALS = ("ci95", "sd", "range", "none")
@@ -39,8 +42,8 @@ def t95(df: int) -> float:
 
 
 def read_results(source: str | Path | pa.Table) -> tuple[pa.Table, dict[str, Any]]:
-    """The results table of a sweep folder, a results file, or a table; and the manifest's
-    measure descriptions (empty if there is no manifest)."""
+    """The results table of a sweep folder, a results file, or a table; and the manifest
+    (empty if there is none), its ``measures`` checked to map names to descriptions."""
     if isinstance(source, pa.Table):
         return source, {}
     path = Path(source)
@@ -50,12 +53,13 @@ def read_results(source: str | Path | pa.Table) -> tuple[pa.Table, dict[str, Any
         raise ExperimentError(f"no sweep results at {file}; run pyaa sweep first")
     try:
         table = read_parquet(file, "sweep results", ("status",))
-        measures = (read_manifest(folder) or {}).get("measures", {})
+        manifest = read_manifest(folder) or {}
     except InputError as error:
         raise ExperimentError(str(error)) from None
+    measures = manifest.get("measures", {})
     if not isinstance(measures, dict) or not all(isinstance(m, dict) for m in measures.values()):
         raise ExperimentError(f"{folder / MANIFEST}: 'measures' must map names to descriptions")
-    return table, measures
+    return table, manifest
 
 
 def _column(table: pa.Table, name: str, what: str) -> list[Any]:
@@ -136,6 +140,7 @@ def plot_measure(
     out: str | Path | None = None,
     interval: str = "ci95",
     title: str | None = None,
+    echo: Echo = lambda rows, by: None,
 ) -> Path:
     """Draw ``measure`` against the parameter ``x`` (mean and interval over seeds), one line
     per value of ``by``; write it as PNG or SVG (by ``out``'s suffix) and return the path.
@@ -148,9 +153,11 @@ def plot_measure(
         out: the picture (default: ``MEASURE-vs-X.png`` in the sweep folder, or here).
         interval: "ci95" (default), "sd", "range" or "none".
         title: the title (default: says what is drawn).
+        echo: called with the summarised rows (:func:`summarize`) and ``by`` before drawing.
     """
-    table, descriptions = read_results(source)
+    table, manifest = read_results(source)
     rows = summarize(table, measure, x, by, interval)
+    echo(rows, by)
     folder = Path(source) if isinstance(source, str | Path) else Path(".")
     folder = folder if folder.is_dir() else folder.parent
     out = Path(out) if out is not None else folder / f"{measure}-vs-{x}.png"
@@ -176,7 +183,8 @@ def plot_measure(
         ax.set_xlim(-0.5, len(labels) - 0.5)
     band = {"ci95": ", 95 % CI", "sd": ", ± 1 sd", "range": ", min to max", "none": ""}
     default = f"{measure} vs {x} (mean of {_runs(rows)} runs{band[interval]})"
-    return _saved(fig, ax, out, by, x, measure_label(measure, descriptions), title or default)
+    ylabel = measure_label(measure, manifest.get("measures", {}))
+    return _saved(fig, ax, out, by, x, ylabel, title or default)
 
 
 def read_series(folder: str | Path) -> tuple[pa.Table, pa.Table, dict[str, Any], list[str]]:
@@ -190,7 +198,7 @@ def read_series(folder: str | Path) -> tuple[pa.Table, pa.Table, dict[str, Any],
 
     path = Path(folder)
     path = path if path.is_dir() else path.parent
-    results, measures = read_results(path)
+    results, manifest = read_results(path)
     file = path / TIMESERIES
     if not file.exists():
         raise ExperimentError(
@@ -198,10 +206,10 @@ def read_series(folder: str | Path) -> tuple[pa.Table, pa.Table, dict[str, Any],
         )
     try:
         series = read_parquet(file, "sweep time series", ("run_id", "iteration", "value"))
-        varied = (read_manifest(path) or {}).get("parameters", [])
     except InputError as error:
         raise ExperimentError(str(error)) from None
-    return series, results, measures, [str(v) for v in varied or []]
+    varied = manifest.get("parameters", [])
+    return series, results, manifest.get("measures", {}), [str(v) for v in varied or []]
 
 
 def summarize_over_time(
@@ -267,6 +275,7 @@ def plot_over_time(
     by: str | None = None,
     out: str | Path | None = None,
     title: str | None = None,
+    echo: Echo = lambda rows, by: None,
 ) -> Path:
     """Draw ``measure`` over the iterations (mean over the runs and its 95 % confidence
     band), one line per value of the parameter ``by`` (default: the only varied one),
@@ -278,10 +287,12 @@ def plot_over_time(
         by: the parameter whose values are the lines.
         out: the picture (default: ``MEASURE-over-time.png`` in the sweep folder).
         title: the title (default: says what is drawn).
+        echo: called with the rows (:func:`summarize_over_time`) and ``by`` before drawing.
     """
     series, results, descriptions, varied = read_series(source)
     by = lines_parameter(varied, by)
     rows = summarize_over_time(series, results, measure, by)
+    echo(rows, by)
     folder = Path(source) if Path(source).is_dir() else Path(source).parent
     out = Path(out) if out is not None else folder / f"{measure}-over-time.png"
     fig, ax = _figure(out)

@@ -62,11 +62,7 @@ def execute(task: RunTask) -> dict[str, Any]:
     from pyautonomousagent.experiments.series import SERIES, run_series
     from pyautonomousagent.simulation import Simulation
 
-    run = task.run
-    row: dict[str, Any] = {"run": run.index, "run_id": run.run_id, **run.point, "seed": run.seed}
-    row.update({m.name: math.nan for m in task.measures})
-    row.update({k: v for k, v in scenario_parameters(task.scenario).items() if k not in row})
-    row["engine"] = None
+    run, row = task.run, blank_row(task)
     start = time.perf_counter()
     log = logging.getLogger("pyautonomousagent")
     was_disabled, log.disabled = log.disabled, True
@@ -98,6 +94,16 @@ def execute(task: RunTask) -> dict[str, Any]:
     finally:
         log.disabled = was_disabled
     row["seconds"] = time.perf_counter() - start
+    return row
+
+
+def blank_row(task: RunTask) -> dict[str, Any]:
+    """``task``'s row before it runs: run, point, seed, parameters; NaN measures, no engine."""
+    run = task.run
+    row: dict[str, Any] = {"run": run.index, "run_id": run.run_id, **run.point, "seed": run.seed}
+    row.update({m.name: math.nan for m in task.measures})
+    row.update({k: v for k, v in scenario_parameters(task.scenario).items() if k not in row})
+    row["engine"] = None
     return row
 
 

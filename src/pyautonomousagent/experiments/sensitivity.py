@@ -66,16 +66,10 @@ def read_sweep(folder: str | Path) -> StoredSweep:
     Raises:
         ExperimentError: no sweep there, no design file, or a damaged file.
     """
-    from pyautonomousagent.experiments.store import read_manifest
-
     folder = Path(folder)
     if not folder.is_dir():
         raise ExperimentError(f"{folder}: no such sweep folder; give a folder pyaa sweep wrote")
-    results, measures = read_results(folder)
-    try:
-        manifest = read_manifest(folder) or {}
-    except InputError as error:
-        raise ExperimentError(str(error)) from None
+    results, manifest = read_results(folder)
     method = manifest.get("experiment", {}).get("design", "grid")
     if method not in INDICES:
         raise ExperimentError(
@@ -86,7 +80,7 @@ def read_sweep(folder: str | Path) -> StoredSweep:
     seeds = manifest.get("experiment", {}).get("seeds")
     if not isinstance(seeds, list) or not seeds:
         raise ExperimentError(f"{folder}: the manifest names no seeds; run the sweep again")
-    return StoredSweep(results, measures, design, unit, len(seeds))
+    return StoredSweep(results, manifest.get("measures", {}), design, unit, len(seeds))
 
 
 def _read_design(path: Path) -> tuple[Design, np.ndarray]:

@@ -28,6 +28,7 @@ from pyautonomousagent.experiments.errors import close_hint
 from pyautonomousagent.experiments.measures import RunData, _Evaluate
 from pyautonomousagent.experiments.runner import (
     RunTask,
+    blank_row,
     execute,
     one_line,
     parameter_columns,
@@ -402,12 +403,7 @@ def _execute(
 
 def failed_row(task: RunTask, error: BaseException) -> dict[str, Any]:
     """The row of a run whose worker failed (e.g. was killed more than Dask allows)."""
-    run: Run = task.run
-    row: dict[str, Any] = {"run": run.index, "run_id": run.run_id, **run.point, "seed": run.seed}
-    row.update({m.name: math.nan for m in task.measures})
-    row.update({k: v for k, v in scenario_parameters(task.scenario).items() if k not in row})
-    row.update(status="failed", error=one_line(error), seconds=math.nan, engine=None)
-    return row
+    return {**blank_row(task), "status": "failed", "error": one_line(error), "seconds": math.nan}
 
 
 @contextlib.contextmanager
