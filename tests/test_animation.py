@@ -196,7 +196,8 @@ def test_labels_of_bunched_agents_do_not_pile_up(run):
 
 
 def test_events_are_marked_while_recent_and_the_inset_shows_the_followed_statuses(run):
-    from pyautonomousagent.render.animation import EVENT_SHOWN, STATUS_COLOURS
+    from pyautonomousagent.bt.status import COLOURS
+    from pyautonomousagent.render.animation import EVENT_SHOWN
 
     order = {"iteration": 100, "event": "message", "type": "gathering", "sender": "drone1",
              "receivers": "all", "data": {"x": 90.0, "y": 10.0}}  # fmt: skip
@@ -210,7 +211,7 @@ def test_events_are_marked_while_recent_and_the_inset_shows_the_followed_statuse
     pixels = painter.render(150)
     statuses = run.recorder.trace("drone3")[150]
     for (x, y), code in zip(painter.inset_boxes, statuses, strict=False):
-        assert tuple(pixels[y + 2, x + 2, :3]) == tuple(rgb(STATUS_COLOURS[int(code)])), (x, y)
+        assert tuple(pixels[y + 2, x + 2, :3]) == tuple(rgb(COLOURS[int(code)])), (x, y)
 
 
 def text_right_edge(painter: FramePainter, left: int, top: int, text: str) -> float:

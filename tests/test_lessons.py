@@ -10,6 +10,7 @@ import pytest
 
 from pyautonomousagent.lessons import (
     CHECKS,
+    STATUS_COLOURS,
     ExerciseError,
     check_exercise,
     embedded_replay,
@@ -34,7 +35,8 @@ def test_tick_table_shows_a_reactive_sequence_halting_its_action() -> None:
     table = tick_table(tree, 2)
     assert table.names == ("root", "ok", "act") and table.depths == (0, 1, 1)
     assert table.statuses == (("RUNNING", "SUCCESS", "RUNNING"), ("FAILURE", "FAILURE", "INVALID"))
-    assert "background:#fff3c4" in table._repr_html_()  # RUNNING, coloured
+    assert f"background:{STATUS_COLOURS['RUNNING']};" in table._repr_html_()
+    assert STATUS_COLOURS["RUNNING"] == "#ffe7c6"  # the views' orange, pale
     assert str(table).splitlines()[2].split() == ["ok", "SUCCESS", "FAILURE"]
 
 

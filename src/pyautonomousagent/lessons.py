@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from pyautonomousagent.bt.spec import Node
-from pyautonomousagent.bt.status import NAMES
+from pyautonomousagent.bt.status import COLOURS, NAMES
 from pyautonomousagent.inputs import shown
 
 __all__ = [
@@ -31,13 +31,17 @@ __all__ = [
     "tick_table",
 ]
 
-#: Background colours of the statuses in :class:`TickTable`'s HTML (as in the replay).
-STATUS_COLOURS = {
-    "SUCCESS": "#c8e6c9",
-    "FAILURE": "#ffcdd2",
-    "RUNNING": "#fff3c4",
-    "INVALID": "#eeeeee",
-}
+
+
+def _pale(colour: str) -> str:
+    """``colour`` (``#rrggbb``) a quarter strength over white, as a ``#rrggbb`` string."""
+    channels = (int(colour[i : i + 2], 16) for i in (1, 3, 5))
+    return "#" + "".join(f"{round(255 - (255 - c) / 4):02x}" for c in channels)
+
+
+#: Background colours of the statuses (by name) in :class:`TickTable`'s HTML: the views'
+#: colours (``bt/status.COLOURS``), pale enough to read the names on.
+STATUS_COLOURS = {NAMES[code]: _pale(colour) for code, colour in COLOURS.items()}
 CELL_STYLE = "text-align:center;padding:2px 8px"
 
 

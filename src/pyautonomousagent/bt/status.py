@@ -29,6 +29,16 @@ NAMES = {
 #: (our INVALID), RUNNING 1, SUCCESS 2, FAILURE 3, SKIPPED 4.
 BTCPP_CODES = {INVALID: 0, RUNNING: 1, SUCCESS: 2, FAILURE: 3, SKIPPED: 4}
 
+#: Each status's colour in the views (the animation's inset, the replay, the studio, the
+#: lessons' tick tables), in their legends' order: INVALID ("not ticked") last.
+COLOURS = {
+    SUCCESS: "#2ca02c",
+    FAILURE: "#d62728",
+    RUNNING: "#ff9f1c",
+    SKIPPED: "#9e9ac8",
+    INVALID: "#d9d9d9",
+}
+
 
 def status_if(condition: Any, if_true: int, if_false: int) -> Any:
     """``if_true`` where ``condition`` holds, else ``if_false``: an int, or an int8 array."""

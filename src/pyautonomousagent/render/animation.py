@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from pyautonomousagent.bt.status import FAILURE, INVALID, NAMES, RUNNING, SUCCESS
+from pyautonomousagent.bt.status import COLOURS, INVALID, NAMES
 from pyautonomousagent.progress import Progress
 from pyautonomousagent.recording import Recorder, node_list
 from pyautonomousagent.render.events import PlacedEvent, placed_events
@@ -65,13 +65,6 @@ ALTITUDE = "z"
 """The column drawn as altitude where a run records it (world units above the ground)."""
 ALTITUDE_COLOURS = "viridis"
 """The colour map of the altitude (dark low, yellow high: legible in grey too)."""
-STATUS_COLOURS = {
-    SUCCESS: "#2ca02c",
-    FAILURE: "#d62728",
-    RUNNING: "#ff9f1c",
-    INVALID: "#d9d9d9",
-}
-"""Inset colour per node status, in the order of the inset's legend."""
 EVENT_SHOWN = 0.04
 """An event stays on the map for this fraction of the run's iterations (at least 1)."""
 PANEL_NOTES = (
@@ -325,13 +318,13 @@ class FramePainter:
             self.inset_boxes.append((x, y))
             self._text(x + 12, y + self.inset_row / 2, node.name[:40], family="monospace", **small)
         y = self.inset_top + len(nodes) * self.inset_row + 8
-        self._legend_codes = list(STATUS_COLOURS)
+        self._legend_codes = list(COLOURS)
         for k, code in enumerate(self._legend_codes):
-            x = self.inset_left + 62 * k
+            x = self.inset_left + 52 * k
             self.inset_boxes.append((x, y))
             label = "not ticked" if code == INVALID else NAMES[code]
             self._text(x + 12, y + 4, label, **small)
-        self._status_rgb = {code: np.array(_rgb(c), np.uint8) for code, c in STATUS_COLOURS.items()}
+        self._status_rgb = {code: np.array(_rgb(c), np.uint8) for code, c in COLOURS.items()}
 
     def _update(self, row: int) -> list[PlacedEvent]:
         """Move the artists to record ``row``; the events shown at it (recent ones)."""

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.bt.status import NAMES
 from pyautonomousagent.inputs import InputError, shown
 from pyautonomousagent.recording import node_list
 from pyautonomousagent.runs import check_target, claim_run, save_run, simulate, streaming
@@ -29,8 +30,8 @@ from pyautonomousagent.studio.trees import Block, Checked, check_blocks, tree_te
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,63}")
 #: Most agents a frame carries (the canvas draws the first ones of a larger swarm).
 MAX_DRAWN = 5000
-#: Node status codes as the recorder keeps them.
-STATUS_NAMES = {0: "invalid", 1: "success", 2: "failure", 3: "running"}
+#: Node status codes as the recorder keeps them -> the names the page shows (its CSS classes).
+STATUS_NAMES = {code: name.lower() for code, name in NAMES.items()}
 
 
 @dataclass
