@@ -29,7 +29,6 @@ from pyautonomousagent.bt.leaf import LEAF_TYPES
 from pyautonomousagent.bt.limits import MAX_TREE_DEPTH
 from pyautonomousagent.bt.vocabulary import (
     BTCPP_LEAVES,
-    REFUSED_ATTRIBUTES,
     SCRIPT_ATTRIBUTES,
     by_tag,
     closest,
@@ -229,12 +228,6 @@ def _node(element: _Element, fail: Fail) -> RawNode:
             f'or write <{category} ID="{element.tag}">',
         )
     for key, value in attrs.items():
-        if key in REFUSED_ATTRIBUTES:
-            raise fail(
-                element.line,
-                f"scripting attribute {key} is not supported: {REFUSED_ATTRIBUTES[key]}",
-                "remove it; use a Precondition node or _failureIf / _successIf instead",
-            )
         if key in SCRIPT_ATTRIBUTES:
             node.scripts[key] = value
         elif not key.startswith("_"):
