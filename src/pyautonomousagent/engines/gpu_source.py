@@ -5,7 +5,7 @@ engine's host (:class:`~pyautonomousagent.loop.source.Stages`; this module impor
 engine), for agent ``a = cuda.grid(1)`` instead of a loop over a chunk of agents; the
 leaves', sensors' and handlers' njit kernels are called as they are (numba-cuda compiles
 them for the device). There is no second copy of a node or a leaf. A tree that sends no
-messages gets ``block_gpu`` (:func:`kernel_function`; with a sensor of the whole swarm one
+messages gets ``block_gpu`` (:func:`kernel_module_source`; with a sensor of the whole swarm one
 iteration a launch, after :func:`swarm_kernels`), one that sends messages one kernel per
 phase and message type (:func:`message_kernels`). docs/architecture.md, "The GPU engine".
 """
@@ -44,34 +44,6 @@ MESSAGE_HEADER = HEADER.replace("import cuda\n", "import cuda, int64\n") + (
     "from pyautonomousagent.engines.gpu_grid import cell_spans, next_message\n"
     "from pyautonomousagent.kernels import hypot\n"
 )
-
-
-def kernel_function(
-    program: Program,
-    kernels: Mapping[int, LeafKernel],
-    layout: Layout,
-    sensors: SensorKernel,
-    stages: Stages,
-) -> str:
-    """``block_gpu``: the fused loop of the compiled engine's ``block_function`` for the one
-    agent of a CUDA thread (see the module's docstring), its per-agent ``stages`` written by
-    the host engine. The caller applies ``cuda.jit``, with FMA contraction off
-    (:mod:`~pyautonomousagent.engines.gpu`)."""
-    tree_body, _motion = stages.tree, stages.motion  # the host's
-    if layout.outboxes:
-        raise ValueError("the GPU kernel is written for trees that send no messages")
-    arguments = fused_arguments(layout, sensors) + _swarm_state(sensors)
-    return f"""
-def block_gpu(t0, count, every, row0, {arguments}):
-    a = cuda.grid(1)
-    if a >= {layout.array("x")}.shape[0]:
-        return
-    for t in range(t0 + 1, t0 + count + 1):
-{_motion(layout, sensors, " " * 8)}
-{tree_body(program, kernels, layout, " " * 8)}
-{_thread_control(kernels, layout, stages, " " * 8)}
-{_record(layout, " " * 8)}
-"""
 
 
 def _thread_control(kernels: Mapping[int, LeafKernel], layout: Layout, stages: Stages,
@@ -129,13 +101,28 @@ def kernel_module_source(
     sensors: SensorKernel,
     stages: Stages,
 ) -> str:
-    """The generated module: imports of the helpers and kernels, then ``block_gpu`` and the
-    swarm sensor's :func:`swarm_kernels` (plain Python functions:
-    :func:`~pyautonomousagent.engines.gpu.load_kernel` compiles them)."""
-    lines = [HEADER, *import_lines(_kernel_imports(kernels, sensors, layout))]
-    lines.append(kernel_function(program, kernels, layout, sensors, stages))
-    lines.append(swarm_kernels(layout, sensors))
-    return "\n".join(lines) + "\n"
+    """The generated module: imports of the helpers and kernels, then ``block_gpu``, the
+    fused loop of the compiled engine's ``block_function`` for the one agent of a CUDA thread
+    (see the module's docstring; its per-agent ``stages`` written by the host engine), and
+    the swarm sensor's :func:`swarm_kernels`: plain Python functions, which
+    :func:`~pyautonomousagent.engines.gpu.load_kernel` compiles (FMA contraction off)."""
+    tree_body, _motion = stages.tree, stages.motion  # the host's
+    if layout.outboxes:
+        raise ValueError("the GPU kernel is written for trees that send no messages")
+    arguments = fused_arguments(layout, sensors) + _swarm_state(sensors)
+    block_gpu = f"""
+def block_gpu(t0, count, every, row0, {arguments}):
+    a = cuda.grid(1)
+    if a >= {layout.array("x")}.shape[0]:
+        return
+    for t in range(t0 + 1, t0 + count + 1):
+{_motion(layout, sensors, " " * 8)}
+{tree_body(program, kernels, layout, " " * 8)}
+{_thread_control(kernels, layout, stages, " " * 8)}
+{_record(layout, " " * 8)}
+"""
+    imports = import_lines(_kernel_imports(kernels, sensors, layout))
+    return "\n".join([HEADER, *imports, block_gpu, swarm_kernels(layout, sensors)]) + "\n"
 
 
 def _kernel_imports(kernels: Mapping[int, LeafKernel], sensors: SensorKernel,
