@@ -141,7 +141,7 @@ def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, inde
 
 
 #: A tree of more nodes than this is written once, in a group function that both fused
-#: variants call (:func:`group_function`); a smaller one (every
+#: variants call (:meth:`_Fused.group_function`); a smaller one (every
 #: mission's: 7-19 nodes) inside each. numba's parallel passes over a loop that holds the
 #: tree grow faster than the tree: written inside, the serial and the parallel variant took
 #: 17 s and 49 s to compile for patrol's 16 nodes, 22 s and 72 s for 26 nodes, 37 s and more
