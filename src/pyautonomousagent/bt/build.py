@@ -49,7 +49,7 @@ def build(document: Document) -> Node:
     """
     check_document(document)  # size and depth, before inlining anything
     builder = _Builder(document)
-    root = builder.inline(document.main, _Scope(), (document.main,), "")
+    root = builder.inline(document.trees[document.main], _Scope(), (document.main,), "")
     _assign_names(root, document.file)
     node = builder.convert(root)
     try:
@@ -94,15 +94,12 @@ class _Builder:
 
     # -- step 1: SubTrees and {port} references -------------------------------------------
 
-    def inline(self, tree_id: str, scope: _Scope, stack: tuple[str, ...], prefix: str) -> RawNode:
-        """A copy of tree ``tree_id`` with SubTrees inlined and references resolved."""
-        return self._copy(self.doc.trees[tree_id], scope, stack, prefix)
-
-    def _copy(self, node: RawNode, scope: _Scope, stack: tuple[str, ...], prefix: str) -> RawNode:
+    def inline(self, node: RawNode, scope: _Scope, stack: tuple[str, ...], prefix: str) -> RawNode:
+        """A copy of ``node`` with SubTrees inlined and references resolved."""
         if node.tag == SUBTREE:
             return self._subtree(node, scope, stack, prefix)
         ports = {k: self._resolve(v, k, scope, node.line_of(k)) for k, v in node.ports.items()}
-        children = [self._copy(child, scope, stack, prefix) for child in node.children]
+        children = [self.inline(child, scope, stack, prefix) for child in node.children]
         name = prefix + node.name if node.name else None
         return replace(node, name=name, ports=ports, children=children, prefix=prefix)
 
@@ -140,7 +137,8 @@ class _Builder:
             if port not in values and not node.autoremap:
                 values[port] = self._resolve(default, port, scope, node.line)
         inner = _Scope(values, scope, node.autoremap, tree_id, node.line)
-        return self.inline(tree_id, inner, (*stack, tree_id), self._instance(node, prefix))
+        tree = self.doc.trees[tree_id]
+        return self.inline(tree, inner, (*stack, tree_id), self._instance(node, prefix))
 
     def _instance(self, node: RawNode, prefix: str) -> str:
         """The name prefix of a SubTree's nodes: ``prefix`` + its name (made up if none) + /."""

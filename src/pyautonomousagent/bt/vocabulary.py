@@ -95,9 +95,6 @@ SCRIPT_ATTRIBUTES = (
     "_onHalted",
 )
 
-#: Scripting attributes refused, with the reason (none: BT.CPP 4.8's all run).
-REFUSED_ATTRIBUTES: dict[str, str] = {}
-
 
 def tag_of(node: Node) -> Tag:
     """The file tag that writes a (checked) control node."""

@@ -11,8 +11,9 @@ and explicit ``<Condition ID="Condition_Low_Energy_Level" threshold="40"/>``; co
 from __future__ import annotations
 
 import json
-from collections.abc import Collection
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 from xml.parsers import expat
 from xml.sax.saxutils import escape, quoteattr
@@ -28,7 +29,6 @@ from pyautonomousagent.bt.leaf import LEAF_TYPES
 from pyautonomousagent.bt.limits import MAX_TREE_DEPTH
 from pyautonomousagent.bt.vocabulary import (
     BTCPP_LEAVES,
-    REFUSED_ATTRIBUTES,
     SCRIPT_ATTRIBUTES,
     by_tag,
     closest,
@@ -38,6 +38,8 @@ from pyautonomousagent.bt.vocabulary import (
 EXPLICIT = ("Action", "Condition", "Control", "Decorator")
 #: Deepest element nesting read: <root>, <BehaviorTree>, then the tree's levels.
 MAX_XML_DEPTH = MAX_TREE_DEPTH + 2
+#: ``TreeFileError`` with the file given: (line, message, fix) -> the error.
+Fail = Callable[[int, str, str], TreeFileError]
 XML_TYPES = {float: "double", int: "int", str: "std::string", bool: "bool"}
 
 
@@ -56,6 +58,7 @@ class _RefusedError(Exception):
 
 def parse_elements(text: str, file: str) -> _Element:
     """The element tree of ``text``, each element with its line; TreeFileError if not XML."""
+    fail = partial(TreeFileError, file)
     parser = expat.ParserCreate()
     parser.ordered_attributes = True
     parser.SetParamEntityParsing(expat.XML_PARAM_ENTITY_PARSING_NEVER)
@@ -82,8 +85,7 @@ def parse_elements(text: str, file: str) -> _Element:
     try:
         parser.Parse(text, True)
     except _RefusedError as refused:
-        raise TreeFileError(
-            file,
+        raise fail(
             refused.line,
             f"the file has {refused.what}, which tree files may not have"
             + ("" if "levels" in refused.what else " (it could expand entities)"),
@@ -93,8 +95,7 @@ def parse_elements(text: str, file: str) -> _Element:
         ) from None
     except expat.ExpatError as error:
         message = expat.ErrorString(error.code)
-        raise TreeFileError(
-            file,
+        raise fail(
             error.lineno,
             f"not well-formed XML ({message}, column {error.offset + 1})",
             "check that every tag is closed and every "
@@ -105,18 +106,17 @@ def parse_elements(text: str, file: str) -> _Element:
 
 def read_xml(text: str, file: str) -> Document:
     """Read a BehaviorTree.CPP v4 XML file into a :class:`Document`."""
+    fail = partial(TreeFileError, file)
     root = parse_elements(text, file)
     if root.tag != "root":
-        raise TreeFileError(
-            file,
+        raise fail(
             root.line,
             f"the outermost element is <{root.tag}>, not <root>",
             'wrap the trees in <root BTCPP_format="4"> ... </root>',
         )
     version = root.attrs.get("BTCPP_format", "4").strip()
     if version != "4":
-        raise TreeFileError(
-            file,
+        raise fail(
             root.line,
             f"BTCPP_format is {version!r}; only version 4 files are read",
             'convert the file to BehaviorTree.CPP 4 (Groot2 does it) and set BTCPP_format="4"',
@@ -127,63 +127,57 @@ def read_xml(text: str, file: str) -> Document:
     count = sum(element.tag == "BehaviorTree" for element in root.children)
     for element in root.children:
         if element.tag == "BehaviorTree":
-            _read_tree(element, file, count, trees, lines)
+            _read_tree(element, fail, count, trees, lines)
         elif element.tag == "TreeNodesModel":
             ports.update(_subtree_ports(element))
         elif element.tag == "include":
-            raise TreeFileError(
-                file,
+            raise fail(
                 element.line,
                 "<include> is not supported",
                 "copy the BehaviorTrees of that file into this one",
             )
         else:
-            raise TreeFileError(
-                file,
+            raise fail(
                 element.line,
                 f"unexpected <{element.tag}> in <root>",
                 "only <BehaviorTree> and <TreeNodesModel> belong in <root>",
             )
-    main = _main_tree(root, trees, file)
+    main = _main_tree(root, trees, fail)
     return Document(file, main, trees, lines, ports)
 
 
 def _read_tree(
-    element: _Element, file: str, count: int, trees: dict[str, RawNode], lines: dict[str, int]
+    element: _Element, fail: Fail, count: int, trees: dict[str, RawNode], lines: dict[str, int]
 ) -> None:
     tree_id = element.attrs.get("ID", "").strip()
     if not tree_id:
         if count > 1:
-            raise TreeFileError(
-                file,
+            raise fail(
                 element.line,
                 "a <BehaviorTree> has no ID",
                 'give every tree an ID: <BehaviorTree ID="MainTree">',
             )
         tree_id = DEFAULT_TREE_ID
     if tree_id in trees:
-        raise TreeFileError(
-            file,
+        raise fail(
             element.line,
             f"two BehaviorTrees have the ID {tree_id!r} "
             f"(lines {lines[tree_id]} and {element.line})",
             "give each <BehaviorTree> its own ID",
         )
     if len(element.children) != 1:
-        raise TreeFileError(
-            file,
+        raise fail(
             element.line,
             f"BehaviorTree {tree_id!r} has {len(element.children)} root nodes, not 1",
             "put exactly one node (e.g. a <Sequence>) directly inside it",
         )
-    trees[tree_id] = _node(element.children[0], file)
+    trees[tree_id] = _node(element.children[0], fail)
     lines[tree_id] = element.line
 
 
-def _main_tree(root: _Element, trees: dict[str, RawNode], file: str) -> str:
+def _main_tree(root: _Element, trees: dict[str, RawNode], fail: Fail) -> str:
     if not trees:
-        raise TreeFileError(
-            file,
+        raise fail(
             root.line,
             "the file has no <BehaviorTree>",
             'add <BehaviorTree ID="MainTree"> with the tree inside <root>',
@@ -191,8 +185,7 @@ def _main_tree(root: _Element, trees: dict[str, RawNode], file: str) -> str:
     main = root.attrs.get("main_tree_to_execute")
     if main is None:
         if len(trees) > 1:
-            raise TreeFileError(
-                file,
+            raise fail(
                 root.line,
                 "several BehaviorTrees and no main_tree_to_execute",
                 f'add main_tree_to_execute="{next(iter(trees))}" '
@@ -201,8 +194,7 @@ def _main_tree(root: _Element, trees: dict[str, RawNode], file: str) -> str:
         return next(iter(trees))
     if main not in trees:
         hint = closest(main, list(trees))
-        raise TreeFileError(
-            file,
+        raise fail(
             root.line,
             f"main_tree_to_execute is {main!r}, but no BehaviorTree has that ID",
             hint or f"use one of: {', '.join(trees)}",
@@ -210,56 +202,46 @@ def _main_tree(root: _Element, trees: dict[str, RawNode], file: str) -> str:
     return main
 
 
-def _node(element: _Element, file: str) -> RawNode:
+def _node(element: _Element, fail: Fail) -> RawNode:
     attrs = dict(element.attrs)
     node = RawNode(element.tag, element.line, attrs.pop("name", None))
     if element.tag in (*EXPLICIT, SUBTREE):
         node_id = attrs.pop("ID", "").strip()
         if not node_id:
-            raise TreeFileError(
-                file,
+            raise fail(
                 element.line,
                 f"<{element.tag}> has no ID",
                 f'say which node it is: <{element.tag} ID="...">',
             )
         if element.tag == SUBTREE:
             node.subtree = node_id
-            node.autoremap = _flag(attrs.pop("_autoremap", "false"), element, file)
+            node.autoremap = _flag(attrs.pop("_autoremap", "false"), element, fail)
         else:
             node.tag, node.category = node_id, element.tag
     elif "ID" in attrs:
         tag = by_tag().get(element.tag)
         category = tag.kind if tag else leaf_category(element.tag)
-        raise TreeFileError(
-            file,
+        raise fail(
             element.line,
             f"<{element.tag}> has an ID attribute",
             f"remove it (the compact form <{element.tag}> names the node already), "
             f'or write <{category} ID="{element.tag}">',
         )
     for key, value in attrs.items():
-        if key in REFUSED_ATTRIBUTES:
-            raise TreeFileError(
-                file,
-                element.line,
-                f"scripting attribute {key} is not supported: {REFUSED_ATTRIBUTES[key]}",
-                "remove it; use a Precondition node or _failureIf / _successIf instead",
-            )
         if key in SCRIPT_ATTRIBUTES:
             node.scripts[key] = value
         elif not key.startswith("_"):
             node.ports[key] = value
-    node.children = [_node(child, file) for child in element.children]
+    node.children = [_node(child, fail) for child in element.children]
     return node
 
 
-def _flag(text: str, element: _Element, file: str) -> bool:
+def _flag(text: str, element: _Element, fail: Fail) -> bool:
     if text.strip().lower() in ("true", "1"):
         return True
     if text.strip().lower() in ("false", "0"):
         return False
-    raise TreeFileError(
-        file,
+    raise fail(
         element.line,
         f"_autoremap must be true or false, got {text!r}",
         'write _autoremap="true" or leave it out',

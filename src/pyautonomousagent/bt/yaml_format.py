@@ -21,7 +21,7 @@ from pyautonomousagent.bt.document import (
     RawNode,
     TreeFileError,
 )
-from pyautonomousagent.bt.vocabulary import REFUSED_ATTRIBUTES, SCRIPT_ATTRIBUTES, closest
+from pyautonomousagent.bt.vocabulary import SCRIPT_ATTRIBUTES, closest
 from pyautonomousagent.inputs import Loader, YamlLimitError, clip, yaml_error_line
 
 TOP_KEYS = ["main_tree_to_execute", "tree", "trees", "subtree_ports"]
@@ -190,12 +190,6 @@ class _Reader:
                     "write '_autoremap: true' or leave it out",
                 )
             raw.autoremap = flag
-        elif key in REFUSED_ATTRIBUTES:
-            raise self.fail(
-                line,
-                f"scripting key {key} is not supported: {REFUSED_ATTRIBUTES[key]}",
-                "remove it; use a Precondition node or _failureIf / _successIf instead",
-            )
         elif key in SCRIPT_ATTRIBUTES:
             raw.scripts[key] = self.text(value, key, "write the script as text")
             raw.port_lines[key] = line

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import inspect
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 from pyautonomousagent.bt import tree_source as source
@@ -140,7 +141,7 @@ def _phase4(kernels: Mapping[int, LeafKernel], layout: Layout, agents: str, inde
 
 
 #: A tree of more nodes than this is written once, in a group function that both fused
-#: variants call (:func:`group_function`); a smaller one (every
+#: variants call (:meth:`_Fused.group_function`); a smaller one (every
 #: mission's: 7-19 nodes) inside each. numba's parallel passes over a loop that holds the
 #: tree grow faster than the tree: written inside, the serial and the parallel variant took
 #: 17 s and 49 s to compile for patrol's 16 nodes, 22 s and 72 s for 26 nodes, 37 s and more
@@ -154,28 +155,6 @@ def grouped(program: Program) -> bool:
     return len(program.nodes) > INLINE_NODES
 
 
-def _group_body(
-    program: Program,
-    kernels: Mapping[int, LeafKernel],
-    layout: Layout,
-    sensors: SensorKernel,
-    indent: str,
-) -> str:
-    """Iterations ``t0 + 1 .. t0 + count`` of Phases 2 (sensors, motion), 3, 4 and 6 for the
-    agents ``first`` to ``last``, indented by ``indent``; the record of iteration ``t`` in row
-    ``t // every - row0`` of the record arrays (a block of record rows,
-    :mod:`~pyautonomousagent.record_blocks`)."""
-    body = f"""for t in range(t0 + 1, t0 + count + 1):
-    for a in range(U(first), U(last)):
-{_motion(layout, sensors, " " * 8)}
-{tree_body(program, kernels, layout, " " * 8)}
-{_phase4(kernels, layout, "range(U(first), U(last))", " " * 4)}
-    if t % every == 0:  # a contiguous run of each record row, column by column
-        row = t // every - row0
-{_record_group(layout, " " * 8)}"""
-    return "\n".join(indent + line if line.strip() else line for line in body.splitlines())
-
-
 def _record_group(layout: Layout, indent: str) -> str:
     """Phase 6 of the agents ``first`` to ``last`` into record row ``row``, at ``indent``:
     the columns, then the node statuses."""
@@ -183,64 +162,6 @@ def _record_group(layout: Layout, indent: str) -> str:
     lines = [f"r{j}[row, first:last] = c{j}[first:last]" for j in range(len(layout.names))]
     lines += ["for a in range(U(first), U(last)):", statuses]
     return "\n".join(indent + line for line in lines)
-
-
-def group_function(
-    program: Program,
-    kernels: Mapping[int, LeafKernel],
-    layout: Layout,
-    sensors: SensorKernel,
-    stepwise: bool,
-) -> str:
-    """What both fused variants call for a tree of more than :data:`INLINE_NODES` nodes,
-    compiled once: ``block_group(first, last, t0, count, every, row0, <the fused
-    parameters>)``, their body (:func:`_group_body`), or with ``stepwise`` ``tick_group(first,
-    last, t, <the fused parameters>)``, the :func:`_tick_and_control` of
-    :func:`stepwise_block_function`."""
-    if stepwise:
-        head = "tick_group(first, last, t"
-        body = _tick_and_control(program, kernels, layout, " " * 4)
-    else:
-        head = "block_group(first, last, t0, count, every, row0"
-        body = _group_body(program, kernels, layout, sensors, " " * 4)
-    return f"""
-@njit(cache=True, nogil=True, error_model="numpy")
-def {head}, {fused_arguments(layout, sensors)}):
-{body}
-"""
-
-
-def block_function(
-    program: Program,
-    kernels: Mapping[int, LeafKernel],
-    layout: Layout,
-    sensors: SensorKernel,
-    parallel: bool,
-) -> str:
-    """``block_serial``/``block_parallel(t0, count, every, row0, chunk, st, cur, pend, kf, ki,
-    arrays..., us, uh, uc, records..., traces, traced_at, behaviour, leaf_rows, stopped_at,
-    max_speed, speed_step, turn_step, sensor state...) -> count``: iterations ``t0 + 1 ..
-    t0 + count`` of Phases 2 (sensors, motion), 3, 4 and 6 for every agent, ``chunk`` agents
-    at a time, the groups shared among the cores in the parallel one (no agent hears
-    another: the tree sends no message): :func:`_group_body`, written in place or, for a
-    large tree (:func:`grouped`), a call of ``block_group``. ``us``, ``uh``, ``uc``: the
-    control signals u_v, u_a and (3-D drone) u_w, shape (N,)."""
-    arguments = fused_arguments(layout, sensors)
-    if grouped(program):
-        body = f"        block_group(first, last, t0, count, every, row0, {arguments})"
-    else:
-        body = _group_body(program, kernels, layout, sensors, " " * 8)
-    name = "block_parallel" if parallel else "block_serial"
-    return f"""
-@njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
-def {name}(t0, count, every, row0, chunk, {arguments}):
-    n = {layout.array("x")}.shape[0]
-    for group in prange((n + chunk - 1) // chunk):
-        first = group * chunk
-        last = min(n, first + chunk)
-{body}
-    return count
-"""
 
 
 def _handle(messaging: Messaging, layout: Layout) -> str:
@@ -309,64 +230,124 @@ def _groups(body: str, indent: str) -> str:
     return "\n".join(indent + line for line in head.splitlines()) + "\n" + body
 
 
-def _tick_and_control(
-    program: Program, kernels: Mapping[int, LeafKernel], layout: Layout, indent: str
-) -> str:
-    """Phases 3 and 4 of the agents ``first`` to ``last`` at iteration ``t``."""
-    agents = "range(U(first), U(last))"
-    return f"""{indent}for a in {agents}:
-{tree_body(program, kernels, layout, indent + " " * 4)}
-{_phase4(kernels, layout, agents, indent)}"""
+@dataclass(frozen=True)
+class _Fused:
+    """The fused loop's functions of a tree: its program, its leaves' kernels, the layout and
+    the mission's compiled sensors."""
 
+    program: Program
+    kernels: Mapping[int, LeafKernel]
+    layout: Layout
+    sensors: SensorKernel
 
-def stepwise_block_function(
-    program: Program,
-    kernels: Mapping[int, LeafKernel],
-    layout: Layout,
-    sensors: SensorKernel,
-    messaging: Messaging | None,
-    parallel: bool,
-) -> str:
-    """``block_messages_serial``/``_parallel`` (given ``messaging``: a tree that sends
-    messages) or ``block_swarm_serial``/``_parallel`` (sensors that sense the whole swarm,
-    ``sensors.swarm``, called once an iteration before the agents' sensors) ``(t0, count,
-    every, row0, chunk, <the fused parameters>[, reach, order, counts, lowest, inboxes...,
-    handler state...][, swarm state...]) -> iterations done``: up to ``count`` whole
-    iterations, Phase by Phase over every agent (``chunk`` at a time), the record of
-    iteration ``t`` in row ``t // every - row0``. The inboxes hold the messages handled in
-    the first iteration (``order``: the types delivered, -1 after them; ``counts`` per type);
-    it stops after an iteration whose messages do not all reach every agent (``reach``: the
-    datalink's range, world units) or include a recorded type (the caller delivers those),
-    and before one the swarm sensor has no room for."""
-    sense_and_move = f"""            for a in range(U(first), U(last)):
+    def group_body(self, indent: str) -> str:
+        """Iterations ``t0 + 1 .. t0 + count`` of Phases 2 (sensors, motion), 3, 4 and 6 for
+        the agents ``first`` to ``last``, indented by ``indent``; the record of iteration ``t``
+        in row ``t // every - row0`` of the record arrays (a block of record rows,
+        :mod:`~pyautonomousagent.record_blocks`)."""
+        layout = self.layout
+        body = f"""for t in range(t0 + 1, t0 + count + 1):
+    for a in range(U(first), U(last)):
+{_motion(layout, self.sensors, " " * 8)}
+{tree_body(self.program, self.kernels, layout, " " * 8)}
+{_phase4(self.kernels, layout, "range(U(first), U(last))", " " * 4)}
+    if t % every == 0:  # a contiguous run of each record row, column by column
+        row = t // every - row0
+{_record_group(layout, " " * 8)}"""
+        return "\n".join(indent + line if line.strip() else line for line in body.splitlines())
+
+    def tick_and_control(self, indent: str) -> str:
+        """Phases 3 and 4 of the agents ``first`` to ``last`` at iteration ``t``."""
+        agents = "range(U(first), U(last))"
+        return f"""{indent}for a in {agents}:
+{tree_body(self.program, self.kernels, self.layout, indent + " " * 4)}
+{_phase4(self.kernels, self.layout, agents, indent)}"""
+
+    def group_function(self, stepwise: bool) -> str:
+        """What both fused variants call for a tree of more than :data:`INLINE_NODES` nodes,
+        compiled once: ``block_group(first, last, t0, count, every, row0, <the fused
+        parameters>)``, their body (:meth:`group_body`), or with ``stepwise``
+        ``tick_group(first, last, t, <the fused parameters>)``, the :meth:`tick_and_control`
+        of :meth:`stepwise_block_function`."""
+        if stepwise:
+            head = "tick_group(first, last, t"
+            body = self.tick_and_control(" " * 4)
+        else:
+            head = "block_group(first, last, t0, count, every, row0"
+            body = self.group_body(" " * 4)
+        return f"""
+@njit(cache=True, nogil=True, error_model="numpy")
+def {head}, {fused_arguments(self.layout, self.sensors)}):
+{body}
+"""
+
+    def block_function(self, parallel: bool) -> str:
+        """``block_serial``/``block_parallel(t0, count, every, row0, chunk, st, cur, pend, kf,
+        ki, arrays..., us, uh, uc, records..., traces, traced_at, behaviour, leaf_rows,
+        stopped_at, max_speed, speed_step, turn_step, sensor state...) -> count``: iterations
+        ``t0 + 1 .. t0 + count`` of Phases 2 (sensors, motion), 3, 4 and 6 for every agent,
+        ``chunk`` agents at a time, the groups shared among the cores in the parallel one (no
+        agent hears another: the tree sends no message): :meth:`group_body`, written in place
+        or, for a large tree (:func:`grouped`), a call of ``block_group``. ``us``, ``uh``,
+        ``uc``: the control signals u_v, u_a and (3-D drone) u_w, shape (N,)."""
+        arguments = fused_arguments(self.layout, self.sensors)
+        if grouped(self.program):
+            body = f"        block_group(first, last, t0, count, every, row0, {arguments})"
+        else:
+            body = self.group_body(" " * 8)
+        name = "block_parallel" if parallel else "block_serial"
+        return f"""
+@njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
+def {name}(t0, count, every, row0, chunk, {arguments}):
+    n = {self.layout.array("x")}.shape[0]
+    for group in prange((n + chunk - 1) // chunk):
+        first = group * chunk
+        last = min(n, first + chunk)
+{body}
+    return count
+"""
+
+    def stepwise_block_function(self, messaging: Messaging | None, parallel: bool) -> str:
+        """``block_messages_serial``/``_parallel`` (given ``messaging``: a tree that sends
+        messages) or ``block_swarm_serial``/``_parallel`` (sensors that sense the whole swarm,
+        ``sensors.swarm``, called once an iteration before the agents' sensors) ``(t0, count,
+        every, row0, chunk, <the fused parameters>[, reach, order, counts, lowest, inboxes...,
+        handler state...][, swarm state...]) -> iterations done``: up to ``count`` whole
+        iterations, Phase by Phase over every agent (``chunk`` at a time), the record of
+        iteration ``t`` in row ``t // every - row0``. The inboxes hold the messages handled in
+        the first iteration (``order``: the types delivered, -1 after them; ``counts`` per
+        type); it stops after an iteration whose messages do not all reach every agent
+        (``reach``: the datalink's range, world units) or include a recorded type (the caller
+        delivers those), and before one the swarm sensor has no room for."""
+        layout, sensors = self.layout, self.sensors
+        sense_and_move = f"""            for a in range(U(first), U(last)):
 {_motion(layout, sensors, " " * 16)}"""
-    if grouped(program):
-        tick_and_control = (
-            f"            tick_group(first, last, t, {fused_arguments(layout, sensors)})"
-        )
-    else:
-        tick_and_control = _tick_and_control(program, kernels, layout, " " * 12)
-    record = _record_group(layout, " " * 16)
-    extra, handle, collect = "", "", ""
-    if messaging is not None:
-        recorded = [k for k, flag in enumerate(messaging.recorded) if flag]
-        deliver_here = " or ".join(f"counts[{k}] > 0" for k in recorded) or "False"
-        names = ["reach", "order", "counts", "lowest", *messaging.inbox_names]
-        extra = ",\n           " + ", ".join(names + messaging.state_names)
-        handle = "\n" + _handle(messaging, layout)
-        collect = f"""
+        if grouped(self.program):
+            arguments = fused_arguments(layout, sensors)
+            tick_and_control = f"            tick_group(first, last, t, {arguments})"
+        else:
+            tick_and_control = self.tick_and_control(" " * 12)
+        record = _record_group(layout, " " * 16)
+        extra, handle, collect = "", "", ""
+        if messaging is not None:
+            recorded = [k for k, flag in enumerate(messaging.recorded) if flag]
+            deliver_here = " or ".join(f"counts[{k}] > 0" for k in recorded) or "False"
+            names = ["reach", "order", "counts", "lowest", *messaging.inbox_names]
+            extra = ",\n           " + ", ".join(names + messaging.state_names)
+            handle = "\n" + _handle(messaging, layout)
+            collect = f"""
 {_collect(messaging, layout)}
         if j > 0:
             if bad or not hypot(high_x - low_x, high_y - low_y) <= reach:
                 return done
             if {deliver_here}:
                 return done"""
-    if swarm_state_names(sensors.swarm):
-        extra += ",\n           " + ", ".join(swarm_state_names(sensors.swarm))
-    kind = "messages" if messaging is not None else "swarm"
-    name = f"block_{kind}_{'parallel' if parallel else 'serial'}"
-    arguments = fused_arguments(layout, sensors) + extra
-    return f"""
+        if swarm_state_names(sensors.swarm):
+            extra += ",\n           " + ", ".join(swarm_state_names(sensors.swarm))
+        kind = "messages" if messaging is not None else "swarm"
+        name = f"block_{kind}_{'parallel' if parallel else 'serial'}"
+        arguments = fused_arguments(layout, sensors) + extra
+        return f"""
 @njit(cache=True, parallel={parallel}, nogil=True, error_model="numpy")
 def {name}(t0, count, every, row0, chunk, {arguments}):
     n = {layout.array("x")}.shape[0]
@@ -431,11 +412,12 @@ def module_source(
     if sensors is None or (layout.outboxes and messaging is None):
         return "\n".join(lines) + "\n"  # no fused loop
     stepwise = bool(layout.outboxes) or sensors.swarm is not None
+    fused = _Fused(program, kernels, layout, sensors)
     if grouped(program):
-        lines.append(group_function(program, kernels, layout, sensors, stepwise))
+        lines.append(fused.group_function(stepwise))
     for p in (False, True):
         if stepwise:
-            lines.append(stepwise_block_function(program, kernels, layout, sensors, messaging, p))
+            lines.append(fused.stepwise_block_function(messaging, p))
         else:
-            lines.append(block_function(program, kernels, layout, sensors, p))
+            lines.append(fused.block_function(p))
     return "\n".join(lines) + "\n"

@@ -1,6 +1,6 @@
 """The GPU engine's iterations of a tree that sends messages: the datalink on the device.
 
-The generated kernels (:func:`~pyautonomousagent.engines.gpu_source.message_kernels`) run
+The generated kernels (:func:`~pyautonomousagent.engines.gpu_source.message_module_source`) run
 one thread an agent; this module launches them iteration by iteration and keeps the
 messages on the device between iterations: ``sense_move`` (Phase 2); last iteration's
 deliveries type by type, one that reached everyone by sender (``handle_sender_<k>``), per

@@ -5,9 +5,9 @@ engine's host (:class:`~pyautonomousagent.loop.source.Stages`; this module impor
 engine), for agent ``a = cuda.grid(1)`` instead of a loop over a chunk of agents; the
 leaves', sensors' and handlers' njit kernels are called as they are (numba-cuda compiles
 them for the device). There is no second copy of a node or a leaf. A tree that sends no
-messages gets ``block_gpu`` (:func:`kernel_function`; with a sensor of the whole swarm one
+messages gets ``block_gpu`` (:func:`kernel_module_source`; with a sensor of the whole swarm one
 iteration a launch, after :func:`swarm_kernels`), one that sends messages one kernel per
-phase and message type (:func:`message_kernels`). docs/architecture.md, "The GPU engine".
+phase and message type (:func:`message_module_source`). docs/architecture.md, "The GPU engine".
 """
 
 from __future__ import annotations
@@ -44,34 +44,6 @@ MESSAGE_HEADER = HEADER.replace("import cuda\n", "import cuda, int64\n") + (
     "from pyautonomousagent.engines.gpu_grid import cell_spans, next_message\n"
     "from pyautonomousagent.kernels import hypot\n"
 )
-
-
-def kernel_function(
-    program: Program,
-    kernels: Mapping[int, LeafKernel],
-    layout: Layout,
-    sensors: SensorKernel,
-    stages: Stages,
-) -> str:
-    """``block_gpu``: the fused loop of the compiled engine's ``block_function`` for the one
-    agent of a CUDA thread (see the module's docstring), its per-agent ``stages`` written by
-    the host engine. The caller applies ``cuda.jit``, with FMA contraction off
-    (:mod:`~pyautonomousagent.engines.gpu`)."""
-    tree_body, _motion = stages.tree, stages.motion  # the host's
-    if layout.outboxes:
-        raise ValueError("the GPU kernel is written for trees that send no messages")
-    arguments = fused_arguments(layout, sensors) + _swarm_state(sensors)
-    return f"""
-def block_gpu(t0, count, every, row0, {arguments}):
-    a = cuda.grid(1)
-    if a >= {layout.array("x")}.shape[0]:
-        return
-    for t in range(t0 + 1, t0 + count + 1):
-{_motion(layout, sensors, " " * 8)}
-{tree_body(program, kernels, layout, " " * 8)}
-{_thread_control(kernels, layout, stages, " " * 8)}
-{_record(layout, " " * 8)}
-"""
 
 
 def _thread_control(kernels: Mapping[int, LeafKernel], layout: Layout, stages: Stages,
@@ -129,13 +101,28 @@ def kernel_module_source(
     sensors: SensorKernel,
     stages: Stages,
 ) -> str:
-    """The generated module: imports of the helpers and kernels, then ``block_gpu`` and the
-    swarm sensor's :func:`swarm_kernels` (plain Python functions:
-    :func:`~pyautonomousagent.engines.gpu.load_kernel` compiles them)."""
-    lines = [HEADER, *import_lines(_kernel_imports(kernels, sensors, layout))]
-    lines.append(kernel_function(program, kernels, layout, sensors, stages))
-    lines.append(swarm_kernels(layout, sensors))
-    return "\n".join(lines) + "\n"
+    """The generated module: imports of the helpers and kernels, then ``block_gpu``, the
+    fused loop of the compiled engine's ``block_function`` for the one agent of a CUDA thread
+    (see the module's docstring; its per-agent ``stages`` written by the host engine), and
+    the swarm sensor's :func:`swarm_kernels`: plain Python functions, which
+    :func:`~pyautonomousagent.engines.gpu.load_kernel` compiles (FMA contraction off)."""
+    tree_body, _motion = stages.tree, stages.motion  # the host's
+    if layout.outboxes:
+        raise ValueError("the GPU kernel is written for trees that send no messages")
+    arguments = fused_arguments(layout, sensors) + _swarm_state(sensors)
+    block_gpu = f"""
+def block_gpu(t0, count, every, row0, {arguments}):
+    a = cuda.grid(1)
+    if a >= {layout.array("x")}.shape[0]:
+        return
+    for t in range(t0 + 1, t0 + count + 1):
+{_motion(layout, sensors, " " * 8)}
+{tree_body(program, kernels, layout, " " * 8)}
+{_thread_control(kernels, layout, stages, " " * 8)}
+{_record(layout, " " * 8)}
+"""
+    imports = import_lines(_kernel_imports(kernels, sensors, layout))
+    return "\n".join([HEADER, *imports, block_gpu, swarm_kernels(layout, sensors)]) + "\n"
 
 
 def _kernel_imports(kernels: Mapping[int, LeafKernel], sensors: SensorKernel,
@@ -291,7 +278,7 @@ def _scatter(messaging: Messaging, k: int) -> str:
     return "\n".join(lines)
 
 
-def message_kernels(
+def message_module_source(
     program: Program,
     kernels: Mapping[int, LeafKernel],
     layout: Layout,
@@ -299,7 +286,9 @@ def message_kernels(
     messaging: Messaging,
     stages: Stages,
 ) -> str:
-    """The kernels of one iteration of a tree that sends messages, one thread an agent:
+    """The generated module of a tree that sends messages: imports of the helpers, leaves',
+    sensors' and handlers' kernels (``H<k>``, per-receiver ``R<k>``), then the kernels of one
+    iteration, one thread an agent (plain Python functions: the engine compiles them):
     ``sense_move`` (Phase 2's sensors and motion), per type the handling of last
     iteration's delivery: of one that reached everyone ``handle_all_<k>`` (thread 0: the
     compiled handler), ``handle_sender_<k>`` (a ``by_sender`` handler: one thread per
@@ -309,6 +298,11 @@ def message_kernels(
     range, found on the type's cell grid), ``tick`` (Phases 3, 4 and 6), then per type
     ``flag_<k>`` and ``scatter_<k>`` (Phase 5: the messages into the inbox; the engine runs
     a prefix sum between them). ``stages``: the per-agent source the host engine writes."""
+    used = _kernel_imports(kernels, sensors, layout)
+    for k, handler in enumerate(messaging.handlers):
+        used[f"H{k}"] = handler.function
+        if handler.receive is not None:
+            used[f"R{k}"] = handler.receive.function
     tree_body, _motion = stages.tree, stages.motion  # the host's
     tick = f"""{tree_body(program, kernels, layout, " " * 4)}
 {_thread_control(kernels, layout, stages, " " * 4)}
@@ -327,24 +321,4 @@ def message_kernels(
     for k in range(len(messaging.types)):
         parts.append(_kernel(f"flag_{k}", layout, sensors, messaging, _flag(messaging, layout, k)))
         parts.append(_kernel(f"scatter_{k}", layout, sensors, messaging, _scatter(messaging, k)))
-    return "".join(parts)
-
-
-def message_module_source(
-    program: Program,
-    kernels: Mapping[int, LeafKernel],
-    layout: Layout,
-    sensors: SensorKernel,
-    messaging: Messaging,
-    stages: Stages,
-) -> str:
-    """The generated module of a tree that sends messages: imports of the helpers, leaves',
-    sensors' and handlers' kernels (``H<k>``, per-receiver ``R<k>``), then
-    :func:`message_kernels` (plain Python functions: the engine compiles them)."""
-    used = _kernel_imports(kernels, sensors, layout)
-    for k, handler in enumerate(messaging.handlers):
-        used[f"H{k}"] = handler.function
-        if handler.receive is not None:
-            used[f"R{k}"] = handler.receive.function
-    kernel_source = message_kernels(program, kernels, layout, sensors, messaging, stages)
-    return "\n".join([MESSAGE_HEADER, *import_lines(used), kernel_source]) + "\n"
+    return "\n".join([MESSAGE_HEADER, *import_lines(used), "".join(parts)]) + "\n"

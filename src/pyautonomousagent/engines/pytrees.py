@@ -195,8 +195,7 @@ def _rule_behaviour(node: Node, children: list[Any]) -> py_trees.behaviour.Behav
     params = tuple(sorted(control_params(node).items()))
     skippable = tuple(may_skip(child) for child in node.children)
     cls = _rule_class(node.type, len(children), params, skippable)
-    behaviour: py_trees.behaviour.Behaviour = cls(node.name, children, NODE_TYPES[node.type].memory)
-    return behaviour
+    return cls(node.name, children, NODE_TYPES[node.type].memory)
 
 
 _decorators = py_trees.decorators
