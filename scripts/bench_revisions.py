@@ -1,6 +1,7 @@
 """Two checkouts of the project measured side by side: ``pyaa bench`` of each, alternated.
 
-The machine is shared and noisy, so the two revisions' runs alternate (A B A B ...) and each
+The machine is shared and noisy, so the two revisions' runs alternate (A B B A A B ...: the
+run that goes first in a round was measured faster, whichever it was) and each
 case keeps its best and its median loop time and its peak memory; the table gives B's ratio
 to A's (of a sub-second loop, one lucky run can move the best by 10 % or more: the median of
 many rounds is the steadier figure). Each run
@@ -61,7 +62,7 @@ def main() -> None:
     loops: dict[str, dict[Case, list[float]]] = {"a": defaultdict(list), "b": defaultdict(list)}
     peaks: dict[str, dict[Case, list[float]]] = {"a": defaultdict(list), "b": defaultdict(list)}
     for r in range(args.repeat):
-        for side in ("a", "b"):
+        for side in ("a", "b") if r % 2 == 0 else ("b", "a"):  # A B, B A: neither always first
             for row in bench(getattr(args, side), arguments):
                 loops[side][case(row)].append(row["loop_s"])
                 peaks[side][case(row)].append(row["peak_mb"])
