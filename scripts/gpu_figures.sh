@@ -51,6 +51,11 @@ step() {
 
 $FIG check || exit 2
 step "device and versions" 30 bash -c "nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.max.sm --format=csv; nproc; $FIG device"
+# The host's CPU: with AVX-512 (device hosts often have it; this project's CI machines do not),
+# the engines' bits with NumPy's AVX-512 kernels on and off (issue 26's acceptance).
+step "host CPU: bits with and without AVX-512" 150 bash -c "grep -m1 'model name' /proc/cpuinfo; \
+  grep -o 'avx512[a-z_]*' /proc/cpuinfo | sort -u | tr '\\n' ' '; echo; \
+  $PY -m pytest -q -p no:cacheprovider -o addopts='' -rs tests/test_simd_levels.py"
 # FMA contraction: a * b + c on the device with numba-cuda's LTO and without (the engine's).
 step "a * b + c with and without LTO" 30 $FIG lto
 # The same bits first: the device tests (patrol, patrol-3d, gathering with and without
