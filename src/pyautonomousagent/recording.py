@@ -455,13 +455,9 @@ def same_everywhere(values: np.ndarray) -> bool:
 
 
 def preallocated(shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
-    """A zero-filled array whose memory is committed at once (Linux: ``MAP_POPULATE``).
-
-    ``numpy.zeros`` maps pages lazily, and each first write then faults one 4 KiB page; on a
-    virtual machine that made full-rate recording three times slower than committing the
-    whole block in one system call. Small arrays, and systems without ``MAP_POPULATE``, get
-    ``numpy.zeros``.
-    """
+    """A zero-filled array whose memory is committed at once (Linux: ``MAP_POPULATE``), not
+    page by page on first writes as ``numpy.zeros`` does (on a virtual machine, three times
+    slower). Small arrays, and systems without ``MAP_POPULATE``, get ``numpy.zeros``."""
     dtype = np.dtype(dtype)
     nbytes = int(np.prod(shape)) * dtype.itemsize
     populate = getattr(mmap, "MAP_POPULATE", None)
@@ -517,13 +513,9 @@ def recorder_from_tables(
     recorder.listeners = []
     recorder.iterations = iteration[::n].astype(np.int64)
     recorder.names = [str(a) for a in states.column("agent").to_pylist()[:n]]
-    skip = {"iteration", "agent", "behaviour"}
+    kept = [k for k in states.column_names if k not in ("iteration", "agent", "behaviour")]
     recorder.columns = RecordedColumns.of(
-        {
-            f.name: states.column(f.name).to_numpy().reshape(records, n)
-            for f in states.schema
-            if f.name not in skip
-        }
+        {k: states.column(k).to_numpy().reshape(records, n) for k in kept}
     )
     recorder.groups = {"state": [], "blackboard": [], "model": []}
     recorder.docs = dict(COLUMN_DOCS)
