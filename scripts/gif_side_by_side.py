@@ -1,7 +1,7 @@
 """Time and size of the gathering GIF, two versions of the code side by side.
 
 Each round writes the full gathering run's GIF (8000 iterations, a frame every 10) once with
-each version, interleaved, each in its own process (only ``write_gif`` is timed); the minimum
+each version, interleaved, each in its own process (only the GIF's writing is timed); the minimum
 of the rounds is printed, since a shared machine is noisy::
 
     git worktree add /tmp/old 16cdfcf        # the code before the new animation
@@ -20,13 +20,14 @@ from pathlib import Path
 CODE = r"""
 import inspect, json, sys
 from pyautonomousagent import Simulation, load
-from pyautonomousagent.render.animation import write_gif
+from pyautonomousagent.render import animation
+write = getattr(animation, "write_gif", None) or animation.write_animation  # old code: write_gif
 scenario = load("gathering")
 sim = Simulation.create(scenario, seed=0).run(progress=False)
-new = "options" in inspect.signature(write_gif).parameters  # marks events when it can
+new = "options" in inspect.signature(write).parameters  # marks events when it can
 options = {"events": sim.events} if new else {}
-stats = write_gif(sim.recorder, scenario, sys.argv[1], frame_every=scenario.frame_every,
-                  progress=False, **options)
+stats = write(sim.recorder, scenario, sys.argv[1], frame_every=scenario.frame_every,
+              progress=False, **options)
 print(json.dumps({"frames": stats.frames, "seconds": stats.seconds, "bytes": stats.bytes}))
 """
 

@@ -19,7 +19,7 @@ from pyautonomousagent.render.animation import (
     FramePainter,
     draw_frame,
     frame_rows,
-    write_gif,
+    write_animation,
 )
 from pyautonomousagent.render.gif import Palette, colour_codes
 from pyautonomousagent.render.panel import panel_rows
@@ -38,7 +38,7 @@ def run() -> Simulation:
 @pytest.fixture(scope="module")
 def gif(run: Simulation, tmp_path_factory: pytest.TempPathFactory):
     path = tmp_path_factory.mktemp("gif") / "run.gif"
-    return write_gif(run.recorder, run.scenario, path, frame_every=10, progress=False)
+    return write_animation(run.recorder, run.scenario, path, frame_every=10, progress=False)
 
 
 def rgb(hex_colour: str) -> np.ndarray:

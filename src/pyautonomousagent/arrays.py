@@ -238,8 +238,7 @@ def hypot(dx: Any, dy: Any) -> Any:
     """``sqrt(dx * dx + dy * dy)``: the length of (dx, dy), for one value or arrays.
 
     Used instead of ``numpy.hypot``/``math.hypot`` wherever a decision reads a distance (the
-    datalink's range, sensors): those are library functions whose last bit differs between
-    libm, NumPy's SIMD code and a GPU, while ``* + sqrt`` are correctly rounded everywhere.
+    datalink's range, sensors): unlike those, ``* + sqrt`` are correctly rounded everywhere.
     (It overflows for lengths above about 1e154 world units, far beyond any world.)
     """
     if isinstance(dx, np.ndarray) or isinstance(dy, np.ndarray):

@@ -2,12 +2,8 @@
 
 A :class:`Recorder` keeps one array of shape ``(records, N)`` per recorded column, where
 ``records = iterations // every + 1`` (the initial state, then every ``every``-th
-iteration), allocated whole the first time the column's values differ between agents
-(:class:`RecordedColumns`: until then one value per record). Nothing grows record by
-record. Given the tree, it also keeps the traced agents' node statuses and every agent's
-active behaviour (:class:`Recorder`). :func:`to_table` and :func:`trace_table` turn the
-arrays into long tables (one row per record and agent) for Parquet, CSV or pandas, with
-each column's unit and meaning in its Parquet field metadata (:data:`COLUMN_DOCS`).
+iteration): nothing grows record by record. :func:`to_table` and :func:`trace_table` turn
+the arrays into long tables (one row per record and agent) for Parquet, CSV or pandas.
 """
 
 from __future__ import annotations
@@ -200,11 +196,10 @@ class Recorder:
         self.columns.store_rows(row0, columns)
         if traces is not None:
             self.traces[row0 : row0 + len(traces)] = traces
-        if self.codes is not None:
-            if behaviour is None and self.codes.full("behaviour") is None:
-                raise ValueError("this recorder keeps traces: pass the active behaviours")
-            if behaviour is not None:
-                self.codes.store_rows(row0, {"behaviour": behaviour})
+        if self.codes is not None and behaviour is not None:
+            self.codes.store_rows(row0, {"behaviour": behaviour})
+        elif self.codes is not None and self.codes.full("behaviour") is None:
+            raise ValueError("this recorder keeps traces: pass the active behaviours")
 
     def trace(self, agent: int | str) -> np.ndarray:
         """The node statuses of one traced agent (index or name), shape (records so far, nodes)."""
@@ -460,13 +455,9 @@ def same_everywhere(values: np.ndarray) -> bool:
 
 
 def preallocated(shape: tuple[int, ...], dtype: np.dtype) -> np.ndarray:
-    """A zero-filled array whose memory is committed at once (Linux: ``MAP_POPULATE``).
-
-    ``numpy.zeros`` maps pages lazily, and each first write then faults one 4 KiB page; on a
-    virtual machine that made full-rate recording three times slower than committing the
-    whole block in one system call. Small arrays, and systems without ``MAP_POPULATE``, get
-    ``numpy.zeros``.
-    """
+    """A zero-filled array whose memory is committed at once (Linux: ``MAP_POPULATE``), not
+    page by page on first writes as ``numpy.zeros`` does (on a virtual machine, three times
+    slower). Small arrays, and systems without ``MAP_POPULATE``, get ``numpy.zeros``."""
     dtype = np.dtype(dtype)
     nbytes = int(np.prod(shape)) * dtype.itemsize
     populate = getattr(mmap, "MAP_POPULATE", None)
@@ -522,13 +513,9 @@ def recorder_from_tables(
     recorder.listeners = []
     recorder.iterations = iteration[::n].astype(np.int64)
     recorder.names = [str(a) for a in states.column("agent").to_pylist()[:n]]
-    skip = {"iteration", "agent", "behaviour"}
+    kept = [k for k in states.column_names if k not in ("iteration", "agent", "behaviour")]
     recorder.columns = RecordedColumns.of(
-        {
-            f.name: states.column(f.name).to_numpy().reshape(records, n)
-            for f in states.schema
-            if f.name not in skip
-        }
+        {k: states.column(k).to_numpy().reshape(records, n) for k in kept}
     )
     recorder.groups = {"state": [], "blackboard": [], "model": []}
     recorder.docs = dict(COLUMN_DOCS)
@@ -646,14 +633,12 @@ def _behaviour_column(recorder: Recorder, start: int, stop: int) -> pa.Dictionar
 
 
 def _documented(
-    table: pa.Table,
-    docs: Mapping[str, tuple[str, str]] | None = None,
-    groups: Mapping[str, str] | None = None,
+    table: pa.Table, docs: Mapping[str, tuple[str, str]], groups: Mapping[str, str] | None = None
 ) -> pa.Table:
     """``table`` with each column's unit and description as field metadata, from ``docs``
     or else :data:`COLUMN_DOCS` (unknown columns get empty strings), and its ``group``
     (state, blackboard, model) where ``groups`` gives one."""
-    docs = {**COLUMN_DOCS, **(docs or {})}
+    docs = {**COLUMN_DOCS, **docs}
     groups = groups or {}
     fields = []
     for field in table.schema:
@@ -681,12 +666,10 @@ def write_table(table: pa.Table, path: Path, fmt: str = "parquet") -> Path:
 def parquet_options(schema: pa.Schema) -> dict[str, Any]:
     """How the records are written to Parquet (``pyarrow.parquet.write_table`` options).
 
-    Dictionary encoding only for the dictionary-typed columns (agent, behaviour): on the
-    float columns pyarrow first tries a dictionary, gives up after 1 MiB of distinct values
-    and falls back to plain encoding, which doubled the time of writing. Statistics (min, max
-    per row group, which readers use to skip row groups) for ``iteration`` only: for the other
-    columns they cost a sixth of the time of writing. Snappy compression, as pyarrow's
-    default. Measured: docs/performance.md.
+    Dictionary encoding only for the dictionary-typed columns (agent, behaviour): on float
+    columns pyarrow gives up on a dictionary after 1 MiB and writes plain, twice as slowly.
+    Statistics (which readers use to skip row groups) for ``iteration`` only: on every column
+    they cost a sixth of the writing. Measured: docs/performance.md.
     """
     dictionary = [f.name for f in schema if pa.types.is_dictionary(f.type)]
     statistics = [name for name in ("iteration",) if name in schema.names]

@@ -14,15 +14,11 @@ its size and SHA-256, and the run's status:
   valid table) or the views (the data is complete, the views are left out);
 - ``failed``: a view could not be drawn (the data is complete; ``note`` says why).
 
-The convention for an existing folder: a folder holding a run (it has ``run.json``) is
-replaced only when asked (``overwrite=True``, ``pyaa run --overwrite``); the earlier run is
-then renamed aside, the new one renamed in, and the earlier one deleted. Any other folder
-that is not empty is never written into, nor is a mount point (it cannot be renamed). An
-interrupted run does not replace an earlier run: it is saved beside it, as
-``NAME-interrupted-YYYYMMDD-HHMMSS``.
-
-One writer at a time: :func:`claim_run` locks the folder before the run starts, and repairs
-what a killed writer left (:mod:`pyautonomousagent.folders`).
+An earlier run in the folder is replaced only when asked (``overwrite=True``, ``pyaa run
+--overwrite``; other folders: :func:`check_target`), never by an interrupted run, which is
+saved beside it as ``NAME-interrupted-YYYYMMDD-HHMMSS``. One writer at a time:
+:func:`claim_run` locks the folder and repairs what a killed writer left
+(:mod:`pyautonomousagent.folders`).
 """
 
 from __future__ import annotations
@@ -375,16 +371,15 @@ def streaming(
             status = simulate(sim)
             save_run(sim, out, status=status, stream=stream)
     """
-    if fmt != "parquet":
+    try:
+        temp = _temp_folder(Path(folder)) if fmt == "parquet" else None
+    except SaveError:
+        temp = None
+    if temp is None:
         yield None
         return
     from pyautonomousagent.streaming import StatesStream
 
-    try:
-        temp = _temp_folder(Path(folder))
-    except SaveError:
-        yield None
-        return
     stream = StatesStream(sim.recorder, temp / "states.parquet")
     try:
         yield stream

@@ -77,9 +77,9 @@ PANEL_MARGIN = 8
 
 
 @dataclass(frozen=True)
-class AnimationStats:
-    """What :func:`write_animation` wrote: its frames, the wall seconds of drawing and
-    encoding, the video file and its size in bytes."""
+class ViewStats:
+    """What :func:`write_animation` (or :func:`~.replay.write_replay`) wrote: its frames, the
+    wall seconds of drawing and encoding, the file and its size in bytes."""
 
     frames: int
     seconds: float
@@ -99,9 +99,7 @@ def frame_rows(recorder: Recorder, frame_every: int) -> np.ndarray:
     if frame_every < 1:
         raise ValueError(f"frame_every must be >= 1, got {frame_every}")
     window = recorder.iterations[: recorder.count] // frame_every
-    first = np.ones(len(window), dtype=bool)
-    first[1:] = window[1:] != window[:-1]
-    return np.flatnonzero(first)
+    return np.flatnonzero(np.diff(window, prepend=window[:1] - 1))  # where the window changes
 
 
 def _rgb(colour: str) -> tuple[int, int, int]:
@@ -183,8 +181,7 @@ class FramePainter:
     @property
     def size(self) -> tuple[int, int]:
         """Frame (width, height) in pixels."""
-        width, height = self.canvas.get_width_height()
-        return int(width), int(height)
+        return self.canvas.get_width_height()
 
     def _add_moving_artists(self, agents: int) -> None:
         from matplotlib.collections import EllipseCollection
@@ -567,7 +564,7 @@ def write_animation(
     fps: int = 20,
     progress: bool | None = None,
     **options: Any,
-) -> AnimationStats:
+) -> ViewStats:
     """Draw the run as a video at ``path`` ("gif" or "mp4"), streaming frame by frame.
 
     Args:
@@ -578,8 +575,7 @@ def write_animation(
         frame_every: iterations between frames (one frame per window of this many).
         dpi: pixels per inch; frames are ``FIGSIZE * dpi`` pixels (800 x 480 at 80), wider
             where the panel's widest value needs more room.
-        fps: frames per second when played. GIF delays are whole hundredths of a second,
-            so the GIF's delay is ``100 / fps`` rounded, and at least 2 (at most 50 fps).
+        fps: frames per second when played (a GIF's: see :func:`~.video.open_stream`).
         progress: show a progress bar; by default only on a terminal.
         options: :class:`FramePainter`'s marks, events, follow and inset.
 
@@ -600,20 +596,4 @@ def write_animation(
             stream.add(painter.render(int(row)))
             bar.update(done)
     bar.close()
-    return AnimationStats(stream.frames, time.perf_counter() - start, path, path.stat().st_size)
-
-
-def write_gif(
-    recorder: Recorder,
-    scenario: Scenario,
-    path: str | Path,
-    frame_every: int = 10,
-    dpi: int = 80,
-    fps: int = 20,
-    progress: bool | None = None,
-    **options: Any,
-) -> AnimationStats:
-    """:func:`write_animation` to an animated, looping GIF."""
-    return write_animation(
-        recorder, scenario, path, "gif", frame_every, dpi, fps, progress, **options
-    )
+    return ViewStats(stream.frames, time.perf_counter() - start, path, path.stat().st_size)

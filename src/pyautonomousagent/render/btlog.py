@@ -1,11 +1,6 @@
 """One agent's recorded node statuses as a Groot2 log: BehaviorTree.CPP's ``.btlog``
-(the format its ``FileLogger2`` writes and Groot2's log replay opens).
-
-docs/data.md gives the layout, all integers little-endian: :data:`MAGIC` and the protocol
-byte; the tree XML's length (int32) and the XML (:func:`tree_xml`); the start time (int64,
-microseconds since the Unix epoch); one :data:`RECORD`-byte record per status transition:
-microseconds since the start (6 bytes), the node's ``_uid`` (uint16), its new status (uint8,
-``BTCPP_CODES``).
+(the format its ``FileLogger2`` writes and Groot2's log replay opens; its layout, all
+integers little-endian: docs/data.md).
 
 A recorded run gives each node's status after every recorded tick; the log holds, at each
 recorded iteration, the nodes whose status differs from the previous record (INVALID, "not
@@ -30,8 +25,11 @@ MAGIC = b"BTCPP4-FileLogger2"
 """The file's first bytes."""
 PROTOCOL = 1
 """The protocol byte after the magic."""
+TRANSITION = np.dtype([("usec", "<u8"), ("uid", "<u2"), ("status", "u1")])
+"""A status change: log microseconds since the start, the node's ``_uid``, its new status."""
 RECORD = 9
 """Bytes per transition record."""
+_KEPT = [0, 1, 2, 3, 4, 5, 8, 9, 10]  # the bytes of a TRANSITION a record holds: usec's low 6
 USEC_PER_ITERATION = 100_000
 """Default log time of one iteration: 0.1 s, so Groot2 replays 10 iterations a second."""
 
@@ -87,7 +85,7 @@ def transitions(
     codes[list(BTCPP_CODES)] = list(BTCPP_CODES.values())
     previous = np.vstack([np.full((1, statuses.shape[1]), INVALID, statuses.dtype), statuses[:-1]])
     rows, nodes = np.nonzero(statuses != previous)  # row-major: by record, then node
-    out = np.zeros(rows.size, dtype=[("usec", "<u8"), ("uid", "<u2"), ("status", "u1")])
+    out = np.zeros(rows.size, dtype=TRANSITION)
     out["usec"] = iterations[rows].astype(np.uint64) * np.uint64(usec_per_iteration)
     out["uid"] = nodes + 1
     out["status"] = codes[statuses[rows, nodes]]
@@ -119,10 +117,7 @@ def write_btlog(
     if records.size and int(records["usec"].max()) >= 1 << 48:
         raise ValueError("the run is too long for 6-byte log times; lower usec_per_iteration")
     start = int(time.time() * 1e6) if start_usec is None else start_usec
-    packed = np.zeros((records.size, RECORD), dtype=np.uint8)
-    packed[:, :6] = records["usec"].astype("<u8").view(np.uint8).reshape(-1, 8)[:, :6]
-    packed[:, 6:8] = records["uid"].astype("<u2").view(np.uint8).reshape(-1, 2)
-    packed[:, 8] = records["status"]
+    packed = records.view(np.uint8).reshape(-1, TRANSITION.itemsize)[:, _KEPT]
     with path.open("wb") as file:
         file.write(MAGIC + bytes([PROTOCOL]) + struct.pack("<i", len(xml)) + xml)
         file.write(struct.pack("<q", start))
@@ -143,11 +138,6 @@ def read_btlog(path: str | Path) -> BtLog:
     (start,) = struct.unpack_from("<q", data, xml_start + size)
     body = np.frombuffer(data, dtype=np.uint8, offset=xml_start + size + 8)
     count = body.size // RECORD
-    rows = body[: count * RECORD].reshape(count, RECORD)
-    out = np.zeros(count, dtype=[("usec", "<u8"), ("uid", "<u2"), ("status", "u1")])
-    wide = np.zeros((count, 8), dtype=np.uint8)
-    wide[:, :6] = rows[:, :6]
-    out["usec"] = wide.view("<u8")[:, 0]
-    out["uid"] = rows[:, 6:8].copy().view("<u2")[:, 0]
-    out["status"] = rows[:, 8]
-    return BtLog(xml, start, out, protocol)
+    wide = np.zeros((count, TRANSITION.itemsize), dtype=np.uint8)
+    wide[:, _KEPT] = body[: count * RECORD].reshape(count, RECORD)
+    return BtLog(xml, start, wide.view(TRANSITION)[:, 0], protocol)

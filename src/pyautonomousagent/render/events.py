@@ -50,8 +50,7 @@ class PlacedEvent:
 
 def placed_events(events: Iterable[Mapping[str, Any]], recorder: Recorder) -> list[PlacedEvent]:
     """Each event with its text and map position, in iteration order."""
-    placed = [_place(event, recorder) for event in events]
-    return sorted(placed, key=lambda e: e.iteration)
+    return sorted((_place(event, recorder) for event in events), key=lambda e: e.iteration)
 
 
 def _place(event: Mapping[str, Any], recorder: Recorder) -> PlacedEvent:

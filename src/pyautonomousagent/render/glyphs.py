@@ -9,8 +9,6 @@ side by side, blended into the pixels with NumPy.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 CHARSET = "".join(chr(c) for c in range(32, 127))
@@ -39,21 +37,16 @@ class GlyphAtlas:
         figure = Figure(figsize=(1, 1), dpi=dpi)
         canvas = FigureCanvasAgg(figure)
         renderer = canvas.get_renderer()
-        width, height, descent = renderer.get_text_width_height_descent("M" * 20, prop, False)
-        ascent = renderer.get_text_width_height_descent("Mgjy|", prop, False)
+        width = renderer.get_text_width_height_descent("M" * 20, prop, False)[0]
+        _, height, descent = renderer.get_text_width_height_descent("Mgjy|", prop, False)
         cell_w = int(np.ceil(width / 20))
-        cell_h = int(np.ceil(ascent[1])) + 2
-        self.baseline = int(np.ceil(ascent[1] - ascent[2])) + 1
+        cell_h = int(np.ceil(height)) + 2
+        self.baseline = int(np.ceil(height - descent)) + 1
         count = len(CHARSET)
         figure.set_size_inches(cell_w * count / dpi, cell_h / dpi)
-        style: dict[str, Any] = {
-            "fontproperties": prop,
-            "va": "baseline",
-            "ha": "left",
-            "color": "black",
-        }
+        y = 1 - self.baseline / cell_h
         for i, char in enumerate(CHARSET):
-            figure.text(i / count, 1 - self.baseline / cell_h, char, **style)
+            figure.text(i / count, y, char, fontproperties=prop, va="baseline", color="black")
         canvas.draw()
         gray = np.asarray(canvas.buffer_rgba())[..., 0].astype(np.float32)
         strip = 1.0 - gray / 255.0  # (cell_h, cell_w * count)

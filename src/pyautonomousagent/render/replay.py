@@ -1,15 +1,10 @@
 """``replay.html``: one self-contained page that replays a recorded run in any browser, offline.
 
-The page (``replay_template.html``, no external script, style or font: the map, the tree
-coloured by the selected agent's statuses, its state and blackboard, the event log, a
-timeline) and the run's data, JSON inside a ``<script type="application/json">``, are one
-file. docs/data.md describes the data: the large arrays base64-encoded, ``positions``
-(frames, N, 3) and ``altitude`` (frames, N; where column ``z`` is recorded, else None) as
-uint16 steps of 1/65535 of their range, ``statuses`` int8 (frames, traced, nodes),
-``values`` float64 (frames, traced, columns), and the changing marks each once with the
-frame intervals where it shows. Decimation keeps the size in check: at most ``max_frames``
-frames and :data:`MAX_AGENT_FRAMES` agent positions, always with the frames of each event's
-iteration and the next.
+The page (``replay_template.html``: no external script, style or font) and the run's data,
+JSON inside a ``<script type="application/json">``, are one file (docs/data.md). The large
+arrays are base64-encoded: ``positions`` (frames, N, 3) and ``altitude`` (frames, N; None
+without column ``z``) as uint16 steps of 1/65535 of their range, ``statuses`` int8 (frames,
+traced, nodes), ``values`` float64 (frames, traced, columns).
 """
 
 from __future__ import annotations
@@ -20,7 +15,7 @@ import json
 import math
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -29,7 +24,7 @@ import numpy as np
 
 from pyautonomousagent.bt.status import NAMES
 from pyautonomousagent.recording import Recorder, node_list
-from pyautonomousagent.render.animation import ALTITUDE, altitude_range, frame_rows
+from pyautonomousagent.render.animation import ALTITUDE, ViewStats, altitude_range, frame_rows
 from pyautonomousagent.render.events import placed_events
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.render.panel import UNITS
@@ -40,17 +35,6 @@ MAX_AGENT_FRAMES = 400_000
 """Most agent positions (frames x agents) in a replay: about 3.2 MB of base64."""
 TEMPLATE = "replay_template.html"
 """The page, next to this module; ``/*__DATA__*/`` marks where the data goes."""
-
-
-@dataclass(frozen=True)
-class ReplayStats:
-    """What :func:`write_replay` wrote: the file, its size in bytes, its frames and the wall
-    seconds it took."""
-
-    path: Path
-    bytes: int
-    frames: int
-    seconds: float
 
 
 def replay_rows(
@@ -203,11 +187,11 @@ def write_replay(
     events: Iterable[Mapping[str, Any]] = (),
     max_frames: int = MAX_FRAMES,
     frame_marks: Callable[[int], Sequence[Mark]] | None = None,
-) -> ReplayStats:
+) -> ViewStats:
     """Write ``replay.html`` for a recorded run at ``path`` (see :func:`replay_data`)."""
     start = time.perf_counter()
     data = replay_data(recorder, world, title, marks, events, max_frames, frame_marks)
     path = Path(path)
     path.write_text(render_page(data), encoding="utf-8")
-    frames = len(data["iterations"])
-    return ReplayStats(path, path.stat().st_size, frames, time.perf_counter() - start)
+    seconds = time.perf_counter() - start
+    return ViewStats(len(data["iterations"]), seconds, path, path.stat().st_size)
