@@ -265,16 +265,18 @@ def _surfaces(a: np.ndarray, c: np.ndarray) -> tuple[float, float, float]:
 
 
 @njit
-def _stages(
+def _step_one(
     y: np.ndarray,
     cmd: np.ndarray,
     i: int,
     c: np.ndarray,
     m: tuple[np.ndarray, np.ndarray],
     w: np.ndarray,
+    new: np.ndarray,
 ) -> None:
-    """The actuators' half steps (``w[MIDDLE:]``, ``w[END:]``) and the three Runge-Kutta
-    stages k1..k3 of ``x8_dynamics.step`` for agent i's state ``y`` (18,)."""
+    """``x8_dynamics.step`` (settling included) of agent i's state ``y`` (18,) into ``new``:
+    the actuators' half steps (``w[MIDDLE:]``, ``w[END:]``), the three Runge-Kutta stages
+    k1..k3, their sum."""
     aero, inertia = m
     h, act, b, stage = c[H], y[13:18], y[0:13], w[STAGE : STAGE + 13]
     _half_step(act, cmd, i, c, w[MIDDLE : MIDDLE + 5])
@@ -286,21 +288,6 @@ def _stages(
     for j in range(13):
         stage[j] = b[j] + h * (2 * w[K2 + j] - w[K1 + j])
     _derivatives(stage, _surfaces(w[END : END + 5], c), c, aero, inertia, w, K3)
-
-
-@njit
-def _step_one(
-    y: np.ndarray,
-    cmd: np.ndarray,
-    i: int,
-    c: np.ndarray,
-    m: tuple[np.ndarray, np.ndarray],
-    w: np.ndarray,
-    new: np.ndarray,
-) -> None:
-    """``x8_dynamics.step`` (settling included) of agent i's state ``y`` (18,) into ``new``."""
-    _stages(y, cmd, i, c, m, w)
-    h = c[H]
     for j in range(13):
         new[j] = y[j] + (h / 6) * (w[K1 + j] + 4 * w[K2 + j] + w[K3 + j])
     norm = math.sqrt(new[0] * new[0] + new[1] * new[1] + new[2] * new[2] + new[3] * new[3])
