@@ -22,7 +22,7 @@ steps on the device, the lowest robot row winning a cell by an atomic minimum):
   :class:`VacuumMission` declares them (the avoid leaf's ``step`` port defaults to the
   motion model's ``turn_step``);
 - Phase 2 (:meth:`VacuumMission.sense`): the cells under robots whose brush ran are cleaned
-  (:attr:`VacuumMission.grid`, :meth:`VacuumMission.coverage`), the sonar is read, and a robot
+  (:attr:`VacuumMission.grid`, its :meth:`CleaningGrid.coverage`), the sonar is read, and a robot
   whose next step (the drone2d equations) would leave the room or touch an obstacle does not
   move this iteration (it stops; the tree then turns it away). So no robot ever enters an
   obstacle, whatever the tree does;
@@ -230,10 +230,6 @@ class VacuumMission(Mission):
             (float(room.width), float(room.height), float(self.params.sonar_range), STOP_MARGIN),
             swarm=swarm, state=(room.rects, room.circles),
         )  # fmt: skip
-
-    def coverage(self) -> float:
-        """The fraction of the room's free cells cleaned so far, in [0, 1]."""
-        return self.grid.coverage()
 
     def frame_marks(self, recorder: Recorder, row: int) -> list[Mark]:
         """The cells cleaned before record ``row``: a cell is cleaned in Phase 2 under a robot
