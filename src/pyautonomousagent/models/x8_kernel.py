@@ -73,12 +73,6 @@ def pack_constants(k: dyn.Constants) -> np.ndarray:
 
 
 @njit
-def _min(a: float, b: float) -> float:
-    """``numpy.minimum`` of two finite numbers (the first where equal)."""
-    return a if a <= b else b
-
-
-@njit
 def _max(a: float, b: float) -> float:
     """``numpy.maximum`` of two finite numbers (the first where equal)."""
     return a if a >= b else b
@@ -86,8 +80,9 @@ def _max(a: float, b: float) -> float:
 
 @njit
 def _clip(x: float, low: float, high: float) -> float:
-    """``minimum(maximum(x, low), high)``."""
-    return _min(_max(x, low), high)
+    """``minimum(maximum(x, low), high)`` of finite numbers (the first where equal)."""
+    x = _max(x, low)
+    return x if x <= high else high
 
 
 @njit
