@@ -68,8 +68,7 @@ def read_point_3d(reader: Reader, value: Any, path: str) -> Point3D:
     """``[x, y, z]``: finite numbers, z (the altitude) at or above the ground."""
     if not isinstance(value, list | tuple) or len(value) != 3:
         raise reader.fail(path, "a point [x, y, z] (z: altitude above the ground)", value)
-    x, y = reader.number(value[0], f"{path}[0]"), reader.number(value[1], f"{path}[1]")
-    z = reader.number(value[2], f"{path}[2]")
+    x, y, z = (reader.number(v, f"{path}[{i}]") for i, v in enumerate(value))
     if z < 0:
         raise reader.fail(f"{path}[2]", "an altitude >= 0 (at or above the ground)", z)
     return (x, y, z)

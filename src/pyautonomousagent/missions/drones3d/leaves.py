@@ -44,11 +44,6 @@ PATROL_3D = (
     PATROL[1], PATROL[2], "z_surveillance_position_1",
     PATROL[3], PATROL[4], "z_surveillance_position_2",
 )  # fmt: skip
-#: The position and the destination as ``kernels.destination_reached_3d``'s arrays.
-TOWARD_DESTINATION_3D = {
-    "x": "x", "y": "y", "z": "z",
-    **dict(zip(("to_x", "to_y", "to_z"), DESTINATION_3D, strict=True)),
-}  # fmt: skip
 #: The arrays of ``kernels.patrol_position_3d``, parameter -> key.
 PATROL_ARRAYS_3D = dict(
     zip(("index", "to_x", "to_y", "to_z", "sx", "sy", "sz", "x1", "y1", "z1", "x2", "y2", "z2"),
@@ -79,7 +74,7 @@ class ConditionDestinationReached3D(Leaf):
         return success_if(near & (abs(dz) <= self.distance))
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.destination_reached_3d, TOWARD_DESTINATION_3D, (self.distance,))
+        return LeafKernel(k.destination_reached_3d, toward(DESTINATION_3D), (self.distance,))
 
 
 def _sqrt(value: Any) -> Any:
@@ -121,7 +116,7 @@ class ActionNavigateToDestination3DA(Leaf):
 
     def kernel(self, world: World) -> LeafKernel:
         heading = Later(bearing_of_one, toward(DESTINATION), "requested_heading")
-        names = {**TOWARD_DESTINATION_3D, "speed": "requested_speed",
+        names = {**toward(DESTINATION_3D), "speed": "requested_speed",
                  "altitude": "requested_altitude"}  # fmt: skip
         constants = (self.speed, self.distance, self.slope)
         return LeafKernel(k.navigate_3d, names, constants, later=heading)

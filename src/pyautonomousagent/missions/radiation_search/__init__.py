@@ -150,7 +150,6 @@ class RadiationSearchMission(Mission):
         """Every drone reads the radiation level at its position; all of them move."""
         s = sim.swarm.columns
         s["radiation"][:] = radiation_level(s["x"], s["y"], self.scenario.objects.radiation_source)
-        return None
 
     def compiled_sensors(self, sim: SimulationView) -> SensorKernel:
         """:meth:`sense` for one drone (``kernels.radiation_reading``)."""
