@@ -51,14 +51,10 @@ def read_radiation_sources(reader: Reader, data: Any, path: str) -> tuple[Radiat
     for i, item in enumerate(data):
         where = f"{path}[{i}]"
         item = reader.keys(item, where, ["x", "y", "range", "active"], ["x", "y", "range"])
-        sources.append(
-            RadiationSource(
-                reader.number(item["x"], f"{where}.x"),
-                reader.number(item["y"], f"{where}.y"),
-                reader.number(item["range"], f"{where}.range", above=0),
-                reader.flag(item.get("active", False), f"{where}.active"),
-            )
-        )
+        x, y = (reader.number(item[key], f"{where}.{key}") for key in "xy")
+        reach = reader.number(item["range"], f"{where}.range", above=0)
+        active = reader.flag(item.get("active", False), f"{where}.active")
+        sources.append(RadiationSource(x, y, reach, active))
     return tuple(sources)
 
 

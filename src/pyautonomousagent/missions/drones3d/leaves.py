@@ -10,12 +10,9 @@ for the compiled engine.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
-import numpy as np
-
-from pyautonomousagent.arrays import bearing, choose, maximum, minimum
+from pyautonomousagent.arrays import bearing, choose, hypot, maximum, minimum
 from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
 from pyautonomousagent.bt.status import RUNNING, SUCCESS, status_if, success_if
 from pyautonomousagent.kernels import Later, LeafKernel
@@ -77,11 +74,6 @@ class ConditionDestinationReached3D(Leaf):
         return LeafKernel(k.destination_reached_3d, toward(DESTINATION_3D), (self.distance,))
 
 
-def _sqrt(value: Any) -> Any:
-    """Square root (correctly rounded: the same bits for one agent and for arrays)."""
-    return np.sqrt(value) if isinstance(value, np.ndarray) else math.sqrt(value)
-
-
 @register_leaf
 class ActionNavigateToDestination3DA(Leaf):
     """Fly toward the current destination and its altitude; always RUNNING.
@@ -110,7 +102,7 @@ class ActionNavigateToDestination3DA(Leaf):
         squared = dx * dx + dy * dy
         agents.requested_speed = choose(squared <= self.distance * self.distance, 0.0, self.speed)
         to_z = bb.z_current_destination_position
-        glide = to_z + self.slope * _sqrt(squared)
+        glide = to_z + self.slope * hypot(dx, dy)  # sqrt(squared), for one agent or arrays
         agents.requested_altitude = maximum(to_z, minimum(agents.z, glide))
         return RUNNING
 

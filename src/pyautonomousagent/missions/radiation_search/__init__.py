@@ -74,11 +74,8 @@ class Source:
 def read_source(reader: Reader, data: Any, path: str) -> Source:
     """``{x, y, range}``, world units."""
     given = reader.keys(data, path, ["x", "y", "range"], ["x", "y", "range"])
-    return Source(
-        reader.number(given["x"], f"{path}.x"),
-        reader.number(given["y"], f"{path}.y"),
-        reader.number(given["range"], f"{path}.range", above=0.0),
-    )
+    x, y = (reader.number(given[key], f"{path}.{key}") for key in "xy")
+    return Source(x, y, reader.number(given["range"], f"{path}.range", above=0.0))
 
 
 def radiation_level(x: np.ndarray, y: np.ndarray, source: Source) -> np.ndarray:
