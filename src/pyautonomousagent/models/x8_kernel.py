@@ -2,13 +2,13 @@
 
 The NumPy code in :mod:`~pyautonomousagent.models.x8_dynamics`,
 :mod:`pyautonomousagent.models.x8`, :mod:`.x8_modes` and :mod:`.autopilot` is the reference;
-the functions here
-repeat its operations on one agent's numbers at a time, in the same order, so that they give the
-same bits (no ``fastmath``, no library arctangent or exponential: :func:`atan2` and :func:`exp`
-follow :func:`pyautonomousagent.arrays.arctan2` and :func:`.x8_dynamics.exp` step by step).
-Without numba (or with ``PYAA_NO_JIT=1``) they run as plain Python, with the same bits: the
-model uses them so for a few agents, where that beats NumPy's cost per call, and the NumPy
-code above (:attr:`pyautonomousagent.models.x8.X8Vectorised.agent_by_agent`).
+the functions here repeat its operations on one agent's numbers at a time, in the same order,
+so that they give the same bits (no ``fastmath``, no library arctangent or exponential:
+:func:`atan2` and :func:`exp` follow :func:`pyautonomousagent.arrays.arctan2` and
+:func:`.x8_dynamics.exp` step by step). Without numba (or with ``PYAA_NO_JIT=1``) they run as
+plain Python, with the same bits: the model uses them so for a few agents, where that beats
+NumPy's cost per call, and the NumPy code above
+(:attr:`pyautonomousagent.models.x8.X8Vectorised.agent_by_agent`).
 
 Two calls per iteration, whatever the number of agents: :func:`advance` (Phase 2: one step
 of every moving agent that is not parked, the ground and the phase changes it makes, what the

@@ -125,12 +125,14 @@ class ConditionRadiationDetected(Leaf):
     type_name = "Condition_Radiation_Detected"
     ports = (Port("threshold", float, "radiation_threshold", 0.0, "percent"),)
     threshold: float
+    #: The kernel, in a tuple (a function held by a class would be bound as a method).
+    above: ClassVar[tuple[Any]] = (k.above,)
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return success_if(agents.radiation > self.threshold)
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.above, ("radiation",), (self.threshold,))
+        return LeafKernel(self.above[0], ("radiation",), (self.threshold,))
 
 
 @register_leaf

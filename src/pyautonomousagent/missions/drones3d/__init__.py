@@ -1,5 +1,5 @@
-"""The paper's drones in three dimensions (issue 18, part 1): ``gathering-3d`` and
-``patrol-3d``, flown by the 3-D drone (``model: drone3d``, docs/drone3d.md).
+"""The paper's drones in three dimensions: ``gathering-3d`` and ``patrol-3d``, flown by the
+3-D drone (``model: drone3d``, docs/drone3d.md).
 
 Surveillance and patrol positions are ``[x, y, z]`` (z: altitude, world units above the
 ground); the refuelling slots are on the ground (z = 0): a drone lands to refuel. Climbing

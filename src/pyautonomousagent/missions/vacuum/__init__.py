@@ -84,13 +84,12 @@ MAX_CELLS = 4_000_000
 """The largest cleaned-area grid a scenario may ask for (cells)."""
 
 
-def obstacle_mark(obstacle: Rectangle | Circle) -> Mark:
-    """An obstacle as a filled grey mark."""
+def obstacle_mark(o: Rectangle | Circle) -> Mark:
+    """The obstacle ``o`` as a filled grey mark."""
     style: dict[str, Any] = {"colour": OBSTACLE_COLOUR, "fill": True, "legend": "obstacle"}
-    if isinstance(obstacle, Rectangle):
-        o = obstacle
+    if isinstance(o, Rectangle):
         return Mark("rect", o.x, o.y, width=o.width, height=o.height, **style)
-    return Mark("circle", obstacle.x, obstacle.y, size=obstacle.radius, **style)
+    return Mark("circle", o.x, o.y, size=o.radius, **style)
 
 
 @register_mission
