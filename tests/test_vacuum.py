@@ -67,8 +67,8 @@ def test_the_cleaned_area_grows_monotonically_and_substantially(vacuum_run):
     assert (np.diff(every_300) > 0).all(), every_300
     free = int(vacuum_run.mission.grid.free.sum())
     assert total[-1] == vacuum_run.mission.grid.cleaned.sum()
-    assert vacuum_run.mission.coverage() == pytest.approx(total[-1] / free)
-    assert vacuum_run.mission.coverage() > 0.6
+    assert vacuum_run.mission.grid.coverage() == pytest.approx(total[-1] / free)
+    assert vacuum_run.mission.grid.coverage() > 0.6
 
 
 def test_the_animation_draws_the_area_cleaned_so_far(vacuum_run):

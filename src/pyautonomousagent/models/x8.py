@@ -406,29 +406,18 @@ class X8Vectorised(X8Model):
         y[dyn.ELEVON_RATES] = 4.0 * wiggle
         y[dyn.PD, :1] = 0.5
         commands = np.array([0.2 * wiggle, -0.3 * wiggle, 0.5 + 0.4 * wiggle])
-        phase = np.zeros(k, dtype=np.int64)
-        want = self._reference_step(y, commands, phase)
+        want = dyn.step(y, commands, self.constants)
+        reference = X8Model(self.settings, k)  # all in FLIGHT: the NumPy code's ground
+        reference.land(want, np.ones(k, dtype=bool))
         got, flight = np.empty_like(y), np.empty((kernel.FLIGHT_ROWS, k))
-        phases = np.zeros_like(phase)
+        phases = np.zeros(k, dtype=np.int64)
         ground = (phases, np.zeros((2, k), dtype=np.int64), np.zeros((2, k)), self._phases)
         columns = (np.zeros(k), np.zeros(k), np.zeros(k), np.zeros(k), self._none)
         c = self.constants
         kernel.advance(y, commands, np.ones(k, dtype=bool), (self._packed, c.aero, c.inertia),
                        (got, flight), ground, columns)  # fmt: skip
-        same = np.array_equal(got, want) and np.array_equal(phases, phase)
+        same = np.array_equal(got, want) and np.array_equal(phases, reference.phase)
         return same and np.array_equal(flight, astuple(observe(want)))
-
-    def _reference_step(self, y: np.ndarray, commands: np.ndarray, phase: np.ndarray) -> np.ndarray:
-        """The NumPy code's step of states ``y`` (STATES, K) under ``commands`` (COMMANDS, K),
-        then the ground (``phase`` (K,) updated), as :meth:`X8Model.land` puts it."""
-        want = dyn.step(y, commands, self.constants)
-        rows = np.flatnonzero(want[dyn.PD] >= 0.0)
-        b = want[:, rows]
-        mu = modes.friction(phase[rows], self.modes)
-        contact = modes.ground_contact(b, mu, self.modes.max_ground_pitch)
-        want[:, rows] = b
-        modes.after_contact(phase, rows, contact)
-        return want
 
     def advance(self, s: dict[str, np.ndarray], moving: np.ndarray) -> None:
         """Phase 2: one time step of ``settings.dt`` for the agents where ``moving`` (and not

@@ -437,29 +437,16 @@ def _actuator_half_step(a: np.ndarray, commands: np.ndarray, k: Constants) -> np
     return out
 
 
-def settle(y: np.ndarray, k: Constants) -> None:
-    """After a full step: renormalise the quaternion and clip the actuators (in place)."""
-    act = k.params.actuators
-    e = y[QUATERNION]
-    e /= np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2] + e[3] * e[3])
-    for rows, low, high in (
-        (y[ELEVONS], act.elevon_min, act.elevon_max),
-        (y[ELEVON_RATES], -act.elevon_rate_max, act.elevon_rate_max),
-        (y[THROTTLE], act.throttle_min, act.throttle_max),
-    ):
-        np.maximum(rows, low, out=rows)
-        np.minimum(rows, high, out=rows)
-
-
 def step(y: np.ndarray, commands: np.ndarray, k: Constants) -> np.ndarray:
     """Advance the state by one time step (``k.dt``) with the commands held.
 
     The actuators are propagated over two half steps (:func:`_actuator_half_step`); the
     airframe takes one step of Kutta's third-order Runge-Kutta method, reading the actuators at
-    the start, middle and end of the step. Against a reference integrated with 20 RK4 substeps
-    per step, the airframe's method is not what limits the accuracy: over 40 s of patrol RK4
-    and RK3 both differ from it by 1.7 cm, RK2 by 2.2 cm; the difference comes from the
-    actuators' rate limit applied per half step (docs/x8.md).
+    the start, middle and end of the step; then the quaternion is renormalised and the
+    actuators clipped. Against a reference integrated with 20 RK4 substeps per step, the
+    airframe's method is not what limits the accuracy: over 40 s of patrol RK4 and RK3 both
+    differ from it by 1.7 cm, RK2 by 2.2 cm; the difference comes from the actuators' rate limit
+    applied per half step (docs/x8.md).
 
     Args:
         y: the state, shape (STATES, N); not modified.
@@ -479,7 +466,15 @@ def step(y: np.ndarray, commands: np.ndarray, k: Constants) -> np.ndarray:
     new = np.empty_like(y)
     new[BODY] = b + (h / 6) * (k1 + 4 * k2 + k3)
     new[ELEVON_R:] = end
-    settle(new, k)
+    e, act = new[QUATERNION], k.params.actuators
+    e /= np.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2] + e[3] * e[3])
+    for rows, low, high in (
+        (new[ELEVONS], act.elevon_min, act.elevon_max),
+        (new[ELEVON_RATES], -act.elevon_rate_max, act.elevon_rate_max),
+        (new[THROTTLE], act.throttle_min, act.throttle_max),
+    ):
+        np.maximum(rows, low, out=rows)
+        np.minimum(rows, high, out=rows)
     return new
 
 

@@ -2,13 +2,13 @@
 
 The NumPy code in :mod:`~pyautonomousagent.models.x8_dynamics`,
 :mod:`pyautonomousagent.models.x8`, :mod:`.x8_modes` and :mod:`.autopilot` is the reference;
-the functions here
-repeat its operations on one agent's numbers at a time, in the same order, so that they give the
-same bits (no ``fastmath``, no library arctangent or exponential: :func:`atan2` and :func:`exp`
-follow :func:`pyautonomousagent.arrays.arctan2` and :func:`.x8_dynamics.exp` step by step).
-Without numba (or with ``PYAA_NO_JIT=1``) they run as plain Python, with the same bits: the
-model uses them so for a few agents, where that beats NumPy's cost per call, and the NumPy
-code above (:attr:`pyautonomousagent.models.x8.X8Vectorised.agent_by_agent`).
+the functions here repeat its operations on one agent's numbers at a time, in the same order,
+so that they give the same bits (no ``fastmath``, no library arctangent or exponential:
+:func:`atan2` and :func:`exp` follow :func:`pyautonomousagent.arrays.arctan2` and
+:func:`.x8_dynamics.exp` step by step). Without numba (or with ``PYAA_NO_JIT=1``) they run as
+plain Python, with the same bits: the model uses them so for a few agents, where that beats
+NumPy's cost per call, and the NumPy code above
+(:attr:`pyautonomousagent.models.x8.X8Vectorised.agent_by_agent`).
 
 Two calls per iteration, whatever the number of agents: :func:`advance` (Phase 2: one step
 of every moving agent that is not parked, the ground and the phase changes it makes, what the
@@ -73,12 +73,6 @@ def pack_constants(k: dyn.Constants) -> np.ndarray:
 
 
 @njit
-def _min(a: float, b: float) -> float:
-    """``numpy.minimum`` of two finite numbers (the first where equal)."""
-    return a if a <= b else b
-
-
-@njit
 def _max(a: float, b: float) -> float:
     """``numpy.maximum`` of two finite numbers (the first where equal)."""
     return a if a >= b else b
@@ -86,8 +80,9 @@ def _max(a: float, b: float) -> float:
 
 @njit
 def _clip(x: float, low: float, high: float) -> float:
-    """``minimum(maximum(x, low), high)``."""
-    return _min(_max(x, low), high)
+    """``minimum(maximum(x, low), high)`` of finite numbers (the first where equal)."""
+    x = _max(x, low)
+    return x if x <= high else high
 
 
 @njit
@@ -265,16 +260,18 @@ def _surfaces(a: np.ndarray, c: np.ndarray) -> tuple[float, float, float]:
 
 
 @njit
-def _stages(
+def _step_one(
     y: np.ndarray,
     cmd: np.ndarray,
     i: int,
     c: np.ndarray,
     m: tuple[np.ndarray, np.ndarray],
     w: np.ndarray,
+    new: np.ndarray,
 ) -> None:
-    """The actuators' half steps (``w[MIDDLE:]``, ``w[END:]``) and the three Runge-Kutta
-    stages k1..k3 of ``x8_dynamics.step`` for agent i's state ``y`` (18,)."""
+    """``x8_dynamics.step`` (settling included) of agent i's state ``y`` (18,) into ``new``:
+    the actuators' half steps (``w[MIDDLE:]``, ``w[END:]``), the three Runge-Kutta stages
+    k1..k3, their sum."""
     aero, inertia = m
     h, act, b, stage = c[H], y[13:18], y[0:13], w[STAGE : STAGE + 13]
     _half_step(act, cmd, i, c, w[MIDDLE : MIDDLE + 5])
@@ -286,21 +283,6 @@ def _stages(
     for j in range(13):
         stage[j] = b[j] + h * (2 * w[K2 + j] - w[K1 + j])
     _derivatives(stage, _surfaces(w[END : END + 5], c), c, aero, inertia, w, K3)
-
-
-@njit
-def _step_one(
-    y: np.ndarray,
-    cmd: np.ndarray,
-    i: int,
-    c: np.ndarray,
-    m: tuple[np.ndarray, np.ndarray],
-    w: np.ndarray,
-    new: np.ndarray,
-) -> None:
-    """``x8_dynamics.step`` (settling included) of agent i's state ``y`` (18,) into ``new``."""
-    _stages(y, cmd, i, c, m, w)
-    h = c[H]
     for j in range(13):
         new[j] = y[j] + (h / 6) * (w[K1 + j] + 4 * w[K2 + j] + w[K3 + j])
     norm = math.sqrt(new[0] * new[0] + new[1] * new[1] + new[2] * new[2] + new[3] * new[3])

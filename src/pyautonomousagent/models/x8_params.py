@@ -54,7 +54,8 @@ class Aerodynamics:
     """Aerodynamic coefficients (dimensionless) and the stall model's blending constants.
 
     Names follow the parameter file: ``C_L_alpha`` is the lift slope per radian, ``C_m_q`` the
-    pitch damping, ``M`` and ``a_0`` the sharpness and angle (rad) of the stall blending.
+    pitch damping, ``M`` and ``a_0`` the sharpness and angle (rad) of the stall blending. The
+    rudder's (``*_delta_r``) are not read: the X8 has no rudder.
     """
 
     C_L_0: float
@@ -76,19 +77,16 @@ class Aerodynamics:
     C_Y_p: float
     C_Y_r: float
     C_Y_delta_a: float
-    C_Y_delta_r: float
     C_l_0: float
     C_l_beta: float
     C_l_p: float
     C_l_r: float
     C_l_delta_a: float
-    C_l_delta_r: float
     C_n_0: float
     C_n_beta: float
     C_n_p: float
     C_n_r: float
     C_n_delta_a: float
-    C_n_delta_r: float
     M: float
     a_0: float
     e: float

@@ -136,21 +136,15 @@ class CrowdedMission(DroneMission):
 
     @classmethod
     def check(cls, scenario: ScenarioView, reader: Reader) -> None:
-        """The risk distance lies within the sensor's range; the lattice, within the world."""
-        p = scenario.parameters
+        """The risk distance lies within the sensor's range; every group's circle of slots lies
+        in the world, else name the largest swarm that fits and the world this one needs."""
+        p, agents = scenario.parameters, scenario.agents
         if p.collision_risk_distance > p.proximity_range:
             raise reader.fail(
                 "parameters.collision_risk_distance",
                 f"at most proximity_range ({p.proximity_range:g} world units)",
                 p.collision_risk_distance,
             )
-        cls._check_lattice(scenario, reader)
-
-    @classmethod
-    def _check_lattice(cls, scenario: ScenarioView, reader: Reader) -> None:
-        """Every group's circle of slots lies in the world, else name the largest swarm that
-        fits and the world this one needs."""
-        p, agents = scenario.parameters, scenario.agents
         if p.slot_radius > p.point_spacing / 2:
             raise reader.fail(
                 "parameters.slot_radius",

@@ -45,9 +45,11 @@ SPEED = Port("speed", float, "reference_speed", 0.0, "cruise speed requested, un
 
 
 def toward(target: tuple[str, ...]) -> dict[str, str]:
-    """The position and the point ``target`` (its x, y keys) as the kernels' ``x, y, to_x,
-    to_y`` (parameter -> column: ``kernels.destination_reached``, ``kernels.bearing``)."""
-    return {"x": "x", "y": "y", "to_x": target[0], "to_y": target[1]}
+    """The position and the point ``target`` (its x, y[, z] keys) as the kernels' ``x, y[, z],
+    to_x, to_y[, to_z]`` (parameter -> column: ``kernels.destination_reached``, its 3-D form,
+    ``kernels.bearing``)."""
+    axes = "xyz"[: len(target)]
+    return {**{a: a for a in axes}, **{f"to_{a}": key for a, key in zip(axes, target, strict=True)}}
 
 
 @register_leaf
@@ -123,12 +125,14 @@ class ConditionRadiationDetected(Leaf):
     type_name = "Condition_Radiation_Detected"
     ports = (Port("threshold", float, "radiation_threshold", 0.0, "percent"),)
     threshold: float
+    #: The kernel, in a tuple (a function held by a class would be bound as a method).
+    above: ClassVar[tuple[Any]] = (k.above,)
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return success_if(agents.radiation > self.threshold)
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.above, ("radiation",), (self.threshold,))
+        return LeafKernel(self.above[0], ("radiation",), (self.threshold,))
 
 
 @register_leaf

@@ -16,9 +16,8 @@ def refuel_starts(run: RunData) -> np.ndarray:
     shape (records - 1, N), boolean. Exact when every iteration is recorded."""
     energy = run.columns["energy"]
     rising = np.diff(energy, axis=0) > 0.0
-    before = np.zeros_like(rising)
-    before[1:] = rising[:-1]
-    return rising & ~before
+    rising[1:] &= ~rising[:-1]  # (the right side is a new array: the rows before)
+    return rising
 
 
 def refuels(run: RunData) -> float:

@@ -30,6 +30,8 @@ from pyautonomousagent.missions.drones.shared_data import SharedData
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation import MessageType, Mission, Param, SimulationView, WorldObject
 from pyautonomousagent.simulation.params import Point, Reader
+from pyautonomousagent.simulation.scenario import check_point_in_world
+from pyautonomousagent.simulation.scenario_view import ScenarioView
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
@@ -49,14 +51,10 @@ def read_radiation_sources(reader: Reader, data: Any, path: str) -> tuple[Radiat
     for i, item in enumerate(data):
         where = f"{path}[{i}]"
         item = reader.keys(item, where, ["x", "y", "range", "active"], ["x", "y", "range"])
-        sources.append(
-            RadiationSource(
-                reader.number(item["x"], f"{where}.x"),
-                reader.number(item["y"], f"{where}.y"),
-                reader.number(item["range"], f"{where}.range", above=0),
-                reader.flag(item.get("active", False), f"{where}.active"),
-            )
-        )
+        x, y = (reader.number(item[key], f"{where}.{key}") for key in "xy")
+        reach = reader.number(item["range"], f"{where}.range", above=0)
+        active = reader.flag(item.get("active", False), f"{where}.active")
+        sources.append(RadiationSource(x, y, reach, active))
     return tuple(sources)
 
 
@@ -65,9 +63,9 @@ def cycled(points: tuple[Point, ...], n: int) -> np.ndarray:
     return np.asarray([points[i % len(points)] for i in range(n)], dtype=np.float64)
 
 
-def distinct(points: Any) -> list[Point]:
-    """The points without repeats, in order."""
-    return list(dict.fromkeys((float(x), float(y)) for x, y in points))
+def distinct(points: Any) -> list[tuple[float, ...]]:
+    """The points (x, y[, z]) without repeats, in order."""
+    return list(dict.fromkeys(tuple(float(v) for v in point) for point in points))
 
 
 class DroneMission(Mission):
@@ -81,6 +79,8 @@ class DroneMission(Mission):
     #: The blackboard keys of the surveillance position and the destination (x, y[, z]).
     surveillance: ClassVar[tuple[str, ...]] = SURVEILLANCE
     destination: ClassVar[tuple[str, ...]] = DESTINATION
+    #: The world object holding the surveillance (or patrol) positions.
+    points: ClassVar[str]
     parameters: ClassVar[tuple[Param, ...]] = (
         Param("reference_speed", 0.1, "world units per iteration (m/s for the X8)",
               "cruise speed the navigation leaves request", minimum=0.0),
@@ -124,6 +124,13 @@ class DroneMission(Mission):
         "x_current_destination_position": ("world unit", "blackboard: current destination, east"),
         "y_current_destination_position": ("world unit", "blackboard: current destination, north"),
     }
+
+    @classmethod
+    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
+        """The refuelling slots and the points ``world.<points>`` lie in the world."""
+        for key in ("refueling_positions", cls.points):
+            for i, point in enumerate(getattr(scenario.objects, key)):
+                check_point_in_world(reader, scenario, point, f"world.{key}[{i}]")
 
     def blackboard(self) -> dict[str, Any]:
         """Table 3: the surveillance, refuelling and destination positions."""
@@ -220,9 +227,10 @@ class DroneMission(Mission):
         return marks
 
     def surveillance_marks(self, points: Any) -> list[Mark]:
-        """Surveillance positions S1.. as "x" markers."""
+        """Surveillance positions S1.. as "x" markers; in 3-D labelled with their altitude."""
+        altitude = " (altitude)" if len(self.surveillance) == 3 else ""
         return [
-            Mark("point", x, y, f"S{i}", colour=TARGET_COLOUR, symbol="x",
-                 legend="surveillance position")
-            for i, (x, y) in enumerate(distinct(points), start=1)
+            Mark("point", p[0], p[1], f"S{i}" + "".join(f" z={z:g}" for z in p[2:]),
+                 colour=TARGET_COLOUR, symbol="x", legend=f"surveillance position{altitude}")
+            for i, p in enumerate(distinct(points), start=1)
         ]  # fmt: skip

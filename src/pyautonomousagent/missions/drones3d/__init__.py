@@ -1,5 +1,5 @@
-"""The paper's drones in three dimensions (issue 18, part 1): ``gathering-3d`` and
-``patrol-3d``, flown by the 3-D drone (``model: drone3d``, docs/drone3d.md).
+"""The paper's drones in three dimensions: ``gathering-3d`` and ``patrol-3d``, flown by the
+3-D drone (``model: drone3d``, docs/drone3d.md).
 
 Surveillance and patrol positions are ``[x, y, z]`` (z: altitude, world units above the
 ground); the refuelling slots are on the ground (z = 0): a drone lands to refuel. Climbing
@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from pyautonomousagent.kernels import SensorKernel
-from pyautonomousagent.missions.drones.mission import TARGET_COLOUR, DroneMission
+from pyautonomousagent.missions.drones.mission import DroneMission
 from pyautonomousagent.missions.drones.sensors import drain_energy
 from pyautonomousagent.missions.drones3d.kernels import (
     adopt_point_3d,
@@ -31,7 +31,6 @@ from pyautonomousagent.missions.drones3d.leaves import (
 from pyautonomousagent.missions.gathering import GatheringMission
 from pyautonomousagent.missions.patrol import PatrolMission
 from pyautonomousagent.models.drone3d import COLUMNS_3D, MEANINGS_3D
-from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation import Param, SimulationView, WorldObject, register_mission
 from pyautonomousagent.simulation.params import Reader
 from pyautonomousagent.simulation.scenario_view import ScenarioView
@@ -69,8 +68,7 @@ def read_point_3d(reader: Reader, value: Any, path: str) -> Point3D:
     """``[x, y, z]``: finite numbers, z (the altitude) at or above the ground."""
     if not isinstance(value, list | tuple) or len(value) != 3:
         raise reader.fail(path, "a point [x, y, z] (z: altitude above the ground)", value)
-    x, y = reader.number(value[0], f"{path}[0]"), reader.number(value[1], f"{path}[1]")
-    z = reader.number(value[2], f"{path}[2]")
+    x, y, z = (reader.number(v, f"{path}[{i}]") for i, v in enumerate(value))
     if z < 0:
         raise reader.fail(f"{path}[2]", "an altitude >= 0 (at or above the ground)", z)
     return (x, y, z)
@@ -91,7 +89,6 @@ class Drone3DMission(DroneMission):
     their bases): altitudes in the blackboard, the climb's energy, the checks of the 3-D
     drone and of the altitudes of the points ``world.<points>``."""
 
-    points: ClassVar[str]
     surveillance = SURVEILLANCE_3D
     destination = DESTINATION_3D
     columns: ClassVar[dict[str, Any]] = COLUMNS
@@ -133,15 +130,6 @@ class Drone3DMission(DroneMission):
             self._stopped,
         )  # fmt: skip
 
-    def surveillance_marks(self, points: Any) -> list[Mark]:
-        """Surveillance positions S1.. as "x" markers labelled with their altitude."""
-        distinct = list(dict.fromkeys((float(x), float(y), float(z)) for x, y, z in points))
-        return [
-            Mark("point", x, y, f"S{i} z={z:g}", colour=TARGET_COLOUR, symbol="x",
-                 legend="surveillance position (altitude)")
-            for i, (x, y, z) in enumerate(distinct, start=1)
-        ]  # fmt: skip
-
 
 @register_mission
 class Gathering3DMission(Drone3DMission, GatheringMission):
@@ -157,7 +145,6 @@ class Gathering3DMission(Drone3DMission, GatheringMission):
                     doc="surveillance positions [x, y, z], used in turn by drones 1, 2, ..."),
     )  # fmt: skip
     meanings: ClassVar[dict[str, tuple[str, str]]] = {**GatheringMission.meanings, **MEANINGS}
-    points = "surveillance_positions"
     adopt_kernels = (adopt_point_everyone_3d, adopt_point_3d)
 
 
@@ -180,7 +167,6 @@ class Patrol3DMission(Drone3DMission, PatrolMission):
         "z_surveillance_position_1": ("world unit", "blackboard: patrol position 1, altitude"),
         "z_surveillance_position_2": ("world unit", "blackboard: patrol position 2, altitude"),
     }
-    points = "patrol_positions"
     patrol = PATROL_3D
 
     def blackboard(self) -> dict[str, Any]:

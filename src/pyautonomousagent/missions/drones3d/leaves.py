@@ -10,12 +10,9 @@ for the compiled engine.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
-import numpy as np
-
-from pyautonomousagent.arrays import bearing, choose, maximum, minimum
+from pyautonomousagent.arrays import bearing, choose, hypot, maximum, minimum
 from pyautonomousagent.bt.leaf import Leaf, Port, register_leaf
 from pyautonomousagent.bt.status import RUNNING, SUCCESS, status_if, success_if
 from pyautonomousagent.kernels import Later, LeafKernel
@@ -44,11 +41,6 @@ PATROL_3D = (
     PATROL[1], PATROL[2], "z_surveillance_position_1",
     PATROL[3], PATROL[4], "z_surveillance_position_2",
 )  # fmt: skip
-#: The position and the destination as ``kernels.destination_reached_3d``'s arrays.
-TOWARD_DESTINATION_3D = {
-    "x": "x", "y": "y", "z": "z",
-    **dict(zip(("to_x", "to_y", "to_z"), DESTINATION_3D, strict=True)),
-}  # fmt: skip
 #: The arrays of ``kernels.patrol_position_3d``, parameter -> key.
 PATROL_ARRAYS_3D = dict(
     zip(("index", "to_x", "to_y", "to_z", "sx", "sy", "sz", "x1", "y1", "z1", "x2", "y2", "z2"),
@@ -79,12 +71,7 @@ class ConditionDestinationReached3D(Leaf):
         return success_if(near & (abs(dz) <= self.distance))
 
     def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.destination_reached_3d, TOWARD_DESTINATION_3D, (self.distance,))
-
-
-def _sqrt(value: Any) -> Any:
-    """Square root (correctly rounded: the same bits for one agent and for arrays)."""
-    return np.sqrt(value) if isinstance(value, np.ndarray) else math.sqrt(value)
+        return LeafKernel(k.destination_reached_3d, toward(DESTINATION_3D), (self.distance,))
 
 
 @register_leaf
@@ -115,13 +102,13 @@ class ActionNavigateToDestination3DA(Leaf):
         squared = dx * dx + dy * dy
         agents.requested_speed = choose(squared <= self.distance * self.distance, 0.0, self.speed)
         to_z = bb.z_current_destination_position
-        glide = to_z + self.slope * _sqrt(squared)
+        glide = to_z + self.slope * hypot(dx, dy)  # sqrt(squared), for one agent or arrays
         agents.requested_altitude = maximum(to_z, minimum(agents.z, glide))
         return RUNNING
 
     def kernel(self, world: World) -> LeafKernel:
         heading = Later(bearing_of_one, toward(DESTINATION), "requested_heading")
-        names = {**TOWARD_DESTINATION_3D, "speed": "requested_speed",
+        names = {**toward(DESTINATION_3D), "speed": "requested_speed",
                  "altitude": "requested_altitude"}  # fmt: skip
         constants = (self.speed, self.distance, self.slope)
         return LeafKernel(k.navigate_3d, names, constants, later=heading)

@@ -22,7 +22,6 @@ from pyautonomousagent.simulation import (
     register_mission,
 )
 from pyautonomousagent.simulation.params import Reader
-from pyautonomousagent.simulation.scenario import check_point_in_world
 from pyautonomousagent.simulation.scenario_view import ScenarioView
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
@@ -48,6 +47,7 @@ class GatheringMission(DroneMission):
     #: The "gathering" handler's kernels, for everyone and for one receiver (3-D: their
     #: forms with the altitude), in a tuple: a function held by a class would be bound.
     adopt_kernels: ClassVar[tuple[Any, Any]] = (adopt_point_everyone, adopt_point)
+    points = "surveillance_positions"
 
     @classmethod
     def check(cls, scenario: ScenarioView, reader: Reader) -> None:
@@ -60,9 +60,7 @@ class GatheringMission(DroneMission):
                 f"one of the drones (drone1..drone{scenario.agents})",
                 sender,
             )
-        for key in ("refueling_positions", "surveillance_positions"):
-            for i, point in enumerate(getattr(scenario.objects, key)):
-                check_point_in_world(reader, scenario, point, f"world.{key}[{i}]")
+        super().check(scenario, reader)
 
     def place(self, swarm: Swarm, world: World, rng: np.random.Generator) -> None:
         """On the refuelling slots; the first destination is the own surveillance position."""

@@ -11,9 +11,6 @@ from pyautonomousagent.missions.drones.leaves import PATROL
 from pyautonomousagent.missions.drones.mission import DroneMission
 from pyautonomousagent.render.marks import Mark
 from pyautonomousagent.simulation import WorldObject, register_mission
-from pyautonomousagent.simulation.params import Reader
-from pyautonomousagent.simulation.scenario import check_point_in_world
-from pyautonomousagent.simulation.scenario_view import ScenarioView
 from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
@@ -31,6 +28,7 @@ class PatrolMission(DroneMission):
     )  # fmt: skip
     #: The patrol's blackboard keys: the index, then positions 1 and 2 (x, y[, z] each).
     patrol: ClassVar[tuple[str, ...]] = PATROL
+    points = "patrol_positions"
 
     meanings: ClassVar[dict[str, tuple[str, str]]] = {
         **DroneMission.meanings,
@@ -43,13 +41,6 @@ class PatrolMission(DroneMission):
         "x_surveillance_position_2": ("world unit", "blackboard: patrol position 2, east"),
         "y_surveillance_position_2": ("world unit", "blackboard: patrol position 2, north"),
     }
-
-    @classmethod
-    def check(cls, scenario: ScenarioView, reader: Reader) -> None:
-        """Positions lie in the world."""
-        for key in ("refueling_positions", "patrol_positions"):
-            for i, point in enumerate(getattr(scenario.objects, key)):
-                check_point_in_world(reader, scenario, point, f"world.{key}[{i}]")
 
     def blackboard(self) -> dict[str, Any]:
         """Table 3 plus the two patrol positions and the index of the current one."""

@@ -97,9 +97,7 @@ class X8PatrolMission(PatrolMission):
     )  # fmt: skip
     columns: ClassVar[dict[str, Any]] = {
         **PatrolMission.columns,
-        MODE_COLUMN: np.float64,
-        ALTITUDE_COLUMN: np.float64,
-        PHASE_COLUMN: np.float64,
+        **dict.fromkeys((MODE_COLUMN, ALTITUDE_COLUMN, PHASE_COLUMN), np.float64),
     }
     meanings: ClassVar[dict[str, tuple[str, str]]] = {
         **PatrolMission.meanings,

@@ -30,10 +30,8 @@ def land(a: int, x: np.ndarray, y: np.ndarray, phase: np.ndarray, mode: np.ndarr
     dx = aim_x - x[a]
     dy = aim_y - y[a]
     glide = tangent * math.sqrt(dx * dx + dy * dy)
-    if final:
-        heading[a] = bearing(x[a], y[a], aim_x, aim_y)
-    else:
-        heading[a] = bearing(x[a], y[a], fix_x, fix_y)
+    to_x, to_y = (aim_x, aim_y) if final else (fix_x, fix_y)
+    heading[a] = bearing(x[a], y[a], to_x, to_y)
     speed[a] = approach_speed if final else cruise
     altitude[a] = np_minimum(ceiling, glide)
     mode[a] = float(LAND) if final else float(CRUISE)

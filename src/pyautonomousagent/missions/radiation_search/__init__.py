@@ -74,11 +74,8 @@ class Source:
 def read_source(reader: Reader, data: Any, path: str) -> Source:
     """``{x, y, range}``, world units."""
     given = reader.keys(data, path, ["x", "y", "range"], ["x", "y", "range"])
-    return Source(
-        reader.number(given["x"], f"{path}.x"),
-        reader.number(given["y"], f"{path}.y"),
-        reader.number(given["range"], f"{path}.range", above=0.0),
-    )
+    x, y = (reader.number(given[key], f"{path}.{key}") for key in "xy")
+    return Source(x, y, reader.number(given["range"], f"{path}.range", above=0.0))
 
 
 def radiation_level(x: np.ndarray, y: np.ndarray, source: Source) -> np.ndarray:
@@ -150,7 +147,6 @@ class RadiationSearchMission(Mission):
         """Every drone reads the radiation level at its position; all of them move."""
         s = sim.swarm.columns
         s["radiation"][:] = radiation_level(s["x"], s["y"], self.scenario.objects.radiation_source)
-        return None
 
     def compiled_sensors(self, sim: SimulationView) -> SensorKernel:
         """:meth:`sense` for one drone (``kernels.radiation_reading``)."""

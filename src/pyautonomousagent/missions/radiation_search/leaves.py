@@ -36,9 +36,7 @@ class ConditionRadiationAboveThreshold(ConditionRadiationDetected):
     """SUCCESS if the radiation sensor reads more than ``threshold`` percent."""
 
     type_name = "Condition_Radiation_Above_Threshold"
-
-    def kernel(self, world: World) -> LeafKernel:
-        return LeafKernel(k.above, ("radiation",), (self.threshold,))
+    above = (k.above,)
 
 
 @register_leaf

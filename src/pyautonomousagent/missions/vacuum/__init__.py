@@ -22,7 +22,7 @@ steps on the device, the lowest robot row winning a cell by an atomic minimum):
   :class:`VacuumMission` declares them (the avoid leaf's ``step`` port defaults to the
   motion model's ``turn_step``);
 - Phase 2 (:meth:`VacuumMission.sense`): the cells under robots whose brush ran are cleaned
-  (:attr:`VacuumMission.grid`, :meth:`VacuumMission.coverage`), the sonar is read, and a robot
+  (:attr:`VacuumMission.grid`, its :meth:`CleaningGrid.coverage`), the sonar is read, and a robot
   whose next step (the drone2d equations) would leave the room or touch an obstacle does not
   move this iteration (it stops; the tree then turns it away). So no robot ever enters an
   obstacle, whatever the tree does;
@@ -84,13 +84,12 @@ MAX_CELLS = 4_000_000
 """The largest cleaned-area grid a scenario may ask for (cells)."""
 
 
-def obstacle_mark(obstacle: Rectangle | Circle) -> Mark:
-    """An obstacle as a filled grey mark."""
+def obstacle_mark(o: Rectangle | Circle) -> Mark:
+    """The obstacle ``o`` as a filled grey mark."""
     style: dict[str, Any] = {"colour": OBSTACLE_COLOUR, "fill": True, "legend": "obstacle"}
-    if isinstance(obstacle, Rectangle):
-        o = obstacle
+    if isinstance(o, Rectangle):
         return Mark("rect", o.x, o.y, width=o.width, height=o.height, **style)
-    return Mark("circle", obstacle.x, obstacle.y, size=obstacle.radius, **style)
+    return Mark("circle", o.x, o.y, size=o.radius, **style)
 
 
 @register_mission
@@ -230,10 +229,6 @@ class VacuumMission(Mission):
             (float(room.width), float(room.height), float(self.params.sonar_range), STOP_MARGIN),
             swarm=swarm, state=(room.rects, room.circles),
         )  # fmt: skip
-
-    def coverage(self) -> float:
-        """The fraction of the room's free cells cleaned so far, in [0, 1]."""
-        return self.grid.coverage()
 
     def frame_marks(self, recorder: Recorder, row: int) -> list[Mark]:
         """The cells cleaned before record ``row``: a cell is cleaned in Phase 2 under a robot

@@ -41,13 +41,11 @@ class Circle:
 Obstacle = Rectangle | Circle
 
 
-def extent(obstacle: Obstacle) -> tuple[float, float, float, float]:
-    """The smallest box holding ``obstacle``: (x0, y0, x1, y1), world units."""
-    if isinstance(obstacle, Rectangle):
-        o = obstacle
+def extent(o: Obstacle) -> tuple[float, float, float, float]:
+    """The smallest box holding the obstacle ``o``: (x0, y0, x1, y1), world units."""
+    if isinstance(o, Rectangle):
         return o.x, o.y, o.x + o.width, o.y + o.height
-    c = obstacle
-    return c.x - c.radius, c.y - c.radius, c.x + c.radius, c.y + c.radius
+    return o.x - o.radius, o.y - o.radius, o.x + o.radius, o.y + o.radius
 
 
 def check_inside(reader: Reader, obstacles: tuple[Obstacle, ...], size: tuple[float, float],
