@@ -145,9 +145,10 @@ def choose_engine(
     ``record_every``-th iteration of ``columns`` columns: "pytrees" if a leaf of ``tree``
     is a hand-written py_trees behaviour; else "gpu" where the tree compiles and
     :func:`~pyautonomousagent.engines.gpu.auto_takes_gpu`; else the faster of "batched" and
-    "compiled" within the memory by their estimated costs (:mod:`.costs`: the compile is
-    paid unless ``compiled_ready``, the loop is in numba's cache), "batched" where the tree
-    does not compile (:func:`~pyautonomousagent.engines.compiled.compilable`). The figures:
+    "compiled" within the memory by their estimated costs
+    (:func:`~pyautonomousagent.simulation.costs.run_costs`: the compile is paid unless
+    ``compiled_ready``, the loop is in numba's cache), "batched" where the tree does not
+    compile (:func:`~pyautonomousagent.engines.compiled.compilable`). The figures:
     docs/performance.md, "How auto chooses". :meth:`Simulation.create` asks again with
     ``compiled_ready`` and takes "compiled" where the GPU kernel cannot run the run."""
     if any(node.type in BEHAVIOUR_TYPES for node in tree.leaves()):
