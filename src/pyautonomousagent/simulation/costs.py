@@ -15,33 +15,23 @@ from dataclasses import dataclass
 
 from pyautonomousagent.record_blocks import RECORD_BLOCK_BYTES
 
-#: Seconds of batched loop from which "auto" compiles: compiling a tree takes about a minute
-#: the first time (both fused variants, on 2 cores: patrol's 66 s, gathering's 76 s; then
-#: well under 1 s from numba's cache), which a loop this long pays back. It is the cost
-#: :func:`run_costs` gives a compile not in the cache yet.
+#: Seconds of batched loop from which "auto" compiles: compiling a tree's fused loop takes
+#: about a minute the first time (patrol's 66 s, gathering's 76 s), then well under 1 s from
+#: numba's cache. It is the cost :func:`run_costs` gives a compile not in the cache yet.
 AUTO_COMPILE_SECONDS = 70.0
-#: The batched engine's loop cost on 2 cores: NumPy's fixed cost per iteration (about 250
-#: calls; gathering, 4 drones: 170 us) and the cost per agent-iteration (patrol, 10^6 drones:
-#: 65 ns), in seconds (docs/performance.md).
+#: Loop costs per iteration and per agent-iteration, in seconds: the batched engine's
+#: (NumPy's fixed cost of about 250 calls; patrol's drones) and the compiled engine's (its call
+#: of 500 iterations spread over them; patrol's drones).
 BATCHED_PER_ITERATION = 1.5e-4
 BATCHED_PER_AGENT = 6.5e-8
-#: The compiled engine's fused loop on 2 cores: per call of 500 iterations (the arguments,
-#: the threads) spread over them, and per agent-iteration (patrol, 10^6 drones: 9.4e7
-#: drone-iterations per second), in seconds.
 COMPILED_PER_ITERATION = 2e-6
 COMPILED_PER_AGENT = 1.1e-8
 #: Seconds to load a compiled loop from numba's cache (set-up).
 COMPILED_LOAD_SECONDS = 1.0
-#: Seconds per agent and record on either engine: storing a record (the columns kept in
-#: full copied, the others compared agent by agent: ``RecordedColumns``).
+#: Seconds per agent and record on either engine: storing a record.
 RECORD_PER_AGENT = 6e-8
-#: Peak bytes of a run beyond its records (patrol, ``/usr/bin/time -v`` of runs recording
-#: twice: batched 153 MB at 1000 drones, 478 MB at 1,000,000; compiled 219 MB and 666 MB):
-#: the process (Python, NumPy, pyarrow, numba) and per agent (its state, NumPy's
-#: temporaries); the compiled engine's besides (numba's compiled code and threads), and per
-#: agent the same, its record block aside
-#: (:data:`~pyautonomousagent.record_blocks.RECORD_BLOCK_BYTES`, or one record row where that
-#: is more: 138 MB at 1,000,000 drones).
+#: Peak bytes of a run beyond its records: the process (Python, NumPy, pyarrow; the compiled
+#: engine's numba code and threads besides) and per agent (its state, NumPy's temporaries).
 BATCHED_BYTES = 150 * 2**20
 COMPILED_BYTES = BATCHED_BYTES + 66 * 2**20
 BYTES_PER_AGENT = 260
@@ -60,18 +50,9 @@ class RunCost:
     bytes: int
 
 
-def batched_seconds(agents: int, iterations: int, record_every: int | None = None) -> float:
-    """About how long the batched engine's loop takes for a run, in seconds; with
-    ``record_every``, storing its records too."""
-    seconds = iterations * (BATCHED_PER_ITERATION + agents * BATCHED_PER_AGENT)
-    return seconds + record_seconds(agents, iterations, record_every)
-
-
-def record_seconds(agents: int, iterations: int, record_every: int | None) -> float:
-    """About how long storing a run's records takes on either engine (0 for None)."""
-    if record_every is None:
-        return 0.0
-    return (iterations // record_every + 1) * agents * RECORD_PER_AGENT
+def batched_seconds(agents: int, iterations: int) -> float:
+    """About how long the batched engine's loop takes for a run, in seconds."""
+    return iterations * (BATCHED_PER_ITERATION + agents * BATCHED_PER_AGENT)
 
 
 def run_costs(
@@ -89,7 +70,7 @@ def run_costs(
     records = iterations // record_every + 1
     row = agents * (columns * 8 + 2)  # the columns and the active behaviour
     recorded = records * row
-    storing = record_seconds(agents, iterations, record_every)
+    storing = records * agents * RECORD_PER_AGENT
     compile_s = COMPILED_LOAD_SECONDS if compiled_ready else AUTO_COMPILE_SECONDS
     compiled = iterations * (COMPILED_PER_ITERATION + agents * COMPILED_PER_AGENT)
     block = min(recorded, max(RECORD_BLOCK_BYTES, row))

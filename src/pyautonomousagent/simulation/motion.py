@@ -90,13 +90,6 @@ def pyfly_installed() -> bool:
     return find_spec("pyfly") is not None
 
 
-def build_model(
-    scenario: ScenarioView, swarm: Swarm, engine: str, seed: int, implementation: str | None = None
-) -> Model:
-    """The motion model of ``scenario`` for ``swarm`` (see :class:`MotionModel`)."""
-    return MOTION_MODELS.get(scenario.model).build(scenario, swarm, engine, seed, implementation)
-
-
 def _drone2d(
     scenario: ScenarioView, swarm: Swarm, engine: str, seed: int, implementation: str | None
 ) -> Model:
@@ -173,43 +166,37 @@ def read_x8_settings(reader: Reader, data: Any) -> X8Settings:
     return X8Settings(**values)
 
 
-_DRONE = DroneParameters()
-MOTION_MODELS.register(
-    "drone2d",
-    MotionModel(
-        "drone2d",
-        _drone2d,
-        (
-            Param("max_speed", _DRONE.max_speed, "world units per iteration",
-                  "upper speed limit", minimum=0.0),
-            Param("speed_step", _DRONE.speed_step, "world units per iteration",
-                  "magnitude of the speed control signal u_v", minimum=0.0),
-            Param("turn_step", _DRONE.turn_step, "degrees per iteration",
-                  "magnitude of the heading control signal u_a", minimum=0.0),
-        ),
-        doc="the paper's 2-D drone (eqs. 1-4) with bang-bang control",
+def _at_least_zero(defaults: Any, *rows: tuple[str, str, str]) -> tuple[Param, ...]:
+    """Parameters ``(name, unit, doc)`` >= 0, their defaults ``defaults``' attributes."""
+    return tuple(Param(n, getattr(defaults, n), unit, doc, minimum=0.0) for n, unit, doc in rows)
+
+
+_DRONE2D = _at_least_zero(
+    DroneParameters(),
+    ("max_speed", "world units per iteration", "upper speed limit"),
+    ("speed_step", "world units per iteration", "magnitude of the speed control signal u_v"),
+    ("turn_step", "degrees per iteration", "magnitude of the heading control signal u_a"),
+)
+_DRONE3D = _at_least_zero(
+    Drone3DParameters(),
+    ("max_climb_rate", "world units per iteration", "largest climb or sink rate"),
+    (
+        "climb_step",
+        "world units per iteration per iteration",
+        "largest change of the climb rate in one iteration (u_w)",
     ),
-)  # fmt: skip
-_DRONE3D = Drone3DParameters()
-MOTION_MODELS.register(
-    "drone3d",
+    ("max_altitude", "world units", "ceiling above the ground"),
+)
+for _model in (
+    MotionModel(
+        "drone2d", _drone2d, _DRONE2D, doc="the paper's 2-D drone (eqs. 1-4) with bang-bang control"
+    ),
     MotionModel(
         "drone3d",
         _drone3d,
-        (
-            *MOTION_MODELS.get("drone2d").parameters,
-            Param("max_climb_rate", _DRONE3D.max_climb_rate, "world units per iteration",
-                  "largest climb or sink rate", minimum=0.0),
-            Param("climb_step", _DRONE3D.climb_step, "world units per iteration per iteration",
-                  "largest change of the climb rate in one iteration (u_w)", minimum=0.0),
-            Param("max_altitude", _DRONE3D.max_altitude, "world units",
-                  "ceiling above the ground", minimum=0.0),
-        ),
+        (*_DRONE2D, *_DRONE3D),
         doc="the 2-D drone with altitude and climb rate (docs/drone3d.md)",
     ),
-)  # fmt: skip
-MOTION_MODELS.register(
-    "x8",
     MotionModel(
         "x8",
         _x8,
@@ -217,4 +204,5 @@ MOTION_MODELS.register(
         read_settings=read_x8_settings,
         doc="the Skywalker X8 6-DOF fixed wing (the [x8] extra)",
     ),
-)
+):
+    MOTION_MODELS.register(_model.name, _model)

@@ -70,11 +70,6 @@ class Values(SimpleNamespace):
         raise AttributeError(f"no parameter {key!r}{hint}")
 
 
-def defaults(params: Iterable[Param]) -> Values:
-    """The parameters' default values."""
-    return Values(**{p.name: p.default for p in params})
-
-
 def plain(value: Any) -> Any:
     """A validated value as plain YAML data: dataclasses as mappings, tuples as lists."""
     if isinstance(value, Values):

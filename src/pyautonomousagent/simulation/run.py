@@ -39,7 +39,7 @@ from pyautonomousagent.simulation.costs import pick_engine, run_costs
 from pyautonomousagent.simulation.engine_api import Engine, fuses
 from pyautonomousagent.simulation.fit import check_tree
 from pyautonomousagent.simulation.mission import MessageType, Mission
-from pyautonomousagent.simulation.motion import Model, build_model
+from pyautonomousagent.simulation.motion import MOTION_MODELS, Model
 from pyautonomousagent.simulation.scenario import Scenario, ScenarioError, to_mapping
 from pyautonomousagent.state import CONTROL_COLUMNS, MOTION_COLUMNS, Swarm
 from pyautonomousagent.world import World
@@ -91,14 +91,18 @@ def recorded_columns(mission: Mission, tree: Node) -> int:
     return columns + len(tree_blackboard_keys(tree, mission.blackboard()))  # and the tree's
 
 
-def _check_fits(
-    scenario: Scenario, mission: Mission, tree: Node, engine: str, record_every: int
-) -> None:
-    """Refuse, before anything is allocated, a run whose records cannot fit in memory."""
+def _fitting_engine(
+    scenario: Scenario, mission: Mission, tree: Node, engine: str, every: int
+) -> str:
+    """The run's engine (for "auto", :func:`choose_engine`'s), once a run whose records
+    cannot fit in memory is refused, before anything is allocated."""
     columns = recorded_columns(mission, tree)
+    if engine == "auto":
+        engine = choose_engine(tree, scenario.agents, scenario.iterations, every, columns)
     nodes = sum(1 for _ in tree.walk())
     per_agent = 100 + nodes * (2000 if engine == "pytrees" else 16)
-    check_memory(scenario.agents, scenario.iterations, record_every, columns, per_agent)
+    check_memory(scenario.agents, scenario.iterations, every, columns, per_agent)
+    return engine
 
 
 #: Iterations a :class:`FusedEngine` runs per call of its ``loop`` (the progress bar's step).
@@ -140,19 +144,13 @@ def choose_engine(
     """The engine "auto" picks for a run of ``agents`` x ``iterations`` recording every
     ``record_every``-th iteration of ``columns`` columns: "pytrees" if a leaf of ``tree``
     is a hand-written py_trees behaviour; else "gpu" where the tree compiles and
-    :func:`~pyautonomousagent.engines.gpu.auto_takes_gpu` (a device, a run at least
-    :data:`~pyautonomousagent.engines.gpu.AUTO_DRONE_ITERATIONS` drone-iterations; where the
-    kernel cannot run the run, :meth:`Simulation.create` takes "compiled" instead); else
-    the faster of "batched" and "compiled" by their estimated costs of this run
-    (:func:`~pyautonomousagent.simulation.costs.run_costs`: seconds with the compile, which
-    ``compiled_ready`` says is in numba's cache already, and memory), never one that needs
-    more memory than is available or than the other by more than
-    :data:`~pyautonomousagent.simulation.costs.MEMORY_MARGIN`
-    (:func:`~pyautonomousagent.simulation.costs.pick_engine`); "batched" where numba is
-    missing or the tree does not compile (see
-    :func:`~pyautonomousagent.engines.compiled.compilable`).
-    (:meth:`Simulation.create` asks again with ``compiled_ready`` where the run's fused
-    loop was compiled before: ``CompiledEngine.ready``.)"""
+    :func:`~pyautonomousagent.engines.gpu.auto_takes_gpu`; else the faster of "batched" and
+    "compiled" within the memory by their estimated costs
+    (:func:`~pyautonomousagent.simulation.costs.run_costs`: the compile is paid unless
+    ``compiled_ready``, the loop is in numba's cache), "batched" where the tree does not
+    compile (:func:`~pyautonomousagent.engines.compiled.compilable`). The figures:
+    docs/performance.md, "How auto chooses". :meth:`Simulation.create` asks again with
+    ``compiled_ready`` and takes "compiled" where the GPU kernel cannot run the run."""
     if any(node.type in BEHAVIOUR_TYPES for node in tree.leaves()):
         return "pytrees"
     if auto_takes_gpu(agents, iterations) and not compilable(tree):
@@ -232,41 +230,34 @@ class Simulation:
             scenario: the scenario to run.
             seed: seed of the run's random generators.
             engine: name of the decision engine (see :data:`ENGINES`), or "auto"
-                (:func:`choose_engine`; the compiled engine also where this run's compiled
-                loop is in the cache already).
+                (:func:`choose_engine`).
             record_every: record every K-th iteration (and the initial state); a K longer
                 than the run records the initial and the final state.
-            tree: a tree description (or a tree file's path) to use instead of the
-                scenario's own.
+            tree: a tree description or a tree file's path, instead of the scenario's own.
             implementation: the X8's implementation, "pyfly" or "vectorised", instead of
                 the engine's default (see :mod:`pyautonomousagent.simulation.motion`).
             trace: the agents whose node statuses are recorded: None (every agent of a
                 small swarm, else the first :data:`~pyautonomousagent.recording.DEFAULT_TRACED`),
-                a count, "all", or names (see :func:`~pyautonomousagent.recording.traced_agents`).
+                a count, "all", or names (:func:`~pyautonomousagent.recording.traced_agents`).
 
         Raises:
-            TypeError, ValueError: a bad argument, named in the message;
-            ScenarioError: a bad scenario field; InputError: a run that cannot fit in memory;
-            TreeError: a leaf of the tree that does not fit the scenario's mission (it names
-                the leaf, why, its mission and the leaves that fit: see
-                :mod:`~pyautonomousagent.simulation.fit`).
+            TypeError, ValueError: a bad argument, named in the message; ScenarioError: a bad
+                scenario field; InputError: a run that cannot fit in memory; TreeError: a
+                leaf that does not fit the mission (:mod:`~pyautonomousagent.simulation.fit`).
         """
         scenario, tree = _checked(scenario, seed, engine, record_every, tree)
         record_every = min(record_every, max(scenario.iterations, 1))  # initial and final
         tree = tree or scenario_tree(scenario)
         auto = engine == "auto"
         mission = scenario.create_mission()
-        if auto:
-            columns = recorded_columns(mission, tree)
-            engine = choose_engine(tree, scenario.agents, scenario.iterations, record_every,
-                                   columns)  # fmt: skip
-        _check_fits(scenario, mission, tree, engine, record_every)
+        engine = _fitting_engine(scenario, mission, tree, engine, record_every)
         start = time.perf_counter()
         declared = tree_blackboard_keys(tree, mission.blackboard())  # scripts' entries
         check_tree(tree, scenario, declared)  # every leaf fits the mission
         rng = np.random.default_rng(seed)
         world = phases.create_world(scenario, seed)
         swarm = phases.create_agents(mission, world, rng, declared)
+        build_model = MOTION_MODELS.get(scenario.model).build
         model = build_model(scenario, swarm, engine, seed, implementation)
         decision = ENGINES.get(engine)(tree, swarm, world, vars(scenario.parameters))
         handlers = {kind.name: kind for kind in mission.message_types()}

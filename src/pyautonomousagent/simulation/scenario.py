@@ -50,21 +50,9 @@ CORE_PARAMETERS = (
     ),
 )
 
-#: The top-level keys of a scenario file other than the motion model's settings section.
-FIELDS = (
-    "name",
-    "description",
-    "mission",
-    "tree",
-    "agents",
-    "iterations",
-    "world",
-    "initial_heading",
-    "frame_every",
-    "parameters",
-    "model",
-)
 REQUIRED = ("name", "mission", "tree", "agents", "iterations", "world")
+#: The top-level keys of a scenario file other than the motion model's settings section.
+FIELDS = (*REQUIRED, "description", "initial_heading", "frame_every", "parameters", "model")
 
 
 @dataclass(frozen=True)
