@@ -50,8 +50,32 @@ def _tree() -> Node:
     )  # fmt: skip
 
 
+def _counting_tree() -> Node:
+    """BT.CPP's node types that count: Repeat, RetryUntilSuccessful, Parallel, ParallelAll,
+    Delay and Timeout (none may take a child that may be SKIPPED: not in :func:`_tree`)."""
+    leaves = iter(f"c{k}" for k in range(40))
+
+    def leaf() -> Node:
+        return from_entry(next(leaves))
+
+    def node(kind: str, *kids: Node, **params: object) -> Node:
+        return Node(kind, f"{kind.lower()}_{next(leaves)}", kids, params)
+
+    return node(
+        "ParallelAll",
+        node("Repeat", leaf(), num_cycles=3),
+        node("RetryUntilSuccessful", leaf(), num_attempts=-1),
+        node("Parallel", leaf(), node("Delay", leaf(), delay_msec=2000),
+             node("Timeout", leaf(), msec=3000), success_count=2, failure_count=-2),
+        node("Timeout", node("RetryUntilSuccessful", leaf(), num_attempts=2), msec=4000),
+        node("Delay", node("Repeat", leaf(), num_cycles=-1), delay_msec=1000),
+        node("Parallel", leaf(), leaf(), leaf()),
+        max_failures=3,
+    )  # fmt: skip
+
+
 def test_the_tree_has_every_node_type_with_a_rule() -> None:
-    used = {node.type for node in _tree().walk()}
+    used = {node.type for tree in (_tree(), _counting_tree()) for node in tree.walk()}
     with_rule = {name for name, record in NODE_TYPES.items() if record.rule is not None}
     missing = with_rule - used - {"FailureIsRunning", "RunningIsFailure", "RunningIsSuccess"}
     assert missing <= {"PassThrough"}, missing
@@ -103,6 +127,18 @@ def test_every_rule_gives_the_batched_engines_statuses(engine: str) -> None:
     got = _statuses(engine, tree)
     _assert_same_statuses(tree, want, got)
     assert len({int(c) for tick in want for c in tick.ravel()}) == 5  # every status seen
+
+
+@pytest.mark.parametrize("engine", ENGINE_NAMES)
+def test_the_counting_rules_give_the_batched_engines_statuses(engine: str) -> None:
+    tree = _counting_tree()
+    check_structure(tree)
+    want = _statuses("batched", tree)
+    got = _statuses(engine, tree)
+    _assert_same_statuses(tree, want, got)
+    for row, node in enumerate(tree.walk()):  # every node ran, and finished
+        seen = {int(c) for tick in want for c in tick[row]}
+        assert RUNNING in seen and seen & {SUCCESS, FAILURE}, node.name
 
 
 def _wide_tree(width: int) -> Node:
