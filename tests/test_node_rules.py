@@ -14,7 +14,7 @@ import pytest
 from pyautonomousagent import jit
 from pyautonomousagent.bt.leaf import LEAF_TYPES
 from pyautonomousagent.bt.nodes import NODE_TYPES
-from pyautonomousagent.bt.spec import Node, check_structure
+from pyautonomousagent.bt.spec import BlackboardRef, Node, check_structure
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.missions.drones import DroneMission
 from pyautonomousagent.simulation.run import ENGINES
@@ -52,8 +52,9 @@ def _tree() -> Node:
 
 def _counting_tree() -> Node:
     """BT.CPP's node types that count: Repeat, RetryUntilSuccessful, Parallel, ParallelAll,
-    Delay and Timeout (none may take a child that may be SKIPPED: not in :func:`_tree`)."""
-    leaves = iter(f"c{k}" for k in range(40))
+    Delay and Timeout, and those that read an entry, Switch2..6 (none may take a child that
+    may be SKIPPED: not in :func:`_tree`); a Switch reads a leaf's entry (1, 2 or 3)."""
+    leaves = iter(f"c{k}" for k in range(80))
 
     def leaf() -> Node:
         return from_entry(next(leaves))
@@ -70,6 +71,10 @@ def _counting_tree() -> Node:
         node("Timeout", node("RetryUntilSuccessful", leaf(), num_attempts=2), msec=4000),
         node("Delay", node("Repeat", leaf(), num_cycles=-1), delay_msec=1000),
         node("Parallel", leaf(), leaf(), leaf()),
+        *(node(f"Switch{n}", *(leaf() for _ in range(n + 1)), variable=BlackboardRef(entry),
+               **{f"case_{k}": case for k, case in enumerate(["3", "1.0", "2", "1", "x", "2.5"], 1)
+                  if k <= n})
+          for n, entry in zip(range(2, 7), ["s_c0", "s_c2", "s_c4", "s_c5", "s_c7"], strict=True)),
         max_failures=3,
     )  # fmt: skip
 
@@ -136,9 +141,9 @@ def test_the_counting_rules_give_the_batched_engines_statuses(engine: str) -> No
     want = _statuses("batched", tree)
     got = _statuses(engine, tree)
     _assert_same_statuses(tree, want, got)
-    for row, node in enumerate(tree.walk()):  # every node ran, and finished
+    for row, node in enumerate(tree.walk()):  # every control node ran, and finished
         seen = {int(c) for tick in want for c in tick[row]}
-        assert RUNNING in seen and seen & {SUCCESS, FAILURE}, node.name
+        assert not node.is_control or RUNNING in seen and seen & {SUCCESS, FAILURE}, node.name
 
 
 def _wide_tree(width: int) -> Node:

@@ -481,6 +481,8 @@ _control(
     most=3,
     rule=while_do_else_rule,
 )
+
+
 def _tick_unfinished(n: Ops, k: int, going: Any = True) -> None:
     """Tick child ``k`` where it has not finished in this run (neither succeeded nor failed)
     and ``going`` holds; count its finish: memory slot 0 the successes of the run, slot 1
@@ -706,6 +708,39 @@ def case(value: Any, children: int) -> str:
     return "" if isinstance(value, str | int | float) else f"must be text, got {value!r}"
 
 
+def switch_rule(n: Ops) -> None:
+    """BT.CPP's Switch2..6: ticks the child of the first case equal to the agent's entry
+    ``variable`` now (else the last child) and returns its status; a running child of another
+    case is halted first; when the child finishes, all are reset. A case that is no number
+    (NaN, a ``{key}``) matches nothing. Remembers the running child + 1 (0: none)."""
+    from pyautonomousagent.bt.program import case_values  # (it imports this module)
+
+    value = n.let("value", n.entry(n.params["variable"].key))
+    match: Any = n.kids - 1
+    for k, number in reversed(list(enumerate(case_values(n.params)))):
+        if not isinstance(number, str) and number == number:  # else: never equal
+            match = n.pick(value == number, k, match)
+    match = n.let("match", match)
+    with n.when(n.status() != RUNNING):
+        n.set_memory(0)
+    for k in range(n.kids):
+        with n.when((n.memory() == k + 1) & (match != k)):
+            n.halt(k, k + 1)
+    for k in range(n.kids):
+        if (match == k) is False:  # no case is a number: the last child only
+            continue
+        with n.when(match == k), n.when(n.tick(k) == RUNNING):
+            n.set_memory(k + 1)
+            n.finish(RUNNING)
+    result = n.child(n.kids - 1)
+    for k in reversed(range(n.kids - 1)):
+        result = n.pick(match == k, n.child(k), result)
+    result = n.let("result", result)  # kept: the halt below resets it
+    n.set_memory(0)
+    n.halt(0)
+    n.finish(result)
+
+
 for _cases in range(2, 7):
     _decorator_or_control = NodeType(
         f"Switch{_cases}", CONTROL, _cases + 1, _cases + 1,
@@ -714,6 +749,7 @@ for _cases in range(2, 7):
         _tag(f"Switch{_cases}", f"switch{_cases}",
              "ticks the child of the first case equal to the entry `variable`, else the "
              "last; a running child of another case is halted"),
+        rule=switch_rule, memory=1,
     )  # fmt: skip
     add(_decorator_or_control)
 

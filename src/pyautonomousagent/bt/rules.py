@@ -86,6 +86,9 @@ class Ops(Protocol):
     def now(self) -> Any:
         """The iteration number (simulated time, in time steps)."""
 
+    def entry(self, key: str) -> Any:
+        """The agent's blackboard entry ``key`` now (a number; ``let`` it to keep it)."""
+
     def iterations(self, msec: int) -> int:
         """``msec`` simulated milliseconds as whole iterations of the scenario's time step,
         rounded up (``script_leaves.iterations``; fixed when the tree is built)."""

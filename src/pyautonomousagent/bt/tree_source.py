@@ -9,6 +9,7 @@ which writes what it does for agent ``a`` instead of doing it. ``st`` holds the 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from typing import Any
@@ -47,9 +48,12 @@ class Source:
 
 
 def source_text(value: Any) -> str:
-    """Source text of a value: a :class:`Source`, a bool or a whole number."""
+    """Source text of a value: a :class:`Source`, a bool, a float (not NaN) or a whole
+    number."""
     if isinstance(value, bool):
         return str(value)
+    if isinstance(value, float):
+        return repr(value) if math.isfinite(value) else f"({'-' * (value < 0)}1e999)"
     return value.text if isinstance(value, Source) else str(int(value))
 
 
@@ -148,7 +152,8 @@ class SourceOps(CodeOps):
     """:class:`~pyautonomousagent.bt.rules.Ops` that writes node ``i``'s rule as code for agent
     ``a``: its lines in :attr:`lines`, children written in place by ``expand``; a ``finish``
     leaves the node's ``while True:`` block with ``break`` (the block of a ``loop`` in it, then
-    the node's); locals end in ``_<i>``; the iteration is ``t``."""
+    the node's); locals end in ``_<i>``; the iteration is ``t``, blackboard entry ``key``
+    ``entry(key)``."""
 
     def __init__(
         self,
@@ -157,8 +162,10 @@ class SourceOps(CodeOps):
         row: int,
         expand: Callable[[int], list[str]],
         time_step: float = 1.0,
+        entry: Callable[[str], str] = "{}[a]".format,
     ) -> None:
         self.program, self.i, self.row, self._expand = program, i, row, expand
+        self.entry = lambda key: Source(entry(key))
         self.children = program.children[i]
         skippable = [may_skip(program.nodes[child]) for child in self.children]
         super().__init__(len(self.children), program.params[i], skippable, time_step)
@@ -244,17 +251,19 @@ def tree_body(
     rows: Mapping[int, int],
     indent: str,
     time_step: float = 1.0,
+    entry: Callable[[str], str] = "{}[a]".format,
 ) -> str:
     """The tick of agent ``a`` at iteration ``t`` as straight-line code, indented by ``indent``:
     each control node is a ``while True:`` block left with ``break``, its children written in
-    place; a leaf is ``leaf_lines(i)``; ``time_step``: the scenario's, seconds. One body with
-    no calls between nodes: numba passes no arrays between functions (which costs reference
-    counting per call and made a tick ten times slower)."""
+    place; a leaf is ``leaf_lines(i)``; ``time_step``: the scenario's, seconds; ``entry(key)``:
+    the source of agent ``a``'s blackboard entry ``key``. One body with no calls between
+    nodes: numba passes no arrays between functions (which costs reference counting per call
+    and made a tick ten times slower)."""
 
     def expand(i: int) -> list[str]:
         if not program.nodes[i].is_control:
             return leaf_lines(i)
-        ops = SourceOps(program, i, rows.get(i, -1), expand, time_step)
+        ops = SourceOps(program, i, rows.get(i, -1), expand, time_step, entry)
         rule = node_record(program, i).rule
         assert rule is not None, program.nodes[i].type
         rule(ops)

@@ -29,7 +29,7 @@ from pyautonomousagent.allocator import reuse_freed_memory
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
 from pyautonomousagent.bt.nodes import NODE_TYPES, PRE_CONDITIONS
-from pyautonomousagent.bt.program import case_values, compile_tree
+from pyautonomousagent.bt.program import compile_tree
 from pyautonomousagent.bt.script import Script, parse
 from pyautonomousagent.bt.spec import Node, TreeError, check_entries
 from pyautonomousagent.bt.status import (
@@ -294,30 +294,6 @@ class BatchedEngine:
             np.copyto(running, result == RUNNING, where=allowed)
             np.copyto(status, result, where=allowed)
 
-    def _switch(self, i: int, mask: np.ndarray) -> None:
-        """Switch2..6; ``counter`` holds the running child + 1 (0: none)."""
-        kids, params = self.program.children[i], self.program.params[i]
-        running, status = self.counter[i], self.status[i]
-        cases = case_values(params)
-        np.copyto(running, 0, where=mask & (status != RUNNING))
-        value = self.swarm.blackboard[params["variable"].key]
-        match = np.full(mask.size, len(cases))
-        for k in reversed(range(len(cases))):  # the first equal case wins
-            match[value == cases[k]] = k
-        other = mask & (running > 0) & (running - 1 != match)
-        for k, child in enumerate(kids):
-            self._halt(child, other & (running - 1 == k))
-        for k, child in enumerate(kids):
-            going = mask & (match == k)
-            if _some(going):
-                self._tickers[child](going)
-                result = self.status[child]
-                np.copyto(status, result, where=going)
-                finished = going & (result != RUNNING)
-                np.copyto(running, k + 1, where=going & (result == RUNNING))
-                np.copyto(running, 0, where=finished)
-                self._halt_children(i, finished)
-
 
 #: Node type -> the method that ticks it, called with (engine, node index, mask): one entry
 #: per record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES` without a rule (those with
@@ -327,5 +303,4 @@ BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
     "PyTreesRepeat": BatchedEngine._counted,
     "PyTreesRetry": BatchedEngine._counted,
     "Precondition": BatchedEngine._precondition,
-    **{f"Switch{n}": BatchedEngine._switch for n in range(2, 7)},
 }

@@ -20,6 +20,7 @@ from pyautonomousagent.bt.nodes import NODE_TYPES, may_skip
 from pyautonomousagent.bt.program import Program
 from pyautonomousagent.bt.script_leaves import time_step
 from pyautonomousagent.bt.tree_source import UNROLLED, CodeOps, Source, source_text
+from pyautonomousagent.state import Swarm
 from pyautonomousagent.world import World
 
 
@@ -36,8 +37,8 @@ class ArraySourceOps(CodeOps):
     """:class:`~pyautonomousagent.bt.rules.Ops` that writes node ``i``'s rule as the body of
     ``tick(mask)``: its own status row is ``st``, child ``k``'s ``S<k>`` (ticked by
     ``tickers[child](e)``, halted by ``halt(child, e)``), memory slot ``s`` the row ``M<s>``,
-    the iteration ``world.iteration``; the mask of the agents of the current block is
-    ``e<depth>`` (a loop's: ``while`` it has any)."""
+    the iteration ``world.iteration``, blackboard entry ``key`` ``BOARD[key]``; the mask of
+    the agents of the current block is ``e<depth>`` (a loop's: ``while`` it has any)."""
 
     def __init__(self, program: Program, i: int, time_step: float = 1.0) -> None:
         self.children = program.children[i]
@@ -61,6 +62,9 @@ class ArraySourceOps(CodeOps):
 
     def now(self) -> ArraySource:
         return ArraySource("world.iteration")
+
+    def entry(self, key: str) -> ArraySource:
+        return ArraySource(f"BOARD[{key!r}]")
 
     def set_memory(self, value: Any, slot: int = 0) -> None:
         self._emit(f"copyto(M{slot}, {source_text(value)}, where=e{self._depth})")
@@ -230,6 +234,7 @@ class BatchedTree(Protocol):
     program: Program
     status: np.ndarray
     world: World
+    swarm: Swarm
     defaults: Mapping[str, Any]
     _tickers: list[Callable[[np.ndarray], None]]
 
@@ -255,6 +260,7 @@ def rule_ticker(engine: BatchedTree, i: int, size: int) -> Callable[[np.ndarray]
         **ops.tables,
         "tickers": engine._tickers,
         "world": engine.world,
+        "BOARD": engine.swarm.blackboard,
         "halt": engine._halt,
         "KIDS": tuple(ops.children),
         "count": np.count_nonzero,

@@ -1,15 +1,11 @@
-"""The py_trees engine's forms of BehaviorTree.CPP's nodes that have no rule, as small
-py_trees classes, and its BT.CPP additions: SKIPPED as a status, the scripting attributes.
+"""The py_trees engine's BehaviorTree.CPP additions: SKIPPED as a status, the scripting
+attributes, and :class:`Precondition` (it asks a script of the agent's blackboard), the
+one BT.CPP node type without a rule (:mod:`pyautonomousagent.bt.rules`: the others are
+written once in :mod:`pyautonomousagent.bt.nodes`).
 
-Each class reproduces the documented BehaviorTree.CPP 4 behaviour (which children are
-ticked, what is returned, what is remembered) in py_trees' terms: a halted node is
-``INVALID`` (BT.CPP's ``IDLE``) and a finished node keeps its last status for display.
-The batched engine implements the same on arrays; docs/tree-files.md has the table. The
-node types with a rule (:mod:`pyautonomousagent.bt.rules`) are not here: Repeat, Parallel,
-Delay, ... are written once in :mod:`pyautonomousagent.bt.nodes`.
-
-- :class:`Precondition`: asks a script of the agent's blackboard;
-- :class:`Switch` (``Switch2`` ... ``Switch6``): reads the agent's entry ``variable``.
+It reproduces BehaviorTree.CPP 4's documented behaviour in py_trees' terms: a halted node is
+``INVALID`` (BT.CPP's ``IDLE``) and a finished node keeps its last status for display. The
+batched engine does the same on arrays; docs/tree-files.md has the table.
 """
 
 from __future__ import annotations
@@ -24,7 +20,6 @@ from py_trees.common import Status
 
 from pyautonomousagent.bt import status as codes
 from pyautonomousagent.bt.nodes import PRE_CONDITIONS as PRE_CONDITION_CODES
-from pyautonomousagent.bt.program import case_values
 from pyautonomousagent.bt.script import parse
 
 #: The statuses of :mod:`pyautonomousagent.bt.status` that py_trees lacks (BehaviorTree.CPP's
@@ -81,39 +76,6 @@ class Precondition(py_trees.decorators.Decorator):
         yield self
 
 
-class Switch(py_trees.composites.Composite):
-    """BT.CPP ``Switch2``...``Switch6``: ticks the child of the first case equal to the
-    agent's entry ``variable`` (else the last child); a running child of another case is
-    halted first; when the child finishes, all are reset."""
-
-    def __init__(self, name: str, children: Sequence[Behaviour], key: str, cases: list) -> None:
-        super().__init__(name, list(children))
-        self.key, self.cases = key, cases
-        self.running = -1
-
-    def bind(self, agent: Any, world: Any, defaults: Mapping[str, Any]) -> None:
-        self.board = agent.blackboard
-
-    def tick(self) -> Iterator[Behaviour]:
-        """Match the entry, halt a running other case, tick the matched child."""
-        if self.status != Status.RUNNING:
-            self.running = -1
-            self.initialise()
-        value = getattr(self.board, self.key)
-        match = next((k for k, c in enumerate(self.cases) if value == c), len(self.cases))
-        if self.running not in (-1, match):
-            halt_all(self.children[self.running : self.running + 1])
-        child = self.children[match]
-        yield from child.tick()
-        self.status = child.status
-        if child.status == Status.RUNNING:
-            self.running = match
-        else:
-            halt_all(self.children)
-            self.running = -1
-        yield self
-
-
 #: :data:`~pyautonomousagent.bt.nodes.PRE_CONDITIONS` with py_trees' statuses.
 PRE_CONDITIONS: tuple[tuple[str, Any, bool, bool], ...] = tuple(
     (key, TO_PYTREES[code], *rest) for key, code, *rest in PRE_CONDITION_CODES
@@ -167,8 +129,4 @@ def with_scripts(behaviour: Behaviour, scripts: Mapping[str, str], agent: Any) -
 #: Node type -> py_trees behaviour, called with (name, children, parameters).
 BTCPP_BEHAVIOURS: dict[str, Callable[[str, list[Behaviour], dict[str, Any]], Behaviour]] = {
     "Precondition": lambda name, kids, p: Precondition(name, kids[0], p["if"], p["else"]),
-    **{
-        f"Switch{n}": lambda name, kids, p: Switch(name, kids, p["variable"].key, case_values(p))
-        for n in range(2, 7)
-    },
 }

@@ -149,10 +149,11 @@ def _parallel(
 class _Ruled(py_trees.behaviour.Behaviour):
     """A node type with a rule, for one agent: its class's ``tick`` is the rule written for
     its shape (:func:`~pyautonomousagent.engines.pytrees_rules.tick_method`), its memory
-    ``m0``, ``m1``, ... (0 before it is first set), its clock ``world.iteration``."""
+    ``m0``, ``m1``, ... (0 before it is first set), its clock ``world.iteration``, its
+    agent's blackboard ``board``."""
 
     def bind(self, agent: AgentView, world: World, defaults: Mapping[str, Any]) -> None:
-        self.world = world
+        self.world, self.board = world, agent.blackboard
 
     def update(self) -> Status:  # pragma: no cover - tick() does the work
         return self.status
@@ -192,9 +193,7 @@ def _rule_class(type_name: str, *shape: Any) -> type:
     return type(type_name, (base,), {"tick": tick, "__doc__": record.tags[0].doc})
 
 
-def _rule_behaviour(
-    node: Node, children: list[Any], step: float
-) -> py_trees.behaviour.Behaviour:
+def _rule_behaviour(node: Node, children: list[Any], step: float) -> py_trees.behaviour.Behaviour:
     """The py_trees behaviour of a node whose type has a rule (``step``: the time step, s)."""
     params = tuple(sorted(control_params(node).items()))
     skippable = tuple(may_skip(child) for child in node.children)

@@ -45,7 +45,8 @@ def _status_text(value: Any) -> str:
 class ScalarSourceOps(CodeOps):
     """:class:`~pyautonomousagent.bt.rules.Ops` that writes a rule as the body of a py_trees
     ``tick`` for one agent: the children are ``c0``, ``c1``, ...; a ``finish`` sets
-    ``self.status``, yields ``self`` and returns; the iteration is ``self.world.iteration``."""
+    ``self.status``, yields ``self`` and returns; the iteration is ``self.world.iteration``,
+    blackboard entry ``key`` an attribute of ``self.board``."""
 
     def __init__(
         self, kids: int, params: Mapping[str, Any], skippable: tuple[bool, ...], time_step: float
@@ -59,6 +60,9 @@ class ScalarSourceOps(CodeOps):
 
     def now(self) -> Source:
         return Source("self.world.iteration")
+
+    def entry(self, key: str) -> Source:
+        return Source(f"getattr(self.board, {key!r})")
 
     def memory(self, slot: int = 0) -> Source:
         return Source(f"self.m{slot}")
