@@ -1,9 +1,11 @@
 """Every node type with a rule (bt/rules.py) on every engine: the same statuses, tick by tick.
 
-One tree holds each such type at least once; 48 agents' leaves return random statuses read
-from the blackboard (``FromEntry``, which has a compiled kernel), so the py_trees engine's
-per-agent form, the batched engine's masked form and the compiled engine's generated code
-of each rule are compared node by node, agent by agent, after every tick.
+Two trees hold each such type at least once (the node types that count or read an entry,
+which take no child that may be SKIPPED, in the second); 48 agents' leaves return random
+statuses read from the blackboard (``FromEntry``, which has a compiled kernel), so the
+py_trees engine's per-agent form, the batched engine's masked form and the compiled
+engine's generated code of each rule are compared node by node, agent by agent, after every
+tick.
 """
 
 from __future__ import annotations
