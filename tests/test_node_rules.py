@@ -1,9 +1,11 @@
 """Every node type with a rule (bt/rules.py) on every engine: the same statuses, tick by tick.
 
-One tree holds each such type at least once; 48 agents' leaves return random statuses read
-from the blackboard (``FromEntry``, which has a compiled kernel), so the py_trees engine's
-per-agent form, the batched engine's masked form and the compiled engine's generated code
-of each rule are compared node by node, agent by agent, after every tick.
+Two trees hold each such type at least once (the node types that count or read an entry,
+which take no child that may be SKIPPED, in the second); 48 agents' leaves return random
+statuses read from the blackboard (``FromEntry``, which has a compiled kernel), so the
+py_trees engine's per-agent form, the batched engine's masked form and the compiled
+engine's generated code of each rule are compared node by node, agent by agent, after every
+tick.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import pytest
 from pyautonomousagent import jit
 from pyautonomousagent.bt.leaf import LEAF_TYPES
 from pyautonomousagent.bt.nodes import NODE_TYPES
-from pyautonomousagent.bt.spec import Node, check_structure
+from pyautonomousagent.bt.spec import BlackboardRef, Node, check_structure
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.missions.drones import DroneMission
 from pyautonomousagent.simulation.run import ENGINES
@@ -50,8 +52,37 @@ def _tree() -> Node:
     )  # fmt: skip
 
 
+def _counting_tree() -> Node:
+    """BT.CPP's node types that count: Repeat, RetryUntilSuccessful, Parallel, ParallelAll,
+    Delay and Timeout, and those that read an entry, Switch2..6 (none may take a child that
+    may be SKIPPED: not in :func:`_tree`); a Switch reads a leaf's entry (1, 2 or 3)."""
+    leaves = iter(f"c{k}" for k in range(80))
+
+    def leaf() -> Node:
+        return from_entry(next(leaves))
+
+    def node(kind: str, *kids: Node, **params: object) -> Node:
+        return Node(kind, f"{kind.lower()}_{next(leaves)}", kids, params)
+
+    return node(
+        "ParallelAll",
+        node("Repeat", leaf(), num_cycles=3),
+        node("RetryUntilSuccessful", leaf(), num_attempts=-1),
+        node("Parallel", leaf(), node("Delay", leaf(), delay_msec=2000),
+             node("Timeout", leaf(), msec=3000), success_count=2, failure_count=-2),
+        node("Timeout", node("RetryUntilSuccessful", leaf(), num_attempts=2), msec=4000),
+        node("Delay", node("Repeat", leaf(), num_cycles=-1), delay_msec=1000),
+        node("Parallel", leaf(), leaf(), leaf()),
+        *(node(f"Switch{n}", *(leaf() for _ in range(n + 1)), variable=BlackboardRef(entry),
+               **{f"case_{k}": case for k, case in enumerate(["3", "1.0", "2", "1", "x", "2.5"], 1)
+                  if k <= n})
+          for n, entry in zip(range(2, 7), ["s_c0", "s_c2", "s_c4", "s_c5", "s_c7"], strict=True)),
+        max_failures=3,
+    )  # fmt: skip
+
+
 def test_the_tree_has_every_node_type_with_a_rule() -> None:
-    used = {node.type for node in _tree().walk()}
+    used = {node.type for tree in (_tree(), _counting_tree()) for node in tree.walk()}
     with_rule = {name for name, record in NODE_TYPES.items() if record.rule is not None}
     missing = with_rule - used - {"FailureIsRunning", "RunningIsFailure", "RunningIsSuccess"}
     assert missing <= {"PassThrough"}, missing
@@ -103,6 +134,18 @@ def test_every_rule_gives_the_batched_engines_statuses(engine: str) -> None:
     got = _statuses(engine, tree)
     _assert_same_statuses(tree, want, got)
     assert len({int(c) for tick in want for c in tick.ravel()}) == 5  # every status seen
+
+
+@pytest.mark.parametrize("engine", ENGINE_NAMES)
+def test_the_counting_rules_give_the_batched_engines_statuses(engine: str) -> None:
+    tree = _counting_tree()
+    check_structure(tree)
+    want = _statuses("batched", tree)
+    got = _statuses(engine, tree)
+    _assert_same_statuses(tree, want, got)
+    for row, node in enumerate(tree.walk()):  # every control node ran, and finished
+        seen = {int(c) for tick in want for c in tick[row]}
+        assert not node.is_control or RUNNING in seen and seen & {SUCCESS, FAILURE}, node.name
 
 
 def _wide_tree(width: int) -> Node:

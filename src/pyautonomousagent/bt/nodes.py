@@ -481,6 +481,91 @@ _control(
     most=3,
     rule=while_do_else_rule,
 )
+
+
+def _tick_unfinished(n: Ops, k: int, going: Any = True) -> None:
+    """Tick child ``k`` where it has not finished in this run (neither succeeded nor failed)
+    and ``going`` holds; count its finish: memory slot 0 the successes of the run, slot 1
+    the failures."""
+    unfinished = (n.child(k) != SUCCESS) & (n.child(k) != FAILURE)
+    with n.when(unfinished if going is True else going & unfinished):
+        result = n.tick(k)
+        n.set_memory(n.memory(0) + (result == SUCCESS), slot=0)
+        n.set_memory(n.memory(1) + (result == FAILURE), slot=1)
+
+
+def parallel_rule(n: Ops) -> None:
+    """BT.CPP's Parallel: a fresh run halts the children; the children that have not finished
+    in this run are ticked left to right until the counts decide: SUCCESS at
+    ``success_count`` successes, FAILURE at ``failure_count`` failures or when too few
+    children are left to succeed; then the RUNNING children are halted (the finished keep
+    their status). Remembers the successes and failures of the run."""
+    need_success = parallel_threshold(n.params["success_count"], n.kids)
+    need_failure = parallel_threshold(n.params["failure_count"], n.kids)
+    with n.when(n.status() != RUNNING):
+        n.halt(0)
+        n.set_memory(0, slot=0)
+        n.set_memory(0, slot=1)
+    successes, failures = n.memory(0), n.memory(1)
+    won = successes >= need_success
+    lost = (failures >= need_failure) | (failures > n.kids - need_success)
+    going = (successes < need_success) & (failures < need_failure)
+    for k in range(n.kids):  # undecided before the first child: else it had finished
+        _tick_unfinished(n, k, going & (failures <= n.kids - need_success) if k else True)
+    with n.when(won | lost):
+        for k in range(n.kids):
+            with n.when(n.child(k) == RUNNING):
+                n.halt(k, k + 1)
+        n.finish(n.pick(won, SUCCESS, FAILURE))
+    n.finish(RUNNING)
+
+
+def parallel_all_rule(n: Ops) -> None:
+    """BT.CPP's ParallelAll: ticks the children that have not finished in this run; once all
+    have, halts them all and fails if ``max_failures`` of them failed, else succeeds.
+    Remembers the successes and failures of the run."""
+    need_failure = parallel_threshold(n.params["max_failures"], n.kids)
+    with n.when(n.status() != RUNNING):
+        n.set_memory(0, slot=0)
+        n.set_memory(0, slot=1)
+    for k in range(n.kids):
+        _tick_unfinished(n, k)
+    with n.when(n.memory(0) + n.memory(1) == n.kids):
+        failed = n.let("failed", n.memory(1) >= need_failure)
+        n.halt(0)
+        n.finish(n.pick(failed, FAILURE, SUCCESS))
+    n.finish(RUNNING)
+
+
+def loop_rule(again: int, limit: str) -> Rule:
+    """BT.CPP's Repeat (``again`` SUCCESS) and RetryUntilSuccessful (FAILURE): the child is
+    ticked again within the tick while it returns ``again`` (at most parameter ``limit``
+    times in all, -1: for ever) if it was RUNNING before; one that returns ``again`` at its
+    first tick ends the tick (RUNNING, a wake-up). Remembers how often it returned
+    ``again`` in this run."""
+
+    def rule(n: Ops) -> None:
+        times = n.params[limit]  # at most two a tick: 2**31 (int32 memory) is for ever too
+        with n.when(n.status() != RUNNING):
+            n.set_memory(0)
+        with n.loop():
+            woke = n.let("woke", n.child(0) != RUNNING)
+            result = n.tick(0)
+            with n.when(result == again):
+                if 0 < times < 2**31:
+                    n.set_memory(n.memory() + 1)
+                    with n.when(n.memory() >= times):
+                        n.set_memory(0)
+                        n.finish(again)
+                n.finish(RUNNING, where=woke)
+            with n.when(result != again):  # else: again, within the tick
+                with n.when(result != RUNNING):
+                    n.set_memory(0)
+                n.finish(result)
+
+    return rule
+
+
 _control(
     "Parallel",
     "⇉",
@@ -489,24 +574,34 @@ _control(
         Param("success_count", int, -1, child_count),
         Param("failure_count", int, 1, child_count),
     ),
+    rule=parallel_rule,
+    memory=2,
 )
 _control(
     "ParallelAll",
     "⇉all",
     "ticks unfinished children until all finished; fails at max_failures failures",
     params=(Param("max_failures", int, 1, child_count),),
+    rule=parallel_all_rule,
+    memory=2,
 )
 _decorator(
     "Repeat",
     "↻",
     "after a success ticks the child again, num_cycles times (-1: for ever)",
     params=(Param("num_cycles", int, None, whole(1, no_limit=True)),),
+    rule=loop_rule(SUCCESS, "num_cycles"),
+    memory=1,
+    yields=True,
 )
 _decorator(
     "RetryUntilSuccessful",
     "↺",
     "after a failure ticks the child again, num_attempts tries (-1: for ever)",
     params=(Param("num_attempts", int, None, whole(1, no_limit=True)),),
+    rule=loop_rule(FAILURE, "num_attempts"),
+    memory=1,
+    yields=True,
 )
 
 
@@ -531,17 +626,47 @@ _decorator(
         Param("else", str, "FAILURE", one_of("FAILURE", "SUCCESS", "RUNNING")),
     ),
 )
+
+
+def delay_rule(n: Ops) -> None:
+    """BT.CPP's Delay: a fresh run waits ``delay_msec`` of simulated time (RUNNING), then
+    ticks the child and returns its status. Remembers the iteration it waits for."""
+    with n.when(n.status() != RUNNING):
+        n.set_memory(n.now() + n.iterations(n.params["delay_msec"]))
+    n.finish(RUNNING, where=n.now() < n.memory())
+    n.finish(n.tick(0))
+
+
+def timeout_rule(n: Ops) -> None:
+    """BT.CPP's Timeout: ticks the child and returns its status; once the run has lasted
+    ``msec`` of simulated time (0: no limit), halts the child and fails instead. Remembers
+    the iteration at which it stops the child."""
+    with n.when(n.status() != RUNNING):
+        n.set_memory(n.now() + n.iterations(n.params["msec"]))
+    if n.params["msec"] > 0:
+        with n.when((n.status() == RUNNING) & (n.now() >= n.memory())):
+            n.halt(0)
+            n.finish(FAILURE)
+    n.finish(n.tick(0))
+
+
 _decorator(
     "Delay",
     "delay",
     "RUNNING for delay_msec of simulated time, then ticks the child",
     params=(Param("delay_msec", int, None, msec),),
+    rule=delay_rule,
+    memory=1,
+    yields=True,
 )
 _decorator(
     "Timeout",
     "timeout",
     "halts the child and fails when it runs longer than msec of simulated time",
     params=(Param("msec", int, None, msec),),
+    rule=timeout_rule,
+    memory=1,
+    yields=True,
 )
 
 
@@ -583,6 +708,39 @@ def case(value: Any, children: int) -> str:
     return "" if isinstance(value, str | int | float) else f"must be text, got {value!r}"
 
 
+def switch_rule(n: Ops) -> None:
+    """BT.CPP's Switch2..6: ticks the child of the first case equal to the agent's entry
+    ``variable`` now (else the last child) and returns its status; a running child of another
+    case is halted first; when the child finishes, all are reset. A case that is no number
+    (NaN, a ``{key}``) matches nothing. Remembers the running child + 1 (0: none)."""
+    from pyautonomousagent.bt.program import case_values  # (it imports this module)
+
+    value = n.let("value", n.entry(n.params["variable"].key))
+    match: Any = n.kids - 1
+    for k, number in reversed(list(enumerate(case_values(n.params)))):
+        if not isinstance(number, str) and number == number:  # else: never equal
+            match = n.pick(value == number, k, match)
+    match = n.let("match", match)
+    with n.when(n.status() != RUNNING):
+        n.set_memory(0)
+    for k in range(n.kids):
+        with n.when((n.memory() == k + 1) & (match != k)):
+            n.halt(k, k + 1)
+    for k in range(n.kids):
+        if (match == k) is False:  # no case is a number: the last child only
+            continue
+        with n.when(match == k), n.when(n.tick(k) == RUNNING):
+            n.set_memory(k + 1)
+            n.finish(RUNNING)
+    result = n.child(n.kids - 1)
+    for k in reversed(range(n.kids - 1)):
+        result = n.pick(match == k, n.child(k), result)
+    result = n.let("result", result)  # kept: the halt below resets it
+    n.set_memory(0)
+    n.halt(0)
+    n.finish(result)
+
+
 for _cases in range(2, 7):
     _decorator_or_control = NodeType(
         f"Switch{_cases}", CONTROL, _cases + 1, _cases + 1,
@@ -591,6 +749,7 @@ for _cases in range(2, 7):
         _tag(f"Switch{_cases}", f"switch{_cases}",
              "ticks the child of the first case equal to the entry `variable`, else the "
              "last; a running child of another case is halted"),
+        rule=switch_rule, memory=1,
     )  # fmt: skip
     add(_decorator_or_control)
 

@@ -4,11 +4,13 @@ A rule is a function of one argument, ``n``, an :class:`Ops`: the node as one en
 It says, for the agents whose tick reaches the node, which children are ticked, which are
 halted, what the node remembers and what it returns, through ``n``'s few operations only:
 values are opaque (a whole number or a piece of generated source) and combine with ``==``,
-``!=``, ``<``, ``<=``, ``>``, ``>=``, ``&`` and ``|``; a condition on them is taken with
-``with n.when(cond):``, never with ``if``. Python's own ``if`` and ``for`` see only what is
-fixed when the tree is built: the number of children, the parameters and which children
-may be SKIPPED. Each engine gives its form by implementing :class:`Ops` that writes code,
-run once when the tree is built (values are source text, conditions ``if`` blocks):
+``!=``, ``<``, ``<=``, ``>``, ``>=``, ``&``, ``|`` and ``+`` (a whole number plus a number or
+a condition, which counts 1 where it holds); a condition on them is taken with
+``with n.when(cond):``, never with ``if``, and a block that repeats is ``with n.loop():``.
+Python's own ``if`` and ``for`` see only what is fixed when the tree is built: the number of
+children, the parameters, the scenario's time step and which children may be SKIPPED.
+Each engine gives its form by implementing :class:`Ops` that writes code, run once when the
+tree is built (values are source text, conditions ``if`` blocks):
 
 - the py_trees engine: a py_trees node's ``tick`` for one agent (``engines/pytrees_rules.py``);
 - the batched engine: NumPy code for all agents, values arrays over agents, conditions masks
@@ -76,6 +78,20 @@ class Ops(Protocol):
 
     def when(self, cond: Any) -> AbstractContextManager[None]:
         """A block that applies to the agents where ``cond`` holds (nested: all of them)."""
+
+    def loop(self) -> AbstractContextManager[None]:
+        """A block run again for the agents that reach its end, left only by ``finish``
+        (nothing after it is run): a child ticked again within one tick."""
+
+    def now(self) -> Any:
+        """The iteration number (simulated time, in time steps)."""
+
+    def entry(self, key: str) -> Any:
+        """The agent's blackboard entry ``key`` now (a number; ``let`` it to keep it)."""
+
+    def iterations(self, msec: int) -> int:
+        """``msec`` simulated milliseconds as whole iterations of the scenario's time step,
+        rounded up (``script_leaves.iterations``; fixed when the tree is built)."""
 
     def finish(self, status: Any, where: Any = True) -> None:
         """End this node's tick with ``status`` where ``where`` holds (under the current

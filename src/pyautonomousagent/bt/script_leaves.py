@@ -208,10 +208,14 @@ class SetBlackboard(_PortsByName):
         return f"SetBlackboard(output_key={self.output_key!r}, value={self.value!r})"
 
 
+def time_step(defaults: Mapping[str, Any]) -> float:
+    """The scenario's time step, seconds (``time_step``, 1 where not given)."""
+    return float(defaults.get("time_step", 1.0))
+
+
 def iterations(msec: float, defaults: Mapping[str, Any]) -> int:
     """Simulated milliseconds as whole iterations (rounded up) of ``time_step`` seconds."""
-    step = float(defaults.get("time_step", 1.0))
-    return max(0, math.ceil(msec / (1000.0 * step) - 1e-9))
+    return max(0, math.ceil(msec / (1000.0 * time_step(defaults)) - 1e-9))
 
 
 @register_leaf

@@ -9,12 +9,14 @@ which writes what it does for agent ``a`` instead of doing it. ``st`` holds the 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from typing import Any
 
 from pyautonomousagent.bt.nodes import NODE_TYPES, may_skip
 from pyautonomousagent.bt.program import Program
+from pyautonomousagent.bt.script_leaves import iterations
 
 
 def _operator(op: str, flip: bool = False) -> Callable[[Source, Any], Source]:
@@ -23,8 +25,8 @@ def _operator(op: str, flip: bool = False) -> Callable[[Source, Any], Source]:
 
 
 class Source:
-    """A value of the generated code: its source text; comparisons and ``&``/``|`` make the
-    text of the combined value."""
+    """A value of the generated code: its source text; comparisons, ``&``/``|`` and ``+`` make
+    the text of the combined value."""
 
     def __init__(self, text: str) -> None:
         self.text = text
@@ -41,13 +43,17 @@ class Source:
     __lt__, __le__, __gt__, __ge__ = (_operator(op) for op in ("<", "<=", ">", ">="))
     __and__, __rand__ = _operator("and"), _operator("and", flip=True)
     __or__, __ror__ = _operator("or"), _operator("or", flip=True)
+    __add__, __radd__ = _operator("+"), _operator("+", flip=True)
     __hash__ = None  # type: ignore[assignment]
 
 
 def source_text(value: Any) -> str:
-    """Source text of a value: a :class:`Source`, a bool or a whole number."""
+    """Source text of a value: a :class:`Source`, a bool, a float (not NaN) or a whole
+    number."""
     if isinstance(value, bool):
         return str(value)
+    if isinstance(value, float):
+        return repr(value) if math.isfinite(value) else f"({'-' * (value < 0)}1e999)"
     return value.text if isinstance(value, Source) else str(int(value))
 
 
@@ -58,13 +64,21 @@ UNROLLED = 4
 
 class CodeOps:
     """What the :class:`~pyautonomousagent.bt.rules.Ops` that write a rule as code share: the
-    lines (:attr:`lines`, indented by block), a ``let`` kept in a local, a ``pick``, and a
+    lines (:attr:`lines`, indented by block), a ``let`` kept in a local, a ``pick``, a
     ``when`` block opened by :meth:`_open` (a block left empty is dropped: a condition has
-    no side effect); a static condition must hold. ``skippable``: per child, may it be
-    SKIPPED (``nodes.may_skip``)."""
+    no side effect; a static condition must hold) and a ``loop`` (``while True:``, then
+    :meth:`_after_loop`). ``skippable``: per child, may it be SKIPPED (``nodes.may_skip``);
+    ``time_step``: the scenario's, seconds (for ``iterations``)."""
 
-    def __init__(self, kids: int, params: Mapping[str, Any], skippable: Sequence[bool]) -> None:
+    def __init__(
+        self,
+        kids: int,
+        params: Mapping[str, Any],
+        skippable: Sequence[bool],
+        time_step: float = 1.0,
+    ) -> None:
         self.kids, self.params, self._skippable = kids, params, tuple(skippable)
+        self.time_step = time_step
         self.lines: list[str] = []
         self._depth = 0
 
@@ -96,6 +110,25 @@ class CodeOps:
     def _close(self) -> None:
         """After a block (its lines written, the depth back to the enclosing one)."""
 
+    def iterations(self, msec: int) -> int:
+        return iterations(msec, {"time_step": self.time_step})
+
+    def _open_loop(self) -> list[str]:
+        """The lines that open a ``loop`` block."""
+        return ["while True:"]
+
+    def _after_loop(self) -> None:
+        """After a ``loop`` block (the depth back to the enclosing one)."""
+
+    @contextmanager
+    def loop(self) -> Iterator[None]:
+        for line in self._open_loop():
+            self._emit(line)
+        self._depth += 1
+        yield
+        self._depth -= 1
+        self._after_loop()
+
     @contextmanager
     def when(self, cond: Any) -> Iterator[None]:
         if not isinstance(cond, Source):
@@ -118,15 +151,24 @@ class CodeOps:
 class SourceOps(CodeOps):
     """:class:`~pyautonomousagent.bt.rules.Ops` that writes node ``i``'s rule as code for agent
     ``a``: its lines in :attr:`lines`, children written in place by ``expand``; a ``finish``
-    leaves the node's ``while True:`` block with ``break``; locals end in ``_<i>``."""
+    leaves the node's ``while True:`` block with ``break`` (the block of a ``loop`` in it, then
+    the node's); locals end in ``_<i>``; the iteration is ``t``, blackboard entry ``key``
+    ``entry(key)``."""
 
     def __init__(
-        self, program: Program, i: int, row: int, expand: Callable[[int], list[str]]
+        self,
+        program: Program,
+        i: int,
+        row: int,
+        expand: Callable[[int], list[str]],
+        time_step: float = 1.0,
+        entry: Callable[[str], str] = "{}[a]".format,
     ) -> None:
         self.program, self.i, self.row, self._expand = program, i, row, expand
+        self.entry = lambda key: Source(entry(key))
         self.children = program.children[i]
         skippable = [may_skip(program.nodes[child]) for child in self.children]
-        super().__init__(len(self.children), program.params[i], skippable)
+        super().__init__(len(self.children), program.params[i], skippable, time_step)
 
     def _local(self, name: str) -> str:
         return f"{name}_{self.i}"
@@ -136,6 +178,12 @@ class SourceOps(CodeOps):
 
     def memory(self, slot: int = 0) -> Source:
         return Source(f"cur[{self.row + slot}, a]")
+
+    def now(self) -> Source:
+        return Source("t")
+
+    def _after_loop(self) -> None:
+        self._emit("break")  # a loop is left by a finish only: the node has finished
 
     def set_memory(self, value: Any, slot: int = 0) -> None:
         self._emit(f"cur[{self.row + slot}, a] = {source_text(value)}")
@@ -202,16 +250,20 @@ def tree_body(
     leaf_lines: Callable[[int], list[str]],
     rows: Mapping[int, int],
     indent: str,
+    time_step: float = 1.0,
+    entry: Callable[[str], str] = "{}[a]".format,
 ) -> str:
-    """The tick of agent ``a`` as straight-line code, indented by ``indent``: each control node
-    is a ``while True:`` block left with ``break``, its children written in place; a leaf is
-    ``leaf_lines(i)``. One body with no calls between nodes: numba passes no arrays between
-    functions (which costs reference counting per call and made a tick ten times slower)."""
+    """The tick of agent ``a`` at iteration ``t`` as straight-line code, indented by ``indent``:
+    each control node is a ``while True:`` block left with ``break``, its children written in
+    place; a leaf is ``leaf_lines(i)``; ``time_step``: the scenario's, seconds; ``entry(key)``:
+    the source of agent ``a``'s blackboard entry ``key``. One body with no calls between
+    nodes: numba passes no arrays between functions (which costs reference counting per call
+    and made a tick ten times slower)."""
 
     def expand(i: int) -> list[str]:
         if not program.nodes[i].is_control:
             return leaf_lines(i)
-        ops = SourceOps(program, i, rows.get(i, -1), expand)
+        ops = SourceOps(program, i, rows.get(i, -1), expand, time_step, entry)
         rule = node_record(program, i).rule
         assert rule is not None, program.nodes[i].type
         rule(ops)

@@ -5,10 +5,10 @@ order (pre-order), each with its parent, its children and the end of its subtree
 subtree is the contiguous range ``[i, end[i])``. Per-node state is held per agent:
 
 - ``status``: shape (nodes, N), int8 codes of :mod:`pyautonomousagent.bt.status`;
-- ``counter``: per control node, shape (N,), what it remembers: the child index of a rule's
-  ``memory`` (py_trees' ``current_child`` of a Sequence/Selector), the successes / failures
-  of Repeat/Retry, the remembered child or loop count of BehaviorTree.CPP's
-  SequenceWithMemory, Repeat and RetryUntilSuccessful.
+- ``counter``: per control node without a rule, shape (N,), what it remembers: the
+  successes / failures of PyTreesRepeat / PyTreesRetry, whether a Precondition's child runs,
+  a Switch's running child (a rule's ``memory`` has rows of its own:
+  :func:`~pyautonomousagent.engines.batched_rules.rule_ticker`).
 
 A node is ticked for the agents whose tick reaches it (a boolean mask), and every
 rule of py_trees 2.x is reproduced: which children are ticked, which statuses are kept,
@@ -28,10 +28,9 @@ import numpy as np
 from pyautonomousagent.allocator import reuse_freed_memory
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import Leaf, check_leaves, make_leaf
-from pyautonomousagent.bt.nodes import NODE_TYPES, PRE_CONDITIONS, parallel_threshold
-from pyautonomousagent.bt.program import case_values, compile_tree
+from pyautonomousagent.bt.nodes import NODE_TYPES, PRE_CONDITIONS
+from pyautonomousagent.bt.program import compile_tree
 from pyautonomousagent.bt.script import Script, parse
-from pyautonomousagent.bt.script_leaves import iterations
 from pyautonomousagent.bt.spec import Node, TreeError, check_entries
 from pyautonomousagent.bt.status import (
     FAILURE,
@@ -44,9 +43,6 @@ from pyautonomousagent.bt.status import (
 from pyautonomousagent.engines.batched_rules import rule_ticker
 from pyautonomousagent.state import AgentView, Swarm
 from pyautonomousagent.world import World
-
-#: A loop count no run reaches (counters are int64): ``num_cycles=-1`` and huge counts.
-LOOP_FOREVER = 2**62
 
 _CODES = {name: code for code, name in NAMES.items()}
 
@@ -90,9 +86,8 @@ class BatchedEngine:
         self.counter = {
             i: np.zeros(swarm.size, dtype=np.int64)
             for i, node in enumerate(program.nodes)
-            if node.is_control
+            if node.is_control and NODE_TYPES.get(node.type).rule is None
         }
-        self._done = np.zeros(self.status.shape, dtype=bool)
         self.leaves: dict[int, Leaf] = {
             i: make_leaf(node, defaults)
             for i, node in enumerate(program.nodes)
@@ -282,82 +277,6 @@ class BatchedEngine:
         self._halt(child, mask & (new != RUNNING) & (result == RUNNING))  # left RUNNING
         np.copyto(self.status[i], new, where=mask)
 
-    # BehaviorTree.CPP's control nodes (see engines/btcpp.py for the same rules on py_trees).
-    # ``counter`` holds SequenceWithMemory's remembered child and the loop counts of
-    # Repeat / RetryUntilSuccessful; ``_done`` marks the finished children of a Parallel.
-
-    def _btcpp_loop(self, i: int, mask: np.ndarray) -> None:
-        """Repeat (again on SUCCESS) and RetryUntilSuccessful (again on FAILURE): the child
-        is ticked again within the tick only if it was RUNNING before; a child that returns
-        ``again`` at its first tick ends the tick (RUNNING, a wake-up)."""
-        node, child = self.program.nodes[i], self.program.children[i][0]
-        repeat = node.type == "Repeat"
-        again = SUCCESS if repeat else FAILURE
-        limit = self.program.params[i]["num_cycles" if repeat else "num_attempts"]
-        limit = LOOP_FOREVER if limit == -1 else min(limit, LOOP_FOREVER)
-        counter, status = self.counter[i], self.status[i]
-        np.copyto(counter, 0, where=mask & (status != RUNNING))
-        going = mask.copy()
-        while _some(going):
-            fresh = self.status[child] != RUNNING
-            self._tickers[child](going)
-            result = self.status[child]
-            looped = going & (result == again)
-            np.add(counter, 1, out=counter, where=looped)
-            more = looped & (counter < limit)
-            ended = going & ~more
-            np.copyto(status, result, where=ended)
-            np.copyto(status, RUNNING, where=more & fresh)
-            np.copyto(counter, 0, where=ended & (result != RUNNING))
-            going = more & ~fresh
-
-    def _btcpp_parallel(self, i: int, mask: np.ndarray) -> None:
-        kids = list(self.program.children[i])
-        params, status, done = self.program.params[i], self.status[i], self._done
-        need_success = parallel_threshold(params["success_count"], len(kids))
-        need_failure = parallel_threshold(params["failure_count"], len(kids))
-        fresh = mask & (status != RUNNING)
-        self._halt_children(i, fresh)
-        done[kids] &= ~fresh
-        alive = mask.copy()
-        for child in kids:
-            ticked = alive & ~done[child]
-            if _some(ticked):
-                self._tickers[child](ticked)
-                done[child] |= ticked & (self.status[child] != RUNNING)
-            results = np.where(done[kids], self.status[kids], RUNNING)
-            successes = (results == SUCCESS).sum(axis=0)
-            failures = (results == FAILURE).sum(axis=0)
-            won = alive & (successes >= need_success)
-            hopeless = (len(kids) - failures < need_success) | (failures >= need_failure)
-            lost = alive & ~won & hopeless
-            ended = won | lost
-            if _some(ended):
-                for kid in kids:
-                    self._halt(kid, ended & (self.status[kid] == RUNNING))
-                done[kids] &= ~ended
-                np.copyto(status, np.where(won, SUCCESS, FAILURE), where=ended)
-                alive &= ~ended
-        np.copyto(status, RUNNING, where=alive)
-
-    def _parallel_all(self, i: int, mask: np.ndarray) -> None:
-        """ParallelAll: ``_done`` marks the finished children."""
-        kids = list(self.program.children[i])
-        status, done = self.status[i], self._done
-        need_failure = parallel_threshold(self.program.params[i]["max_failures"], len(kids))
-        done[kids] &= ~(mask & (status != RUNNING))
-        for child in kids:
-            ticked = mask & ~done[child]
-            if _some(ticked):
-                self._tickers[child](ticked)
-                done[child] |= ticked & (self.status[child] != RUNNING)
-        finished = mask & done[kids].all(axis=0)
-        failures = (self.status[kids] == FAILURE).sum(axis=0)
-        verdict = np.where(failures >= need_failure, FAILURE, SUCCESS)
-        np.copyto(status, np.where(finished, verdict, RUNNING), where=mask)
-        self._halt_children(i, finished)
-        done[kids] &= ~finished
-
     def _precondition(self, i: int, mask: np.ndarray) -> None:
         """Precondition; ``counter`` is 1 from a RUNNING child to its finishing, halts
         included (BT.CPP 4.8): the script is not asked then."""
@@ -375,57 +294,6 @@ class BatchedEngine:
             np.copyto(running, result == RUNNING, where=allowed)
             np.copyto(status, result, where=allowed)
 
-    def _delay(self, i: int, mask: np.ndarray) -> None:
-        """Delay; ``counter`` holds the iteration from which the child is ticked."""
-        child = self.program.children[i][0]
-        deadline, status = self.counter[i], self.status[i]
-        wait = iterations(self.program.params[i]["delay_msec"], self.defaults)
-        np.copyto(deadline, self.world.iteration + wait, where=mask & (status != RUNNING))
-        going = mask & (deadline <= self.world.iteration)
-        np.copyto(status, RUNNING, where=mask & ~going)
-        if _some(going):
-            self._tickers[child](going)
-            np.copyto(status, self.status[child], where=going)
-
-    def _timeout(self, i: int, mask: np.ndarray) -> None:
-        """Timeout; ``counter`` holds the iteration at which the child is stopped."""
-        child, limit = self.program.children[i][0], self.program.params[i]["msec"]
-        deadline, status = self.counter[i], self.status[i]
-        fresh = mask & (status != RUNNING)
-        np.copyto(deadline, self.world.iteration + iterations(limit, self.defaults), where=fresh)
-        late = mask & ~fresh & (deadline <= self.world.iteration) if limit > 0 else mask & False
-        if _some(late):
-            self._halt(child, late)
-            np.copyto(status, FAILURE, where=late)
-        going = mask & ~late
-        if _some(going):
-            self._tickers[child](going)
-            np.copyto(status, self.status[child], where=going)
-
-    def _switch(self, i: int, mask: np.ndarray) -> None:
-        """Switch2..6; ``counter`` holds the running child + 1 (0: none)."""
-        kids, params = self.program.children[i], self.program.params[i]
-        running, status = self.counter[i], self.status[i]
-        cases = case_values(params)
-        np.copyto(running, 0, where=mask & (status != RUNNING))
-        value = self.swarm.blackboard[params["variable"].key]
-        match = np.full(mask.size, len(cases))
-        for k in reversed(range(len(cases))):  # the first equal case wins
-            match[value == cases[k]] = k
-        other = mask & (running > 0) & (running - 1 != match)
-        for k, child in enumerate(kids):
-            self._halt(child, other & (running - 1 == k))
-        for k, child in enumerate(kids):
-            going = mask & (match == k)
-            if _some(going):
-                self._tickers[child](going)
-                result = self.status[child]
-                np.copyto(status, result, where=going)
-                finished = going & (result != RUNNING)
-                np.copyto(running, k + 1, where=going & (result == RUNNING))
-                np.copyto(running, 0, where=finished)
-                self._halt_children(i, finished)
-
 
 #: Node type -> the method that ticks it, called with (engine, node index, mask): one entry
 #: per record of :data:`~pyautonomousagent.bt.nodes.NODE_TYPES` without a rule (those with
@@ -434,12 +302,5 @@ BATCHED_NODES: dict[str, Callable[[BatchedEngine, int, np.ndarray], None]] = {
     "PyTreesParallel": BatchedEngine._parallel,
     "PyTreesRepeat": BatchedEngine._counted,
     "PyTreesRetry": BatchedEngine._counted,
-    "Parallel": BatchedEngine._btcpp_parallel,
-    "Repeat": BatchedEngine._btcpp_loop,
-    "RetryUntilSuccessful": BatchedEngine._btcpp_loop,
-    "ParallelAll": BatchedEngine._parallel_all,
     "Precondition": BatchedEngine._precondition,
-    "Delay": BatchedEngine._delay,
-    "Timeout": BatchedEngine._timeout,
-    **{f"Switch{n}": BatchedEngine._switch for n in range(2, 7)},
 }

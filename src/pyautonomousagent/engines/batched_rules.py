@@ -11,14 +11,17 @@ engine, bound to that node's rows, so a tick interprets no rule.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any, Protocol
 
 import numpy as np
 
 from pyautonomousagent.bt.nodes import NODE_TYPES, may_skip
 from pyautonomousagent.bt.program import Program
+from pyautonomousagent.bt.script_leaves import time_step
 from pyautonomousagent.bt.tree_source import UNROLLED, CodeOps, Source, source_text
+from pyautonomousagent.state import Swarm
+from pyautonomousagent.world import World
 
 
 class ArraySource(Source):
@@ -33,17 +36,19 @@ class ArraySource(Source):
 class ArraySourceOps(CodeOps):
     """:class:`~pyautonomousagent.bt.rules.Ops` that writes node ``i``'s rule as the body of
     ``tick(mask)``: its own status row is ``st``, child ``k``'s ``S<k>`` (ticked by
-    ``tickers[child](e)``, halted by ``halt(child, e)``), memory slot ``s`` the row ``M<s>``;
-    the mask of the agents of the current block is ``e<depth>``."""
+    ``tickers[child](e)``, halted by ``halt(child, e)``), memory slot ``s`` the row ``M<s>``,
+    the iteration ``world.iteration``, blackboard entry ``key`` ``BOARD[key]``; the mask of
+    the agents of the current block is ``e<depth>`` (a loop's: ``while`` it has any)."""
 
-    def __init__(self, program: Program, i: int) -> None:
+    def __init__(self, program: Program, i: int, time_step: float = 1.0) -> None:
         self.children = program.children[i]
         skippable = [may_skip(program.nodes[c]) for c in self.children]
-        super().__init__(len(self.children), program.params[i], skippable)
+        super().__init__(len(self.children), program.params[i], skippable, time_step)
         self.lines = ["e0 = mask.copy()"]
         self.tables: dict[str, np.ndarray] = {}
         self._dead: int | None = None  # a block (depth) every agent of which has finished
         self._some = [True]  # per depth: its mask is known to have an agent (no finish since)
+        self._loops: list[int] = []  # the depths of the loop blocks open
 
     def _emit(self, line: str) -> None:
         if self._dead is None or self._depth < self._dead:
@@ -54,6 +59,12 @@ class ArraySourceOps(CodeOps):
 
     def memory(self, slot: int = 0) -> ArraySource:
         return ArraySource(f"M{slot}")
+
+    def now(self) -> ArraySource:
+        return ArraySource("world.iteration")
+
+    def entry(self, key: str) -> ArraySource:
+        return ArraySource(f"BOARD[{key!r}]")
 
     def set_memory(self, value: Any, slot: int = 0) -> None:
         self._emit(f"copyto(M{slot}, {source_text(value)}, where=e{self._depth})")
@@ -103,6 +114,16 @@ class ArraySourceOps(CodeOps):
         if self._dead is not None and self._dead > self._depth:
             self._dead = None
 
+    def _open_loop(self) -> list[str]:
+        depth = self._depth
+        self._some[depth + 1 :] = [True]
+        self._loops.append(depth + 1)
+        return [f"e{depth + 1} = e{depth}.copy()", f"while count(e{depth + 1}):"]
+
+    def _after_loop(self) -> None:
+        self._loops.pop()
+        self._close()
+
     def finish(self, status: Any, where: Any = True) -> None:
         depth, value = self._depth, source_text(status)
         if where is True and depth == 0:
@@ -116,7 +137,8 @@ class ArraySourceOps(CodeOps):
             done = "done"
             self._emit(f"done = e{depth} & {source_text(where)}")
         self._emit(f"copyto(st, {value}, where={done})")
-        for outer in range(depth + (where is not True)):
+        own = where is not True or depth in self._loops  # a loop's mask: emptied
+        for outer in range(depth + own):
             self._emit(f"e{outer} ^= {done}")  # done is within every enclosing mask
         self._emit("if not count(e0):")
         self._emit("    return")
@@ -211,6 +233,9 @@ class BatchedTree(Protocol):
 
     program: Program
     status: np.ndarray
+    world: World
+    swarm: Swarm
+    defaults: Mapping[str, Any]
     _tickers: list[Callable[[np.ndarray], None]]
 
     def _halt(self, child: int, mask: np.ndarray) -> None: ...
@@ -222,7 +247,7 @@ def rule_ticker(engine: BatchedTree, i: int, size: int) -> Callable[[np.ndarray]
     status row, its children's and its memory (``record.memory`` rows of int64, 0 at first)."""
     record = NODE_TYPES.get(engine.program.nodes[i].type)
     assert record.rule is not None, record.name
-    ops = ArraySourceOps(engine.program, i)
+    ops = ArraySourceOps(engine.program, i, time_step(engine.defaults))
     record.rule(ops)
     lines = roll(ops.lines) if len(ops.children) >= ROLLED else ops.lines
     source = "\n".join(["def tick(mask):", *("    " + line for line in lines)])
@@ -234,6 +259,8 @@ def rule_ticker(engine: BatchedTree, i: int, size: int) -> Callable[[np.ndarray]
         **{f"M{slot}": memory[slot] for slot in range(record.memory)},
         **ops.tables,
         "tickers": engine._tickers,
+        "world": engine.world,
+        "BOARD": engine.swarm.blackboard,
         "halt": engine._halt,
         "KIDS": tuple(ops.children),
         "count": np.count_nonzero,

@@ -21,6 +21,7 @@ from py_trees.common import Status
 from pyautonomousagent.bt.behaviours import BEHAVIOUR_TYPES
 from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, Leaf, check_leaves, make_leaf
 from pyautonomousagent.bt.nodes import CONTROL, NODE_TYPES, may_skip
+from pyautonomousagent.bt.script_leaves import time_step
 from pyautonomousagent.bt.spec import Node, TreeError, check_entries, control_params
 from pyautonomousagent.bt.status import invalid_status
 from pyautonomousagent.engines.btcpp import BTCPP_BEHAVIOURS, TO_PYTREES, halt_all, with_scripts
@@ -123,7 +124,7 @@ def build_behaviour(
         if node.type in PYTREES_NODES or NODE_TYPES[node.type].rule is None:
             behaviour = PYTREES_NODES[node.type](node.name, children, control_params(node))
         else:
-            behaviour = _rule_behaviour(node, children)
+            behaviour = _rule_behaviour(node, children, time_step(defaults))
         if hasattr(behaviour, "bind"):  # nodes that read the blackboard or the clock
             behaviour.bind(agent, world, defaults)
     elif node.type in BEHAVIOUR_TYPES:
@@ -148,7 +149,11 @@ def _parallel(
 class _Ruled(py_trees.behaviour.Behaviour):
     """A node type with a rule, for one agent: its class's ``tick`` is the rule written for
     its shape (:func:`~pyautonomousagent.engines.pytrees_rules.tick_method`), its memory
-    ``m0``, ``m1``, ... (0 before it is first set)."""
+    ``m0``, ``m1``, ... (0 before it is first set), its clock ``world.iteration``, its
+    agent's blackboard ``board``."""
+
+    def bind(self, agent: AgentView, world: World, defaults: Mapping[str, Any]) -> None:
+        self.world, self.board = world, agent.blackboard
 
     def update(self) -> Status:  # pragma: no cover - tick() does the work
         return self.status
@@ -180,21 +185,19 @@ class RuleDecorator(_Ruled, py_trees.decorators.Decorator):
 
 
 @cache
-def _rule_class(
-    type_name: str, kids: int, params: tuple[tuple[str, Any], ...], skippable: tuple[bool, ...]
-) -> type:
-    """The py_trees class of a node type with a rule, for one shape (see ``tick_method``)."""
+def _rule_class(type_name: str, *shape: Any) -> type:
+    """The py_trees class of a node type with a rule, for one shape (``tick_method``'s)."""
     record = NODE_TYPES.get(type_name)
     base = RuleComposite if record.kind == CONTROL else RuleDecorator
-    tick = tick_method(type_name, kids, params, skippable)
+    tick = tick_method(type_name, *shape)
     return type(type_name, (base,), {"tick": tick, "__doc__": record.tags[0].doc})
 
 
-def _rule_behaviour(node: Node, children: list[Any]) -> py_trees.behaviour.Behaviour:
-    """The py_trees behaviour of a node whose type has a rule."""
+def _rule_behaviour(node: Node, children: list[Any], step: float) -> py_trees.behaviour.Behaviour:
+    """The py_trees behaviour of a node whose type has a rule (``step``: the time step, s)."""
     params = tuple(sorted(control_params(node).items()))
     skippable = tuple(may_skip(child) for child in node.children)
-    cls = _rule_class(node.type, len(children), params, skippable)
+    cls = _rule_class(node.type, len(children), params, skippable, step)
     return cls(node.name, children, NODE_TYPES[node.type].memory)
 
 

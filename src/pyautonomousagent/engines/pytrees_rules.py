@@ -45,15 +45,24 @@ def _status_text(value: Any) -> str:
 class ScalarSourceOps(CodeOps):
     """:class:`~pyautonomousagent.bt.rules.Ops` that writes a rule as the body of a py_trees
     ``tick`` for one agent: the children are ``c0``, ``c1``, ...; a ``finish`` sets
-    ``self.status``, yields ``self`` and returns."""
+    ``self.status``, yields ``self`` and returns; the iteration is ``self.world.iteration``,
+    blackboard entry ``key`` an attribute of ``self.board``."""
 
-    def __init__(self, kids: int, params: Mapping[str, Any], skippable: tuple[bool, ...]):
-        super().__init__(kids, params, skippable)
+    def __init__(
+        self, kids: int, params: Mapping[str, Any], skippable: tuple[bool, ...], time_step: float
+    ) -> None:
+        super().__init__(kids, params, skippable, time_step)
         self._depth = 1
         self.tables: dict[str, dict[int, Any]] = {}
 
     def status(self) -> StatusSource:
         return StatusSource("self.status")
+
+    def now(self) -> Source:
+        return Source("self.world.iteration")
+
+    def entry(self, key: str) -> Source:
+        return Source(f"getattr(self.board, {key!r})")
 
     def memory(self, slot: int = 0) -> Source:
         return Source(f"self.m{slot}")
@@ -104,14 +113,19 @@ class ScalarSourceOps(CodeOps):
 
 @cache
 def tick_method(
-    type_name: str, kids: int, params: tuple[tuple[str, Any], ...], skippable: tuple[bool, ...]
+    type_name: str,
+    kids: int,
+    params: tuple[tuple[str, Any], ...],
+    skippable: tuple[bool, ...],
+    time_step: float,
 ) -> Callable[[Any], Iterator[Any]]:
     """The ``tick`` of a node of ``type_name`` with ``kids`` children, parameters ``params``
-    (name, value) and children that may be SKIPPED where ``skippable`` says so: its rule
-    written by :class:`ScalarSourceOps` and compiled (cached: the arguments are the shape)."""
+    (name, value), children that may be SKIPPED where ``skippable`` says so and the
+    scenario's ``time_step`` (seconds): its rule written by :class:`ScalarSourceOps` and
+    compiled (cached: the arguments are the shape)."""
     rule = NODE_TYPES.get(type_name).rule
     assert rule is not None, type_name
-    ops = ScalarSourceOps(kids, dict(params), skippable)
+    ops = ScalarSourceOps(kids, dict(params), skippable, time_step)
     rule(ops)
     children = "".join(f"c{k}, " for k in range(kids))
     head = [f"    {children}= self.children"] if kids else []

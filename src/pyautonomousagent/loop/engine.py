@@ -10,6 +10,7 @@ import numpy as np
 
 from pyautonomousagent.bt.leaf import check_leaves, make_leaf
 from pyautonomousagent.bt.program import Program, compile_tree
+from pyautonomousagent.bt.script_leaves import time_step
 from pyautonomousagent.bt.spec import Node, TreeError, check_entries
 from pyautonomousagent.bt.tree_source import memory_rows, memory_size
 from pyautonomousagent.kernels import LeafKernel, Sends, SensorKernel
@@ -61,6 +62,7 @@ class LoopEngine:
             memory_rows(self.program),
             senders,
             deferrable(self.program, self.kernels),
+            time_step=time_step(defaults),
         )
         self.pending = np.full(swarm.size, -1, dtype=np.int32)  # deferred Later steps
         self.status = np.zeros((len(self.program.nodes), swarm.size), dtype=np.int8)

@@ -63,6 +63,7 @@ class Layout:
         vertical: the 3-D drone's ``(max_climb_rate, climb_step, max_altitude)`` where the
             motion model is the 3-D drone (its altitude and climb rate are moved too, the
             control signal u_w kept in ``uc``), else None (the 2-D drone).
+        time_step: the scenario's, seconds (what Delay's and Timeout's milliseconds are).
     """
 
     names: tuple[str, ...]
@@ -71,6 +72,7 @@ class Layout:
     deferred: tuple[int, ...] = ()
     constants: Constants = field(default_factory=Constants)
     vertical: tuple[float, float, float] | None = None
+    time_step: float = 1.0
 
     @property
     def arrays(self) -> str:
