@@ -29,12 +29,11 @@ import numpy as np
 
 from pyautonomousagent.engines import cuda_jit
 from pyautonomousagent.engines.gpu_records import RecordGroups, Slot
-from pyautonomousagent.engines.gpu_source import kernel_module_source, message_module_source
+from pyautonomousagent.engines.gpu_source import Thread, kernel_module_source, message_module_source
 from pyautonomousagent.inputs import InputError
-from pyautonomousagent.kernels import SensorKernel
 from pyautonomousagent.loop.arguments import ordered, parameters
 from pyautonomousagent.loop.engine import LoopEngine
-from pyautonomousagent.loop.layout import Constants, Fused, Layout, Messaging
+from pyautonomousagent.loop.layout import Constants, Fused, Messaging
 from pyautonomousagent.loop.modules import load_source
 from pyautonomousagent.loop.source import fused_parameters, record_parameters, swarm_state_names
 from pyautonomousagent.models.drone2d import Drone2D
@@ -262,15 +261,14 @@ class GpuEngine(LoopEngine):
             )
         start = time.perf_counter()
         layout = replace(self.layout, constants=Constants(), vertical=fused.vertical)
+        thread = Thread(self.program, self.kernels, layout, fused.sensors, self.stages)
         if fused.messaging is None:
-            source = kernel_module_source(
-                self.program, self.kernels, layout, fused.sensors, self.stages
-            )
+            source = kernel_module_source(thread)
             self._kernel = load_kernel(source)
             steps = len(swarm.device) if swarm is not None else 0
             self._swarm_kernels = [load_kernel(source, f"swarm_{j}") for j in range(steps)]
         else:
-            self._message_kernels(layout, fused.sensors, fused.messaging)
+            self._message_kernels(thread, fused.messaging)
         self._kernel_constants = layout.constants.arrays()  # the CPU tick's may differ
         iterations = sim.scenario.iterations
         self._groups = RecordGroups(sim.recorder, self.layout.names, iterations, self.timings,
@@ -284,17 +282,16 @@ class GpuEngine(LoopEngine):
             raise RuntimeError("engine gpu: the kernel's PTX has fused multiply-adds")
         self.timings.update(dict.fromkeys(TIMINGS, 0.0), compile=time.perf_counter() - start)
 
-    def _message_kernels(self, layout: Layout, sensors: SensorKernel, messaging: Messaging) -> None:
+    def _message_kernels(self, thread: Thread, messaging: Messaging) -> None:
         """Generate and load the kernels of a tree that sends messages
         (:mod:`~pyautonomousagent.engines.gpu_messages`)."""
         from pyautonomousagent.engines.gpu_messages import DeviceMessages
 
-        source = message_module_source(
-            self.program, self.kernels, layout, sensors, messaging, self.stages
-        )
+        source = message_module_source(thread, messaging)
         names = [line.split("(")[0][4:] for line in source.splitlines() if line.startswith("def ")]
         kernels = {name: load_kernel(source, name) for name in names}
-        common = [name for line in fused_parameters(layout, sensors) for name in line]
+        layout = thread.layout
+        common = [name for line in fused_parameters(layout, thread.sensors) for name in line]
         xy = (common.index(layout.array("x")), common.index(layout.array("y")))
         self._messages = DeviceMessages(kernels, messaging, common, xy, self.swarm.size)
 
