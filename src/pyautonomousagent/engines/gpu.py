@@ -92,11 +92,8 @@ def gpu_problem() -> str | None:
 #: Drone-iterations (agents x iterations) from which "auto" takes the GPU engine where a
 #: device is present (:func:`auto_takes_gpu`); None: never. It stays None until
 #: ``scripts/gpu_figures.sh`` has shown the device's bits equal to the batched engine's and
-#: measured (its ``crossover`` step) where the GPU starts to win, printing the value to put
-#: here. On the H100 lent twice (docs/performance.md) the device contracted ``a * b + c``
-#: into fused multiply-adds, so positions differed from the batched engine's by one unit in
-#: the last place; the measured crossover, 1,876,028,000 drone-iterations (patrol, the
-#: kernel's ~9 s compile included), waits for bits that match.
+#: measured (its ``crossover`` step) where the GPU starts to win (docs/performance.md, "GPU
+#: engine on an H100": the crossover measured there waits for bits that match).
 AUTO_DRONE_ITERATIONS: int | None = None
 
 
@@ -247,13 +244,13 @@ class GpuEngine(LoopEngine):
         """
         fused = self._fusable(sim)
         swarm = fused.sensors.swarm if fused is not None else None
-        if fused is not None and swarm is not None and not self.runs(sim):
+        if swarm is not None and not self.runs(sim):
             why = "no device form yet" if not swarm.device else "and a tree that sends messages"
             raise InputError(
                 f"engine gpu: mission {sim.mission.name!r} senses the whole swarm at once (a "
                 f"SwarmSensorKernel, e.g. collisions) with {why}; use --engine compiled"
             )
-        if fused is None or not self.runs(sim):
+        if fused is None:
             raise InputError(
                 "engine gpu: only runs whose mission has compiled sensors and compiled "
                 "handlers of the messages its tree sends run on the GPU so far (e.g. patrol, "
@@ -379,15 +376,8 @@ class GpuEngine(LoopEngine):
         swarm = swarm_state_names(fused.sensors.swarm)
         return arguments | dict(zip(swarm, self._swarm_device, strict=True))
 
+    @no_fma()
     def loop(self, sim: LoopView, count: int, typical: int | None = None) -> int:
-        """:meth:`_loop` with NVVM's FMA contraction off (:func:`no_fma`): a kernel that is
-        first launched here with new argument types (a grid or reduction step, e.g. when the
-        first message falls in range) is compiled at that launch, and must do the NumPy
-        engine's arithmetic as the kernels compiled by :meth:`prepare` do."""
-        with no_fma():
-            return self._loop(sim, count)
-
-    def _loop(self, sim: LoopView, count: int) -> int:
         """Run up to ``count`` whole iterations on the device (0 compiles only; fewer where
         their records would not fit in a group, :meth:`RecordGroups.fit`, or where a tree's
         messages must go through the CPU's datalink, a recorded type); return how many ran,
@@ -397,7 +387,10 @@ class GpuEngine(LoopEngine):
         are copied back while the next call's iterations run (:mod:`.gpu_records`); the
         state by :meth:`sync`, after every call of a tree that sends messages (whose last
         iteration's messages then go to the datalink, and the handlers' state to the
-        mission)."""
+        mission). With NVVM's FMA contraction off (:func:`no_fma`): a kernel first launched
+        here with new argument types (a grid or reduction step, e.g. when the first message
+        falls in range) is compiled at that launch, and must do the NumPy engine's
+        arithmetic as the kernels compiled by :meth:`prepare` do."""
         from numba import cuda
 
         if self._kernel is None and self._messages is None:
