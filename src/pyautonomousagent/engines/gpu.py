@@ -429,7 +429,7 @@ class GpuEngine(LoopEngine):
             done = count
         else:
             values = ordered(self._messages.common, arguments, "the message kernels")
-            done = self._message_loop(sim, fresh, tuple(values), count, row0)
+            done = self._messages.run(sim, tuple(values), count, row0, fresh)
         self._groups.launched(slot, start, done, fused.sensors, time.perf_counter() - began)
         self._synced = start + done  # the clock: the simulation advances it by ``done``
         if self._messages is not None and done:
@@ -481,19 +481,3 @@ class GpuEngine(LoopEngine):
                 kernel[(*shape(n), stream)](t, n if count else 0, *state)
             launch = self._kernel[blocks, THREADS, stream]
             launch(t - 1, 1 if count else 0, every, row0, *values)
-
-    def _message_loop(
-        self, sim: LoopView, fresh: bool, arguments: tuple[Any, ...], count: int, row0: int
-    ) -> int:
-        """Up to ``count`` iterations of a tree that sends messages
-        (:class:`~pyautonomousagent.engines.gpu_messages.DeviceMessages`), ``sim.inbox``
-        handled in the first; how many were done. ``count`` 0 compiles the kernels."""
-        messages = self._messages
-        assert messages is not None
-        if fresh:
-            messages.upload_state()
-        if not count:
-            messages.compile(arguments, sim.world.datalink.range)
-            return 0
-        messages.upload_inbox(sim)
-        return messages.run(sim, arguments, count, row0)

@@ -167,21 +167,29 @@ class DeviceMessages:
             sx, sy = self.inboxes[k][4:]
             grid.group(sx, sy, 0, (0.0, 0.0, 0.0, 0.0), reach)
 
-    def run(self, sim: LoopView, common: tuple[Any, ...], count: int, row0: int) -> int:
-        """Up to ``count`` iterations from the world's (``common``: the kernels' common
-        arguments, ``row0``: the record group's first row); how many were done."""
+    def run(
+        self, sim: LoopView, common: tuple[Any, ...], count: int, row0: int, fresh: bool
+    ) -> int:
+        """Up to ``count`` iterations from the world's, ``sim.inbox`` handled in the first
+        (``common``: the kernels' common arguments, ``row0``: the record group's first row,
+        ``fresh``: the state goes to the device anew, the handlers' too); how many were
+        done. ``count`` 0 compiles the kernels."""
         start, every, reach = sim.world.iteration, sim.recorder.every, sim.world.datalink.range
-        done = 0
+        if fresh:
+            self.upload_state()
+        if not count:
+            self.compile(common, reach)
+            return 0
+        self.upload_inbox(sim)
         for t in range(start + 1, start + count + 1):
             head = (t, every, row0, *common)
             self._launch("sense_move", self.n, head, reach)
             for k, how, m in self.plan:
                 self._handle(k, how, m, head, reach)
             self._launch("tick", self.n, head, reach)
-            done += 1
             if self._collect(head, reach):
-                break
-        return done
+                return t - start
+        return count
 
     def _launch(self, name: str, live: int, head: tuple[Any, ...], reach: float) -> None:
         """Kernel ``name`` over ``live`` threads: ``head`` (the iteration, ``every``,

@@ -281,12 +281,8 @@ def message_module_source(thread: Thread, messaging: Messaging) -> str:
     sensors' and handlers' kernels (``H<k>``, per-receiver ``R<k>``), then the kernels of one
     iteration, one thread an agent (plain Python functions: the engine compiles them):
     ``sense_move`` (Phase 2's sensors and motion), per type the handling of last
-    iteration's delivery: of one that reached everyone ``handle_all_<k>`` (thread 0: the
-    compiled handler), ``handle_sender_<k>`` (a ``by_sender`` handler: one thread per
-    sender, on its messages) and ``handle_each_<k>`` (one thread per receiver: the
-    per-receiver form of every message it did not send), of one that reached only some
-    ``handle_near_<k>`` (one thread per receiver: the per-receiver form of the messages in
-    range, found on the type's cell grid), ``tick`` (Phases 3, 4 and 6), then per type
+    iteration's delivery (``handle_all_<k>``, ``handle_sender_<k>``, ``handle_each_<k>``,
+    ``handle_near_<k>``: the functions above), ``tick`` (Phases 3, 4 and 6), then per type
     ``flag_<k>`` and ``scatter_<k>`` (Phase 5: the messages into the inbox; the engine runs
     a prefix sum between them)."""
     layout, sensors = thread.layout, thread.sensors
