@@ -18,7 +18,7 @@ import pytest
 
 from pyautonomousagent import Simulation, cli, jit, load, runs
 from pyautonomousagent.engines import gpu
-from pyautonomousagent.engines.gpu_source import kernel_module_source
+from pyautonomousagent.engines.gpu_source import Thread, kernel_module_source
 from pyautonomousagent.loop.layout import Constants
 from pyautonomousagent.loop.source import alias
 from pyautonomousagent.models import drone2d
@@ -133,7 +133,7 @@ def _kernel_source(agents: int = 4) -> str:
     assert fused is not None and fused.messaging is None
     layout = engine.layout.__class__(**{**vars(engine.layout), "constants": Constants()})
     return kernel_module_source(
-        engine.program, engine.kernels, layout, fused.sensors, engine.stages
+        Thread(engine.program, engine.kernels, layout, fused.sensors, engine.stages)
     )
 
 

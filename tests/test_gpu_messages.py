@@ -17,7 +17,7 @@ import pytest
 
 from pyautonomousagent import Simulation, jit, load
 from pyautonomousagent.engines.gpu_messages import DeviceMessages
-from pyautonomousagent.engines.gpu_source import message_module_source
+from pyautonomousagent.engines.gpu_source import Thread, message_module_source
 from pyautonomousagent.loop.layout import Constants
 from pyautonomousagent.loop.source import alias
 from pyautonomousagent.missions import gathering
@@ -38,9 +38,8 @@ def _message_source(scenario: str) -> str:
     layout = engine.layout.__class__(
         **{**vars(engine.layout), "constants": Constants(), "vertical": fused.vertical}
     )
-    return message_module_source(
-        engine.program, engine.kernels, layout, fused.sensors, fused.messaging, engine.stages
-    )
+    thread = Thread(engine.program, engine.kernels, layout, fused.sensors, engine.stages)
+    return message_module_source(thread, fused.messaging)
 
 
 @needs_numba

@@ -71,14 +71,18 @@ def _part(work: np.ndarray, start: int, size: int) -> np.ndarray:
     return work[start : start + size]
 
 
+#: A grid built by :func:`_build`: the points' coordinates (d, N) and cells (d, N) in bucket
+#: order, their indices in that order (N,), each bucket's first position in it (mask + 2,),
+#: the cells per axis (d,) and the bucket mask.
+Grid = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]
+
+
 @njit
 def _build(
     axes: tuple[np.ndarray, ...], width: float, mask: int, work: np.ndarray, points: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The grid of the points whose coordinates ``axes`` holds (one array (N,) per axis):
-    its lowest corner (d,), cells per axis (d,), the points' cells (d, N) and coordinates
-    (d, N) in bucket order, their indices in that order (N,), and each bucket's first
-    position in it (mask + 2,). The big arrays are views of ``work`` (int64, at least
+) -> tuple[np.ndarray, Grid]:
+    """The lowest corner (d,) and the :data:`Grid` of the points whose coordinates ``axes``
+    holds (one array (N,) per axis). The big arrays are views of ``work`` (int64, at least
     (d + 2) N + 2 mask + 3) and ``points`` (float64, at least d N), or new arrays where
     those are empty (:func:`_part`)."""
     d, n = len(axes), axes[0].shape[0]
@@ -119,7 +123,7 @@ def _build(
             v = axes[k][i]
             sorted_points[k, s] = v
             sorted_cells[k, s] = _cell(v, low[k], width)
-    return low, extent, sorted_cells, sorted_points, order, starts
+    return low, (sorted_points, sorted_cells, order, starts, extent, mask)
 
 
 @njit
@@ -181,12 +185,7 @@ def _offer(slot: int, d2: float, j: int, best2: np.ndarray, best: np.ndarray) ->
 
 @njit
 def _forward(
-    points: np.ndarray,
-    cells: np.ndarray,
-    order: np.ndarray,
-    starts: np.ndarray,
-    extent: np.ndarray,
-    mask: int,
+    grid: Grid,
     range2: float,
     radius2: float,
     best2: np.ndarray,
@@ -204,6 +203,7 @@ def _forward(
     pairs closer than ``radius2`` it found into ``close``; with ``fill``: those pairs
     (lower index first) and squared distances into ``pairs``, ``pairs2``, for the points
     whose ``close`` is not 0. All arrays per point are in bucket order."""
+    points, cells, order, starts, extent, mask = grid
     d, n = points.shape
     centre = np.empty(d, dtype=np.int64)
     cell = np.empty(d, dtype=np.int64)
@@ -250,34 +250,29 @@ def _forward(
 
 @njit
 def _near_and_pairs(
-    points: np.ndarray,
-    cells: np.ndarray,
-    order: np.ndarray,
-    starts: np.ndarray,
-    extent: np.ndarray,
-    mask: int,
+    grid: Grid,
     range2: float,
     radius2: float,
     none: float,
     work: np.ndarray,
     scratch: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:meth:`CellList.near` on a built grid (squared range and radius; ``points`` and
-    ``cells`` in bucket order, ``order`` gives the indices): each point's nearest other
-    point with squared distance <= ``range2`` (lowest index among equals) within the range
-    (N,) and its distance (N,) (-1 and ``none`` for none), views of ``work`` (int64, at
-    least 3 N) and ``scratch`` (float64, at least 2 N) or new arrays where those are empty,
-    and the pairs closer than the radius, first, second (P,) sorted by first then second,
-    and their distances (P,). One core: on a machine shared with NumPy's work, threads
-    waiting for the next parallel loop slow the rest more than they save here."""
+    """:meth:`CellList.near` on a built grid (squared range and radius): each point's
+    nearest other point with squared distance <= ``range2`` (lowest index among equals)
+    within the range (N,) and its distance (N,) (-1 and ``none`` for none), views of
+    ``work`` (int64, at least 3 N) and ``scratch`` (float64, at least 2 N) or new arrays
+    where those are empty, and the pairs closer than the radius, first, second (P,) sorted
+    by first then second, and their distances (P,). One core: on a machine shared with
+    NumPy's work, threads waiting for the next parallel loop slow the rest more than they
+    save here."""
+    order = grid[2]
     n = order.shape[0]
     nearest, close, best = _part(work, 0, n), _part(work, n, n), _part(work, 2 * n, n)
     distance, best2 = _part(scratch, 0, n), _part(scratch, n, n)
     best2[:n] = math.inf
     best[:n] = -1
     unused = np.empty((2, 0), dtype=np.int64)
-    _forward(points, cells, order, starts, extent, mask, range2, radius2, best2, best, close,
-             unused, best2, False)  # fmt: skip
+    _forward(grid, range2, radius2, best2, best, close, unused, best2, False)
     for s in range(n):
         i = order[s]
         nearest[i] = best[s]
@@ -288,8 +283,7 @@ def _near_and_pairs(
     if total == 0:
         return nearest, distance, pairs[0], pairs[1], pairs2
     # the second pass: only the points that found a pair (close[s] > 0) write them
-    _forward(points, cells, order, starts, extent, mask, 0.0, radius2, best2, best, close,
-             pairs, pairs2, True)  # fmt: skip
+    _forward(grid, 0.0, radius2, best2, best, close, pairs, pairs2, True)
     by = _pair_order(pairs[0], pairs[1], n)
     return nearest, distance, pairs[0][by], pairs[1][by], np.sqrt(pairs2[by])
 
@@ -363,25 +357,18 @@ def near_all(
     n, d = axes[0].shape[0], len(axes)
     width, mask = _grid_shape(n, max(range_, radius))
     grid_ints = (d + 2) * n + 2 * mask + 3
-    _, extent, cells, points, order, starts = _build(axes, width, mask, work, scratch)
-    return _near_and_pairs(points, cells, order, starts, extent, mask, range_ * range_,
-                           radius * radius, none, work[grid_ints:], scratch[d * n :])  # fmt: skip
+    _, grid = _build(axes, width, mask, work, scratch)
+    range2, radius2 = range_ * range_, radius * radius
+    return _near_and_pairs(grid, range2, radius2, none, work[grid_ints:], scratch[d * n :])
 
 
 @njit
 def _candidates(
-    query: np.ndarray,
-    low: np.ndarray,
-    width: float,
-    cells: np.ndarray,
-    order: np.ndarray,
-    starts: np.ndarray,
-    extent: np.ndarray,
-    mask: int,
-    out: np.ndarray,
+    query: np.ndarray, low: np.ndarray, width: float, grid: Grid, out: np.ndarray
 ) -> int:
     """The (query row, point) pairs whose cells neighbour each other into ``out`` (2,
     capacity), as many as fit; returns how many there are."""
+    _, cells, order, starts, extent, mask = grid
     d, m = query.shape
     centre = np.empty(d, dtype=np.int64)
     cell = np.empty(d, dtype=np.int64)
@@ -439,9 +426,8 @@ class CellList:
         if not axes or any(a.shape != axes[0].shape or a.ndim != 1 for a in axes):
             raise ValueError("CellList: one array of shape (N,) per axis")
         self.reach = float(reach)
-        self.width, self.mask = _grid_shape(axes[0].size, self.reach)
-        built = _build(axes, self.width, self.mask, *FRESH)
-        self.low, self.extent, self.cells, self.sorted_points, self.order, self.starts = built
+        self.width, mask = _grid_shape(axes[0].size, self.reach)
+        self.low, self.grid = _build(axes, self.width, mask, *FRESH)
 
     def near(self, range_: float, radius: float, none: float = math.inf) -> Near:
         """Every point's nearest neighbour within ``range_`` (distance <= ``range_``; distance
@@ -451,8 +437,8 @@ class CellList:
         cells)."""
         if max(range_, radius) > self.reach:
             raise ValueError(f"near: range {range_} and radius {radius} must be <= {self.reach}")
-        grid = (self.sorted_points, self.cells, self.order, self.starts, self.extent, self.mask)
-        return Near(*_near_and_pairs(*grid, range_ * range_, radius * radius, none, *FRESH))
+        range2, radius2 = range_ * range_, radius * radius
+        return Near(*_near_and_pairs(self.grid, range2, radius2, none, *FRESH))
 
     def candidates(self, coordinates: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
         """(query row, point) of every query point and grid point in neighbouring cells: a
@@ -462,8 +448,7 @@ class CellList:
         capacity = max(64, 4 * query.shape[1])
         while True:
             out = np.empty((2, capacity), dtype=np.int64)
-            count = _candidates(query, self.low, self.width, self.cells, self.order,
-                                self.starts, self.extent, self.mask, out)  # fmt: skip
+            count = _candidates(query, self.low, self.width, self.grid, out)
             if count <= capacity:
                 return out[0, :count], out[1, :count]
             capacity = count

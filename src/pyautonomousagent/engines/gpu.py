@@ -29,12 +29,11 @@ import numpy as np
 
 from pyautonomousagent.engines import cuda_jit
 from pyautonomousagent.engines.gpu_records import RecordGroups, Slot
-from pyautonomousagent.engines.gpu_source import kernel_module_source, message_module_source
+from pyautonomousagent.engines.gpu_source import Thread, kernel_module_source, message_module_source
 from pyautonomousagent.inputs import InputError
-from pyautonomousagent.kernels import SensorKernel
 from pyautonomousagent.loop.arguments import ordered, parameters
 from pyautonomousagent.loop.engine import LoopEngine
-from pyautonomousagent.loop.layout import Constants, Fused, Layout, Messaging
+from pyautonomousagent.loop.layout import Constants, Fused, Messaging
 from pyautonomousagent.loop.modules import load_source
 from pyautonomousagent.loop.source import fused_parameters, record_parameters, swarm_state_names
 from pyautonomousagent.models.drone2d import Drone2D
@@ -93,11 +92,8 @@ def gpu_problem() -> str | None:
 #: Drone-iterations (agents x iterations) from which "auto" takes the GPU engine where a
 #: device is present (:func:`auto_takes_gpu`); None: never. It stays None until
 #: ``scripts/gpu_figures.sh`` has shown the device's bits equal to the batched engine's and
-#: measured (its ``crossover`` step) where the GPU starts to win, printing the value to put
-#: here. On the H100 lent twice (docs/performance.md) the device contracted ``a * b + c``
-#: into fused multiply-adds, so positions differed from the batched engine's by one unit in
-#: the last place; the measured crossover, 1,876,028,000 drone-iterations (patrol, the
-#: kernel's ~9 s compile included), waits for bits that match.
+#: measured (its ``crossover`` step) where the GPU starts to win (docs/performance.md, "GPU
+#: engine on an H100": the crossover measured there waits for bits that match).
 AUTO_DRONE_ITERATIONS: int | None = None
 
 
@@ -248,13 +244,13 @@ class GpuEngine(LoopEngine):
         """
         fused = self._fusable(sim)
         swarm = fused.sensors.swarm if fused is not None else None
-        if fused is not None and swarm is not None and not self.runs(sim):
+        if swarm is not None and not self.runs(sim):
             why = "no device form yet" if not swarm.device else "and a tree that sends messages"
             raise InputError(
                 f"engine gpu: mission {sim.mission.name!r} senses the whole swarm at once (a "
                 f"SwarmSensorKernel, e.g. collisions) with {why}; use --engine compiled"
             )
-        if fused is None or not self.runs(sim):
+        if fused is None:
             raise InputError(
                 "engine gpu: only runs whose mission has compiled sensors and compiled "
                 "handlers of the messages its tree sends run on the GPU so far (e.g. patrol, "
@@ -262,15 +258,14 @@ class GpuEngine(LoopEngine):
             )
         start = time.perf_counter()
         layout = replace(self.layout, constants=Constants(), vertical=fused.vertical)
+        thread = Thread(self.program, self.kernels, layout, fused.sensors, self.stages)
         if fused.messaging is None:
-            source = kernel_module_source(
-                self.program, self.kernels, layout, fused.sensors, self.stages
-            )
+            source = kernel_module_source(thread)
             self._kernel = load_kernel(source)
             steps = len(swarm.device) if swarm is not None else 0
             self._swarm_kernels = [load_kernel(source, f"swarm_{j}") for j in range(steps)]
         else:
-            self._message_kernels(layout, fused.sensors, fused.messaging)
+            self._message_kernels(thread, fused.messaging)
         self._kernel_constants = layout.constants.arrays()  # the CPU tick's may differ
         iterations = sim.scenario.iterations
         self._groups = RecordGroups(sim.recorder, self.layout.names, iterations, self.timings,
@@ -284,17 +279,16 @@ class GpuEngine(LoopEngine):
             raise RuntimeError("engine gpu: the kernel's PTX has fused multiply-adds")
         self.timings.update(dict.fromkeys(TIMINGS, 0.0), compile=time.perf_counter() - start)
 
-    def _message_kernels(self, layout: Layout, sensors: SensorKernel, messaging: Messaging) -> None:
+    def _message_kernels(self, thread: Thread, messaging: Messaging) -> None:
         """Generate and load the kernels of a tree that sends messages
         (:mod:`~pyautonomousagent.engines.gpu_messages`)."""
         from pyautonomousagent.engines.gpu_messages import DeviceMessages
 
-        source = message_module_source(
-            self.program, self.kernels, layout, sensors, messaging, self.stages
-        )
+        source = message_module_source(thread, messaging)
         names = [line.split("(")[0][4:] for line in source.splitlines() if line.startswith("def ")]
         kernels = {name: load_kernel(source, name) for name in names}
-        common = [name for line in fused_parameters(layout, sensors) for name in line]
+        layout = thread.layout
+        common = [name for line in fused_parameters(layout, thread.sensors) for name in line]
         xy = (common.index(layout.array("x")), common.index(layout.array("y")))
         self._messages = DeviceMessages(kernels, messaging, common, xy, self.swarm.size)
 
@@ -382,15 +376,8 @@ class GpuEngine(LoopEngine):
         swarm = swarm_state_names(fused.sensors.swarm)
         return arguments | dict(zip(swarm, self._swarm_device, strict=True))
 
+    @no_fma()
     def loop(self, sim: LoopView, count: int, typical: int | None = None) -> int:
-        """:meth:`_loop` with NVVM's FMA contraction off (:func:`no_fma`): a kernel that is
-        first launched here with new argument types (a grid or reduction step, e.g. when the
-        first message falls in range) is compiled at that launch, and must do the NumPy
-        engine's arithmetic as the kernels compiled by :meth:`prepare` do."""
-        with no_fma():
-            return self._loop(sim, count)
-
-    def _loop(self, sim: LoopView, count: int) -> int:
         """Run up to ``count`` whole iterations on the device (0 compiles only; fewer where
         their records would not fit in a group, :meth:`RecordGroups.fit`, or where a tree's
         messages must go through the CPU's datalink, a recorded type); return how many ran,
@@ -400,7 +387,10 @@ class GpuEngine(LoopEngine):
         are copied back while the next call's iterations run (:mod:`.gpu_records`); the
         state by :meth:`sync`, after every call of a tree that sends messages (whose last
         iteration's messages then go to the datalink, and the handlers' state to the
-        mission)."""
+        mission). With NVVM's FMA contraction off (:func:`no_fma`): a kernel first launched
+        here with new argument types (a grid or reduction step, e.g. when the first message
+        falls in range) is compiled at that launch, and must do the NumPy engine's
+        arithmetic as the kernels compiled by :meth:`prepare` do."""
         from numba import cuda
 
         if self._kernel is None and self._messages is None:
@@ -439,7 +429,7 @@ class GpuEngine(LoopEngine):
             done = count
         else:
             values = ordered(self._messages.common, arguments, "the message kernels")
-            done = self._message_loop(sim, fresh, tuple(values), count, row0)
+            done = self._messages.run(sim, tuple(values), count, row0, fresh)
         self._groups.launched(slot, start, done, fused.sensors, time.perf_counter() - began)
         self._synced = start + done  # the clock: the simulation advances it by ``done``
         if self._messages is not None and done:
@@ -491,19 +481,3 @@ class GpuEngine(LoopEngine):
                 kernel[(*shape(n), stream)](t, n if count else 0, *state)
             launch = self._kernel[blocks, THREADS, stream]
             launch(t - 1, 1 if count else 0, every, row0, *values)
-
-    def _message_loop(
-        self, sim: LoopView, fresh: bool, arguments: tuple[Any, ...], count: int, row0: int
-    ) -> int:
-        """Up to ``count`` iterations of a tree that sends messages
-        (:class:`~pyautonomousagent.engines.gpu_messages.DeviceMessages`), ``sim.inbox``
-        handled in the first; how many were done. ``count`` 0 compiles the kernels."""
-        messages = self._messages
-        assert messages is not None
-        if fresh:
-            messages.upload_state()
-        if not count:
-            messages.compile(arguments, sim.world.datalink.range)
-            return 0
-        messages.upload_inbox(sim)
-        return messages.run(sim, arguments, count, row0)

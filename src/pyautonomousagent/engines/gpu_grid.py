@@ -54,7 +54,7 @@ ONE_CELL = (0.0, 0.0, 1.0, 1, 1)
 
 
 def geometry(
-    box: tuple[float, float, float, float], reach: float, limit: int
+    box: tuple[float, ...], reach: float, limit: int
 ) -> tuple[float, float, float, int, int]:
     """The grid over ``box`` (low x, high x, low y, high y: world units) for ``reach``:
     (low x, low y, cell side, cells along x, cells along y), at most ``limit`` cells."""
@@ -192,8 +192,7 @@ class DeviceGrid:
     def group(self, sx: Any, sy: Any, count: int, box: tuple[float, ...], reach: float) -> None:
         """Group the first ``count`` messages at ``sx``, ``sy`` (device arrays, world units)
         on the grid over ``box`` (low x, high x, low y, high y of the agents and senders)."""
-        low_x, high_x, low_y, high_y = box
-        layout = geometry((low_x, high_x, low_y, high_y), reach, self.limit)
+        layout = geometry(box, reach, self.limit)
         self.grid.copy_to_device(np.array(layout, dtype=np.float64))
         self.cells = layout[3] * layout[4]
         _count[shape(count)](sx, sy, count, self.grid, self.cell, self.filled)

@@ -75,8 +75,7 @@ class DeviceMessages:
         xy: tuple[int, int], n: int,
     ) -> None:  # fmt: skip
         self.kernels, self.messaging, self.n = kernels, messaging, n
-        self.common = common
-        self.xy = xy  # where x and y are in the kernels' common arguments (found by name)
+        self.common, self.xy = common, xy
         types = len(messaging.types)
         self.width = [sum(1 for kind, _ in messaging.senders.values() if kind == k)
                       for k in range(types)]  # fmt: skip
@@ -168,23 +167,34 @@ class DeviceMessages:
             sx, sy = self.inboxes[k][4:]
             grid.group(sx, sy, 0, (0.0, 0.0, 0.0, 0.0), reach)
 
-    def run(self, sim: LoopView, common: tuple[Any, ...], count: int, row0: int) -> int:
-        """Up to ``count`` iterations from the world's (``common``: the kernels' common
-        arguments, ``row0``: the record group's first row); how many were done."""
+    def run(
+        self, sim: LoopView, common: tuple[Any, ...], count: int, row0: int, fresh: bool
+    ) -> int:
+        """Up to ``count`` iterations from the world's, ``sim.inbox`` handled in the first
+        (``common``: the kernels' common arguments, ``row0``: the record group's first row,
+        ``fresh``: the state goes to the device anew, the handlers' too); how many were
+        done. ``count`` 0 compiles the kernels."""
         start, every, reach = sim.world.iteration, sim.recorder.every, sim.world.datalink.range
-        blocks, threads = shape(self.n)
-        done = 0
+        if fresh:
+            self.upload_state()
+        if not count:
+            self.compile(common, reach)
+            return 0
+        self.upload_inbox(sim)
         for t in range(start + 1, start + count + 1):
-            extra = self.arguments(reach)
-            self.kernels["sense_move"][blocks, threads](self.n, t, every, row0, *common, *extra)
+            head = (t, every, row0, *common)
+            self._launch("sense_move", self.n, head, reach)
             for k, how, m in self.plan:
-                self._handle(k, how, m, t, every, row0, common, reach)
-            extra = self.arguments(reach)
-            self.kernels["tick"][blocks, threads](self.n, t, every, row0, *common, *extra)
-            done += 1
-            if self._collect(t, every, row0, common, reach):
-                break
-        return done
+                self._handle(k, how, m, head, reach)
+            self._launch("tick", self.n, head, reach)
+            if self._collect(head, reach):
+                return t - start
+        return count
+
+    def _launch(self, name: str, live: int, head: tuple[Any, ...], reach: float) -> None:
+        """Kernel ``name`` over ``live`` threads: ``head`` (the iteration, ``every``,
+        ``row0``, then the common arguments), then :meth:`arguments`."""
+        self.kernels[name][shape(live)](live, *head, *self.arguments(reach))
 
     def _everyone(self, k: int, m: int) -> int:
         """How type ``k``'s delivery to everyone of ``m`` messages is handled (see the
@@ -196,23 +206,19 @@ class DeviceMessages:
             return self.EACH
         return self.ALL
 
-    def _handle(self, k: int, how: int, m: int, t: int, every: int, row0: int,
-                common: tuple[Any, ...], reach: float) -> None:  # fmt: skip
+    def _handle(self, k: int, how: int, m: int, head: tuple[Any, ...], reach: float) -> None:
         """Type ``k``'s delivery of last iteration (``m`` messages), handled ``how``: in one
         thread (``ALL``), one thread per message (``SENDER``: those that start a sender's
         run work) or one thread per receiver (``EACH``, ``NEAR``), with more room for the
         per-receiver state while it lacks some."""
-        kernel = self.kernels[f"{self.KERNELS[how]}_{k}"]
+        name = f"{self.KERNELS[how]}_{k}"
         if how in (self.ALL, self.SENDER):
-            live = 1 if how == self.ALL else m
-            kernel[shape(live)](live, t, every, row0, *common, *self.arguments(reach))
+            self._launch(name, 1 if how == self.ALL else m, head, reach)
             return
-        blocks, threads = shape(self.n)
         receive = self.messaging.handlers[k].receive
         assert receive is not None
         while True:
-            extra = self.arguments(reach)
-            kernel[blocks, threads](self.n, t, every, row0, *common, *extra)
+            self._launch(name, self.n, head, reach)
             if not self.tables[k] or self.tables[k][0].copy_to_host()[0] == 0:
                 return
             assert receive.keep is not None and receive.state is not None
@@ -220,20 +226,17 @@ class DeviceMessages:
             self.room[k] *= 2
             self.tables[k] = tuple(cuda.to_device(a) for a in receive.state(self.room[k]))
 
-    def _collect(self, t: int, every: int, row0: int, common: tuple[Any, ...],
-                 reach: float) -> bool:  # fmt: skip
+    def _collect(self, head: tuple[Any, ...], reach: float) -> bool:
         """Phase 5 on the device: this iteration's messages into the inboxes and the next
         iteration's handling planned; True where the CPU must deliver them instead."""
         n, messaging = self.n, self.messaging
         self.lowest.copy_to_device(self.no_node)
-        extra = self.arguments(reach)
-        blocks, threads = shape(n)
-        x, y = common[self.xy[0]], common[self.xy[1]]
+        x, y = head[3 + self.xy[0]], head[3 + self.xy[1]]  # after t, every, row0
         for k in range(len(messaging.types)):
             flags, places = self.inboxes[k][:2]
-            self.kernels[f"flag_{k}"][blocks, threads](n, t, every, row0, *common, *extra)
+            self._launch(f"flag_{k}", n, head, reach)
             exclusive_scan(flags[: n * self.width[k]], places, self.work)
-            self.kernels[f"scatter_{k}"][blocks, threads](n, t, every, row0, *common, *extra)
+            self._launch(f"scatter_{k}", n, head, reach)
         counts, lowest = self.counts.copy_to_host(), self.lowest.copy_to_host()
         sent = sorted((int(lowest[k]), k) for k in range(len(counts)) if counts[k] > 0)
         self.plan, stop, boxes = [], False, {}

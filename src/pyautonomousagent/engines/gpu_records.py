@@ -108,21 +108,16 @@ class RecordGroups:
         self.traced_at = cuda.to_device(traced_at)
         self.leaf_rows = cuda.to_device(recorder.leaf_rows.astype(np.int64))
         self._no_stop = cuda.to_device(np.full(agents, -1, dtype=np.int64))
-        self._shapes = self._row_shapes(agents)
+        # the shape of one record row and the type of each record array, in kernel order
+        self._shapes: list[tuple[tuple[int, ...], np.dtype]]
+        self._shapes = [((agents,), recorder.columns.dtypes[k]) for k in self.names]
+        self._shapes.append(((len(recorder.nodes), recorder.traced.size), np.dtype(np.int8)))
+        self._shapes.append(((agents,), np.dtype(np.int16)))
         fitting = GROUP_BYTES // max(1, self.row_bytes)
         self.capacity = max(1, min(iterations // recorder.every + 1, fitting))
         self._slots: list[Slot] = []
         self._next = 0
         self._flight: deque[Group] = deque()
-
-    def _row_shapes(self, agents: int) -> list[tuple[tuple[int, ...], np.dtype]]:
-        """The shape of one record row and the type of each record array, in kernel order."""
-        r = self.recorder
-        shapes: list[tuple[tuple[int, ...], np.dtype]]
-        shapes = [((agents,), r.columns.dtypes[k]) for k in self.names]
-        shapes.append(((len(r.nodes), r.traced.size), np.dtype(np.int8)))
-        shapes.append(((agents,), np.dtype(np.int16)))
-        return shapes
 
     @property
     def row_bytes(self) -> int:

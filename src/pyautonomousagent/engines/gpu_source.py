@@ -13,6 +13,7 @@ phase and message type (:func:`message_module_source`). docs/architecture.md, "T
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 from pyautonomousagent.bt.program import Program
@@ -46,23 +47,45 @@ MESSAGE_HEADER = HEADER.replace("import cuda\n", "import cuda, int64\n") + (
 )
 
 
-def _thread_control(kernels: Mapping[int, LeafKernel], layout: Layout, stages: Stages,
-                    indent: str) -> str:  # fmt: skip
-    """Phase 4 for the agent ``a`` of a thread (``stages.control``), at ``indent``, after its
-    deferred ``Later`` steps (if any)."""
-    if not layout.deferred:
-        return stages.control(layout, indent)
-    control = stages.control(layout, indent + " " * 4)
-    return _later_pass(kernels, layout, "range(a, a + 1)", control, indent)
+@dataclass(frozen=True)
+class Thread:
+    """What the kernels are written from, for the agent ``a = cuda.grid(1)`` of a CUDA
+    thread at iteration ``t``: the tree's program, its leaves' kernels, the layout, the
+    mission's compiled sensors and the host engine's per-agent ``stages``."""
 
+    program: Program
+    kernels: Mapping[int, LeafKernel]
+    layout: Layout
+    sensors: SensorKernel
+    stages: Stages
 
-def _record(layout: Layout, indent: str) -> str:
-    """Phase 6 for the agent ``a`` of a thread, at ``indent``: at a recorded iteration ``t``,
-    its columns and node statuses into record row ``t // every - row0``."""
-    store = [f"    r{j}[row, a] = c{j}[a]" for j in range(len(layout.names))]
-    statuses = "    record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"
-    lines = ["if t % every == 0:", "    row = t // every - row0", *store, statuses]
-    return "\n".join(indent + line for line in lines)
+    def tick(self, indent: str) -> str:
+        """Phases 3 and 4 (after the deferred ``Later`` steps, if any), then Phase 6: at a
+        recorded iteration, the columns and node statuses into record row ``t // every -
+        row0``; at ``indent``."""
+        layout, stages = self.layout, self.stages
+        tree = stages.tree(self.program, self.kernels, layout, indent)  # numbers constants first
+        if layout.deferred:
+            control = stages.control(layout, indent + " " * 4)
+            control = _later_pass(self.kernels, layout, "range(a, a + 1)", control, indent)
+        else:
+            control = stages.control(layout, indent)
+        store = [f"    r{j}[row, a] = c{j}[a]" for j in range(len(layout.names))]
+        statuses = "    record_statuses(a, row, st, traces, traced_at, behaviour, leaf_rows)"
+        record = ["if t % every == 0:", "    row = t // every - row0", *store, statuses]
+        return "\n".join([tree, control, *(indent + line for line in record)])
+
+    def imports(self) -> dict[str, Any]:
+        """Name -> function of the leaves' and the motion model's kernels
+        (:func:`~pyautonomousagent.loop.source.kernel_imports`) and the sensors' (with a
+        swarm sensor its ``apply``, ``WA``, and device steps, ``WD0, WD1, ...``)."""
+        used = kernel_imports(self.kernels, self.layout)
+        used["S"] = self.sensors.function
+        swarm = self.sensors.swarm
+        if swarm is not None:
+            used["WA"] = swarm.apply
+            used |= {f"WD{j}": step for j, step in enumerate(swarm.device)}
+        return used
 
 
 def _swarm_state(sensors: SensorKernel) -> str:
@@ -94,19 +117,13 @@ def swarm_{j}(t, n, kf, ki, {layout.arrays}{states}):
     )
 
 
-def kernel_module_source(
-    program: Program,
-    kernels: Mapping[int, LeafKernel],
-    layout: Layout,
-    sensors: SensorKernel,
-    stages: Stages,
-) -> str:
+def kernel_module_source(thread: Thread) -> str:
     """The generated module: imports of the helpers and kernels, then ``block_gpu``, the
     fused loop of the compiled engine's ``block_function`` for the one agent of a CUDA thread
     (see the module's docstring; its per-agent ``stages`` written by the host engine), and
     the swarm sensor's :func:`swarm_kernels`: plain Python functions, which
     :func:`~pyautonomousagent.engines.gpu.load_kernel` compiles (FMA contraction off)."""
-    tree_body, _motion = stages.tree, stages.motion  # the host's
+    layout, sensors = thread.layout, thread.sensors
     if layout.outboxes:
         raise ValueError("the GPU kernel is written for trees that send no messages")
     arguments = fused_arguments(layout, sensors) + _swarm_state(sensors)
@@ -116,26 +133,11 @@ def block_gpu(t0, count, every, row0, {arguments}):
     if a >= {layout.array("x")}.shape[0]:
         return
     for t in range(t0 + 1, t0 + count + 1):
-{_motion(layout, sensors, " " * 8)}
-{tree_body(program, kernels, layout, " " * 8)}
-{_thread_control(kernels, layout, stages, " " * 8)}
-{_record(layout, " " * 8)}
+{thread.stages.motion(layout, sensors, " " * 8)}
+{thread.tick(" " * 8)}
 """
-    imports = import_lines(_kernel_imports(kernels, sensors, layout))
+    imports = import_lines(thread.imports())
     return "\n".join([HEADER, *imports, block_gpu, swarm_kernels(layout, sensors)]) + "\n"
-
-
-def _kernel_imports(kernels: Mapping[int, LeafKernel], sensors: SensorKernel,
-                    layout: Layout) -> dict[str, Any]:  # fmt: skip
-    """Name -> function of the leaves' and the motion model's kernels
-    (:func:`~pyautonomousagent.loop.source.kernel_imports`) and the sensors' (with a swarm
-    sensor its ``apply``, ``WA``, and device steps, ``WD0, WD1, ...``)."""
-    used = kernel_imports(kernels, layout)
-    used["S"] = sensors.function
-    if sensors.swarm is not None:
-        used["WA"] = sensors.swarm.apply
-        used |= {f"WD{j}": step for j, step in enumerate(sensors.swarm.device)}
-    return used
 
 
 def message_arguments(layout: Layout, messaging: Messaging) -> str:
@@ -166,15 +168,11 @@ def receive_size(messaging: Messaging, k: int) -> int:
     return len(receive.state(1))
 
 
-def _kernel(
-    name: str, layout: Layout, sensors: SensorKernel, messaging: Messaging, body: str
-) -> str:
-    """A message kernel ``name(live, t, every, row0, common..., message...)``: ``body`` for
-    thread ``a = cuda.grid(1)`` below ``live``, indented by 4."""
-    common = fused_arguments(layout, sensors)
-    return f"""
+#: A message kernel ``name(live, t, every, row0, common..., extra...)`` (``extra``:
+#: :func:`message_arguments`): ``body`` for thread ``a = cuda.grid(1)`` below ``live``.
+MESSAGE_KERNEL = """
 def {name}(live, t, every, row0, {common},
-           {message_arguments(layout, messaging)}):
+           {extra}):
     a = cuda.grid(1)
     if a >= live:
         return
@@ -278,47 +276,32 @@ def _scatter(messaging: Messaging, k: int) -> str:
     return "\n".join(lines)
 
 
-def message_module_source(
-    program: Program,
-    kernels: Mapping[int, LeafKernel],
-    layout: Layout,
-    sensors: SensorKernel,
-    messaging: Messaging,
-    stages: Stages,
-) -> str:
+def message_module_source(thread: Thread, messaging: Messaging) -> str:
     """The generated module of a tree that sends messages: imports of the helpers, leaves',
     sensors' and handlers' kernels (``H<k>``, per-receiver ``R<k>``), then the kernels of one
     iteration, one thread an agent (plain Python functions: the engine compiles them):
     ``sense_move`` (Phase 2's sensors and motion), per type the handling of last
-    iteration's delivery: of one that reached everyone ``handle_all_<k>`` (thread 0: the
-    compiled handler), ``handle_sender_<k>`` (a ``by_sender`` handler: one thread per
-    sender, on its messages) and ``handle_each_<k>`` (one thread per receiver: the
-    per-receiver form of every message it did not send), of one that reached only some
-    ``handle_near_<k>`` (one thread per receiver: the per-receiver form of the messages in
-    range, found on the type's cell grid), ``tick`` (Phases 3, 4 and 6), then per type
+    iteration's delivery (``handle_all_<k>``, ``handle_sender_<k>``, ``handle_each_<k>``,
+    ``handle_near_<k>``: the functions above), ``tick`` (Phases 3, 4 and 6), then per type
     ``flag_<k>`` and ``scatter_<k>`` (Phase 5: the messages into the inbox; the engine runs
-    a prefix sum between them). ``stages``: the per-agent source the host engine writes."""
-    used = _kernel_imports(kernels, sensors, layout)
+    a prefix sum between them)."""
+    layout, sensors = thread.layout, thread.sensors
+    tick = thread.tick(" " * 4)  # first: it numbers the leaves' constants
+    used, bodies = thread.imports(), {"sense_move": thread.stages.motion(layout, sensors, " " * 4)}
     for k, handler in enumerate(messaging.handlers):
         used[f"H{k}"] = handler.function
-        if handler.receive is not None:
-            used[f"R{k}"] = handler.receive.function
-    tree_body, _motion = stages.tree, stages.motion  # the host's
-    tick = f"""{tree_body(program, kernels, layout, " " * 4)}
-{_thread_control(kernels, layout, stages, " " * 4)}
-{_record(layout, " " * 4)}"""
-    parts = [_kernel("sense_move", layout, sensors, messaging, _motion(layout, sensors, " " * 4))]
-    for k, handler in enumerate(messaging.handlers):
         forms = [("handle_all", _handle_all)]
         forms += [("handle_sender", _handle_sender)] if handler.by_sender else []
         if handler.receive is not None:
+            used[f"R{k}"] = handler.receive.function
             forms += [("handle_each", _handle_each), ("handle_near", _handle_near)]
-        for name, form in forms:
-            parts.append(
-                _kernel(f"{name}_{k}", layout, sensors, messaging, form(messaging, layout, k))
-            )
-    parts.append(_kernel("tick", layout, sensors, messaging, tick))
+        bodies |= {f"{name}_{k}": form(messaging, layout, k) for name, form in forms}
+    bodies["tick"] = tick
     for k in range(len(messaging.types)):
-        parts.append(_kernel(f"flag_{k}", layout, sensors, messaging, _flag(messaging, layout, k)))
-        parts.append(_kernel(f"scatter_{k}", layout, sensors, messaging, _scatter(messaging, k)))
+        bodies |= {f"flag_{k}": _flag(messaging, layout, k), f"scatter_{k}": _scatter(messaging, k)}
+    common, extra = fused_arguments(layout, sensors), message_arguments(layout, messaging)
+    parts = [
+        MESSAGE_KERNEL.format(name=name, common=common, extra=extra, body=body)
+        for name, body in bodies.items()
+    ]
     return "\n".join([MESSAGE_HEADER, *import_lines(used), "".join(parts)]) + "\n"
