@@ -67,9 +67,14 @@ def tree_body(
     after the outboxes are cleared (nothing sent yet this tick)."""
     ticks = layout.array("number_ticks")
     clear = "".join(f"{indent}o{i}[0, a] = 0.0\n" for i in layout.outboxes)
-    body = source.tree_body(program, lambda i: _leaf_lines(i, kernels, layout, ticks),
-                            layout.memory_rows, indent, layout.time_step,
-                            lambda key: f"{layout.array(key)}[a]")  # fmt: skip
+    body = source.tree_body(
+        program,
+        lambda i: _leaf_lines(i, kernels, layout, ticks),
+        layout.memory_rows,
+        indent,
+        layout.time_step,
+        lambda key: f"{layout.array(key)}[a]",
+    )
     return clear + body
 
 
