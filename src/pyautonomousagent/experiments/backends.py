@@ -152,8 +152,7 @@ class PoolBackend(Watched):
     def _look(self) -> None:
         """Note the pool's processes (they start as runs are submitted)."""
         processes = getattr(self._pool, "_processes", None) or {}
-        for pid, process in list(processes.items()):
-            self._known[f"process {pid}"] = process
+        self._known.update({f"process {pid}": p for pid, p in list(processes.items())})
         self.see(list(self._known))
 
     def _lost(self, again: int) -> None:
@@ -161,15 +160,9 @@ class PoolBackend(Watched):
         The pool's own thread reaps its processes meanwhile, so an exit code may show a
         moment late: wait for them (at most 2 s; the pool stops every process it had)."""
         deadline = time.monotonic() + 2.0
-        while time.monotonic() < deadline:
-            if all(process.exitcode is not None for process in self._known.values()):
-                break
+        while time.monotonic() < deadline and any(p.exitcode is None for p in self._known.values()):
             time.sleep(0.01)
-        dead = [
-            name
-            for name, process in self._known.items()
-            if process.exitcode is not None and process.exitcode != -signal.SIGTERM
-        ]
+        dead = [n for n, p in self._known.items() if p.exitcode not in (None, -signal.SIGTERM)]
         for name in dead or ["a process"]:
             if self.lose(name):
                 code = self._known[name].exitcode if name in self._known else "?"

@@ -28,13 +28,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pyautonomousagent.experiments.design import (
-    DESIGNS,
-    Design,
-    is_power_of_two,
-    schema_types,
-    typed,
-)
+from pyautonomousagent.experiments.design import DESIGNS, Design, schema_types, typed
 from pyautonomousagent.experiments.errors import ExperimentError, close_hint
 from pyautonomousagent.experiments.expression import ExpressionError
 from pyautonomousagent.experiments.measures import MEASURES, Measure, expression_measure
@@ -348,7 +342,7 @@ class _Reader:
                 f"design {method} needs samples, the number of samples N (e.g. --samples 64)"
             )
         samples = self.count(data["samples"], "samples")
-        if method == "sobol" and not is_power_of_two(samples):
+        if method == "sobol" and samples & (samples - 1):  # not a power of two
             raise self.fail("samples", "a power of two for design sobol (e.g. 32, 64)", samples)
         grid = self.mapping(data.get("vary") or {}, "vary")
         if not grid:

@@ -156,9 +156,7 @@ def compile_once(
         return None
     tree = scenario_tree(scenario)
     if experiment.engine == "auto":
-        points = experiment.points()
-        agents = max(int(p.get("agents", scenario.agents)) for p in points)
-        iterations = max(int(p.get("iterations", scenario.iterations)) for p in points)
+        agents, iterations = largest_run(experiment, scenario)
         every = experiment.record_every
         columns = recorded_columns(scenario.create_mission(), tree)
         if choose_engine(tree, agents, iterations, every, columns, True) != "compiled":
@@ -179,13 +177,18 @@ def compile_once(
     return seconds
 
 
+def largest_run(experiment: Experiment, scenario: Any) -> tuple[int, int]:
+    """The most agents and the most iterations of any of the experiment's points."""
+    points = experiment.points()
+    agents = max(int(p.get("agents", scenario.agents)) for p in points)
+    return agents, max(int(p.get("iterations", scenario.iterations)) for p in points)
+
+
 def run_bytes(experiment: Experiment, scenario: Any, columns: int, save_runs: bool) -> int:
     """Estimated peak memory of the experiment's largest run: its records (8 bytes per
     column, agent and record; twice when the run's table is written) and the freed memory
     the allocator keeps."""
-    points = experiment.points()
-    agents = max(int(p.get("agents", scenario.agents)) for p in points)
-    iterations = max(int(p.get("iterations", scenario.iterations)) for p in points)
+    agents, iterations = largest_run(experiment, scenario)
     records = iterations // experiment.record_every + 1
     recorded = records * agents * columns * 8 * (2 if save_runs else 1)
     return recorded + ALLOCATOR_RETAINED_BYTES
@@ -248,7 +251,6 @@ def sweep(
     compile_once(experiment, scenario, len(runs), report)
     probe = check(experiment, scenario)
     _previous_manifest(out, experiment, resume)  # refused before a backend starts
-    schema = _schema(experiment, scenario)
     owned = isinstance(backend, str)
     chosen = make_backend(backend, workers, address) if isinstance(backend, str) else backend
     with contextlib.ExitStack() as held:
@@ -260,8 +262,7 @@ def sweep(
         held.enter_context(_claim(out, report))
         previous = _previous_manifest(out, experiment, resume)  # again, now that it is ours
         start = time.perf_counter()
-        out.mkdir(parents=True, exist_ok=True)
-        journal = Journal(out, schema)
+        journal = Journal(out, _schema(experiment, scenario))  # makes the folder
         for note in journal.notes:
             report(note)
         done = journal.finished() if resume else set()
