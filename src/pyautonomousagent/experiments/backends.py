@@ -8,9 +8,8 @@ result or the exception that stopped the worker. The function is the same everyw
 every backend. At most 4 runs per worker are in flight, so a sweep of a million runs does not
 hold a million futures. A pool that breaks (a worker killed, out of memory) is started again
 and its runs given again, up to :data:`ATTEMPTS` times each; a Dask run is submitted under
-its own key (never ``pure=True``'s hash, which would merge identical runs). The pool and Dask
-backends count the workers seen and lost and the runs given again (:meth:`stats`, written
-into ``experiment.json``) and tell ``report`` (one line, set by the sweep) of a lost worker.
+its own key (never ``pure=True``'s hash, which would merge identical runs); the pool and Dask
+backends count their lost workers (:class:`Watched`).
 """
 
 from __future__ import annotations
@@ -290,7 +289,6 @@ class DaskBackend(Watched):
             raise BackendError(
                 "the Dask backend needs dask[distributed]: pip install 'pyautonomousagent[dask]'"
             ) from None
-        self.address = address
         self._cluster = None
         if address is None:
             self._cluster = LocalCluster(

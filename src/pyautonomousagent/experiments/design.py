@@ -12,6 +12,7 @@ likely. SALib and SciPy are the optional ``[experiments]`` extra, imported only 
 
 from __future__ import annotations
 
+import importlib
 import json
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
@@ -129,8 +130,6 @@ def typed(design: Design, kinds: dict[str, type]) -> Design:
 def library(module: str, method: str) -> Any:
     """The module ``module`` (of SALib or SciPy), or an ExperimentError naming the extra to
     install; ``method`` is the design that needs it."""
-    import importlib
-
     try:
         return importlib.import_module(module)
     except ImportError:

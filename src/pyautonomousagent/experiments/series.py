@@ -10,6 +10,7 @@ per ok run, measure and checkpoint (docs/experiments.md, "Time series").
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -134,8 +135,6 @@ def compact(folder: Path, results: pa.Table) -> pa.Table:
 def documented(table: pa.Table, units: Mapping[str, Any]) -> pa.Table:
     """``table`` with the measures' units (``units``: name -> {"unit", "doc"}, the
     manifest's ``measures``) in the schema's metadata under ``b"measures"``."""
-    import json
-
     metadata = dict(table.schema.metadata or {})
     metadata[b"measures"] = json.dumps(dict(units)).encode()
     return table.replace_schema_metadata(metadata)
