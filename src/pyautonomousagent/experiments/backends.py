@@ -8,9 +8,8 @@ result or the exception that stopped the worker. The function is the same everyw
 every backend. At most 4 runs per worker are in flight, so a sweep of a million runs does not
 hold a million futures. A pool that breaks (a worker killed, out of memory) is started again
 and its runs given again, up to :data:`ATTEMPTS` times each; a Dask run is submitted under
-its own key (never ``pure=True``'s hash, which would merge identical runs). The pool and Dask
-backends count the workers seen and lost and the runs given again (:meth:`stats`, written
-into ``experiment.json``) and tell ``report`` (one line, set by the sweep) of a lost worker.
+its own key (never ``pure=True``'s hash, which would merge identical runs); the pool and Dask
+backends count their lost workers (:class:`Watched`).
 """
 
 from __future__ import annotations
@@ -152,8 +151,7 @@ class PoolBackend(Watched):
     def _look(self) -> None:
         """Note the pool's processes (they start as runs are submitted)."""
         processes = getattr(self._pool, "_processes", None) or {}
-        for pid, process in list(processes.items()):
-            self._known[f"process {pid}"] = process
+        self._known.update({f"process {pid}": p for pid, p in list(processes.items())})
         self.see(list(self._known))
 
     def _lost(self, again: int) -> None:
@@ -161,15 +159,9 @@ class PoolBackend(Watched):
         The pool's own thread reaps its processes meanwhile, so an exit code may show a
         moment late: wait for them (at most 2 s; the pool stops every process it had)."""
         deadline = time.monotonic() + 2.0
-        while time.monotonic() < deadline:
-            if all(process.exitcode is not None for process in self._known.values()):
-                break
+        while time.monotonic() < deadline and any(p.exitcode is None for p in self._known.values()):
             time.sleep(0.01)
-        dead = [
-            name
-            for name, process in self._known.items()
-            if process.exitcode is not None and process.exitcode != -signal.SIGTERM
-        ]
+        dead = [n for n, p in self._known.items() if p.exitcode not in (None, -signal.SIGTERM)]
         for name in dead or ["a process"]:
             if self.lose(name):
                 code = self._known[name].exitcode if name in self._known else "?"
@@ -297,7 +289,6 @@ class DaskBackend(Watched):
             raise BackendError(
                 "the Dask backend needs dask[distributed]: pip install 'pyautonomousagent[dask]'"
             ) from None
-        self.address = address
         self._cluster = None
         if address is None:
             self._cluster = LocalCluster(

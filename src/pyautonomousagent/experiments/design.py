@@ -12,6 +12,7 @@ likely. SALib and SciPy are the optional ``[experiments]`` extra, imported only 
 
 from __future__ import annotations
 
+import importlib
 import json
 from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING, Any
@@ -126,16 +127,9 @@ def typed(design: Design, kinds: dict[str, type]) -> Design:
     return replace(design, integers=frozenset(integers))
 
 
-def is_power_of_two(value: int) -> bool:
-    """True for 1, 2, 4, 8, ..."""
-    return value >= 1 and value & (value - 1) == 0
-
-
 def library(module: str, method: str) -> Any:
     """The module ``module`` (of SALib or SciPy), or an ExperimentError naming the extra to
     install; ``method`` is the design that needs it."""
-    import importlib
-
     try:
         return importlib.import_module(module)
     except ImportError:

@@ -11,6 +11,7 @@ must be one number.
 from __future__ import annotations
 
 import ast
+import functools
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -154,10 +155,8 @@ class Expression:
 
 def _chain(ops: list[Callable[[Any, Any], Any]], values: list[Any]) -> np.ndarray:
     """``a < b <= c ...``: 1.0 where every comparison of neighbours holds, else 0.0."""
-    result: Any = True
-    for op, left, right in zip(ops, values, values[1:], strict=False):
-        result = np.logical_and(result, op(left, right))
-    return np.asarray(result, dtype=np.float64)
+    holds = (op(left, right) for op, left, right in zip(ops, values, values[1:], strict=False))
+    return np.asarray(functools.reduce(np.logical_and, holds, True), dtype=np.float64)
 
 
 def _reduced(function: Callable[[np.ndarray], Any], argument: np.ndarray) -> Any:

@@ -16,8 +16,10 @@ from typing import Any
 
 import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 
 from pyautonomousagent.experiments.errors import ExperimentError, close_hint
+from pyautonomousagent.experiments.series import TIMESERIES
 from pyautonomousagent.experiments.store import MANIFEST, RESULTS, read_manifest
 from pyautonomousagent.inputs import InputError, read_parquet
 
@@ -194,8 +196,6 @@ def read_series(folder: str | Path) -> tuple[pa.Table, pa.Table, dict[str, Any],
         ExperimentError: no sweep results, or no time series (the sweep ran without
             ``--every``), or a file that cannot be read.
     """
-    from pyautonomousagent.experiments.series import TIMESERIES
-
     path = Path(folder)
     path = path if path.is_dir() else path.parent
     results, manifest = read_results(path)
@@ -223,8 +223,6 @@ def summarize_over_time(
         ExperimentError: ``measure`` is not in the time series, or ``by`` not a column of
             the results, or no run has a value.
     """
-    import pyarrow.compute as pc
-
     names = sorted(set(series["measure"].to_pylist()))
     if measure not in names:
         raise ExperimentError(

@@ -16,13 +16,17 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 from urllib.parse import quote
 
-from pyautonomousagent.simulation.scenario import to_mapping
+import pyarrow as pa
+
+from pyautonomousagent.experiments.measures import Measure, RunData
+from pyautonomousagent.experiments.series import SERIES, run_series
+from pyautonomousagent.experiments.store import atomic_write_table
+from pyautonomousagent.simulation import Scenario, Simulation
+from pyautonomousagent.simulation.scenario import parameter_list, to_mapping
 
 if TYPE_CHECKING:
     from pyautonomousagent.bt.spec import Node
-    from pyautonomousagent.experiments.measures import Measure
     from pyautonomousagent.experiments.spec import Run
-    from pyautonomousagent.simulation import Scenario
 
 
 @dataclass(frozen=True)
@@ -58,10 +62,6 @@ def execute(task: RunTask) -> dict[str, Any]:
     log (e.g. one warning per drone that runs dry) is silenced: the measures count it. With
     ``task.every`` the row also holds the run's time series (a table) under
     :data:`~pyautonomousagent.experiments.series.SERIES`, if the run is ok."""
-    from pyautonomousagent.experiments.measures import RunData
-    from pyautonomousagent.experiments.series import SERIES, run_series
-    from pyautonomousagent.simulation import Simulation
-
     run, row = task.run, blank_row(task)
     start = time.perf_counter()
     log = logging.getLogger("pyautonomousagent")
@@ -130,8 +130,6 @@ def partition_dir(root: Path, run: Run) -> Path:
 
 def write_run_data(sim: Any, root: Path, run: Run) -> None:
     """Write the run's recorded table as ``data.parquet`` in its partition folder."""
-    from pyautonomousagent.experiments.store import atomic_write_table
-
     folder = partition_dir(root, run)
     folder.mkdir(parents=True, exist_ok=True)
     atomic_write_table(sim.table(), folder / "data.parquet")
@@ -150,10 +148,6 @@ def parameter_columns(scenario: Any) -> tuple[dict[str, Any], dict[str, tuple[st
     bool, str -> string) and its (unit, description), for the results' schema: the
     scenario's fields that can vary and every declared parameter of its core, motion model
     and mission."""
-    import pyarrow as pa
-
-    from pyautonomousagent.simulation.scenario import parameter_list
-
     arrow = {bool: pa.bool_(), int: pa.int64(), float: pa.float64(), str: pa.string()}
     types = {name: arrow[kind] for name, (kind, _, _) in _FIELD_COLUMNS.items()}
     docs = {name: (unit, doc) for name, (_, unit, doc) in _FIELD_COLUMNS.items()}

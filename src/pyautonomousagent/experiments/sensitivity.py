@@ -6,8 +6,7 @@ and ``ST`` (no unit, 0 to 1) or Morris's ``mu_star``, ``sigma`` and ``mu`` (the 
 unit per the parameter's whole range), each with ``confidence``, the half-width of its 95 %
 bootstrap interval (drawn from the design's seed: the same sweep gives the same table). A
 point run with several seeds counts by the mean of its successful runs; a measure with one
-value everywhere, or none at some point, has no indices (NaN). :func:`read_sweep` reads what
-the analysis needs from a sweep folder, and :func:`plot_indices` draws the table.
+value everywhere, or none at some point, has no indices (NaN).
 """
 
 from __future__ import annotations
@@ -90,13 +89,9 @@ def _read_design(path: Path) -> tuple[Design, np.ndarray]:
     try:
         table = read_parquet(path, "design", ("point",))
         about = json.loads((table.schema.metadata or {})[b"pyaa.design"])
-        design = Design(
-            about["method"],
-            int(about["samples"]),
-            int(about["seed"]),
-            {k: (float(lo), float(hi)) for k, (lo, hi) in about["bounds"].items()},
-            frozenset(about["integers"]),
-        )
+        method, samples, seed = about["method"], int(about["samples"]), int(about["seed"])
+        bounds = {k: (float(lo), float(hi)) for k, (lo, hi) in about["bounds"].items()}
+        design = Design(method, samples, seed, bounds, frozenset(about["integers"]))
         unit = np.column_stack([table[name].to_numpy() for name in design.names])
     except (InputError, KeyError, ValueError, TypeError, pa.ArrowException) as error:
         raise ExperimentError(f"{path}: not a design pyaa sweep wrote ({error})") from None
@@ -254,8 +249,7 @@ def _panel(ax: Any, table: pa.Table, stored: StoredSweep, measure: str) -> None:
     ax.set_title(measure_label(measure, stored.measures), fontsize=9)
     if all(math.isnan(r["value"]) for r in rows):
         ax.text(0.5, 0.5, "no indices", ha="center", transform=ax.transAxes)
-        ax.set_xticks([])
-        ax.set_yticks([])
+        ax.set(xticks=[], yticks=[])
         return
     labels = {"S1": "first order S1", "ST": "total ST", "mu_star": "mu*", "sigma": "sigma"}
     where = np.arange(len(names))

@@ -10,6 +10,7 @@ per ok run, measure and checkpoint (docs/experiments.md, "Time series").
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -125,9 +126,7 @@ def compact(folder: Path, results: pa.Table) -> pa.Table:
     ok = results.filter(pc.equal(results["status"], "ok"))
     order = {run_id: i for i, run_id in enumerate(ok["run_id"].to_pylist())}
     rows = list(zip(parts["run_id"].to_pylist(), parts["part"].to_pylist(), strict=True))
-    latest: dict[str, int] = {}
-    for run_id, part in rows:
-        latest[run_id] = max(part, latest.get(run_id, part))
+    latest = dict(rows)  # the parts oldest first: a run's last row is in its latest part
     keep = [i for i, (run, part) in enumerate(rows) if run in order and latest[run] == part]
     keep.sort(key=lambda i: order[rows[i][0]])  # stable: a run's rows keep their order
     return parts.take(pa.array(keep, pa.int64())).select(series_schema().names)
@@ -136,8 +135,6 @@ def compact(folder: Path, results: pa.Table) -> pa.Table:
 def documented(table: pa.Table, units: Mapping[str, Any]) -> pa.Table:
     """``table`` with the measures' units (``units``: name -> {"unit", "doc"}, the
     manifest's ``measures``) in the schema's metadata under ``b"measures"``."""
-    import json
-
     metadata = dict(table.schema.metadata or {})
     metadata[b"measures"] = json.dumps(dict(units)).encode()
     return table.replace_schema_metadata(metadata)

@@ -1,18 +1,11 @@
 """An experiment: a scenario, the parameters to vary, the seeds and the measures.
 
-Written as YAML, or given on the command line, which builds the same mapping: the keys
-``name``, ``scenario``, ``iterations``, ``set`` (fixed overrides), ``vary`` (a grid: lists or
-``{from, to, step}`` ranges, both ends included), ``sample`` (random points crossed with the
-grid), ``seeds``, ``measures``, ``engine``, ``record_every`` and ``every`` (the time series'
-interval); or, instead of the grid, ``design`` (lhs, sobol or morris), ``samples`` and
-``design_seed`` with bounds ``{from, to}`` in ``vary`` (see
-:mod:`~pyautonomousagent.experiments.design`). docs/experiments.md shows a full file.
-
-:meth:`Experiment.from_mapping` validates it; every error is an :class:`ExperimentError`
-naming the source, the field and what it must be. :func:`read_file` reads the file as
-every input file is read (bounded, UTF-8, YAML 1.2 numbers, no key given twice, no Python
-tags), and :func:`with_options` adds the command line's ``--vary`` and ``--set`` to it,
-refusing a parameter both fixed and varied, or varied twice.
+Written as YAML (docs/experiments.md, "The experiment", shows every key), or given on the
+command line, which adds to the same mapping (:func:`with_options`). ``vary`` is a grid
+(lists or ``{from, to, step}`` ranges, both ends included) crossed with the random points
+of ``sample``, or the bounds ``{from, to}`` of a sampled ``design`` (lhs, sobol or morris:
+:mod:`~pyautonomousagent.experiments.design`). :meth:`Experiment.from_mapping` validates it;
+every error is an :class:`ExperimentError` naming the source, the field and what it must be.
 """
 
 from __future__ import annotations
@@ -28,13 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from pyautonomousagent.experiments.design import (
-    DESIGNS,
-    Design,
-    is_power_of_two,
-    schema_types,
-    typed,
-)
+from pyautonomousagent.experiments.design import DESIGNS, Design, schema_types, typed
 from pyautonomousagent.experiments.errors import ExperimentError, close_hint
 from pyautonomousagent.experiments.expression import ExpressionError
 from pyautonomousagent.experiments.measures import MEASURES, Measure, expression_measure
@@ -88,7 +75,7 @@ class Run:
 
 @dataclass(frozen=True)
 class Experiment:
-    """A validated experiment (see the module docstring for the file format).
+    """A validated experiment (docs/experiments.md has the file format).
 
     Attributes:
         scenario: a registered scenario name or a scenario file path.
@@ -145,9 +132,7 @@ class Experiment:
 
     def points(self) -> list[dict[str, Any]]:
         """Every point: the grid crossed with the random samples (in that order), or the
-        design's points (whole numbers where the design marks a parameter so, as
-        :func:`for_scenario` does from the scenario's
-        schema: :func:`~pyautonomousagent.experiments.sweeps.sweep` calls it; floats before)."""
+        design's points (whole numbers where :func:`for_scenario` marked a parameter so)."""
         if self.design is not None:
             return self.design.points()
         product = itertools.product(*self.vary.values())
@@ -192,13 +177,10 @@ class Experiment:
                 k: {kind: list(args)} for k, (kind, args) in self.sample["parameters"].items()
             }
             data["sample"] = {**self.sample, "parameters": params}
-        if self.design is not None:
-            data["vary"] = {k: {"from": lo, "to": hi} for k, (lo, hi) in self.design.bounds.items()}
-            data.update(
-                design=self.design.method,
-                samples=self.design.samples,
-                design_seed=self.design.seed,
-            )
+        design = self.design
+        if design is not None:
+            data["vary"] = {k: {"from": lo, "to": hi} for k, (lo, hi) in design.bounds.items()}
+            data.update(design=design.method, samples=design.samples, design_seed=design.seed)
         return data
 
 
@@ -348,7 +330,7 @@ class _Reader:
                 f"design {method} needs samples, the number of samples N (e.g. --samples 64)"
             )
         samples = self.count(data["samples"], "samples")
-        if method == "sobol" and not is_power_of_two(samples):
+        if method == "sobol" and samples & (samples - 1):  # not a power of two
             raise self.fail("samples", "a power of two for design sobol (e.g. 32, 64)", samples)
         grid = self.mapping(data.get("vary") or {}, "vary")
         if not grid:

@@ -22,10 +22,12 @@ from typing import Any
 
 import pyarrow as pa
 
+from pyautonomousagent.bt.files import is_tree_file
+from pyautonomousagent.engines.compiled import CompiledEngine
 from pyautonomousagent.experiments.backends import Backend, make_backend, quiet
 from pyautonomousagent.experiments.design import DESIGN_FILE, design_table
 from pyautonomousagent.experiments.errors import close_hint
-from pyautonomousagent.experiments.measures import RunData, _Evaluate
+from pyautonomousagent.experiments.measures import MEASURES, RunData, _Evaluate
 from pyautonomousagent.experiments.runner import (
     RunTask,
     blank_row,
@@ -50,7 +52,11 @@ from pyautonomousagent.experiments.store import (
 from pyautonomousagent.folders import BusyError, claimed
 from pyautonomousagent.progress import Progress
 from pyautonomousagent.runs import versions
-from pyautonomousagent.simulation.run import scenario_tree
+from pyautonomousagent.scenarios import load
+from pyautonomousagent.simulation import ScenarioError, Simulation
+from pyautonomousagent.simulation.costs import AUTO_COMPILE_SECONDS, run_costs
+from pyautonomousagent.simulation.run import choose_engine, recorded_columns, scenario_tree
+from pyautonomousagent.simulation.scenario import to_mapping
 
 #: Freed memory a worker process may keep: the trim threshold set by ``allocator.py``
 #: (4 x 32 MiB), which the batched engine applies to every process it runs in.
@@ -81,9 +87,6 @@ class SweepResult:
 
 def base_scenario(experiment: Experiment) -> Any:
     """The experiment's scenario with its fixed overrides and iterations applied."""
-    from pyautonomousagent.scenarios import load
-    from pyautonomousagent.simulation import ScenarioError
-
     try:
         scenario = load(experiment.scenario)
         return scenario.with_overrides(**{"iterations": experiment.iterations, **experiment.fixed})
@@ -98,10 +101,6 @@ def check(experiment: Experiment, scenario: Any) -> RunData:
     Raises:
         ExperimentError: an unknown parameter, a bad value, or an unknown column.
     """
-    from pyautonomousagent.bt.files import is_tree_file
-    from pyautonomousagent.simulation import ScenarioError, Simulation
-    from pyautonomousagent.simulation.scenario import to_mapping
-
     data = to_mapping(scenario)
     known = [k for k in data if k not in _NOT_VARIED] + list(data["parameters"])
     values: dict[str, set[str]] = {}
@@ -147,18 +146,11 @@ def compile_once(
     to pay for compiling: :data:`~pyautonomousagent.simulation.costs.AUTO_COMPILE_SECONDS`);
     they load it from numba's cache. Not for a varied tree. ``report`` is told before and
     how long it took; the seconds, or None where nothing was compiled."""
-    from pyautonomousagent.engines.compiled import CompiledEngine
-    from pyautonomousagent.simulation import Simulation
-    from pyautonomousagent.simulation.costs import AUTO_COMPILE_SECONDS, run_costs
-    from pyautonomousagent.simulation.run import choose_engine, recorded_columns
-
     if experiment.engine not in ("auto", "compiled") or "tree" in experiment.parameters:
         return None
     tree = scenario_tree(scenario)
     if experiment.engine == "auto":
-        points = experiment.points()
-        agents = max(int(p.get("agents", scenario.agents)) for p in points)
-        iterations = max(int(p.get("iterations", scenario.iterations)) for p in points)
+        agents, iterations = largest_run(experiment, scenario)
         every = experiment.record_every
         columns = recorded_columns(scenario.create_mission(), tree)
         if choose_engine(tree, agents, iterations, every, columns, True) != "compiled":
@@ -179,13 +171,18 @@ def compile_once(
     return seconds
 
 
+def largest_run(experiment: Experiment, scenario: Any) -> tuple[int, int]:
+    """The most agents and the most iterations of any of the experiment's points."""
+    points = experiment.points()
+    agents = max(int(p.get("agents", scenario.agents)) for p in points)
+    return agents, max(int(p.get("iterations", scenario.iterations)) for p in points)
+
+
 def run_bytes(experiment: Experiment, scenario: Any, columns: int, save_runs: bool) -> int:
     """Estimated peak memory of the experiment's largest run: its records (8 bytes per
     column, agent and record; twice when the run's table is written) and the freed memory
     the allocator keeps."""
-    points = experiment.points()
-    agents = max(int(p.get("agents", scenario.agents)) for p in points)
-    iterations = max(int(p.get("iterations", scenario.iterations)) for p in points)
+    agents, iterations = largest_run(experiment, scenario)
     records = iterations // experiment.record_every + 1
     recorded = records * agents * columns * 8 * (2 if save_runs else 1)
     return recorded + ALLOCATOR_RETAINED_BYTES
@@ -248,7 +245,6 @@ def sweep(
     compile_once(experiment, scenario, len(runs), report)
     probe = check(experiment, scenario)
     _previous_manifest(out, experiment, resume)  # refused before a backend starts
-    schema = _schema(experiment, scenario)
     owned = isinstance(backend, str)
     chosen = make_backend(backend, workers, address) if isinstance(backend, str) else backend
     with contextlib.ExitStack() as held:
@@ -260,8 +256,7 @@ def sweep(
         held.enter_context(_claim(out, report))
         previous = _previous_manifest(out, experiment, resume)  # again, now that it is ours
         start = time.perf_counter()
-        out.mkdir(parents=True, exist_ok=True)
-        journal = Journal(out, schema)
+        journal = Journal(out, _schema(experiment, scenario))  # makes the folder
         for note in journal.notes:
             report(note)
         done = journal.finished() if resume else set()
@@ -336,19 +331,8 @@ def _tasks(
     """One task per run; the tree is read once here unless the tree itself is varied."""
     tree = None if "tree" in experiment.parameters else scenario_tree(scenario)
     folder = str(runs_dir.resolve()) if runs_dir is not None else None
-    return [
-        RunTask(
-            run,
-            scenario,
-            experiment.engine,
-            experiment.record_every,
-            experiment.measures,
-            folder,
-            tree,
-            experiment.every,
-        )
-        for run in runs
-    ]
+    shared = (experiment.engine, experiment.record_every, experiment.measures, folder, tree)
+    return [RunTask(run, scenario, *shared, experiment.every) for run in runs]
 
 
 def _check_picklable(task: RunTask) -> None:
@@ -458,9 +442,6 @@ def _manifest(
     backend: Backend,
     previous: Mapping[str, Any] | None,
 ) -> dict[str, Any]:
-    from pyautonomousagent.experiments.measures import MEASURES
-    from pyautonomousagent.simulation.scenario import to_mapping
-
     measures = {
         m.name: {"doc": m.doc, "unit": m.unit, "registered": m.name in MEASURES}
         for m in experiment.measures
