@@ -5,6 +5,7 @@ where it is declared, before any code is generated or compiled: the count of its
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from pyautonomousagent.jit import njit
@@ -173,3 +174,23 @@ def test_a_handler_and_its_receive_form_must_name_their_arrays_alike() -> None:
 def test_a_function_with_star_args_takes_no_mapping() -> None:
     with pytest.raises(TypeError, match="cannot take columns by name"):
         LeafKernel(lambda a, *arrays: 1, {"x": "x"})
+
+
+def test_a_receive_form_without_state_is_passed_none_of_the_handlers_state() -> None:
+    """The GPU engine passes a per-receiver form only its own state (``Receive.state``), so a
+    handler with run state and a state-less receive form takes the arrays and constants."""
+
+    def everyone(t, senders, data, count, x, seen):
+        pass
+
+    def one(r, m, t, senders, data, x):
+        pass
+
+    def one_with_state(r, m, t, senders, data, x, seen):
+        pass
+
+    state = (np.zeros(4),)
+    handler = HandlerKernel(everyone, ("v",), ("x",), state=state, receive=Receive(one))
+    assert handler.names == ("x",)
+    with pytest.raises(TypeError, match=r"Receive .*one_with_state.* takes 7 arguments"):
+        HandlerKernel(everyone, ("v",), ("x",), state=state, receive=Receive(one_with_state))

@@ -275,7 +275,7 @@ class HandlerKernel:
         everyone, one = ("t", "senders", "data", "count"), ("r", "m", "t", "senders", "data")
         check_arity("HandlerKernel", self.function, everyone, passed)
         if self.receive is not None and self.receive.state is None:  # else: its state's size
-            check_arity("Receive", self.receive.function, one, passed)
+            check_arity("Receive", self.receive.function, one, passed | {"state arrays": 0})
         receive = () if self.receive is None else (("Receive", self.receive.function, one),)
         _bind(self, ("HandlerKernel", self.function, everyone), *receive)
 
