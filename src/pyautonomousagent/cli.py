@@ -880,7 +880,7 @@ def leaves_command(args: argparse.Namespace) -> int:
     )
     values = vars(scenario.parameters)
     for cls in own:
-        print(f"  {cls.type_name}: {_first_line(cls.__doc__)}")
+        print(f"  {cls.type_name}: {cls.summary()}")
         for port in cls.ports:
             doc = f"; {port.doc}" if port.doc else ""
             print(
@@ -892,11 +892,6 @@ def leaves_command(args: argparse.Namespace) -> int:
     general = [cls.type_name for cls in fits if is_general(cls)]
     print(f"general leaves, for any mission (docs/tree-files.md): {', '.join(general)}")
     return 0
-
-
-def _first_line(doc: str | None) -> str:
-    """The first sentence line of a docstring ("" for none)."""
-    return (doc or "").strip().split("\n", 1)[0].strip().replace("``", "")
 
 
 def _tree_source(source: str) -> tuple[Document, str, dict[str, Any], Scenario | None]:

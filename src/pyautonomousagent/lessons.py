@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from pyautonomousagent.bt.spec import Node
-from pyautonomousagent.bt.status import COLOURS, NAMES
+from pyautonomousagent.bt.status import CODES, COLOURS, NAMES
 from pyautonomousagent.inputs import shown
 
 __all__ = [
@@ -166,9 +166,8 @@ def _depths(node: Node, depth: int = 0) -> list[int]:
 def scripted(*statuses: str) -> list[list[int]]:
     """A ``Scripted`` leaf's ``statuses`` port for one agent from status names, e.g.
     ``scripted("RUNNING", "SUCCESS")`` -> ``[[3], [1]]``."""
-    codes = {name: code for code, name in NAMES.items()}
     try:
-        return [[codes[s.upper()]] for s in statuses]
+        return [[CODES[s.upper()]] for s in statuses]
     except KeyError as error:
         raise ValueError(
             f"unknown status {error.args[0]!r}; use SUCCESS, FAILURE or RUNNING"

@@ -14,9 +14,12 @@ Uploaded files go through :func:`~pyautonomousagent.bt.files.document_from_bytes
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from typing import Any
+
+import numpy as np
 
 from pyautonomousagent.bt.build import build
 from pyautonomousagent.bt.document import DEFAULT_TREE_ID, Document, RawNode, document_from_node
@@ -85,7 +88,7 @@ def palette(scenario: Scenario) -> dict[str, Any]:
         {
             "type": cls.type_name,
             "name": snake_case(cls.type_name),
-            "doc": _first_line(cls.__doc__),
+            "doc": cls.summary(),
             "general": is_general(cls),
             "ports": [
                 {
@@ -93,7 +96,7 @@ def palette(scenario: Scenario) -> dict[str, Any]:
                     "hint": port.hint(),
                     "doc": port.doc,
                     "default": port.default,
-                    "value": _plain(values.get(port.default)),
+                    "value": plain(values.get(port.default)),
                 }
                 for port in cls.ports
             ],
@@ -103,12 +106,13 @@ def palette(scenario: Scenario) -> dict[str, Any]:
     return {"controls": controls, "leaves": leaves}
 
 
-def _plain(value: Any) -> Any:
-    return value if isinstance(value, bool | int | float | str) or value is None else str(value)
-
-
-def _first_line(doc: str | None) -> str:
-    return (doc or "").strip().split("\n", 1)[0].strip().replace("``", "")
+def plain(value: Any) -> Any:
+    """``value`` as JSON has it: None, a bool, number or text as it is (a NumPy scalar as
+    Python's); a number that is not finite, and anything else, as text."""
+    item = value.item() if isinstance(value, np.generic) else value
+    if isinstance(item, float) and not math.isfinite(item):
+        return str(item)
+    return item if isinstance(item, bool | int | float | str) or item is None else str(item)
 
 
 def blocks_of(document: Document) -> Block:
