@@ -32,7 +32,6 @@ __all__ = [
 ]
 
 
-
 def _pale(colour: str) -> str:
     """``colour`` (``#rrggbb``) a quarter strength over white, as a ``#rrggbb`` string."""
     channels = (int(colour[i : i + 2], 16) for i in (1, 3, 5))

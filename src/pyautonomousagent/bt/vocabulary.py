@@ -47,15 +47,12 @@ class Tag:
 
 def tags() -> list[Tag]:
     """Every file tag of every registered control node type."""
-    out = []
-    for node_type in NODE_TYPES.values():
-        params = {p.name: (p.type, p.default is None) for p in node_type.params if p.in_files}
-        for t in node_type.tags:
-            out.append(
-                Tag(t.tag, node_type.name, node_type.kind, t.fixed, params,
-                    node_type.builtin, t.symbol, t.doc)
-            )  # fmt: skip
-    return out
+    return [
+        Tag(t.tag, node.name, node.kind, t.fixed, params, node.builtin, t.symbol, t.doc)
+        for node in NODE_TYPES.values()
+        for params in [{p.name: (p.type, p.default is None) for p in node.params if p.in_files}]
+        for t in node.tags
+    ]
 
 
 def by_tag() -> dict[str, Tag]:

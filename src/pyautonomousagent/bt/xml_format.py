@@ -236,16 +236,15 @@ def _flag(text: str, element: _Element, fail: Fail) -> bool:
 
 def _subtree_ports(models: _Element) -> dict[str, dict[str, Any]]:
     """SubTree ID -> {port: default} from a TreeNodesModel (other models are ours)."""
-    found: dict[str, dict[str, Any]] = {}
-    for model in models.children:
-        if model.tag == SUBTREE and model.attrs.get("ID"):
-            found[model.attrs["ID"]] = {
-                port.attrs["name"]: port.attrs["default"]
-                for port in model.children
-                if port.tag in ("input_port", "inout_port")
-                and {"name", "default"} <= set(port.attrs)
-            }
-    return found
+    return {
+        model.attrs["ID"]: {
+            port.attrs["name"]: port.attrs["default"]
+            for port in model.children
+            if port.tag in ("input_port", "inout_port") and {"name", "default"} <= set(port.attrs)
+        }
+        for model in models.children
+        if model.tag == SUBTREE and model.attrs.get("ID")
+    }
 
 
 # -- writing ---------------------------------------------------------------------------

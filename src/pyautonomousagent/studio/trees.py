@@ -24,7 +24,6 @@ import numpy as np
 from pyautonomousagent.bt.build import build
 from pyautonomousagent.bt.document import DEFAULT_TREE_ID, Document, RawNode, document_from_node
 from pyautonomousagent.bt.files import document_from_bytes, parse_document, to_text_format
-from pyautonomousagent.bt.leaf import LEAF_TYPES
 from pyautonomousagent.bt.spec import Node, TreeError, snake_case
 from pyautonomousagent.bt.vocabulary import tags
 from pyautonomousagent.bt.xml_format import format_value, write_xml
@@ -215,5 +214,4 @@ def _block_of(error: TreeError, raws: list[RawNode], tree: Node | None) -> int:
 def tree_text(document: Document, fmt: str, scenario: Scenario) -> str:
     """``document`` as the text of an XML or YAML file, as ``pyaa tree SCENARIO --format``
     writes it (the XML's TreeNodesModel lists the leaves that fit the scenario)."""
-    leaves = [cls.type_name for cls in fitting_leaves(scenario)]
-    return to_text_format(document, fmt, leaves=[n for n in LEAF_TYPES if n in leaves])
+    return to_text_format(document, fmt, leaves=[cls.type_name for cls in fitting_leaves(scenario)])
