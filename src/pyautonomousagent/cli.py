@@ -608,9 +608,10 @@ def _saying_compiles() -> Iterator[None]:
         logger.setLevel(level)
 
 
-def _note(text: str) -> None:
+def _note(*texts: str) -> None:
     """Say on stderr what pyaa did by itself (e.g. what a killed run left, repaired)."""
-    print(f"pyaa: {text}", file=sys.stderr)
+    for text in texts:
+        print(f"pyaa: {text}", file=sys.stderr)
 
 
 def _run_claimed(
@@ -710,8 +711,7 @@ def replay_command(args: argparse.Namespace) -> int:
     written into the run folder is listed in its ``run.json``."""
     folder: Path = args.run_dir
     with claim_existing(folder) as held:
-        for note in held.notes:
-            _note(note)
+        _note(*held.notes)
         if not (folder / "run.json").is_file():
             raise ScenarioError(f"{folder}: no run.json here; give a folder that pyaa run wrote")
         views = ["replay.html", *(f"{agent}.btlog" for agent in args.btlog)]
@@ -719,8 +719,7 @@ def replay_command(args: argparse.Namespace) -> int:
         for name in views[1:]:
             check_output(out.parent / name, folder, views)
         if out.parent == folder.resolve():  # ours while the claim is held
-            for note in recover(out):
-                _note(note)
+            _note(*recover(out))
         written = _replay_into(folder, out, args)
         if out.parent == folder.resolve():
             add_files(folder, written)  # run.json lists them: the folder still verifies

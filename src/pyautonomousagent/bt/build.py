@@ -19,7 +19,7 @@ from typing import Any
 from pyautonomousagent.bt.document import SUBTREE, Document, RawNode, TreeFileError
 from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf, LeafError
 from pyautonomousagent.bt.limits import check_document
-from pyautonomousagent.bt.nodes import DECORATOR
+from pyautonomousagent.bt.nodes import DECORATOR, NODE_TYPES
 from pyautonomousagent.bt.script import ScriptError, parse
 from pyautonomousagent.bt.spec import (
     BlackboardRef,
@@ -27,7 +27,6 @@ from pyautonomousagent.bt.spec import (
     TreeError,
     check_structure,
     control_params,
-    node_type,
     snake_case,
 )
 from pyautonomousagent.bt.vocabulary import (
@@ -240,7 +239,7 @@ class _Builder:
                 f"{tag.tag} needs at least 1 child, has 0",
                 f"put the nodes it should tick inside <{tag.tag}>...</{tag.tag}>",
             )
-        record = node_type(tag.spec)
+        record = NODE_TYPES.get(tag.spec)
         if len(children) < record.least or (
             record.most is not None and len(children) > record.most
         ):
@@ -250,7 +249,7 @@ class _Builder:
                 "the first child is the condition, then the then- and else-branch",
             )
         params = self._params(node, tag)
-        entries = {p.name for p in node_type(tag.spec).params if p.entry}
+        entries = {p.name for p in record.params if p.entry}
         for key, value in params.items():
             if isinstance(value, BlackboardRef) and key not in entries:
                 raise self.fail(
