@@ -122,10 +122,10 @@ def main_tree(
     return main
 
 
-def document_from_node(root: Node, tree_id: str = DEFAULT_TREE_ID, file: str = "") -> Document:
+def document_from_node(root: Node, tree_id: str = DEFAULT_TREE_ID) -> Document:
     """A one-tree document for a tree description (which is checked first)."""
     check_structure(root)
-    return Document(file or "<tree>", tree_id, {tree_id: _raw(root)})
+    return Document("<tree>", tree_id, {tree_id: _raw(root)})
 
 
 def _raw(node: Node) -> RawNode:
