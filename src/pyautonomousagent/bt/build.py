@@ -87,6 +87,7 @@ class _Builder:
     def __init__(self, document: Document) -> None:
         self.doc = document
         self.instances: dict[str, int] = {}  # SubTree name prefix -> line of its <SubTree>
+        self.tags = by_tag()  # once per file, not once per node
 
     def fail(self, line: int, message: str, fix: str) -> TreeFileError:
         return TreeFileError(self.doc.file, line, message, fix)
@@ -199,8 +200,7 @@ class _Builder:
 
     def _convert(self, node: RawNode) -> Node:
         children = tuple(self.convert(child) for child in node.children)
-        tags = by_tag()
-        tag = tags.get(node.tag)
+        tag = self.tags.get(node.tag)
         if tag is not None:
             return self._control(node, tag, children)
         if node.tag in LEAF_TYPES or node.tag in ENGINE_LEAF_TYPES:
@@ -211,7 +211,7 @@ class _Builder:
                 f"BehaviorTree.CPP node {node.tag!r} is not supported: {UNSUPPORTED[node.tag]}",
                 f"build it from the supported nodes listed in {DOCS}",
             )
-        known = list(tags) + list(LEAF_TYPES) + sorted(ENGINE_LEAF_TYPES)
+        known = list(self.tags) + list(LEAF_TYPES) + sorted(ENGINE_LEAF_TYPES)
         hint = closest(node.tag, known)
         raise self.fail(
             node.line,
