@@ -20,7 +20,8 @@ import pytest
 
 from pyautonomousagent.bt.document import document_from_node
 from pyautonomousagent.bt.files import read_document, to_text_format
-from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure, node_type
+from pyautonomousagent.bt.nodes import NODE_TYPES
+from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure
 from pyautonomousagent.bt.status import FAILURE, RUNNING, SUCCESS
 from pyautonomousagent.bt.vocabulary import tags
 from pyautonomousagent.bt.xml_format import write_xml
@@ -49,7 +50,7 @@ def random_tree(rng: np.random.Generator, leaves: list[str], depth: int = 0) -> 
         leaves.append(name)
         return Node("Scripted", name, (), {"statuses": [[SUCCESS]]})
     tag = BTCPP_TAGS[rng.integers(len(BTCPP_TAGS))]
-    record = node_type(tag.spec)
+    record = NODE_TYPES.get(tag.spec)
     most = record.most or 3
     count = int(rng.integers(max(record.least, 1), most + 1))
     kids = tuple(random_tree(rng, leaves, depth + 1) for _ in range(count))

@@ -11,6 +11,7 @@ import urllib.request
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from pyautonomousagent import Simulation, load
@@ -25,7 +26,7 @@ from pyautonomousagent.simulation.fit import fitting_leaves
 from pyautonomousagent.studio import Studio
 from pyautonomousagent.studio.server import scenario_blocks
 from pyautonomousagent.studio.session import Session
-from pyautonomousagent.studio.trees import to_document
+from pyautonomousagent.studio.trees import plain, to_document
 
 ITERATIONS = 300
 """Iterations of the runs saved here (the browser test runs the whole 8000)."""
@@ -85,6 +86,30 @@ def test_palette_is_built_from_the_registries(client: Client) -> None:
     energy = next(p for p in info["schema"]["parameters"] if p["name"] == "energy_use")
     assert energy["unit"] == "percent per iteration"
     assert (energy["minimum"], energy["maximum"]) == (0, 100)
+
+
+@pytest.mark.parametrize(
+    ("value", "shown"),
+    [
+        (None, None),
+        (True, True),
+        (3, 3),
+        (2.5, 2.5),
+        ("text", "text"),
+        (np.bool_(True), True),
+        (np.int64(7), 7),
+        (np.float32(0.5), 0.5),
+        (math.nan, "nan"),
+        (np.float64(-math.inf), "-inf"),
+        ((1, 2), "(1, 2)"),
+    ],
+)
+def test_a_value_is_sent_as_json_has_it(value: Any, shown: Any) -> None:
+    """The palette's port values and the followed agent's blackboard: NumPy scalars as
+    Python's (same type), NaN and infinities as text (JSON has none), other things as text."""
+    got = plain(value)
+    assert got == shown and type(got) is type(shown)
+    json.dumps(got, allow_nan=False)
 
 
 def test_the_scenarios_tree_can_run(client: Client) -> None:

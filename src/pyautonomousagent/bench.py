@@ -211,13 +211,12 @@ def measure(case: Case, timeout: float | None = None, budget_mb: float | None = 
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
     ) as child:
         while child.poll() is None:
-            if budget_mb is not None and (_peak_mb(child.pid) or 0.0) > budget_mb:
+            over = budget_mb is not None and (_peak_mb(child.pid) or 0.0) > budget_mb
+            if over or timeout is not None and time.perf_counter() - started > timeout:
                 child.kill()
                 child.wait()
-                return Result(case, None, _peak_mb(child.pid), f"over {budget_mb:.0f} MB")
-            if timeout is not None and time.perf_counter() - started > timeout:
-                child.kill()
-                child.wait()
+                if over:
+                    return Result(case, None, _peak_mb(child.pid), f"over {budget_mb:.0f} MB")
                 return Result(case, None, None, f"timed out after {timeout:.0f} s")
             time.sleep(0.05)
         out, err = child.communicate()

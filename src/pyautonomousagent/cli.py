@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import difflib
-import functools
 import json
 import logging
 import os
@@ -17,13 +16,22 @@ from itertools import product
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
+from pyautonomousagent import bench
 from pyautonomousagent.bt.build import build
-from pyautonomousagent.bt.document import Document, document_from_node
-from pyautonomousagent.bt.files import file_format, is_tree_file, read_document, to_text_format
+from pyautonomousagent.bt.document import Document
+from pyautonomousagent.bt.files import (
+    file_format,
+    is_tree_file,
+    read_document,
+    scenario_document,
+    to_text_format,
+)
 from pyautonomousagent.bt.leaf import LeafError
 from pyautonomousagent.bt.spec import Node, TreeError
 from pyautonomousagent.bt.text import to_text
 from pyautonomousagent.bt.trees import tree_by_name
+from pyautonomousagent.experiments.backends import BackendError
+from pyautonomousagent.experiments.expression import ExpressionError
 from pyautonomousagent.folders import Claim, hidden_folder, recover
 from pyautonomousagent.inputs import InputError, clip, finite, shown
 from pyautonomousagent.names import AgentNames
@@ -57,8 +65,9 @@ if TYPE_CHECKING:
     from pyautonomousagent.render.views import Views
 
 #: Errors that mean bad input: shown as one line, no traceback (TreeFileError is a TreeError;
-#: ScenarioError and the runs' RunError are InputErrors).
-USER_ERRORS = (InputError, TreeError, LeafError)
+#: ScenarioError and the runs' RunError are InputErrors; the experiments' ExpressionError is a
+#: bad measure expression, BackendError a backend that fails).
+USER_ERRORS = (InputError, TreeError, LeafError, ExpressionError, BackendError)
 #: A subcommand: the parsed arguments -> the exit status.
 Command = Callable[[argparse.Namespace], int]
 
@@ -331,26 +340,22 @@ def studio_command(args: argparse.Namespace) -> int:
 
 
 def _bench_engines(args: argparse.Namespace, scenario: Scenario) -> list[str]:
-    from pyautonomousagent.bench import BENCH_ENGINES
-
     default = "pyfly,batched" if scenario.model == "x8" else "pytrees,batched"
     engines = [e.strip() for e in (args.engines or default).split(",") if e.strip()]
-    unknown = [e for e in engines if e not in BENCH_ENGINES]
+    unknown = [e for e in engines if e not in bench.BENCH_ENGINES]
     if unknown or not engines:
         raise ScenarioError(
             f"--engines: unknown engine {(unknown or [''])[0]!r}; "
-            f"choose from {', '.join(BENCH_ENGINES)}"
+            f"choose from {', '.join(bench.BENCH_ENGINES)}"
         )
     return engines
 
 
 def bench_command(args: argparse.Namespace) -> int:
     """``pyaa bench``: measure each case in its own process, print the table (or JSON)."""
-    from pyautonomousagent import bench
-
     scenario = load(args.scenario)
     engines = _bench_engines(args, scenario)
-    _bench_defaults(args, scenario, bench.PAPER_TABLES)
+    _bench_defaults(args, scenario)
     _check_whole(args, "iterations", "reference_iterations", "stress_iterations", "stress_start")
     if args.timeout is not None and not (finite(args.timeout) and args.timeout > 0):
         raise ScenarioError(f"--timeout must be a number of seconds > 0, got {args.timeout}")
@@ -361,9 +366,9 @@ def bench_command(args: argparse.Namespace) -> int:
     except ValueError as error:
         raise ScenarioError(f"--memory-budget: {error}") from None
     if args.stress:
-        return _stress(args, engines, bench)
+        return _stress(args, engines)
     short = args.reference_iterations
-    variants = _bench_variants(args, scenario, bench)
+    variants = _bench_variants(args, scenario)
     _note_grown_worlds(scenario, args.agents)
     results = []
     cases = list(product(args.record_every or [1], args.agents, engines, variants))
@@ -381,29 +386,10 @@ def bench_command(args: argparse.Namespace) -> int:
             flush=True,
         )
         results.append(bench.measure(case, args.timeout))
-    if args.compare and not args.json:
-        print(bench.compare_table(results))
-        return 0
     if args.json:
-        ratios = bench.speedups(results, engines[0])
-        rows = [
-            {
-                **vars(r.case),
-                "seconds": r.full_seconds,
-                "peak_mb": r.peak_mb,
-                "seconds_per_agent_iteration": r.per_agent_iteration,
-                "setup_s": r.setup,
-                "loop_s": r.loop,
-                "write_s": r.write,
-                "write_thread_s": r.write_thread,
-                "views_s": r.views,
-                **_gpu_row(r, args.bandwidth),
-                f"speedup_vs_{engines[0]}": ratios.get(r.case),
-                "error": r.error,
-            }
-            for r in results
-        ]
-        print(json.dumps(rows, indent=2))
+        print(json.dumps(_json_rows(results, engines[0], args.bandwidth), indent=2))
+    elif args.compare:
+        print(bench.compare_table(results))
     else:
         print(bench.table(results, engines[0]))
         gpu = bench.gpu_table(results, args.bandwidth)
@@ -412,16 +398,32 @@ def bench_command(args: argparse.Namespace) -> int:
     return 0
 
 
-def _gpu_row(result: Any, gbps: float | None) -> dict[str, Any]:
-    """A GPU case's fields of ``pyaa bench --json``: ``gpu_s`` (its parts, seconds),
-    ``bytes_per_drone_iteration`` and, given ``--bandwidth``, ``bandwidth_gbps`` and
-    ``bandwidth_fraction``; {} for the other engines."""
-    if result.gpu is None:
-        return {}
-    row = {"gpu_s": result.gpu, "bytes_per_drone_iteration": result.bytes_per_drone_iteration}
-    if gbps is not None:
-        row |= {"bandwidth_gbps": gbps, "bandwidth_fraction": result.bandwidth_fraction(gbps)}
-    return row
+def _json_rows(
+    results: list[bench.Result], reference: str, gbps: float | None
+) -> list[dict[str, Any]]:
+    """``pyaa bench --json``: a row per result; a GPU case also has ``gpu_s`` (its parts,
+    seconds), ``bytes_per_drone_iteration`` and, given ``--bandwidth``, ``bandwidth_gbps``
+    and ``bandwidth_fraction``."""
+    ratios = bench.speedups(results, reference)
+    rows = []
+    for r in results:
+        row = {
+            **vars(r.case),
+            "seconds": r.full_seconds,
+            "peak_mb": r.peak_mb,
+            "seconds_per_agent_iteration": r.per_agent_iteration,
+            "setup_s": r.setup,
+            "loop_s": r.loop,
+            "write_s": r.write,
+            "write_thread_s": r.write_thread,
+            "views_s": r.views,
+        }
+        if r.gpu is not None:
+            row |= {"gpu_s": r.gpu, "bytes_per_drone_iteration": r.bytes_per_drone_iteration}
+            if gbps is not None:
+                row |= {"bandwidth_gbps": gbps, "bandwidth_fraction": r.bandwidth_fraction(gbps)}
+        rows.append(row | {f"speedup_vs_{reference}": ratios.get(r.case), "error": r.error})
+    return rows
 
 
 def _note_grown_worlds(scenario: Scenario, agents: Sequence[int]) -> None:
@@ -435,9 +437,7 @@ def _note_grown_worlds(scenario: Scenario, agents: Sequence[int]) -> None:
                   f"{scenario.world[1]:g}), which holds its layout", file=sys.stderr)  # fmt: skip
 
 
-def _bench_variants(
-    args: argparse.Namespace, scenario: Scenario, bench: Any
-) -> list[tuple[str, str]]:
+def _bench_variants(args: argparse.Namespace, scenario: Scenario) -> list[tuple[str, str]]:
     """``--compare`` as (name, "KEY=VALUE,...") pairs, each checked against the scenario
     (one variant, the scenario as it is, without the option); ``--repeat`` checked."""
     _check_whole(args, "repeat")
@@ -454,17 +454,17 @@ def _bench_variants(
     return variants
 
 
-def _bench_defaults(args: argparse.Namespace, scenario: Scenario, paper: Mapping[str, Any]) -> None:
+def _bench_defaults(args: argparse.Namespace, scenario: Scenario) -> None:
     """Fill in ``--agents`` and ``--iterations`` left out: the paper's table sizes (1, 10,
     100, 1000 agents x 4000 iterations) for its scenarios, else the scenario's own."""
-    in_paper = scenario.name in paper
+    in_paper = scenario.name in bench.PAPER_TABLES
     if args.agents is None:
         args.agents = [1, 10, 100, 1000] if in_paper else [scenario.agents]
     if args.iterations is None:
         args.iterations = 4000 if in_paper else scenario.iterations
 
 
-def _stress(args: argparse.Namespace, engines: list[str], bench: Any) -> int:
+def _stress(args: argparse.Namespace, engines: list[str]) -> int:
     budget = args.memory_budget_mb
 
     def show(result: Any) -> None:
@@ -608,9 +608,10 @@ def _saying_compiles() -> Iterator[None]:
         logger.setLevel(level)
 
 
-def _note(text: str) -> None:
+def _note(*texts: str) -> None:
     """Say on stderr what pyaa did by itself (e.g. what a killed run left, repaired)."""
-    print(f"pyaa: {text}", file=sys.stderr)
+    for text in texts:
+        print(f"pyaa: {text}", file=sys.stderr)
 
 
 def _run_claimed(
@@ -710,8 +711,7 @@ def replay_command(args: argparse.Namespace) -> int:
     written into the run folder is listed in its ``run.json``."""
     folder: Path = args.run_dir
     with claim_existing(folder) as held:
-        for note in held.notes:
-            _note(note)
+        _note(*held.notes)
         if not (folder / "run.json").is_file():
             raise ScenarioError(f"{folder}: no run.json here; give a folder that pyaa run wrote")
         views = ["replay.html", *(f"{agent}.btlog" for agent in args.btlog)]
@@ -719,8 +719,7 @@ def replay_command(args: argparse.Namespace) -> int:
         for name in views[1:]:
             check_output(out.parent / name, folder, views)
         if out.parent == folder.resolve():  # ours while the claim is held
-            for note in recover(out):
-                _note(note)
+            _note(*recover(out))
         written = _replay_into(folder, out, args)
         if out.parent == folder.resolve():
             add_files(folder, written)  # run.json lists them: the folder still verifies
@@ -880,7 +879,7 @@ def leaves_command(args: argparse.Namespace) -> int:
     )
     values = vars(scenario.parameters)
     for cls in own:
-        print(f"  {cls.type_name}: {_first_line(cls.__doc__)}")
+        print(f"  {cls.type_name}: {cls.summary()}")
         for port in cls.ports:
             doc = f"; {port.doc}" if port.doc else ""
             print(
@@ -892,11 +891,6 @@ def leaves_command(args: argparse.Namespace) -> int:
     general = [cls.type_name for cls in fits if is_general(cls)]
     print(f"general leaves, for any mission (docs/tree-files.md): {', '.join(general)}")
     return 0
-
-
-def _first_line(doc: str | None) -> str:
-    """The first sentence line of a docstring ("" for none)."""
-    return (doc or "").strip().split("\n", 1)[0].strip().replace("``", "")
 
 
 def _tree_source(source: str) -> tuple[Document, str, dict[str, Any], Scenario | None]:
@@ -912,20 +906,7 @@ def _tree_source(source: str) -> tuple[Document, str, dict[str, Any], Scenario |
             "tree or scenario file; give a file ending in .xml, .yaml or .yml"
         )
     scenario = load(source)
-    defaults = vars(scenario.parameters)
-    if is_tree_file(scenario.tree):
-        document = read_document(scenario.tree)
-    else:
-        document = document_from_node(tree_by_name(scenario.tree), scenario.tree)
-    return document, scenario.name, defaults, scenario
-
-
-def _scenario_leaves(scenario: Scenario | None) -> list[str] | None:
-    """The leaf types that fit ``scenario`` (for a tree written for it), or None for a bare
-    tree file (no scenario)."""
-    from pyautonomousagent.simulation.fit import fitting_leaves
-
-    return None if scenario is None else [cls.type_name for cls in fitting_leaves(scenario)]
+    return scenario_document(scenario.tree), scenario.name, vars(scenario.parameters), scenario
 
 
 def _all_defaults() -> dict[str, Any]:
@@ -979,8 +960,11 @@ def tree_command(args: argparse.Namespace) -> int:
             path = draw_tree(build(document), target, title=name)
         print(f"wrote {path}")
         return 0
-    if fmt in ("xml", "yaml"):
-        text = to_text_format(document, fmt, leaves=_scenario_leaves(scenario))
+    if fmt in ("xml", "yaml"):  # a scenario's tree lists the leaves that fit it, not all
+        from pyautonomousagent.simulation.fit import fitting_leaves
+
+        leaves = None if scenario is None else [cls.type_name for cls in fitting_leaves(scenario)]
+        text = to_text_format(document, fmt, leaves=leaves)
     elif fmt == "dot":
         from pyautonomousagent.bt.draw import to_dot
 
@@ -1011,24 +995,6 @@ def _writing(path: Path) -> Iterator[None]:
 
 
 # --- experiments: pyaa sweep, pyaa plot, pyaa measures (library: pyautonomousagent.experiments)
-
-
-def _experiment_errors(command: Command) -> Command:
-    """``command`` with the experiments' errors that are no InputError (a bad measure
-    expression, a backend that fails) shown as one line (exit 2)."""
-
-    @functools.wraps(command)
-    def guarded(args: argparse.Namespace) -> int:
-        from pyautonomousagent.experiments import ExpressionError
-        from pyautonomousagent.experiments.backends import BackendError
-
-        try:
-            return command(args)
-        except (ExpressionError, BackendError) as error:
-            print(f"pyaa: error: {clip(str(error))}", file=sys.stderr)
-            return 2
-
-    return guarded
 
 
 def _experiment(args: argparse.Namespace) -> Any:
@@ -1070,7 +1036,6 @@ def _inside(root: Path, name: str) -> Path:
     return path
 
 
-@_experiment_errors
 def sweep_command(args: argparse.Namespace) -> int:
     """``pyaa sweep``: run an experiment into a sweep folder (see docs/experiments.md)."""
     from pyautonomousagent.experiments import sweep
@@ -1112,7 +1077,6 @@ def sweep_command(args: argparse.Namespace) -> int:
     return 1 if result.counts["failed"] else 0
 
 
-@_experiment_errors
 def plot_command(args: argparse.Namespace) -> int:
     """``pyaa plot``: a measure against a parameter, mean and interval over seeds."""
     from pyautonomousagent.experiments.plot import plot_measure
@@ -1140,7 +1104,6 @@ def _print_row(group: str, where: str, row: Mapping[str, Any]) -> None:
           f"[{row['low']:.6g}, {row['high']:.6g}]")  # fmt: skip
 
 
-@_experiment_errors
 def analyse_command(args: argparse.Namespace) -> int:
     """``pyaa analyse``: print and draw a Sobol or Morris sweep's sensitivity indices."""
     from pyautonomousagent.experiments import sensitivity
@@ -1178,7 +1141,6 @@ def _plot_over_time(args: argparse.Namespace) -> int:
     return 0
 
 
-@_experiment_errors
 def measures_command(args: argparse.Namespace) -> int:
     """``pyaa measures``: one line per registered measure."""
     from pyautonomousagent.experiments import MEASURES

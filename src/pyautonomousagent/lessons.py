@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from pyautonomousagent.bt.spec import Node
-from pyautonomousagent.bt.status import COLOURS, NAMES
+from pyautonomousagent.bt.status import CODES, COLOURS, NAMES
 from pyautonomousagent.inputs import shown
 
 __all__ = [
@@ -30,7 +30,6 @@ __all__ = [
     "embedded_replay",
     "tick_table",
 ]
-
 
 
 def _pale(colour: str) -> str:
@@ -166,26 +165,12 @@ def _depths(node: Node, depth: int = 0) -> list[int]:
 def scripted(*statuses: str) -> list[list[int]]:
     """A ``Scripted`` leaf's ``statuses`` port for one agent from status names, e.g.
     ``scripted("RUNNING", "SUCCESS")`` -> ``[[3], [1]]``."""
-    codes = {name: code for code, name in NAMES.items()}
     try:
-        return [[codes[s.upper()]] for s in statuses]
+        return [[CODES[s.upper()]] for s in statuses]
     except KeyError as error:
         raise ValueError(
             f"unknown status {error.args[0]!r}; use SUCCESS, FAILURE or RUNNING"
         ) from None
-
-
-#: Lesson number ("01".."09") -> its check: takes the answers, returns the verdict's text,
-#: raises ExerciseError when an answer is missing or wrong.
-CHECKS: dict[str, Callable[..., str]] = {}
-
-
-def _lesson(number: str) -> Callable[[Callable[..., str]], Callable[..., str]]:
-    def add(check: Callable[..., str]) -> Callable[..., str]:
-        CHECKS[number] = check
-        return check
-
-    return add
 
 
 def check_exercise(lesson: str | int, **answers: Any) -> None:
@@ -285,7 +270,6 @@ def l02_tree() -> Node:
     )
 
 
-@_lesson("02")
 def _check_02(root_statuses: Any = None) -> str:
     ticks = len(L02_SCRIPTS["door_open"])
     got = _status_list("root_statuses", root_statuses, ticks)
@@ -303,7 +287,6 @@ def _check_02(root_statuses: Any = None) -> str:
 # --- Lesson 06: experiments -----------------------------------------------------------------
 
 
-@_lesson("06")
 def _check_06(table: Any = None, best: Any = None) -> str:
     import pyarrow as pa
 
@@ -350,7 +333,6 @@ def _coordinates(name: str, value: Any, length: int) -> np.ndarray:
     return numbers
 
 
-@_lesson("01")
 def _check_01(position: Any = None) -> str:
     from pyautonomousagent.models.drone2d import DroneParameters, advance
 
@@ -388,7 +370,6 @@ def gathering_order_receivers(datalink_range: float) -> list[str]:
     return [sim.swarm.names[int(i)] for i in receivers]
 
 
-@_lesson("03")
 def _check_03(heard: Any = None) -> str:
     heard = _given("heard", heard, "a list of drone names, e.g. ['drone2']")
     if isinstance(heard, str) or not isinstance(heard, Sequence):
@@ -461,7 +442,6 @@ def _load_tree(path: Path) -> Node:
         raise ExerciseError(f"Your file does not load: {error}") from None
 
 
-@_lesson("05")
 def _check_05(tree_file: Any = None) -> str:
     path = _tree_file(tree_file, "your YAML tree file", "slow.yaml", (".yaml", ".yml"),
                       "a YAML file: save your tree as slow.yaml",
@@ -492,7 +472,6 @@ def smallest_compiled_swarm(iterations: int) -> int:
     return 1 + bisect.bisect_left(range(1, 10**12), True, key=worth_it)
 
 
-@_lesson("07")
 def _check_07(agents: Any = None) -> str:
     got = _number("agents", agents, "a whole number of drones")
     if not got.is_integer():
@@ -515,7 +494,6 @@ def _check_07(agents: Any = None) -> str:
 # --- Lesson 04: your own mission ------------------------------------------------------------
 
 
-@_lesson("04")
 def _check_04(leaf_type: Any = None, scenario: Any = None) -> str:
     from pyautonomousagent.bt.leaf import LEAF_TYPES, Leaf
     from pyautonomousagent.bt.spec import inverter, leaf, reactive_sequence
@@ -594,7 +572,6 @@ def x8_climb_time(altitude: float, within: float = 1.0, iterations: int = 3000) 
     return float(run.recorder.iterations[close[0]] * 0.01)
 
 
-@_lesson("08")
 def _check_08(climb_time: Any = None) -> str:
     seconds = _number("climb_time", climb_time, "a number of seconds")
     expected = x8_climb_time(60.0)
@@ -638,7 +615,6 @@ def _same_flight(a: list[np.ndarray], b: list[np.ndarray]) -> bool:
     return all(np.array_equal(u, v) for u, v in zip(a, b, strict=True))
 
 
-@_lesson("09")
 def _check_09(tree_file: Any = None) -> str:
     path = _tree_file(tree_file, "the XML file you saved from the studio", "refuel-early.xml",
                       (".xml",), "an XML file: press Save XML in the studio, and give the name it "
@@ -670,3 +646,18 @@ def _l09_hint(path: Path, got: list[np.ndarray]) -> str:
     return (f"Not quite: with {path} the drones do not fly as they should.\nHint: start from "
             "the gathering tree (Fig. 6: Scenario's tree, or your fig6 blocks) and change only "
             f"those two fields: threshold {L09_THRESHOLD:g}, rate {L09_RATE:g}.")  # fmt: skip
+
+
+#: Lesson number -> its check: takes the answers, returns the verdict's text, raises
+#: ExerciseError when an answer is missing or wrong.
+CHECKS: dict[str, Callable[..., str]] = {
+    "01": _check_01,
+    "02": _check_02,
+    "03": _check_03,
+    "04": _check_04,
+    "05": _check_05,
+    "06": _check_06,
+    "07": _check_07,
+    "08": _check_08,
+    "09": _check_09,
+}

@@ -1,11 +1,5 @@
-"""One small registry type for everything users add by name.
-
-Leaf types, missions, motion models, engines and control node types are each kept in a
-:class:`Registry`: ``register`` adds an entry (refusing a name taken by another object),
-``get`` looks one up and, for an unknown name, raises :class:`UnknownNameError` with the closest
-known names ("did you mean"), ``unregister`` removes one, and ``override`` replaces or adds an
-entry for the duration of a ``with`` block (what a test registers, it removes).
-"""
+"""One small registry type for everything users add by name: leaf types, missions, motion
+models, engines and control node types are each kept in a :class:`Registry`."""
 
 from __future__ import annotations
 

@@ -20,7 +20,6 @@ from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf
 from pyautonomousagent.bt.spec import Node, leaf, reactive_sequence
 from pyautonomousagent.bt.status import FAILURE, SUCCESS
 from pyautonomousagent.bt.trees import TREES
-from pyautonomousagent.datalink import Datalink
 from pyautonomousagent.scenarios import SCENARIOS, load
 from pyautonomousagent.simulation import phases
 from pyautonomousagent.simulation.mission import MISSIONS
@@ -73,11 +72,9 @@ def make_harness(
     (its blackboard, columns and parameters), no motion: only the tree runs."""
     scenario = _scenario(scenario).with_overrides(agents=agents)
     mission = scenario.create_mission()
-    link = Datalink(scenario.parameters.datalink_range)
-    world = World(*scenario.world, datalink=link, objects=scenario.objects)
+    world = phases.create_world(scenario, 0)
     declared = tree_blackboard_keys(tree, mission.blackboard())
     swarm = phases.create_agents(mission, world, np.random.default_rng(0), declared)
-    world.agent_index = {name: i for i, name in enumerate(swarm.names)}
     decision = ENGINES.get(engine)(tree, swarm, world, vars(scenario.parameters))
     return Harness(tree, swarm, world, decision)
 

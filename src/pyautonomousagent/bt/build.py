@@ -19,7 +19,7 @@ from typing import Any
 from pyautonomousagent.bt.document import SUBTREE, Document, RawNode, TreeFileError
 from pyautonomousagent.bt.leaf import ENGINE_LEAF_TYPES, LEAF_TYPES, Leaf, LeafError
 from pyautonomousagent.bt.limits import check_document
-from pyautonomousagent.bt.nodes import DECORATOR
+from pyautonomousagent.bt.nodes import DECORATOR, NODE_TYPES
 from pyautonomousagent.bt.script import ScriptError, parse
 from pyautonomousagent.bt.spec import (
     BlackboardRef,
@@ -27,7 +27,6 @@ from pyautonomousagent.bt.spec import (
     TreeError,
     check_structure,
     control_params,
-    node_type,
     snake_case,
 )
 from pyautonomousagent.bt.vocabulary import (
@@ -88,6 +87,7 @@ class _Builder:
     def __init__(self, document: Document) -> None:
         self.doc = document
         self.instances: dict[str, int] = {}  # SubTree name prefix -> line of its <SubTree>
+        self.tags = by_tag()  # once per file, not once per node
 
     def fail(self, line: int, message: str, fix: str) -> TreeFileError:
         return TreeFileError(self.doc.file, line, message, fix)
@@ -200,8 +200,7 @@ class _Builder:
 
     def _convert(self, node: RawNode) -> Node:
         children = tuple(self.convert(child) for child in node.children)
-        tags = by_tag()
-        tag = tags.get(node.tag)
+        tag = self.tags.get(node.tag)
         if tag is not None:
             return self._control(node, tag, children)
         if node.tag in LEAF_TYPES or node.tag in ENGINE_LEAF_TYPES:
@@ -212,7 +211,7 @@ class _Builder:
                 f"BehaviorTree.CPP node {node.tag!r} is not supported: {UNSUPPORTED[node.tag]}",
                 f"build it from the supported nodes listed in {DOCS}",
             )
-        known = list(tags) + list(LEAF_TYPES) + sorted(ENGINE_LEAF_TYPES)
+        known = list(self.tags) + list(LEAF_TYPES) + sorted(ENGINE_LEAF_TYPES)
         hint = closest(node.tag, known)
         raise self.fail(
             node.line,
@@ -240,7 +239,7 @@ class _Builder:
                 f"{tag.tag} needs at least 1 child, has 0",
                 f"put the nodes it should tick inside <{tag.tag}>...</{tag.tag}>",
             )
-        record = node_type(tag.spec)
+        record = NODE_TYPES.get(tag.spec)
         if len(children) < record.least or (
             record.most is not None and len(children) > record.most
         ):
@@ -250,7 +249,7 @@ class _Builder:
                 "the first child is the condition, then the then- and else-branch",
             )
         params = self._params(node, tag)
-        entries = {p.name for p in node_type(tag.spec).params if p.entry}
+        entries = {p.name for p in record.params if p.entry}
         for key, value in params.items():
             if isinstance(value, BlackboardRef) and key not in entries:
                 raise self.fail(

@@ -8,12 +8,12 @@ into a checked :class:`~pyautonomousagent.bt.spec.Node`, the only thing the engi
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from pyautonomousagent.bt.spec import BlackboardRef, Node, TreeError, check_structure
-from pyautonomousagent.bt.vocabulary import file_params, tag_of
+from pyautonomousagent.bt.vocabulary import closest, file_params, tag_of
 from pyautonomousagent.inputs import cut
 
 #: The tag of a reference to another behaviour tree of the same file.
@@ -76,10 +76,7 @@ class RawNode:
 
     def walk(self) -> list[RawNode]:
         """This node and all below it, depth first."""
-        nodes = [self]
-        for child in self.children:
-            nodes.extend(child.walk())
-        return nodes
+        return [self, *(node for child in self.children for node in child.walk())]
 
 
 @dataclass
@@ -101,10 +98,34 @@ class Document:
     subtree_ports: dict[str, dict[str, Any]] = field(default_factory=dict)
 
 
-def document_from_node(root: Node, tree_id: str = DEFAULT_TREE_ID, file: str = "") -> Document:
+def main_tree(
+    trees: Mapping[str, RawNode],
+    main: str | None,
+    fail: Callable[[str, str], TreeFileError],
+    word: str,
+    add_main: str,
+) -> str:
+    """The ID of the tree to run: ``main`` (the file's ``main_tree_to_execute``), or the
+    only tree where the file names none. ``fail(message, fix)`` makes the error; messages
+    call a tree ``word``, and ``add_main.format(ID)`` is the fix for several trees."""
+    if main is None:
+        if len(trees) > 1:
+            several = f"several {word}s and no main_tree_to_execute"
+            raise fail(several, add_main.format(next(iter(trees))))
+        return next(iter(trees))
+    if main not in trees:
+        hint = closest(main, list(trees))
+        raise fail(
+            f"main_tree_to_execute is {main!r}, but no {word} has that ID",
+            hint or f"use one of: {', '.join(trees)}",
+        )
+    return main
+
+
+def document_from_node(root: Node, tree_id: str = DEFAULT_TREE_ID) -> Document:
     """A one-tree document for a tree description (which is checked first)."""
     check_structure(root)
-    return Document(file or "<tree>", tree_id, {tree_id: _raw(root)})
+    return Document("<tree>", tree_id, {tree_id: _raw(root)})
 
 
 def _raw(node: Node) -> RawNode:

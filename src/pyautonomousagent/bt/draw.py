@@ -72,15 +72,13 @@ class Box:
 def layout(root: Node) -> tuple[Box, float, float]:
     """Boxes for every node, placed; returns the root box and the picture's width and height."""
     box = _measure(root)
-    heights: list[float] = []
-    for b, depth in _levels(box, 0):
-        heights.extend([0.0] * (depth + 1 - len(heights)))
-        heights[depth] = max(heights[depth], b.height)
+    levels = _levels(box, 0)
+    deepest = max(depth for _, depth in levels)
+    heights = [max(b.height for b, d in levels if d == depth) for depth in range(deepest + 1)]
     tops = [GAP + sum(heights[:d]) + LEVEL * d for d in range(len(heights))]
     _place(box, GAP, 0, tops)
-    boxes = [b for b, _ in _levels(box, 0)]
-    width = max(b.x + b.width / 2 for b in boxes) + GAP
-    height = max(b.y + b.height for b in boxes) + GAP
+    width = max(b.x + b.width / 2 for b, _ in levels) + GAP
+    height = max(b.y + b.height for b, _ in levels) + GAP
     return box, width, height
 
 

@@ -22,6 +22,7 @@ from pyautonomousagent.bt.document import (
     document_from_node,
 )
 from pyautonomousagent.bt.spec import Node
+from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.bt.xml_format import read_xml, write_xml
 from pyautonomousagent.bt.yaml_format import read_yaml, write_yaml
 from pyautonomousagent.inputs import InputError, decode_text, read_text
@@ -76,6 +77,13 @@ def document_from_bytes(data: bytes, name: str) -> Document:
 def _unreadable(name: str, error: InputError) -> TreeFileError:
     problem, _, fix = str(error).rpartition("; ")
     return TreeFileError(name, 0, f"cannot read the file ({problem})", fix or "check the path")
+
+
+def scenario_document(tree: str) -> Document:
+    """The document a scenario's ``tree`` names: a tree file's, or a built-in tree's."""
+    if is_tree_file(tree):
+        return read_document(tree)
+    return document_from_node(tree_by_name(tree), tree)
 
 
 def load_tree(path: str | Path) -> Node:

@@ -132,6 +132,11 @@ class Leaf:
         return cls(**values)
 
     @classmethod
+    def summary(cls) -> str:
+        """The first line of the class's docstring, ``...`` marks dropped ("" for none)."""
+        return (cls.__doc__ or "").strip().split("\n", 1)[0].strip().replace("``", "")
+
+    @classmethod
     def required_ports(cls) -> list[str]:
         """The ports a tree must give (the others default to the scenario's parameters)."""
         return []

@@ -10,6 +10,8 @@ engines themselves tick larger trees).
 
 from __future__ import annotations
 
+from functools import partial
+
 from pyautonomousagent.bt.document import SUBTREE, Document, RawNode, TreeFileError
 
 #: Most nodes of a tree once its SubTrees are inlined: a recording stores the active leaf
@@ -86,19 +88,15 @@ def check_document(document: Document) -> None:
         TreeFileError: naming the file, the main tree's line and the fix.
     """
     nodes, levels = inlined_size(document)
-    line = document.lines.get(document.main, 0)
+    fail = partial(TreeFileError, document.file, document.lines.get(document.main, 0))
     if check_size(nodes):
-        raise TreeFileError(
-            document.file,
-            line,
+        raise fail(
             f"tree {document.main!r} has {nodes} nodes once its SubTrees are inlined, more "
             f"than the {MAX_TREE_NODES} allowed",
             "use fewer nodes, or each SubTree fewer times (every use is a copy)",
         )
     if levels > MAX_TREE_DEPTH:
-        raise TreeFileError(
-            document.file,
-            line,
+        raise fail(
             f"tree {document.main!r} is {levels} levels deep once its SubTrees are inlined, "
             f"more than the {MAX_TREE_DEPTH} allowed",
             "nest fewer control nodes inside each other",

@@ -274,12 +274,9 @@ _BINARY_FN: dict[str, Callable[[Any, Any], Any]] = {
 
 def _compile(node: Ast) -> Fn:
     kind = node[0]
-    if kind in ("num", "bool"):
-        value = node[1]
+    if kind in ("num", "bool", "str"):  # a string is its enum value
+        value = enum_code(node[1]) if kind == "str" else node[1]
         return lambda env: value
-    if kind == "str":
-        code = enum_code(node[1])
-        return lambda env: code
     if kind == "key":
         name = node[1]
         return lambda env: getattr(env, name)

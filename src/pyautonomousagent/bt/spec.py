@@ -132,7 +132,7 @@ def check_structure(root: Node) -> None:
             if node.children:
                 raise TreeError(f"leaf {node.name!r} ({node.type}) cannot have children")
             continue
-        record = node_type(node.type)
+        record = NODE_TYPES.get(node.type)
         count = len(node.children)
         if count < record.least or (record.most is not None and count > record.most):
             raise TreeError(f"{node.type} {node.name!r} needs {_arity(record)}, has {count}")
@@ -155,7 +155,7 @@ def entries_read(root: Node) -> dict[str, str]:
     found: dict[str, str] = {}
     for node in root.walk():
         if node.is_control:
-            for param in node_type(node.type).params:
+            for param in NODE_TYPES.get(node.type).params:
                 value = node.params.get(param.name)
                 if param.entry and isinstance(value, BlackboardRef):
                     found.setdefault(value.key, node.name)
@@ -169,11 +169,6 @@ def check_entries(root: Node, keys: Container[str]) -> None:
             raise TreeError(f"node {name!r} reads blackboard entry {key!r}, which no agent has")
 
 
-def node_type(type_name: str) -> NodeType:
-    """The record of a control node type."""
-    return NODE_TYPES.get(type_name)
-
-
 def _arity(record: NodeType) -> str:
     """``"1 child(ren)"``, ``"at least 1 child(ren)"``, ``"2 to 3 child(ren)"``."""
     if record.least == record.most:
@@ -185,7 +180,7 @@ def _arity(record: NodeType) -> str:
 
 def control_params(node: Node) -> dict[str, Any]:
     """A control node's parameters with defaults filled in; TreeError if one is bad."""
-    record = node_type(node.type)
+    record = NODE_TYPES.get(node.type)
     defaults = record.defaults()
     where = f"{node.type} {node.name!r}"
     unknown = sorted(set(node.params) - set(defaults))

@@ -24,6 +24,8 @@ NAMES = {
     RUNNING: "RUNNING",
     SKIPPED: "SKIPPED",
 }
+#: Status name -> code (:data:`NAMES` inverted).
+CODES = {name: code for code, name in NAMES.items()}
 
 #: Each code's value in BehaviorTree.CPP 4's ``NodeStatus`` (its ``.btlog`` files): IDLE 0
 #: (our INVALID), RUNNING 1, SUCCESS 2, FAILURE 3, SKIPPED 4.

@@ -47,15 +47,12 @@ class Tag:
 
 def tags() -> list[Tag]:
     """Every file tag of every registered control node type."""
-    out = []
-    for node_type in NODE_TYPES.values():
-        params = {p.name: (p.type, p.default is None) for p in node_type.params if p.in_files}
-        for t in node_type.tags:
-            out.append(
-                Tag(t.tag, node_type.name, node_type.kind, t.fixed, params,
-                    node_type.builtin, t.symbol, t.doc)
-            )  # fmt: skip
-    return out
+    return [
+        Tag(t.tag, node.name, node.kind, t.fixed, params, node.builtin, t.symbol, t.doc)
+        for node in NODE_TYPES.values()
+        for params in [{p.name: (p.type, p.default is None) for p in node.params if p.in_files}]
+        for t in node.tags
+    ]
 
 
 def by_tag() -> dict[str, Tag]:
@@ -68,21 +65,19 @@ BTCPP_LEAVES = frozenset(
     {"AlwaysSuccess", "AlwaysFailure", "Script", "ScriptCondition", "SetBlackboard", "Sleep"}
 )
 
-#: BehaviorTree.CPP 4 built-ins that pyAutonomousAgent does not run, with the reason.
+#: BehaviorTree.CPP 4 built-ins that pyAutonomousAgent does not run, with the reason (the
+#: file reader looks here only for a tag that is no node type or leaf type).
 UNSUPPORTED: dict[str, str] = {
     **dict.fromkeys(
         ["ManualSelector", "AlwaysRunning"],
         "it is not a built-in of BehaviorTree.CPP 4.8 (the version held against)",
     ),
     **dict.fromkeys(
-        ["Delay", "Timeout", "Sleep", "Precondition", "LoopInt", "LoopDouble",
-         "LoopString", "LoopBool", "SkipUnlessUpdated", "WaitValueUpdate", "WasEntryUpdated"],
+        ["LoopInt", "LoopDouble", "LoopString", "LoopBool", "SkipUnlessUpdated",
+         "WaitValueUpdate", "WasEntryUpdated"],
         "it needs wall-clock time, scripting or blackboard entries of its own",
     ),
-    **dict.fromkeys(
-        ["Script", "ScriptCondition", "SetBlackboard", "UnsetBlackboard"],
-        "scripting and free blackboard entries are not supported",
-    ),
+    "UnsetBlackboard": "scripting and free blackboard entries are not supported",
 }  # fmt: skip
 
 #: BehaviorTree.CPP's scripting attributes, any node may have them (see Node.scripts): the

@@ -24,6 +24,7 @@ from pyautonomousagent.bt.document import (
     Document,
     RawNode,
     TreeFileError,
+    main_tree,
 )
 from pyautonomousagent.bt.leaf import LEAF_TYPES
 from pyautonomousagent.bt.limits import MAX_TREE_DEPTH
@@ -31,7 +32,6 @@ from pyautonomousagent.bt.vocabulary import (
     BTCPP_LEAVES,
     SCRIPT_ATTRIBUTES,
     by_tag,
-    closest,
     leaf_category,
 )
 
@@ -52,8 +52,7 @@ class _Element:
 
 
 class _RefusedError(Exception):
-    def __init__(self, line: int, what: str) -> None:
-        self.line, self.what = line, what
+    """What the parser refuses: its args are the line, the message and the fix."""
 
 
 def parse_elements(text: str, file: str) -> _Element:
@@ -67,7 +66,11 @@ def parse_elements(text: str, file: str) -> _Element:
 
     def start(tag: str, attrs: list[str]) -> None:
         if len(stack) >= MAX_XML_DEPTH:
-            raise _RefusedError(parser.CurrentLineNumber, f"more than {MAX_TREE_DEPTH} levels")
+            raise _RefusedError(
+                parser.CurrentLineNumber,
+                f"the file has more than {MAX_TREE_DEPTH} levels, which tree files may not have",
+                "nest nodes less deeply: put parts in their own <BehaviorTree> and use SubTree",
+            )
         element = _Element(
             tag, dict(zip(attrs[::2], attrs[1::2], strict=True)), parser.CurrentLineNumber
         )
@@ -75,7 +78,12 @@ def parse_elements(text: str, file: str) -> _Element:
         stack.append(element)
 
     def refuse(*_: Any) -> int:
-        raise _RefusedError(parser.CurrentLineNumber, "a <!DOCTYPE> or entity declaration")
+        raise _RefusedError(
+            parser.CurrentLineNumber,
+            "the file has a <!DOCTYPE> or entity declaration, which tree files may not have "
+            "(it could expand entities)",
+            "delete the <!DOCTYPE ...> and <!ENTITY ...> lines",
+        )
 
     parser.StartElementHandler = start
     parser.EndElementHandler = lambda tag: stack.pop()
@@ -85,14 +93,7 @@ def parse_elements(text: str, file: str) -> _Element:
     try:
         parser.Parse(text, True)
     except _RefusedError as refused:
-        raise fail(
-            refused.line,
-            f"the file has {refused.what}, which tree files may not have"
-            + ("" if "levels" in refused.what else " (it could expand entities)"),
-            "nest nodes less deeply: put parts in their own <BehaviorTree> and use SubTree"
-            if "levels" in refused.what
-            else "delete the <!DOCTYPE ...> and <!ENTITY ...> lines",
-        ) from None
+        raise fail(*refused.args) from None
     except expat.ExpatError as error:
         message = expat.ErrorString(error.code)
         raise fail(
@@ -182,24 +183,9 @@ def _main_tree(root: _Element, trees: dict[str, RawNode], fail: Fail) -> str:
             "the file has no <BehaviorTree>",
             'add <BehaviorTree ID="MainTree"> with the tree inside <root>',
         )
+    add = 'add main_tree_to_execute="{}" (the ID of the tree to run) to <root>'
     main = root.attrs.get("main_tree_to_execute")
-    if main is None:
-        if len(trees) > 1:
-            raise fail(
-                root.line,
-                "several BehaviorTrees and no main_tree_to_execute",
-                f'add main_tree_to_execute="{next(iter(trees))}" '
-                "(the ID of the tree to run) to <root>",
-            )
-        return next(iter(trees))
-    if main not in trees:
-        hint = closest(main, list(trees))
-        raise fail(
-            root.line,
-            f"main_tree_to_execute is {main!r}, but no BehaviorTree has that ID",
-            hint or f"use one of: {', '.join(trees)}",
-        )
-    return main
+    return main_tree(trees, main, partial(fail, root.line), "BehaviorTree", add)
 
 
 def _node(element: _Element, fail: Fail) -> RawNode:
@@ -250,16 +236,15 @@ def _flag(text: str, element: _Element, fail: Fail) -> bool:
 
 def _subtree_ports(models: _Element) -> dict[str, dict[str, Any]]:
     """SubTree ID -> {port: default} from a TreeNodesModel (other models are ours)."""
-    found: dict[str, dict[str, Any]] = {}
-    for model in models.children:
-        if model.tag == SUBTREE and model.attrs.get("ID"):
-            found[model.attrs["ID"]] = {
-                port.attrs["name"]: port.attrs["default"]
-                for port in model.children
-                if port.tag in ("input_port", "inout_port")
-                and {"name", "default"} <= set(port.attrs)
-            }
-    return found
+    return {
+        model.attrs["ID"]: {
+            port.attrs["name"]: port.attrs["default"]
+            for port in model.children
+            if port.tag in ("input_port", "inout_port") and {"name", "default"} <= set(port.attrs)
+        }
+        for model in models.children
+        if model.tag == SUBTREE and model.attrs.get("ID")
+    }
 
 
 # -- writing ---------------------------------------------------------------------------

@@ -10,6 +10,7 @@ its line, and a key given twice is an error rather than silently dropped.
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Any
 
 import yaml
@@ -20,6 +21,7 @@ from pyautonomousagent.bt.document import (
     Document,
     RawNode,
     TreeFileError,
+    main_tree,
 )
 from pyautonomousagent.bt.vocabulary import SCRIPT_ATTRIBUTES, closest
 from pyautonomousagent.inputs import Loader, YamlLimitError, clip, yaml_error_line
@@ -119,24 +121,11 @@ class _Reader:
         return trees, {key: line for key, (line, _) in entries.items()}
 
     def main(self, top: yaml.Node, keys: dict[str, tuple[int, yaml.Node]], trees: dict) -> str:
-        if "main_tree_to_execute" not in keys:
-            if len(trees) > 1:
-                raise self.fail(
-                    top,
-                    "several trees and no main_tree_to_execute",
-                    f"add 'main_tree_to_execute: {next(iter(trees))}'",
-                )
-            return next(iter(trees))
-        line, node = keys["main_tree_to_execute"]
-        main = self.text(node, "main_tree_to_execute", "name the tree to run")
-        if main not in trees:
-            hint = closest(main, list(trees))
-            raise self.fail(
-                line,
-                f"main_tree_to_execute is {main!r}, but no tree has that ID",
-                hint or f"use one of: {', '.join(trees)}",
-            )
-        return main
+        line, node = keys.get("main_tree_to_execute", (0, None))
+        fix = "name the tree to run"
+        main = None if node is None else self.text(node, "main_tree_to_execute", fix)
+        add = "add 'main_tree_to_execute: {}'"
+        return main_tree(trees, main, partial(self.fail, line or top), "tree", add)
 
     def subtree_ports(self, keys: dict[str, tuple[int, yaml.Node]]) -> dict[str, dict[str, Any]]:
         if "subtree_ports" not in keys:

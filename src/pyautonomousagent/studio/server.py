@@ -33,11 +33,9 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import parse_qs, urlparse
 
-from pyautonomousagent.bt.document import document_from_node
-from pyautonomousagent.bt.files import read_document
+from pyautonomousagent.bt.files import scenario_document
 from pyautonomousagent.bt.leaf import LeafError
 from pyautonomousagent.bt.spec import TreeError
-from pyautonomousagent.bt.trees import tree_by_name
 from pyautonomousagent.inputs import MAX_FILE_BYTES, InputError, clip
 from pyautonomousagent.runs import SaveError
 from pyautonomousagent.studio.session import Session
@@ -243,10 +241,7 @@ class Studio:
 
 def scenario_blocks(session: Session) -> dict[str, Any]:
     """The scenario's own tree as blocks."""
-    tree = session.base.tree
-    if tree.endswith((".xml", ".yaml", ".yml")):
-        return blocks_of(read_document(tree))
-    return blocks_of(document_from_node(tree_by_name(tree), tree))
+    return blocks_of(scenario_document(session.base.tree))
 
 
 def _handler(studio: Studio) -> type[BaseHTTPRequestHandler]:

@@ -24,7 +24,7 @@ from pyautonomousagent.scenarios import load
 from pyautonomousagent.simulation import Scenario, ScenarioError, Simulation
 from pyautonomousagent.simulation.scenario import parameter_list
 from pyautonomousagent.studio.live import EventFeed
-from pyautonomousagent.studio.trees import Block, Checked, check_blocks, tree_text
+from pyautonomousagent.studio.trees import Block, Checked, check_blocks, plain, tree_text
 
 #: What a saved tree or run may be called (a file or folder name in the studio's folder).
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,63}")
@@ -316,18 +316,10 @@ def frame_of(sim: Simulation, follow: int | None, nodes: list[dict[str, Any]]) -
         frame["follow"] = {
             "agent": swarm.names[follow],
             "statuses": statuses_of(sim, follow),
-            "blackboard": {k: _plain(v[follow]) for k, v in swarm.blackboard.items()},
+            "blackboard": {k: plain(v[follow]) for k, v in swarm.blackboard.items()},
         }
     frame["nodes"] = [{k: n[k] for k in ("name", "type", "depth")} for n in nodes]
     return frame
-
-
-def _plain(value: Any) -> Any:
-    """One blackboard value as JSON has it (a number that is not finite as text)."""
-    item = value.item() if isinstance(value, np.generic) else value
-    if isinstance(item, float) and not math.isfinite(item):
-        return str(item)
-    return item if isinstance(item, bool | int | float | str) else str(item)
 
 
 def _rounded(values: np.ndarray, decimals: int = 3) -> list[float]:

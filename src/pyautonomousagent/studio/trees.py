@@ -14,14 +14,16 @@ Uploaded files go through :func:`~pyautonomousagent.bt.files.document_from_bytes
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from pyautonomousagent.bt.build import build
 from pyautonomousagent.bt.document import DEFAULT_TREE_ID, Document, RawNode, document_from_node
 from pyautonomousagent.bt.files import document_from_bytes, parse_document, to_text_format
-from pyautonomousagent.bt.leaf import LEAF_TYPES
 from pyautonomousagent.bt.spec import Node, TreeError, snake_case
 from pyautonomousagent.bt.vocabulary import tags
 from pyautonomousagent.bt.xml_format import format_value, write_xml
@@ -85,7 +87,7 @@ def palette(scenario: Scenario) -> dict[str, Any]:
         {
             "type": cls.type_name,
             "name": snake_case(cls.type_name),
-            "doc": _first_line(cls.__doc__),
+            "doc": cls.summary(),
             "general": is_general(cls),
             "ports": [
                 {
@@ -93,7 +95,7 @@ def palette(scenario: Scenario) -> dict[str, Any]:
                     "hint": port.hint(),
                     "doc": port.doc,
                     "default": port.default,
-                    "value": _plain(values.get(port.default)),
+                    "value": plain(values.get(port.default)),
                 }
                 for port in cls.ports
             ],
@@ -103,12 +105,13 @@ def palette(scenario: Scenario) -> dict[str, Any]:
     return {"controls": controls, "leaves": leaves}
 
 
-def _plain(value: Any) -> Any:
-    return value if isinstance(value, bool | int | float | str) or value is None else str(value)
-
-
-def _first_line(doc: str | None) -> str:
-    return (doc or "").strip().split("\n", 1)[0].strip().replace("``", "")
+def plain(value: Any) -> Any:
+    """``value`` as JSON has it: None, a bool, number or text as it is (a NumPy scalar as
+    Python's); a number that is not finite, and anything else, as text."""
+    item = value.item() if isinstance(value, np.generic) else value
+    if isinstance(item, float) and not math.isfinite(item):
+        return str(item)
+    return item if isinstance(item, bool | int | float | str) or item is None else str(item)
 
 
 def blocks_of(document: Document) -> Block:
@@ -211,5 +214,4 @@ def _block_of(error: TreeError, raws: list[RawNode], tree: Node | None) -> int:
 def tree_text(document: Document, fmt: str, scenario: Scenario) -> str:
     """``document`` as the text of an XML or YAML file, as ``pyaa tree SCENARIO --format``
     writes it (the XML's TreeNodesModel lists the leaves that fit the scenario)."""
-    leaves = [cls.type_name for cls in fitting_leaves(scenario)]
-    return to_text_format(document, fmt, leaves=[n for n in LEAF_TYPES if n in leaves])
+    return to_text_format(document, fmt, leaves=[cls.type_name for cls in fitting_leaves(scenario)])
