@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from pyautonomousagent.bt.rules import Ops, Rule
-from pyautonomousagent.bt.script import ScriptError, parse
+from pyautonomousagent.bt.script import ScriptError, literal, parse
 from pyautonomousagent.bt.status import FAILURE, NAMES, RUNNING, SKIPPED, SUCCESS
 from pyautonomousagent.registry import Registry
 
@@ -708,12 +708,18 @@ def case(value: Any, children: int) -> str:
     return "" if isinstance(value, str | int | float) else f"must be text, got {value!r}"
 
 
+def case_values(params: Mapping[str, Any]) -> list[Any]:
+    """A Switch's cases as the numbers they compare with (words: enum values)."""
+    cases = sorted((int(k[5:]), v) for k, v in params.items() if k.startswith("case_"))
+    texts = (str(value).lower() if isinstance(value, bool) else str(value) for _, value in cases)
+    return [literal(text)[0] for text in texts]
+
+
 def switch_rule(n: Ops) -> None:
     """BT.CPP's Switch2..6: ticks the child of the first case equal to the agent's entry
     ``variable`` now (else the last child) and returns its status; a running child of another
     case is halted first; when the child finishes, all are reset. A case that is no number
     (NaN, a ``{key}``) matches nothing. Remembers the running child + 1 (0: none)."""
-    from pyautonomousagent.bt.program import case_values  # (it imports this module)
 
     value = n.let("value", n.entry(n.params["variable"].key))
     match: Any = n.kids - 1

@@ -2,18 +2,15 @@
 
 The batched engine ticks it over NumPy arrays; the compiled and GPU engines generate their
 kernels from it. A subtree is the contiguous range ``[i, end[i])`` of nodes in pre-order.
-Also here, once for every engine: what a Switch's cases compare with (:func:`case_values`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from pyautonomousagent.bt.script_leaves import literal
 from pyautonomousagent.bt.spec import Node, control_params
 
 
@@ -59,10 +56,3 @@ def compile_tree(root: Node) -> Program:
     return Program(
         tuple(nodes), np.asarray(parent), tuple(tuple(c) for c in children), np.asarray(end), params
     )
-
-
-def case_values(params: Mapping[str, Any]) -> list[Any]:
-    """A Switch's cases as the numbers they compare with (words: enum values)."""
-    cases = sorted((int(k[5:]), v) for k, v in params.items() if k.startswith("case_"))
-    return [literal(str(value).lower() if isinstance(value, bool) else str(value))[0]
-            for _, value in cases]  # fmt: skip

@@ -401,3 +401,28 @@ def parse(code: str) -> Script:
     if not statements:
         raise ScriptError("the script is empty", 1)
     return Script(code, tuple(statements))
+
+
+def _reference(value: Any) -> str | None:
+    if isinstance(value, str) and len(value) > 2 and value[0] == "{" and value[-1] == "}":
+        return value[1:-1].strip()
+    return None
+
+
+def literal(text: str) -> tuple[Any, str]:
+    """A SetBlackboard value: (value, type name); ``{key}`` gives (key, "key")."""
+    key = _reference(text)
+    if key is not None:
+        return key, "key"
+    word = text.strip()
+    if word in ("true", "false"):
+        return word == "true", "bool"
+    try:
+        return int(word), "int"
+    except ValueError:
+        pass
+    try:
+        number = float(word)
+    except ValueError:
+        return enum_code(word), "int"
+    return number, "float"

@@ -21,16 +21,10 @@ from typing import Any, ClassVar
 import numpy as np
 
 from pyautonomousagent.bt.leaf import Leaf, LeafError, register_leaf
-from pyautonomousagent.bt.script import DTYPES, Script, ScriptError, enum_code, parse, widest
+from pyautonomousagent.bt.script import DTYPES, Script, ScriptError, literal, parse, widest
 from pyautonomousagent.bt.status import RUNNING, SUCCESS, success_if
 from pyautonomousagent.state import AgentView
 from pyautonomousagent.world import World
-
-
-def _reference(value: Any) -> str | None:
-    if isinstance(value, str) and len(value) > 2 and value[0] == "{" and value[-1] == "}":
-        return value[1:-1].strip()
-    return None
 
 
 class _PortsByName(Leaf):
@@ -139,25 +133,6 @@ class ScriptCondition(_ScriptLeaf):
 
     def evaluate(self, agents: AgentView, world: World) -> Any:
         return success_if(self.script.truth(agents.blackboard))
-
-
-def literal(text: str) -> tuple[Any, str]:
-    """A SetBlackboard value: (value, type name); ``{key}`` gives (key, "key")."""
-    key = _reference(text)
-    if key is not None:
-        return key, "key"
-    word = text.strip()
-    if word in ("true", "false"):
-        return word == "true", "bool"
-    try:
-        return int(word), "int"
-    except ValueError:
-        pass
-    try:
-        number = float(word)
-    except ValueError:
-        return enum_code(word), "int"
-    return number, "float"
 
 
 @register_leaf
