@@ -10,6 +10,8 @@ tick.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
@@ -28,15 +30,22 @@ from .test_try_catch import FromEntry, from_entry
 AGENTS, TICKS = 48, 40
 
 
-def _tree() -> Node:
-    leaves = iter(f"l{k}" for k in range(40))
+def _builders(prefix: str) -> tuple[Callable[[], Node], Callable[..., Node]]:
+    """``leaf()`` (a leaf returning its entry) and ``node(kind, *kids, **params)``, their
+    names numbered ``<prefix><k>`` in the order made."""
+    names = iter(f"{prefix}{k}" for k in range(100))
 
     def leaf() -> Node:
-        return from_entry(next(leaves))
+        return from_entry(next(names))
 
     def node(kind: str, *kids: Node, **params: object) -> Node:
-        return Node(kind, f"{kind.lower()}_{next(leaves)}", kids, params)
+        return Node(kind, f"{kind.lower()}_{next(names)}", kids, params)
 
+    return leaf, node
+
+
+def _tree() -> Node:
+    leaf, node = _builders("l")
     return node(
         "Fallback",
         node("Sequence", node("RunOnce", leaf()), node("TryCatch", leaf(), leaf(), leaf()),
@@ -56,14 +65,7 @@ def _counting_tree() -> Node:
     """BT.CPP's node types that count: Repeat, RetryUntilSuccessful, Parallel, ParallelAll,
     Delay and Timeout, and those that read an entry, Switch2..6 (none may take a child that
     may be SKIPPED: not in :func:`_tree`); a Switch reads a leaf's entry (1, 2 or 3)."""
-    leaves = iter(f"c{k}" for k in range(80))
-
-    def leaf() -> Node:
-        return from_entry(next(leaves))
-
-    def node(kind: str, *kids: Node, **params: object) -> Node:
-        return Node(kind, f"{kind.lower()}_{next(leaves)}", kids, params)
-
+    leaf, node = _builders("c")
     return node(
         "ParallelAll",
         node("Repeat", leaf(), num_cycles=3),
@@ -117,6 +119,14 @@ def _assert_same_statuses(tree: Node, want: list[np.ndarray], got: list[np.ndarr
         assert not differ.size, f"tick {t}: node {names[differ[0][0]]}, agent {differ[0][1]}"
 
 
+def _same_as_batched(engine: str, tree: Node) -> list[np.ndarray]:
+    """Assert that ``engine`` gives the batched engine's statuses on ``tree``; those."""
+    check_structure(tree)
+    want = _statuses("batched", tree)
+    _assert_same_statuses(tree, want, _statuses(engine, tree))
+    return want
+
+
 ENGINE_NAMES = [
     "pytrees",
     pytest.param(
@@ -128,21 +138,14 @@ ENGINE_NAMES = [
 
 @pytest.mark.parametrize("engine", ENGINE_NAMES)
 def test_every_rule_gives_the_batched_engines_statuses(engine: str) -> None:
-    tree = _tree()
-    check_structure(tree)
-    want = _statuses("batched", tree)
-    got = _statuses(engine, tree)
-    _assert_same_statuses(tree, want, got)
+    want = _same_as_batched(engine, _tree())
     assert len({int(c) for tick in want for c in tick.ravel()}) == 5  # every status seen
 
 
 @pytest.mark.parametrize("engine", ENGINE_NAMES)
 def test_the_counting_rules_give_the_batched_engines_statuses(engine: str) -> None:
     tree = _counting_tree()
-    check_structure(tree)
-    want = _statuses("batched", tree)
-    got = _statuses(engine, tree)
-    _assert_same_statuses(tree, want, got)
+    want = _same_as_batched(engine, tree)
     for row, node in enumerate(tree.walk()):  # every control node ran, and finished
         seen = {int(c) for tick in want for c in tick[row]}
         assert not node.is_control or RUNNING in seen and seen & {SUCCESS, FAILURE}, node.name
