@@ -29,7 +29,7 @@ SENSITIVE = frozenset(
         "cbrt", "power", "float_power", "hypot", "dot", "matmul", "inner", "vdot", "einsum",
         "tensordot", "linalg",
     }
-)
+)  # fmt: skip
 
 SET_UP = "computed once for the whole swarm before the loop, the same input to every engine"
 SHOWN = "drawn, measured or checked after a run; no engine reads it"
@@ -78,7 +78,7 @@ def _uses(tree: ast.AST) -> Iterator[tuple[str, str]]:
 
 
 def sensitive_uses(root: Path = SRC) -> dict[str, list[str]]:
-    """"file::function" -> the sensitive uses in it, for every module under ``root``."""
+    """``file::function`` -> the sensitive uses in it, for every module under ``root``."""
     found: dict[str, list[str]] = {}
     for path in sorted(root.rglob("*.py")):
         tree = ast.parse(path.read_text(), filename=str(path))
