@@ -194,7 +194,7 @@ def test_a_node_with_many_children_is_written_as_loops_for_the_batched_engine() 
         for i in range(1, len(program.nodes)):  # every node with many children
             if len(program.children[i]) < width:
                 continue
-            ops = ArraySourceOps(program, i)
+            ops = ArraySourceOps(program, i, time_step=1.0)
             NODE_TYPES.get(program.nodes[i].type).rule(ops)
             rolled = roll(ops.lines)
             assert any(line.startswith("for q in range(") for line in rolled)
@@ -225,7 +225,8 @@ def test_nodes_with_many_children_give_the_batched_engines_statuses_on_compiled(
         Node("Fallback", "fm", kids(True), {"memory": True}),
     ), {"memory": False})  # fmt: skip
     check_structure(tree)
-    body = tree_body(compile_tree(tree), lambda i: [f"st[{i}, a] = 1"], {}, "")
+    program = compile_tree(tree)
+    body = tree_body(program, lambda i: [f"st[{i}, a] = 1"], {}, "", 1.0, "c_{}[a]".format)
     assert body.count("for span_") >= 3  # each wide node halts its later children in a loop
     want, got = _statuses("batched", tree), _statuses("compiled", tree)
     _assert_same_statuses(tree, want, got)

@@ -509,9 +509,10 @@ def parallel_rule(n: Ops) -> None:
     successes, failures = n.memory(0), n.memory(1)
     won = successes >= need_success
     lost = (failures >= need_failure) | (failures > n.kids - need_success)
-    going = (successes < need_success) & (failures < need_failure)
+    undecided = (successes < need_success) & (failures < need_failure)
+    undecided = undecided & (failures <= n.kids - need_success)
     for k in range(n.kids):  # undecided before the first child: else it had finished
-        _tick_unfinished(n, k, going & (failures <= n.kids - need_success) if k else True)
+        _tick_unfinished(n, k, undecided if k else True)
     with n.when(won | lost):
         for k in range(n.kids):
             with n.when(n.child(k) == RUNNING):

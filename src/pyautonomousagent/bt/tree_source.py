@@ -75,7 +75,7 @@ class CodeOps:
         kids: int,
         params: Mapping[str, Any],
         skippable: Sequence[bool],
-        time_step: float = 1.0,
+        time_step: float,
     ) -> None:
         self.kids, self.params, self._skippable = kids, params, tuple(skippable)
         self.time_step = time_step
@@ -161,8 +161,8 @@ class SourceOps(CodeOps):
         i: int,
         row: int,
         expand: Callable[[int], list[str]],
-        time_step: float = 1.0,
-        entry: Callable[[str], str] = "{}[a]".format,
+        time_step: float,
+        entry: Callable[[str], str],
     ) -> None:
         self.program, self.i, self.row, self._expand = program, i, row, expand
         self.entry = lambda key: Source(entry(key))
@@ -250,8 +250,8 @@ def tree_body(
     leaf_lines: Callable[[int], list[str]],
     rows: Mapping[int, int],
     indent: str,
-    time_step: float = 1.0,
-    entry: Callable[[str], str] = "{}[a]".format,
+    time_step: float,
+    entry: Callable[[str], str],
 ) -> str:
     """The tick of agent ``a`` at iteration ``t`` as straight-line code, indented by ``indent``:
     each control node is a ``while True:`` block left with ``break``, its children written in

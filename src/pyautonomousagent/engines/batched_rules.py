@@ -40,7 +40,7 @@ class ArraySourceOps(CodeOps):
     the iteration ``world.iteration``, blackboard entry ``key`` ``BOARD[key]``; the mask of
     the agents of the current block is ``e<depth>`` (a loop's: ``while`` it has any)."""
 
-    def __init__(self, program: Program, i: int, time_step: float = 1.0) -> None:
+    def __init__(self, program: Program, i: int, time_step: float) -> None:
         self.children = program.children[i]
         skippable = [may_skip(program.nodes[c]) for c in self.children]
         super().__init__(len(self.children), program.params[i], skippable, time_step)
